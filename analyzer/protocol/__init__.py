@@ -1,0 +1,3 @@
+"""Sans-IO protocol core: bytes and frames with timestamps in, events out."""
+
+from __future__ import annotations

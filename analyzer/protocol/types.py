@@ -1,0 +1,136 @@
+"""Value types shared by the whole analyzer: CAN frames, stream chunks and events."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+# Topics of the event contract.
+TOPIC_COMMAND = "/gimbal/command"
+TOPIC_GIMBAL_ATTITUDE = "/gimbal/attitude"
+TOPIC_GIMBAL_RANGING = "/gimbal/ranging"
+TOPIC_UAV_GPS = "/uav/gps"
+TOPIC_UAV_ALTITUDE = "/uav/altitude"
+TOPIC_UAV_ATTITUDE = "/uav/attitude"
+TOPIC_UAV_TEXT = "/uav/text"
+TOPIC_DIAGNOSTICS = "/diagnostics"
+TOPIC_CAN_OTHER = "/can/other"
+
+TOPICS = (
+    TOPIC_COMMAND,
+    TOPIC_GIMBAL_ATTITUDE,
+    TOPIC_GIMBAL_RANGING,
+    TOPIC_UAV_GPS,
+    TOPIC_UAV_ALTITUDE,
+    TOPIC_UAV_ATTITUDE,
+    TOPIC_UAV_TEXT,
+    TOPIC_DIAGNOSTICS,
+)
+
+# Diagnostic kinds (the ``kind`` field of /diagnostics events).
+CRC_MISMATCH = "crc_mismatch"
+INCOMPLETE = "incomplete"
+BAD_FRAME = "bad_frame"
+BAD_LINE = "bad_line"
+TEXT_UNTERMINATED = "text_unterminated"
+GARBAGE = "garbage"
+DUPLICATE = "duplicate"
+BUS_ERROR = "bus_error"
+LINK = "link"
+
+DIAGNOSTIC_KINDS = (
+    CRC_MISMATCH,
+    INCOMPLETE,
+    BAD_FRAME,
+    BAD_LINE,
+    TEXT_UNTERMINATED,
+    GARBAGE,
+    DUPLICATE,
+    BUS_ERROR,
+    LINK,
+)
+
+# Directions of a TCP / UART stream.
+TO_IDU = "gs_to_idu"
+FROM_IDU = "idu_to_gs"
+
+
+@dataclass(frozen=True, slots=True)
+class CanFrame:
+    """One CAN frame as seen on a bus or in a log file."""
+
+    time: float
+    can_id: int
+    data: bytes
+    extended: bool = True
+    channel: str = ""
+    is_remote: bool = False
+    is_error: bool = False
+    is_fd: bool = False
+    direction: str = ""  # "rx" / "tx" when the log says so
+
+    @property
+    def dlc(self) -> int:
+        return len(self.data)
+
+
+@dataclass(frozen=True, slots=True)
+class StreamChunk:
+    """Bytes read from a TCP or UART stream in one go."""
+
+    time: float
+    data: bytes
+    source: str = "stream"
+    direction: str = ""  # TO_IDU / FROM_IDU / "" when unknown
+
+
+@dataclass(slots=True)
+class Event:
+    """A decoded message or a diagnostic; becomes one JSON object."""
+
+    topic: str
+    time: float
+    source: str
+    fields: dict[str, Any] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "topic": self.topic,
+            "time": self.time,
+            "source": self.source,
+            "warnings": list(self.warnings),
+        }
+        out.update(self.fields)
+        return out
+
+    @classmethod
+    def from_dict(cls, obj: dict[str, Any]) -> Event:
+        rest = {k: v for k, v in obj.items() if k not in ("topic", "time", "source", "warnings")}
+        return cls(
+            topic=str(obj["topic"]),
+            time=float(obj["time"]),
+            source=str(obj.get("source", "")),
+            fields=rest,
+            warnings=list(obj.get("warnings", [])),
+        )
+
+
+def hexstr(data: bytes) -> str:
+    """Bytes as upper-case hex pairs separated by spaces, as the vendor document writes them."""
+    return data.hex(" ").upper()
+
+
+def diagnostic(
+    time: float,
+    source: str,
+    kind: str,
+    detail: str,
+    raw: bytes = b"",
+    **extra: Any,
+) -> Event:
+    """Build a /diagnostics event."""
+    fields: dict[str, Any] = {"kind": kind, "detail": detail, "raw": hexstr(raw)}
+    fields["byte_count"] = len(raw)
+    fields.update(extra)
+    return Event(TOPIC_DIAGNOSTICS, time, source, fields)
