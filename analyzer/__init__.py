@@ -3,4 +3,4 @@
 from __future__ import annotations
 
 __version__ = "0.1.0"
-PROTOCOL_DOCUMENT = "Gimbal Interface Definition and Protocols (vendor document, with NOTES.md errata)"
+PROTOCOL_DOCUMENT = "Gimbal Interface Definition and Protocols (vendor), read with NOTES.md"

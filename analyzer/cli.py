@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from types import ModuleType
 
 from analyzer import __version__
+from analyzer.errors import SourceError, UsageError
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
 # run(args) -> int, and keeps heavy imports (textual, mcap, can) inside run().
@@ -32,10 +33,6 @@ Decode capture files (candump, python-can logs, pcap, raw TCP/UART dumps,
 MCAP), capture live from a CAN interface, the IDU's TCP port or a UART,
 record MCAP files for Foxglove, and watch everything in a terminal UI.
 """
-
-
-class UsageError(Exception):
-    """A user error: printed as one line, exit code 2."""
 
 
 def _load(name: str) -> ModuleType | None:
@@ -84,12 +81,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as exc:
         print(f"gimbal-analyzer {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except SourceError as exc:
+        print(f"gimbal-analyzer {args.command}: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
-        # Output piped into `head` and the like: not an error.
-        try:
-            sys.stdout = None  # type: ignore[assignment]
-        finally:
-            return 0
+        # Output piped into `head` and the like: not an error. Point stdout at
+        # devnull so the interpreter's final flush does not fail again.
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
