@@ -1,0 +1,263 @@
+"""The sans-IO decoder: CAN frames and stream chunks in, events out, per-source state kept."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from analyzer.protocol.codec import decode_command
+from analyzer.protocol.feedback import decode_feedback
+from analyzer.protocol.framing import RawFrame, StreamFramer
+from analyzer.protocol.ids import (
+    CONTROL_ID,
+    FEEDBACK_ID,
+    FRAME_CAN,
+    FRAME_CONTROL,
+    TCP_MARKER,
+    TEXT_END_ID,
+    TEXT_ID,
+)
+from analyzer.protocol.reassembly import FeedbackReassembler, Message
+from analyzer.protocol.types import (
+    BAD_FRAME,
+    BUS_ERROR,
+    TOPIC_CAN_OTHER,
+    TOPIC_COMMAND,
+    CanFrame,
+    Event,
+    StreamChunk,
+    diagnostic,
+    hexstr,
+)
+from analyzer.protocol.uav import STATUS_FRAMES, TextAssembler, decode_status
+
+_NO_EVENTS: tuple[Event, ...] = ()
+
+
+class Decoder:
+    """Decodes everything of the protocol from any mix of CAN frames and stream chunks.
+
+    State (feedback reassembly, text messages, stream framing) is kept per CAN channel
+    and per stream source + direction. The decoder never raises on any input and never
+    reads a clock: times come with the input, ``tick(now)`` reports stale partial
+    messages in live use, ``close()`` flushes everything at the end of input.
+    """
+
+    def __init__(self, *, emit_other: bool = False, text_limit: int = 256) -> None:
+        self.emit_other = emit_other
+        self.text_limit = text_limit
+        self._reassemblers: dict[str, FeedbackReassembler] = {}
+        self._texts: dict[str, TextAssembler] = {}
+        self._framers: dict[tuple[str, str], StreamFramer] = {}
+        self.frames = 0
+        self.protocol_frames = 0
+        self.other_frames = 0
+        self.chunks = 0
+        self.last_time = 0.0
+
+    # -- input ---------------------------------------------------------------------------------
+
+    def feed(self, item: CanFrame | StreamChunk) -> list[Event]:
+        if isinstance(item, CanFrame):
+            return self.feed_can(item)
+        return self.feed_stream(item)
+
+    def feed_can(self, frame: CanFrame) -> list[Event]:
+        """Decode one CAN frame (from a bus or a log)."""
+        self.frames += 1
+        self.last_time = frame.time
+        return self._can(frame, frame.channel or "can", {})
+
+    def feed_stream(self, chunk: StreamChunk) -> list[Event]:
+        """Decode bytes read from a TCP / UART stream."""
+        self.chunks += 1
+        self.last_time = chunk.time
+        key = (chunk.source, chunk.direction)
+        framer = self._framers.get(key)
+        if framer is None:
+            framer = self._framers[key] = StreamFramer(chunk.source, chunk.direction)
+        return self._framed(framer, framer.feed(chunk.data, chunk.time))
+
+    def tick(self, now: float) -> list[Event]:
+        """Live use: report partial messages that waited too long."""
+        out: list[Event] = []
+        for reassembler in self._reassemblers.values():
+            out.extend(self._feedback(reassembler.source, reassembler.tick(now), {}))
+        for text in self._texts.values():
+            out.extend(text.tick(now))
+        for framer in self._framers.values():
+            out.extend(self._framed(framer, framer.tick(now)))
+        return out
+
+    def close(self, now: float | None = None) -> list[Event]:
+        """End of input: everything still pending becomes a diagnostic."""
+        when = self.last_time if now is None else now
+        out: list[Event] = []
+        for framer in self._framers.values():
+            out.extend(self._framed(framer, framer.close(when)))
+        for reassembler in self._reassemblers.values():
+            out.extend(self._feedback(reassembler.source, reassembler.close(when), {}))
+        for text in self._texts.values():
+            out.extend(text.close(when))
+        return out
+
+    @property
+    def stats(self) -> dict[str, int]:
+        parts: list[Any] = [*self._framers.values(), *self._reassemblers.values()]
+        return {
+            "frames": self.frames,
+            "protocol_frames": self.protocol_frames,
+            "other_frames": self.other_frames,
+            "chunks": self.chunks,
+            "bytes_fed": sum(p.bytes_fed for p in parts),
+            "bytes_framed": sum(p.bytes_framed for p in parts),
+            "bytes_discarded": sum(p.bytes_discarded for p in parts),
+            "bytes_pending": sum(p.pending for p in parts),
+        }
+
+    # -- CAN -------------------------------------------------------------------------------------
+
+    def _can(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        can_id = frame.can_id
+        if frame.is_error:
+            return [
+                diagnostic(
+                    frame.time,
+                    source,
+                    BUS_ERROR,
+                    f"CAN error frame (id 0x{can_id:08X})",
+                    frame.data,
+                    **extra,
+                )
+            ]
+        if can_id not in _HANDLED:
+            self.other_frames += 1
+            if not self.emit_other:
+                return []
+            return [
+                Event(
+                    TOPIC_CAN_OTHER,
+                    frame.time,
+                    source,
+                    {
+                        "can_id": can_id,
+                        "extended": frame.extended,
+                        "dlc": len(frame.data),
+                        "data": hexstr(frame.data),
+                        "remote": frame.is_remote,
+                        **extra,
+                    },
+                )
+            ]
+        self.protocol_frames += 1
+        if frame.is_remote:
+            return [
+                diagnostic(
+                    frame.time,
+                    source,
+                    BAD_FRAME,
+                    f"remote frame on protocol ID 0x{can_id:08X}",
+                    frame.data,
+                    can_id=can_id,
+                    **extra,
+                )
+            ]
+        warnings: list[str] = []
+        if not frame.extended:
+            warnings.append(
+                f"standard (11-bit) frame on ID 0x{can_id:X}; the protocol uses extended IDs"
+            )
+        if frame.is_fd:
+            warnings.append("CAN FD frame; the protocol uses classic CAN")
+        if can_id == CONTROL_ID:
+            fields, more = decode_command(frame.data)
+            fields.update(extra)
+            return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings + more)]
+        if can_id == FEEDBACK_ID:
+            reassembler = self._reassemblers.get(source)
+            if reassembler is None:
+                reassembler = self._reassemblers[source] = FeedbackReassembler(source)
+            return self._feedback(source, reassembler.feed(frame.data, frame.time), extra, warnings)
+        if can_id in (TEXT_ID, TEXT_END_ID):
+            text = self._texts.get(source)
+            if text is None:
+                text = self._texts[source] = TextAssembler(source, self.text_limit)
+            events = text.feed(can_id, frame.data, frame.time)
+            for event in events:
+                event.warnings[:0] = warnings
+                event.fields.update(extra)
+            return events
+        status = STATUS_FRAMES[can_id]
+        fields, more = decode_status(can_id, frame.data)
+        fields.update(extra)
+        return [Event(status.topic, frame.time, source, fields, warnings + more)]
+
+    def _feedback(
+        self,
+        source: str,
+        results: list[Message | Event],
+        extra: dict[str, Any],
+        warnings: list[str] | None = None,
+    ) -> list[Event]:
+        out: list[Event] = []
+        for result in results:
+            if isinstance(result, Event):
+                result.fields.update(extra)
+                out.append(result)
+                continue
+            layout, fields, more = decode_feedback(result.data)
+            assert layout is not None  # the reassembler only passes CRC-checked messages
+            fields.update(extra)
+            out.append(
+                Event(
+                    layout.topic,
+                    result.time,
+                    source,
+                    fields,
+                    [*(warnings or []), *result.warnings, *more],
+                )
+            )
+        return out
+
+    # -- streams ---------------------------------------------------------------------------------
+
+    def _framed(self, framer: StreamFramer, results: list[RawFrame | Event]) -> list[Event]:
+        out: list[Event] = []
+        extra: dict[str, Any] = {"direction": framer.direction} if framer.direction else {}
+        source = framer.source
+        for result in results:
+            if isinstance(result, Event):
+                out.append(result)
+            else:
+                out.extend(self._stream_frame(result, source, extra))
+        return out
+
+    def _stream_frame(self, frame: RawFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        data = frame.data
+        warnings: list[str] = []
+        if frame.frame_type in (FRAME_CONTROL, FRAME_CAN) and data[12:14] != TCP_MARKER:
+            warnings.append(f"bytes 12-13 are {hexstr(data[12:14])}, expected 40 88")
+        if frame.frame_type == FRAME_CONTROL:
+            if any(data[3:12]):
+                warnings.append("reserved bytes 3-11 are not zero: " + hexstr(data[3:12]))
+            fields, more = decode_command(data[14:22])
+            fields.update(extra)
+            fields["transport"] = "stream"
+            return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings + more)]
+        if frame.frame_type == FRAME_CAN:
+            can_id = int.from_bytes(data[3:7], "big")
+            if any(data[7:12]):
+                warnings.append("reserved bytes 7-11 are not zero: " + hexstr(data[7:12]))
+            inner = CanFrame(frame.time, can_id, data[14:22], channel=source)
+            fields_extra = {**extra, "transport": "stream", "crc_set": frame.crc_set}
+            events = self._can(inner, source, fields_extra)
+            for event in events:
+                event.warnings[:0] = warnings
+            return events
+        layout, fields, more = decode_feedback(data)
+        assert layout is not None
+        fields.update(extra)
+        fields["transport"] = "stream"
+        return [Event(layout.topic, frame.time, source, fields, warnings + more)]
+
+
+_HANDLED = frozenset({CONTROL_ID, FEEDBACK_ID, TEXT_ID, TEXT_END_ID, *STATUS_FRAMES})

@@ -1,0 +1,228 @@
+"""Declarative fixed-position fields: how one value sits in a frame, and its codec."""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+# kind -> (struct format, size, minimum raw, maximum raw)
+_KINDS: dict[str, tuple[str, int, int, int]] = {
+    "u8": ("<B", 1, 0, 0xFF),
+    "s8": ("<b", 1, -0x80, 0x7F),
+    "u16": ("<H", 2, 0, 0xFFFF),
+    "s16": ("<h", 2, -0x8000, 0x7FFF),
+    "u32": ("<I", 4, 0, 0xFFFFFFFF),
+    "s32": ("<i", 4, -0x80000000, 0x7FFFFFFF),
+}
+
+_STRUCTS = {kind: struct.Struct(fmt) for kind, (fmt, _, _, _) in _KINDS.items()}
+
+
+class EncodeError(ValueError):
+    """A value that cannot be encoded: unknown name, bad label or out of range."""
+
+
+@dataclass(frozen=True)
+class Field:
+    """One value at a fixed byte offset of a frame.
+
+    The physical value is ``raw * mul / div``; ``minimum``/``maximum`` are raw limits
+    from the protocol document (out-of-range values are decoded and flagged).
+    """
+
+    name: str
+    offset: int
+    kind: str = "u8"
+    div: int = 1
+    mul: int = 1
+    unit: str = ""
+    minimum: int | None = None
+    maximum: int | None = None
+    labels: Mapping[int, str] | None = None
+    other_label: str | None = None  # label for raw values that are not in ``labels``
+    label_as: str | None = None  # put the label in this field and keep the raw number in ``name``
+    boolean: bool = False
+    expected: int | None = None  # a fixed raw value the document prescribes
+    default: Any = None  # value used by encode() when the caller leaves it out
+    description: str = ""
+    soft_maximum: int | None = None  # above this: valid only on some models (warn)
+    soft_note: str = ""
+
+    @property
+    def size(self) -> int:
+        return _KINDS[self.kind][1]
+
+    @property
+    def end(self) -> int:
+        return self.offset + self.size
+
+    @property
+    def decimals(self) -> int:
+        return 0 if self.div == 1 else math.ceil(math.log10(self.div))
+
+    def value_limits(self) -> tuple[float | None, float | None]:
+        """Minimum and maximum in physical units."""
+        lo = None if self.minimum is None else self.scale(self.minimum)
+        hi = None if self.maximum is None else self.scale(self.maximum)
+        return lo, hi
+
+    def scale(self, raw: int) -> float | int:
+        if self.div == 1:
+            return raw * self.mul
+        return raw * self.mul / self.div
+
+    # -- decoding ---------------------------------------------------------------------------
+
+    def read_raw(self, data: bytes) -> int:
+        raw: int = _STRUCTS[self.kind].unpack_from(data, self.offset)[0]
+        return raw
+
+    def decode_into(self, data: bytes, out: dict[str, Any], warnings: list[str]) -> None:
+        """Decode this field of ``data`` into ``out``; doubts go to ``warnings``."""
+        raw = self.read_raw(data)
+        if self.labels is not None:
+            label = self.labels.get(raw, self.other_label)
+            if label is None:
+                warnings.append(f"{self.name}: unknown value {raw} (0x{raw:02X})")
+            if self.label_as:
+                out[self.name] = raw
+                out[self.label_as] = label if label is not None else "unknown"
+            else:
+                out[self.name] = label if label is not None else raw
+                out[self.name + "_raw"] = raw
+            return
+        if self.boolean:
+            out[self.name] = raw != 0
+            if raw not in (0, 1):
+                warnings.append(f"{self.name}: flag value {raw}, expected 0 or 1")
+            return
+        out[self.name] = self.scale(raw)
+        self._check(raw, warnings)
+
+    def _check(self, raw: int, warnings: list[str]) -> None:
+        if self.expected is not None and raw != self.expected:
+            warnings.append(
+                f"{self.name}: raw value {raw}, the document prescribes {self.expected}"
+            )
+        lo, hi = self.minimum, self.maximum
+        if (lo is not None and raw < lo) or (hi is not None and raw > hi):
+            vlo, vhi = self.value_limits()
+            unit = f" {self.unit}" if self.unit else ""
+            warnings.append(
+                f"{self.name}: {self.format_value(self.scale(raw))}{unit} out of range "
+                f"[{self.format_value(vlo)}, {self.format_value(vhi)}]{unit}"
+            )
+        elif self.soft_maximum is not None and raw > self.soft_maximum:
+            warnings.append(f"{self.name}: {self.format_value(self.scale(raw))} {self.soft_note}")
+
+    def format_value(self, value: float | int | None) -> str:
+        if value is None:
+            return "-"
+        if self.div == 1:
+            return str(value)
+        return f"{value:.{self.decimals}f}"
+
+    # -- encoding ---------------------------------------------------------------------------
+
+    def to_raw(self, value: Any, *, check_range: bool = True) -> int:
+        """Physical value (or label) -> raw integer, with clear errors."""
+        if self.labels is not None and isinstance(value, str):
+            for raw, label in self.labels.items():
+                if label == value:
+                    return raw
+            if self.other_label is not None and value == self.other_label:
+                return 0
+            valid = ", ".join(self.labels.values())
+            raise EncodeError(f"{self.name}: unknown value {value!r}; valid: {valid}")
+        if isinstance(value, bool):
+            raw = int(value)
+        elif isinstance(value, int) and self.labels is not None:
+            raw = value
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise EncodeError(f"{self.name}: {value!r} is not a number") from None
+            if not math.isfinite(number):
+                raise EncodeError(f"{self.name}: {value!r} is not a finite number")
+            raw = round(number * self.div / self.mul)
+        _, _, kind_lo, kind_hi = _KINDS[self.kind]
+        lo = self.minimum if check_range and self.minimum is not None else kind_lo
+        hi = self.maximum if check_range and self.maximum is not None else kind_hi
+        unlabelled = self.labels is not None and raw not in self.labels
+        if check_range and unlabelled and self.other_label is None:
+            valid = ", ".join(f"{v} ({k})" for k, v in (self.labels or {}).items())
+            raise EncodeError(f"{self.name}: unknown value {raw}; valid: {valid}")
+        if not lo <= raw <= hi:
+            vlo, vhi = (self.scale(lo), self.scale(hi))
+            unit = f" {self.unit}" if self.unit else ""
+            raise EncodeError(
+                f"{self.name}: {value} out of range "
+                f"[{self.format_value(vlo)}, {self.format_value(vhi)}]{unit}"
+            )
+        return raw
+
+    def write(self, buffer: bytearray, value: Any, *, check_range: bool = True) -> None:
+        _STRUCTS[self.kind].pack_into(
+            buffer, self.offset, self.to_raw(value, check_range=check_range)
+        )
+
+    # -- documentation ----------------------------------------------------------------------
+
+    def json_schema(self) -> dict[str, Any]:
+        """JSON Schema of the decoded value(s) of this field."""
+        schema: dict[str, Any] = {}
+        text = self.description
+        if self.unit:
+            text = f"{text} [{self.unit}]" if text else f"[{self.unit}]"
+        if self.labels is not None and not self.label_as:
+            names = list(self.labels.values())
+            if self.other_label:
+                names.append(self.other_label)
+            schema = {"type": ["string", "integer"], "enum": [*names]}
+            schema["description"] = text + " (label; a raw number when unknown)"
+            return schema
+        if self.boolean:
+            return {"type": "boolean", "description": text}
+        schema["type"] = "integer" if self.div == 1 else "number"
+        lo, hi = self.value_limits()
+        notes = []
+        if lo is not None or hi is not None:
+            notes.append(f"documented range [{self.format_value(lo)}, {self.format_value(hi)}]")
+        if notes:
+            text = f"{text}; {', '.join(notes)}" if text else ", ".join(notes)
+        schema["description"] = text
+        return schema
+
+
+@dataclass(frozen=True)
+class Layout:
+    """An ordered set of fields that together describe one frame or message."""
+
+    fields: tuple[Field, ...]
+    size: int
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for f in self.fields:
+            f.decode_into(data, out, warnings)
+        return out
+
+    def encode(self, values: Mapping[str, Any], *, check_range: bool = True) -> bytearray:
+        buffer = bytearray(self.size)
+        for f in self.fields:
+            value = values.get(f.name, f.default if f.default is not None else 0)
+            f.write(buffer, value, check_range=check_range)
+        return buffer
+
+
+def pad(data: bytes, size: int, what: str, warnings: list[str]) -> bytes:
+    """Zero-pad short data so fixed-offset fields can be read; say so in warnings."""
+    if len(data) < size:
+        warnings.append(f"{what}: {len(data)} data bytes, expected {size}; missing bytes read as 0")
+        return bytes(data) + bytes(size - len(data))
+    return bytes(data)

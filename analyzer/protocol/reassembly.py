@@ -1,0 +1,191 @@
+"""Reassembly of 32-byte gimbal feedback messages from their four 8-byte CAN segments."""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+from analyzer.protocol.crc import check_crc, crc16
+from analyzer.protocol.feedback import FRAME_SIZES
+from analyzer.protocol.ids import HEADER
+from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, diagnostic
+
+SEGMENTS_PER_MESSAGE = 4
+
+
+@dataclass(frozen=True, slots=True)
+class Segment:
+    time: float
+    data: bytes
+
+
+@dataclass(frozen=True, slots=True)
+class Message:
+    """A reassembled message whose CRC checked."""
+
+    time: float  # time of the segment that completed it
+    data: bytes
+    segments: tuple[Segment, ...]
+    warnings: tuple[str, ...] = ()
+
+
+def _is_header(data: bytes) -> bool:
+    return len(data) >= 3 and data[:2] == HEADER and data[2] in FRAME_SIZES
+
+
+def _crc_ok(data: bytes) -> bool:
+    size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
+    return size is not None and len(data) >= size and check_crc(data[:size])
+
+
+class FeedbackReassembler:
+    """Turns the segment stream of CAN ID 0x030F0001 into messages and diagnostics.
+
+    A segment starting with EB 90 only starts a message when the CRC confirms it, so a
+    payload that happens to hold EB 90 is no false start. Missing segments, repeated
+    segments, corrupted messages and late segments are reported; every byte fed is in a
+    message (``bytes_framed``) or a diagnostic (``bytes_discarded``) once resolved.
+    """
+
+    def __init__(
+        self,
+        source: str,
+        *,
+        late_after: float = 0.2,
+        stale_after: float = 1.0,
+    ) -> None:
+        self.source = source
+        self.late_after = late_after  # gap between segments of one message worth a warning
+        self.stale_after = stale_after  # a partial message older than this is given up
+        self.bytes_fed = 0
+        self.bytes_framed = 0
+        self.bytes_discarded = 0
+        self._pending: list[Segment] = []
+
+    @property
+    def pending(self) -> int:
+        return sum(len(s.data) for s in self._pending)
+
+    def feed(self, data: bytes, time: float) -> list[Message | Event]:
+        self.bytes_fed += len(data)
+        out: list[Message | Event] = []
+        if self._pending and time - self._pending[-1].time > self.stale_after:
+            self._resolve(out, final=True, time=time)
+        self._pending.append(Segment(time, bytes(data)))
+        self._resolve(out, final=False, time=time)
+        return out
+
+    def tick(self, now: float) -> list[Message | Event]:
+        out: list[Message | Event] = []
+        if self._pending and now - self._pending[-1].time > self.stale_after:
+            self._resolve(out, final=True, time=now)
+        return out
+
+    def close(self, time: float) -> list[Message | Event]:
+        out: list[Message | Event] = []
+        self._resolve(out, final=True, time=time)
+        return out
+
+    # -- internals ---------------------------------------------------------------------------
+
+    def _report(
+        self, out: list[Message | Event], kind: str, detail: str, segs: list[Segment], time: float
+    ) -> None:
+        raw = b"".join(s.data for s in segs)
+        self.bytes_discarded += len(raw)
+        out.append(diagnostic(time, self.source, kind, detail, raw, segments=len(segs)))
+
+    def _emit(
+        self, out: list[Message | Event], segs: list[Segment], extra: tuple[str, ...] = ()
+    ) -> None:
+        data = b"".join(s.data for s in segs)
+        warnings = list(extra)
+        gaps = [b.time - a.time for a, b in itertools.pairwise(segs)]
+        if gaps and max(gaps) > self.late_after:
+            warnings.append(f"late segment: {max(gaps) * 1000:.0f} ms between segments")
+        sizes = [len(s.data) for s in segs]
+        if any(n != 8 for n in sizes):
+            warnings.append(f"segment lengths {sizes}, expected 8 each")
+        self.bytes_framed += len(data)
+        out.append(Message(segs[-1].time, data, tuple(segs), tuple(warnings)))
+
+    def _resolve(self, out: list[Message | Event], *, final: bool, time: float) -> None:
+        pending = self._pending
+        while pending:
+            if not _is_header(pending[0].data):
+                k = next((i for i, s in enumerate(pending) if _is_header(s.data)), len(pending))
+                self._report(
+                    out,
+                    INCOMPLETE,
+                    f"{k} feedback segment(s) without a message header "
+                    "(first segment lost or message cut)",
+                    pending[:k],
+                    time,
+                )
+                del pending[:k]
+                continue
+            if len(pending) < SEGMENTS_PER_MESSAGE:
+                if final:
+                    self._report(
+                        out,
+                        INCOMPLETE,
+                        f"feedback message with only {len(pending)} of 4 segments",
+                        pending[:],
+                        time,
+                    )
+                    pending.clear()
+                break
+            first = pending[:SEGMENTS_PER_MESSAGE]
+            if _crc_ok(b"".join(s.data for s in first)):
+                self._emit(out, first)
+                del pending[:SEGMENTS_PER_MESSAGE]
+                continue
+            repeats = [
+                i for i in range(1, SEGMENTS_PER_MESSAGE) if pending[i].data == pending[i - 1].data
+            ]
+            if repeats:
+                if len(pending) <= SEGMENTS_PER_MESSAGE and not final:
+                    break  # wait for one more segment to tell a repeat from corruption
+                if len(pending) > SEGMENTS_PER_MESSAGE:
+                    k = repeats[0]
+                    candidate = pending[:k] + pending[k + 1 : SEGMENTS_PER_MESSAGE + 1]
+                    if _crc_ok(b"".join(s.data for s in candidate)):
+                        self._report(
+                            out,
+                            DUPLICATE,
+                            f"feedback segment {k + 1} repeated",
+                            [pending[k]],
+                            pending[k].time,
+                        )
+                        self._emit(out, candidate, (f"segment {k + 1} was repeated",))
+                        del pending[: SEGMENTS_PER_MESSAGE + 1]
+                        continue
+            restart = next(
+                (i for i in range(1, SEGMENTS_PER_MESSAGE) if _is_header(pending[i].data)), 0
+            )
+            if restart:
+                self._report(
+                    out,
+                    INCOMPLETE,
+                    f"feedback message with only {restart} of 4 segments before the "
+                    "next header (segment lost?)",
+                    pending[:restart],
+                    time,
+                )
+                del pending[:restart]
+                continue
+            data = b"".join(s.data for s in first)
+            self._report(out, CRC_MISMATCH, _crc_detail(data), first, first[-1].time)
+            del pending[:SEGMENTS_PER_MESSAGE]
+
+
+def _crc_detail(data: bytes) -> str:
+    size = FRAME_SIZES[data[2]]
+    if len(data) < size:
+        return f"feedback message of {len(data)} bytes is too short for its CRC"
+    got = data[size - 2 : size]
+    want = crc16(data[: size - 2]).to_bytes(2, "little")
+    return (
+        f"feedback message type 0x{data[2]:02X}: CRC {got.hex(' ').upper()} on the wire, "
+        f"{want.hex(' ').upper()} computed"
+    )
