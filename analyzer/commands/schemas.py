@@ -1,0 +1,57 @@
+"""`gimbal-analyzer schemas`: write or check the JSON Schema of every topic."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from analyzer.errors import UsageError
+
+HELP = "write (or --check) the JSON Schemas of every topic into a directory"
+DESCRIPTION = """\
+The JSON Schemas are generated from the protocol table. This writes one file
+per topic (e.g. gimbal.command.schema.json) into DIR (default: schemas).
+
+  gimbal-analyzer schemas            write schemas/*.schema.json
+  gimbal-analyzer schemas --check    exit 1 if the files differ from the table
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("directory", nargs="?", default="schemas", help="output directory")
+    parser.add_argument("--check", action="store_true", help="only compare, write nothing")
+
+
+def rendered() -> dict[str, str]:
+    """File name -> file text for every topic."""
+    from analyzer.protocol.schema import schema_filename, topic_schemas
+
+    return {
+        schema_filename(topic): json.dumps(schema, indent=2) + "\n"
+        for topic, schema in topic_schemas().items()
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    directory = Path(args.directory)
+    files = rendered()
+    if args.check:
+        stale = [
+            name
+            for name, text in files.items()
+            if not (directory / name).is_file() or (directory / name).read_text() != text
+        ]
+        if stale:
+            print(f"out of date in {directory}: {', '.join(stale)} (run: gimbal-analyzer schemas)")
+            return 1
+        print(f"{len(files)} schemas in {directory} match the protocol table")
+        return 0
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        for name, text in files.items():
+            (directory / name).write_text(text)
+    except OSError as exc:
+        raise UsageError(f"cannot write schemas to {directory}: {exc.strerror}") from None
+    print(f"wrote {len(files)} schemas to {directory}")
+    return 0
