@@ -114,6 +114,8 @@ class FeedbackReassembler:
         while pending:
             if not _is_header(pending[0].data):
                 k = next((i for i, s in enumerate(pending) if _is_header(s.data)), len(pending))
+                if k == len(pending) < SEGMENTS_PER_MESSAGE and not final:
+                    break  # report a run of stray segments as one, once it ends
                 self._report(
                     out,
                     INCOMPLETE,
