@@ -181,7 +181,7 @@ def test_feedback_faults_on_can_become_diagnostics() -> None:
 
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(
-    st.sampled_from(sorted(PROTOCOL_IDS) + [0x7FF]),
+    st.sampled_from([*sorted(PROTOCOL_IDS), 0x7FF]),
     st.binary(max_size=9),
     st.booleans(),
 ), max_size=40))  # fmt: skip
