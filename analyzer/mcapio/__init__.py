@@ -1,0 +1,3 @@
+"""MCAP recordings: the writer sink, the (crash-tolerant) reader and the recording summary."""
+
+from __future__ import annotations

@@ -1,0 +1,156 @@
+"""Channel layout of a recording: raw channels, their JSON encoding and the channel roles."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
+
+TOPIC_CAN_FRAMES = "/can/frames"
+TOPIC_STREAM_BYTES = "/stream/bytes"
+RAW_TOPICS = (TOPIC_CAN_FRAMES, TOPIC_STREAM_BYTES)
+
+# Name of the metadata record describing the recording, and of the one written at the end
+# with counts gathered while writing (so `info` needs no scan of a finalised file).
+METADATA_NAME = "gimbal-analyzer"
+STATS_METADATA_NAME = "gimbal-analyzer.stats"
+
+# Channel metadata key telling what a channel holds: decoded events, raw input or a
+# Foxglove view derived from events.
+ROLE_KEY = "role"
+ROLE_EVENT = "event"
+ROLE_RAW = "raw"
+ROLE_VIEW = "view"
+
+SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+
+CAN_FRAME_SCHEMA: dict[str, Any] = {
+    "$schema": SCHEMA_DIALECT,
+    "title": "gimbal_analyzer.CanFrame",
+    "description": "One CAN frame exactly as received (lossless; re-decodable).",
+    "type": "object",
+    "properties": {
+        "time": {"type": "number", "description": "seconds (Unix time) of reception"},
+        "id": {"type": "integer", "minimum": 0, "description": "CAN identifier"},
+        "extended": {"type": "boolean", "description": "29-bit identifier"},
+        "dlc": {"type": "integer", "minimum": 0, "description": "number of data bytes"},
+        "data": {"type": "string", "description": "data bytes, hex pairs separated by spaces"},
+        "channel": {"type": "string", "description": "CAN channel / interface name"},
+        "remote": {"type": "boolean", "description": "remote transmission request"},
+        "error": {"type": "boolean", "description": "error frame"},
+        "fd": {"type": "boolean", "description": "CAN FD frame"},
+        "direction": {"type": "string", "description": "'rx' / 'tx' when the source says so"},
+    },
+    "required": ["time", "id", "extended", "dlc", "data"],
+}
+
+STREAM_BYTES_SCHEMA: dict[str, Any] = {
+    "$schema": SCHEMA_DIALECT,
+    "title": "gimbal_analyzer.StreamChunk",
+    "description": "Bytes read from a TCP / UART stream in one go (lossless; re-decodable).",
+    "type": "object",
+    "properties": {
+        "time": {"type": "number", "description": "seconds (Unix time) of the read"},
+        "data": {"type": "string", "description": "the bytes, hex pairs separated by spaces"},
+        "size": {"type": "integer", "minimum": 0, "description": "number of bytes"},
+        "source": {"type": "string", "description": "stream name (address, device)"},
+        "direction": {
+            "type": "string",
+            "enum": ["gs_to_idu", "idu_to_gs", ""],
+            "description": "ground station -> IDU, IDU -> ground station, or unknown",
+        },
+    },
+    "required": ["time", "data", "source"],
+}
+
+_TRUE_FALSE = ("false", "true")
+_STRING_CACHE: dict[str, str] = {}
+
+
+def _json_str(value: str) -> str:
+    """A JSON string literal, cached (channel names and directions repeat endlessly)."""
+    text = _STRING_CACHE.get(value)
+    if text is None:
+        text = json.dumps(value)
+        if len(_STRING_CACHE) < 1024:
+            _STRING_CACHE[value] = text
+    return text
+
+
+def _json_time(value: float) -> str:
+    return repr(float(value)) if math.isfinite(value) else "0.0"
+
+
+def can_frame_json(frame: CanFrame) -> bytes:
+    """The /can/frames message of one frame (hand-built: this runs for every frame)."""
+    data = frame.data
+    return (
+        f'{{"time":{_json_time(frame.time)},"id":{frame.can_id},'
+        f'"extended":{_TRUE_FALSE[frame.extended]},"dlc":{len(data)},'
+        f'"data":"{data.hex(" ").upper()}","channel":{_json_str(frame.channel)},'
+        f'"remote":{_TRUE_FALSE[frame.is_remote]},"error":{_TRUE_FALSE[frame.is_error]},'
+        f'"fd":{_TRUE_FALSE[frame.is_fd]},"direction":{_json_str(frame.direction)}}}'
+    ).encode()
+
+
+def stream_chunk_json(chunk: StreamChunk) -> bytes:
+    """The /stream/bytes message of one chunk."""
+    return (
+        f'{{"time":{_json_time(chunk.time)},"data":"{hexstr(chunk.data)}",'
+        f'"size":{len(chunk.data)},"source":{_json_str(chunk.source)},'
+        f'"direction":{_json_str(chunk.direction)}}}'
+    ).encode()
+
+
+def can_frame_from_dict(obj: dict[str, Any]) -> CanFrame:
+    return CanFrame(
+        time=float(obj["time"]),
+        can_id=int(obj["id"]),
+        data=bytes.fromhex(str(obj.get("data", ""))),
+        extended=bool(obj.get("extended", True)),
+        channel=str(obj.get("channel", "")),
+        is_remote=bool(obj.get("remote", False)),
+        is_error=bool(obj.get("error", False)),
+        is_fd=bool(obj.get("fd", False)),
+        direction=str(obj.get("direction", "")),
+    )
+
+
+def stream_chunk_from_dict(obj: dict[str, Any]) -> StreamChunk:
+    return StreamChunk(
+        time=float(obj["time"]),
+        data=bytes.fromhex(str(obj.get("data", ""))),
+        source=str(obj.get("source", "stream")),
+        direction=str(obj.get("direction", "")),
+    )
+
+
+def time_ns(seconds: float) -> int:
+    """Event time in seconds -> MCAP log time in nanoseconds (clamped to the uint64 range)."""
+    if not math.isfinite(seconds) or seconds <= 0:
+        return 0
+    return min(round(seconds * 1e9), 2**64 - 1)
+
+
+def schema_name(topic: str) -> str:
+    """'/gimbal/command' -> 'gimbal_analyzer.gimbal.command'."""
+    return "gimbal_analyzer." + topic.strip("/").replace("/", ".")
+
+
+def permissive_schema(topic: str) -> dict[str, Any]:
+    """Schema for a topic the core has no schema for (e.g. /can/other)."""
+    return {
+        "$schema": SCHEMA_DIALECT,
+        "title": schema_name(topic),
+        "description": f"events on {topic}",
+        "type": "object",
+        "properties": {
+            "topic": {"type": "string"},
+            "time": {"type": "number"},
+            "source": {"type": "string"},
+            "warnings": {"type": "array", "items": {"type": "string"}},
+        },
+        "required": ["topic", "time"],
+    }

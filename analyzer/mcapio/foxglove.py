@@ -1,0 +1,199 @@
+"""Foxglove views of events: target and UAV positions as LocationFix, diagnostics as Log."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from analyzer.protocol.types import (
+    BUS_ERROR,
+    LINK,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_RANGING,
+    TOPIC_UAV_ALTITUDE,
+    TOPIC_UAV_GPS,
+    Event,
+)
+
+LOCATION_FIX = "foxglove.LocationFix"
+LOG = "foxglove.Log"
+
+TOPIC_UAV_FIX = "/uav/gps/fix"
+TOPIC_TARGET_FIX = "/gimbal/ranging/fix"
+TOPIC_DIAGNOSTICS_LOG = "/diagnostics/log"
+
+# foxglove.LogLevel
+LOG_UNKNOWN, LOG_DEBUG, LOG_INFO, LOG_WARNING, LOG_ERROR, LOG_FATAL = range(6)
+# foxglove.PositionCovarianceType
+COVARIANCE_UNKNOWN = 0
+
+_TIME_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "title": "time",
+    "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+    },
+}
+
+LOCATION_FIX_SCHEMA: dict[str, Any] = {
+    "title": LOCATION_FIX,
+    "description": "A navigation satellite fix for any Global Navigation Satellite System",
+    "type": "object",
+    "properties": {
+        "timestamp": {**_TIME_SCHEMA, "description": "Timestamp of the message"},
+        "frame_id": {"type": "string", "description": "Frame for the sensor"},
+        "latitude": {"type": "number", "description": "Latitude in degrees"},
+        "longitude": {"type": "number", "description": "Longitude in degrees"},
+        "altitude": {"type": "number", "description": "Altitude in meters"},
+        "position_covariance": {
+            "type": "array",
+            "items": {"type": "number"},
+            "minItems": 9,
+            "maxItems": 9,
+            "description": "Position covariance (m^2), ENU, row-major",
+        },
+        "position_covariance_type": {
+            "title": "foxglove.PositionCovarianceType",
+            "description": "Type of position covariance",
+            "oneOf": [
+                {"title": "UNKNOWN", "const": 0},
+                {"title": "APPROXIMATED", "const": 1},
+                {"title": "DIAGONAL_KNOWN", "const": 2},
+                {"title": "KNOWN", "const": 3},
+            ],
+        },
+    },
+    "required": [
+        "timestamp",
+        "frame_id",
+        "latitude",
+        "longitude",
+        "altitude",
+        "position_covariance",
+        "position_covariance_type",
+    ],
+}
+
+LOG_SCHEMA: dict[str, Any] = {
+    "title": LOG,
+    "description": "A log message",
+    "type": "object",
+    "properties": {
+        "timestamp": {**_TIME_SCHEMA, "description": "Timestamp of log message"},
+        "level": {
+            "title": "foxglove.LogLevel",
+            "description": "Log level",
+            "oneOf": [
+                {"title": "UNKNOWN", "const": LOG_UNKNOWN},
+                {"title": "DEBUG", "const": LOG_DEBUG},
+                {"title": "INFO", "const": LOG_INFO},
+                {"title": "WARNING", "const": LOG_WARNING},
+                {"title": "ERROR", "const": LOG_ERROR},
+                {"title": "FATAL", "const": LOG_FATAL},
+            ],
+        },
+        "message": {"type": "string", "description": "Log message"},
+        "name": {"type": "string", "description": "Process or node name"},
+        "file": {"type": "string", "description": "Filename"},
+        "line": {"type": "integer", "minimum": 0, "description": "Line number in the file"},
+    },
+    "required": ["timestamp", "level", "message", "name", "file", "line"],
+}
+
+VIEW_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
+    TOPIC_UAV_FIX: (LOCATION_FIX, LOCATION_FIX_SCHEMA),
+    TOPIC_TARGET_FIX: (LOCATION_FIX, LOCATION_FIX_SCHEMA),
+    TOPIC_DIAGNOSTICS_LOG: (LOG, LOG_SCHEMA),
+}
+
+_ZERO_COVARIANCE = [0.0] * 9
+_UP_WORDS = ("connected", "connect", "up", "open", "opened", "reconnected")
+
+
+def timestamp(seconds: float) -> dict[str, int]:
+    """Seconds -> foxglove time {sec, nsec} (negative or invalid times become 0)."""
+    if not math.isfinite(seconds) or seconds <= 0:
+        return {"sec": 0, "nsec": 0}
+    sec = math.floor(seconds)
+    nsec = min(round((seconds - sec) * 1e9), 999_999_999)
+    return {"sec": int(sec), "nsec": int(nsec)}
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    number = float(value)
+    return number if math.isfinite(number) else None
+
+
+def _fix(event: Event, frame_id: str, altitude: float) -> dict[str, Any] | None:
+    lat = _number(event.fields.get("latitude_deg"))
+    lon = _number(event.fields.get("longitude_deg"))
+    if lat is None or lon is None or not (-90 <= lat <= 90 and -180 <= lon <= 180):
+        return None
+    if lat == 0 and lon == 0:  # 0/0 is what a source sends before it has a fix
+        return None
+    return {
+        "timestamp": timestamp(event.time),
+        "frame_id": frame_id,
+        "latitude": lat,
+        "longitude": lon,
+        "altitude": altitude,
+        "position_covariance": _ZERO_COVARIANCE,
+        "position_covariance_type": COVARIANCE_UNKNOWN,
+    }
+
+
+def log_level(event: Event) -> int:
+    """Foxglove log level of a diagnostic."""
+    kind = event.fields.get("kind")
+    if kind == BUS_ERROR:
+        return LOG_ERROR
+    if kind == LINK:
+        state = str(event.fields.get("state", "")).lower()
+        return LOG_INFO if state in _UP_WORDS else LOG_WARNING
+    return LOG_WARNING
+
+
+def log_message(event: Event) -> dict[str, Any]:
+    kind = event.fields.get("kind", "diagnostic")
+    text = f"{kind}: {event.fields.get('detail', '')}"
+    raw = event.fields.get("raw")
+    if raw:
+        text += f" [{raw}]"
+    return {
+        "timestamp": timestamp(event.time),
+        "level": log_level(event),
+        "message": text,
+        "name": event.source,
+        "file": "",
+        "line": 0,
+    }
+
+
+class FoxgloveViews:
+    """Turns events into Foxglove messages; keeps the last UAV altitude for the UAV fix."""
+
+    def __init__(self) -> None:
+        self.uav_altitude_m = 0.0
+
+    def views(self, event: Event) -> list[tuple[str, dict[str, Any]]]:
+        """(topic, message) pairs to publish for one event (most events give none)."""
+        topic = event.topic
+        if topic == TOPIC_UAV_ALTITUDE:
+            altitude = _number(event.fields.get("altitude_m"))
+            if altitude is not None:
+                self.uav_altitude_m = altitude
+            return []
+        if topic == TOPIC_UAV_GPS:
+            fix = _fix(event, "uav", self.uav_altitude_m)
+            return [] if fix is None else [(TOPIC_UAV_FIX, fix)]
+        if topic == TOPIC_GIMBAL_RANGING:
+            if event.fields.get("success") is False:
+                return []
+            fix = _fix(event, "ranging_target", 0.0)
+            return [] if fix is None else [(TOPIC_TARGET_FIX, fix)]
+        if topic == TOPIC_DIAGNOSTICS:
+            return [(TOPIC_DIAGNOSTICS_LOG, log_message(event))]
+        return []

@@ -1,0 +1,336 @@
+"""McapSink: writes raw items, decoded events and Foxglove views to a crash-tolerant MCAP file."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from analyzer import PROTOCOL_DOCUMENT, __version__
+from analyzer.errors import SourceError
+from analyzer.mcapio.channels import (
+    CAN_FRAME_SCHEMA,
+    METADATA_NAME,
+    ROLE_EVENT,
+    ROLE_KEY,
+    ROLE_RAW,
+    ROLE_VIEW,
+    STATS_METADATA_NAME,
+    STREAM_BYTES_SCHEMA,
+    TOPIC_CAN_FRAMES,
+    TOPIC_STREAM_BYTES,
+    can_frame_json,
+    permissive_schema,
+    schema_name,
+    stream_chunk_json,
+    time_ns,
+)
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS, FoxgloveViews
+from analyzer.mcapio.stats import EventStats
+from analyzer.pipeline import Batch, RawItem
+from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE, CanFrame, Event
+
+# Small chunks: a crash loses at most the chunk being built, and the time-based flush
+# closes chunks long before they fill up in live use.
+DEFAULT_CHUNK_SIZE = 128 * 1024
+# Live recording: close the open chunk and flush this often (seconds), so that after a
+# crash everything older than about a second is on disk.
+DEFAULT_FLUSH_INTERVAL = 0.5
+
+
+def _default_schemas() -> dict[str, dict[str, Any]]:
+    try:
+        from analyzer.protocol.schema import topic_schemas
+    except ImportError:
+        return {}
+    return topic_schemas()
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value).hex(" ").upper()
+    if isinstance(value, (set, frozenset, tuple)):
+        return list(value)
+    return str(value)
+
+
+def _describe(exc: OSError) -> str:
+    return exc.strerror or str(exc)
+
+
+class McapSink:
+    """Sink (see analyzer.pipeline) writing one MCAP recording.
+
+    Channels: one JSON channel per event topic (schema encoding ``jsonschema``), the lossless
+    raw channels ``/can/frames`` and ``/stream/bytes``, and Foxglove views (``foxglove.LocationFix``
+    for UAV and ranging-target positions, ``foxglove.Log`` for diagnostics). Log and publish
+    time of every message are the event / item time in nanoseconds.
+
+    With ``flush_interval`` set (live recording) the open chunk is closed and the file flushed
+    at that interval by a background thread (and by ``handle``), and fsync'ed, so a killed
+    recorder leaves a file whose older messages the reader recovers. A write error (disk full,
+    device gone) stops the recording: the file is cut back to the last complete flush, so it
+    stays readable, ``error`` says what happened and a ``SourceError`` is raised once.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        metadata: dict[str, str],
+        schemas: dict[str, dict[str, Any]] | None = None,
+        chunk_size: int = DEFAULT_CHUNK_SIZE,
+        flush_interval: float | None = DEFAULT_FLUSH_INTERVAL,
+        foxglove_views: bool = True,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        from mcap.writer import CompressionType, Writer
+
+        self.path = str(path)
+        self.error: str | None = None
+        self.stats = EventStats()
+        self.items_written = 0
+        self.events_written = 0
+        self.messages_written = 0
+        self.last_time: float | None = None
+        self._schemas = _default_schemas() if schemas is None else dict(schemas)
+        self._views = FoxgloveViews() if foxglove_views else None
+        self._clock = clock
+        self._flush_interval = flush_interval
+        self._lock = threading.Lock()
+        self._closed = False
+        self._channels: dict[str, int] = {}
+        self._schema_ids: dict[str, int] = {}
+        self._sequence: dict[int, int] = {}
+        self._dirty = False
+        self._good_offset = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        try:
+            self._file = open(self.path, "wb")  # noqa: SIM115 (closed in close())
+        except OSError as exc:
+            raise SourceError(f"cannot create {self.path}: {_describe(exc)}") from None
+        self._writer = Writer(
+            self._file,
+            chunk_size=chunk_size,
+            compression=CompressionType.NONE,
+        )
+        info = {
+            "tool": "gimbal-analyzer",
+            "tool_version": __version__,
+            "protocol_document": PROTOCOL_DOCUMENT,
+            **{str(k): str(v) for k, v in metadata.items()},
+        }
+        try:
+            self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
+            self._writer.add_metadata(METADATA_NAME, info)
+            self._file.flush()
+            self._good_offset = self._file.tell()
+        except OSError as exc:
+            self._fail(exc)
+        self._last_flush = clock()
+        if flush_interval is not None:
+            self._thread = threading.Thread(target=self._flush_loop, name="mcap-flush", daemon=True)
+            self._thread.start()
+
+    # -- Sink ------------------------------------------------------------------------------------
+
+    def handle(self, batch: Batch) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                for item in batch.items:
+                    self._write_item(item)
+                for event in batch.events:
+                    self._write_event(event)
+                if (
+                    self._flush_interval is not None
+                    and self._clock() - self._last_flush >= self._flush_interval
+                ):
+                    self._flush_locked()
+            except OSError as exc:
+                self._fail(exc)
+
+    def write_item(self, item: RawItem) -> None:
+        """Write one raw CAN frame / stream chunk to its lossless channel."""
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._write_item(item)
+            except OSError as exc:
+                self._fail(exc)
+
+    def write_event(self, event: Event) -> None:
+        """Write one decoded event (and its Foxglove views)."""
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._write_event(event)
+            except OSError as exc:
+                self._fail(exc)
+
+    def flush(self) -> None:
+        """Close the open chunk and push everything to the operating system."""
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._flush_locked()
+            except OSError as exc:
+                self._fail(exc)
+
+    def close(self) -> None:
+        """Finish the file (summary, indexes, statistics). Safe to call twice."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._writer.add_metadata(STATS_METADATA_NAME, self.stats.to_metadata())
+                self._writer.finish()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+            except OSError as exc:
+                self._fail(exc)
+            self._closed = True
+            self._file.close()
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    # -- writing ---------------------------------------------------------------------------------
+
+    def _channel(self, topic: str, role: str) -> int:
+        channel_id = self._channels.get(topic)
+        if channel_id is not None:
+            return channel_id
+        if role == ROLE_RAW:
+            schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
+            name = str(schema["title"])
+        elif role == ROLE_VIEW:
+            name, schema = VIEW_SCHEMAS[topic]
+        else:
+            name = schema_name(topic)
+            schema = self._schemas.get(topic) or permissive_schema(topic)
+        schema_id = self._schema_ids.get(name)
+        if schema_id is None:
+            data = json.dumps(schema, separators=(",", ":")).encode()
+            schema_id = self._writer.register_schema(name, "jsonschema", data)
+            self._schema_ids[name] = schema_id
+        channel_id = self._writer.register_channel(topic, "json", schema_id, {ROLE_KEY: role})
+        self._channels[topic] = channel_id
+        self._sequence[channel_id] = 0
+        return channel_id
+
+    def _add(self, channel_id: int, log_time: int, data: bytes) -> None:
+        sequence = self._sequence[channel_id] + 1
+        self._sequence[channel_id] = sequence
+        self._writer.add_message(channel_id, log_time, data, log_time, sequence)
+        self.messages_written += 1
+        self._dirty = True
+
+    def _write_item(self, item: RawItem) -> None:
+        if isinstance(item, CanFrame):
+            channel_id = self._channels.get(TOPIC_CAN_FRAMES) or self._channel(
+                TOPIC_CAN_FRAMES, ROLE_RAW
+            )
+            data = can_frame_json(item)
+        else:
+            channel_id = self._channels.get(TOPIC_STREAM_BYTES) or self._channel(
+                TOPIC_STREAM_BYTES, ROLE_RAW
+            )
+            data = stream_chunk_json(item)
+        self._add(channel_id, time_ns(item.time), data)
+        self.items_written += 1
+        self.last_time = item.time
+
+    def _write_event(self, event: Event) -> None:
+        topic = event.topic
+        channel_id = self._channels.get(topic) or self._channel(topic, ROLE_EVENT)
+        data = json.dumps(event.to_dict(), separators=(",", ":"), default=_json_default)
+        log_time = time_ns(event.time)
+        self._add(channel_id, log_time, data.encode())
+        self.events_written += 1
+        self.last_time = event.time
+        if topic == TOPIC_DIAGNOSTICS:
+            self.stats.diagnostics[str(event.fields.get("kind", "unknown"))] += 1
+        elif topic == TOPIC_GIMBAL_ATTITUDE:
+            self.stats.attitude(event.time)
+        if self._views is not None:
+            for view_topic, message in self._views.views(event):
+                view_id = self._channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
+                self._add(view_id, log_time, json.dumps(message, separators=(",", ":")).encode())
+
+    def _flush_locked(self) -> None:
+        self._last_flush = self._clock()
+        if not self._dirty:
+            return
+        self._writer.flush()
+        self._good_offset = self._file.tell()
+        self._dirty = False
+
+    def _flush_loop(self) -> None:
+        interval = self._flush_interval or DEFAULT_FLUSH_INTERVAL
+        while not self._stop.wait(interval / 4):
+            flushed = False
+            with self._lock:
+                if self._closed:
+                    return
+                if self._clock() - self._last_flush >= interval:
+                    try:
+                        flushed = self._dirty
+                        self._flush_locked()
+                    except OSError as exc:
+                        try:
+                            self._fail(exc)
+                        except SourceError:
+                            return
+                fd = self._file.fileno() if flushed else -1
+            if fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.fsync(fd)  # outside the lock: slow media must not stall capture
+
+    def _fail(self, exc: OSError) -> None:
+        """Stop for good after a write error, leaving a file the reader can recover."""
+        reason = _describe(exc)
+        good = self._good_offset
+        self._closed = True
+        self._stop.set()
+        with contextlib.suppress(OSError):
+            self._file.close()
+        with contextlib.suppress(OSError):
+            os.truncate(self.path, good)  # drop the half-written tail
+        self.error = (
+            f"recording stopped, cannot write {self.path}: {reason}; the file keeps what was "
+            f"written up to then ({good} bytes, readable: gimbal-analyzer info {self.path})"
+        )
+        raise SourceError(self.error) from None
+
+
+def recording_metadata(source: str, **extra: str) -> dict[str, str]:
+    """Metadata for a new recording: source description plus anything else worth keeping."""
+    out = {"source": source, "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    out.update(extra)
+    return out
+
+
+def output_path(path: str) -> Path:
+    """Check an output path before a long capture starts (directory exists, not a directory)."""
+    target = Path(path)
+    if target.is_dir():
+        raise SourceError(f"{path} is a directory")
+    parent = target.parent if str(target.parent) else Path(".")
+    if not parent.is_dir():
+        raise SourceError(f"directory {parent} does not exist")
+    return target
