@@ -1,0 +1,147 @@
+"""Parse ``--source`` specs: ``can:``, ``tcp:``, ``proxy:``, ``serial:`` and ``file:`` forms."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from analyzer.errors import UsageError
+
+DEFAULT_IDU_HOST = "192.168.42.200"
+DEFAULT_IDU_PORT = 2000
+DEFAULT_CAN_BITRATE = 1_000_000
+DEFAULT_SERIAL_BAUDRATE = 115_200
+DEFAULT_PROXY_LISTEN_HOST = "0.0.0.0"
+
+SOURCE_FORMS = (
+    "can:INTERFACE:CHANNEL[@BITRATE] (e.g. can:socketcan:can0, can:virtual:demo), "
+    "tcp:HOST:PORT (default 192.168.42.200:2000), "
+    "proxy:[LISTEN_HOST:]PORT->IDU_HOST:PORT, "
+    "serial:DEVICE[@BAUD] (e.g. serial:/dev/ttyUSB0@115200), "
+    "file:PATH"
+)
+
+
+@dataclass(frozen=True, slots=True)
+class CanSpec:
+    interface: str
+    channel: str
+    bitrate: int | None  # None: the interface has no bitrate (virtual) or none was given
+
+
+@dataclass(frozen=True, slots=True)
+class TcpSpec:
+    host: str
+    port: int
+
+
+@dataclass(frozen=True, slots=True)
+class ProxySpec:
+    listen_host: str
+    listen_port: int
+    idu_host: str
+    idu_port: int
+
+
+@dataclass(frozen=True, slots=True)
+class SerialSpec:
+    url: str
+    baudrate: int
+
+
+@dataclass(frozen=True, slots=True)
+class FileSpec:
+    path: str
+
+
+SourceSpec = CanSpec | TcpSpec | ProxySpec | SerialSpec | FileSpec
+
+# Interfaces without a bitrate setting of their own: no default bitrate is passed.
+_NO_BITRATE = frozenset({"virtual", "socketcan", "udp_multicast"})
+
+
+def _bad(spec: str, why: str) -> UsageError:
+    return UsageError(f"bad source {spec!r}: {why}; valid forms: {SOURCE_FORMS}")
+
+
+def _port(text: str, spec: str) -> int:
+    if not text.isdigit() or not 0 <= int(text) <= 65535:
+        raise _bad(spec, f"port {text!r} is not a number 0-65535")
+    return int(text)
+
+
+def split_host_port(text: str, spec: str, *, default_port: int | None = None) -> tuple[str, int]:
+    """``HOST:PORT``, ``[V6ADDR]:PORT`` or (with a default port) ``HOST``."""
+    if text.startswith("["):
+        host, sep, rest = text[1:].partition("]")
+        if not sep or not host:
+            raise _bad(spec, f"unclosed '[' in {text!r}")
+        if not rest:
+            if default_port is None:
+                raise _bad(spec, f"missing port in {text!r}")
+            return host, default_port
+        if not rest.startswith(":"):
+            raise _bad(spec, f"expected ':PORT' after ']' in {text!r}")
+        return host, _port(rest[1:], spec)
+    host, sep, port = text.rpartition(":")
+    if not sep:
+        if default_port is None:
+            raise _bad(spec, f"missing port in {text!r}")
+        host, port = text, str(default_port)
+    if not host:
+        raise _bad(spec, f"missing host in {text!r}")
+    if ":" in host:
+        raise _bad(spec, f"write IPv6 addresses in brackets: [{host}]:{port}")
+    return host, _port(port, spec)
+
+
+def _split_rate(text: str) -> tuple[str, int | None]:
+    """``NAME@123`` -> (NAME, 123); a trailing ``@`` part that is not digits stays in the name."""
+    name, sep, rate = text.rpartition("@")
+    if sep and rate.isdigit() and name:
+        return name, int(rate)
+    return text, None
+
+
+def parse_source(spec: str) -> SourceSpec:
+    """Turn a ``--source`` string into a spec object; raise UsageError naming the valid forms."""
+    kind, sep, rest = spec.partition(":")
+    kind = kind.strip().lower()
+    if not sep and kind != "tcp":
+        raise _bad(spec, "missing 'KIND:'")
+    if kind == "can":
+        interface, sep, channel = rest.partition(":")
+        if not interface or not sep or not channel:
+            raise _bad(spec, "CAN sources need an interface and a channel")
+        channel, bitrate = _split_rate(channel)
+        if bitrate is None and interface not in _NO_BITRATE:
+            bitrate = DEFAULT_CAN_BITRATE
+        if bitrate is not None and bitrate <= 0:
+            raise _bad(spec, "bitrate must be positive")
+        return CanSpec(interface, channel, bitrate)
+    if kind == "tcp":
+        if not rest:
+            return TcpSpec(DEFAULT_IDU_HOST, DEFAULT_IDU_PORT)
+        host, port = split_host_port(rest, spec, default_port=DEFAULT_IDU_PORT)
+        return TcpSpec(host, port)
+    if kind == "proxy":
+        listen, sep, idu = rest.partition("->")
+        if not sep or not listen or not idu:
+            raise _bad(spec, "a proxy needs LISTEN->IDU_HOST:PORT")
+        if listen.isdigit():
+            listen_host, listen_port = DEFAULT_PROXY_LISTEN_HOST, _port(listen, spec)
+        else:
+            listen_host, listen_port = split_host_port(listen, spec)
+        idu_host, idu_port = split_host_port(idu, spec, default_port=DEFAULT_IDU_PORT)
+        return ProxySpec(listen_host, listen_port, idu_host, idu_port)
+    if kind == "serial":
+        url, baudrate = _split_rate(rest)
+        if not url:
+            raise _bad(spec, "missing serial device")
+        if baudrate is not None and baudrate <= 0:
+            raise _bad(spec, "baud rate must be positive")
+        return SerialSpec(url, DEFAULT_SERIAL_BAUDRATE if baudrate is None else baudrate)
+    if kind == "file":
+        if not rest:
+            raise _bad(spec, "missing file path")
+        return FileSpec(rest)
+    raise _bad(spec, f"unknown source kind {kind!r}")
