@@ -1,0 +1,348 @@
+"""The monitor app: lays out the panels, folds batches from the bridge, redraws at a fixed rate."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import ClassVar, Protocol
+
+from textual.app import App, ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal
+from textual.message import Message
+from textual.widgets import DataTable, Footer
+
+from analyzer.pipeline import Sink
+from analyzer.tui.bridge import TuiBridge
+from analyzer.tui.command_log import CommandLog
+from analyzer.tui.detail_screen import DetailScreen
+from analyzer.tui.diagnostics_panel import DiagnosticsPanel
+from analyzer.tui.event_filter import EventFilter
+from analyzer.tui.gimbal_panel import GimbalPanel
+from analyzer.tui.help_screen import HelpScreen
+from analyzer.tui.id_table import IdTable
+from analyzer.tui.prompt_bar import PromptBar
+from analyzer.tui.state import LogEntry, MonitorState
+from analyzer.tui.status_bar import StatusBar, StatusInfo
+from analyzer.tui.uav_panel import UavPanel
+
+REFRESH_HZ = 8.0  # screen updates per second, whatever the input rate
+
+
+class CaptureControl(Protocol):
+    """What the app needs of a capture: to stop it and wait for its sinks to finish."""
+
+    def stop(self) -> None: ...
+
+    def join(self, timeout: float | None = None) -> object: ...
+
+
+class BatchesReady(Message):
+    """Posted (from the capture thread, via the bridge) when batches wait in the bridge."""
+
+
+@dataclass
+class RefreshStats:
+    """How the display keeps up (read by tests and the load benchmark)."""
+
+    batches: int = 0
+    messages: int = 0
+    refreshes: int = 0
+    last_batch_wall: float = 0.0
+    lag: float = 0.0  # at the last refresh: now - capture time of the newest batch shown
+    max_lag: float = 0.0
+
+
+def _file_size(path: str) -> int | None:
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return None
+
+
+class MonitorApp(App[int]):
+    """The live monitor. Feed it through ``bridge`` (a Sink given to the capture)."""
+
+    TITLE = "gimbal-analyzer monitor"
+    ENABLE_COMMAND_PALETTE = False
+
+    CSS = """
+    #top { height: 10; }
+    #top GimbalPanel { width: 66; }
+    #top UavPanel { width: 1fr; }
+    #middle { height: 1fr; }
+    #middle CommandLog { width: 1fr; }
+    #middle IdTable { width: 62; }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("q", "quit", "Quit"),
+        Binding("p", "toggle_pause", "Pause"),
+        Binding("space", "toggle_pause", "Pause", show=False),
+        Binding("f", "filter", "Filter"),
+        Binding("slash", "search", "Search", key_display="/"),
+        Binding("n", "find_next", "Next", show=False),
+        Binding("N", "find_previous", "Previous", show=False),
+        Binding("c", "clear_counters", "Clear"),
+        Binding("r", "toggle_raw", "Raw"),
+        Binding("v", "toggle_view", "View"),
+        Binding("escape", "follow", "Follow", show=False),
+        Binding("question_mark", "help", "Help", key_display="?"),
+        Binding("f1", "help", "Help", show=False),
+    ]
+
+    def __init__(
+        self,
+        bridge: TuiBridge,
+        *,
+        source_label: str = "",
+        recording: str | None = None,
+        capture: CaptureControl | None = None,
+        clock: Callable[[], float] = time.time,
+        refresh_hz: float = REFRESH_HZ,
+        state: MonitorState | None = None,
+        file_size: Callable[[str], int | None] = _file_size,
+    ) -> None:
+        super().__init__()
+        self.bridge = bridge
+        self.capture = capture
+        self.clock = clock
+        self.refresh_hz = refresh_hz
+        self.state = state or MonitorState()
+        self.file_size = file_size
+        self.info = StatusInfo(source=source_label, recording=recording)
+        self.filter = EventFilter()
+        self.search_text = ""
+        self.paused = False
+        self.stats = RefreshStats()
+        self._paused_seq = 0
+        self._log_key: tuple[object, ...] = ()
+        self._capture_stopped = False
+
+    # -- layout --------------------------------------------------------------------------------
+
+    def compose(self) -> ComposeResult:
+        yield StatusBar(id="status")
+        with Horizontal(id="top"):
+            yield GimbalPanel(id="gimbal")
+            yield UavPanel(id="uav")
+        with Horizontal(id="middle"):
+            yield CommandLog(id="log")
+            yield IdTable(id="ids")
+        yield DiagnosticsPanel(id="diagnostics")
+        yield PromptBar(id="prompt")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.bridge.connect(self._wake)
+        self.set_interval(1.0 / self.refresh_hz, self.refresh_view)
+        self.query_one(CommandLog).focus()
+        self.refresh_view()
+
+    def on_unmount(self) -> None:
+        self.bridge.disconnect()
+
+    # -- data in -------------------------------------------------------------------------------
+
+    def _wake(self) -> None:
+        """Runs in the capture thread: one message per wake-up (post_message is thread-safe)."""
+        self.post_message(BatchesReady())
+
+    def on_batches_ready(self, message: BatchesReady) -> None:
+        self.stats.messages += 1
+        self.pull()
+
+    def pull(self) -> int:
+        """Fold every batch waiting in the bridge into the state (cheap; no drawing)."""
+        batches, dropped = self.bridge.take()
+        state = self.state
+        for batch in batches:
+            wall = batch.wall_time or self.clock()
+            state.fold(batch, wall)
+            self.stats.last_batch_wall = wall
+        self.stats.batches += len(batches)
+        if dropped:
+            state.mark_dropped(dropped)
+        if self.bridge.closed and not state.source_ended and not self.bridge.backlog:
+            state.source_finished()
+        return len(batches)
+
+    # -- drawing -------------------------------------------------------------------------------
+
+    def refresh_view(self) -> None:
+        """Redraw from the state (timer-driven, so the cost does not grow with the input rate)."""
+        now = self.clock()
+        state = self.state
+        state.advance(now)
+        info = self.info
+        if info.recording:
+            info.recording_size = self.file_size(info.recording)
+        info.paused = self.paused
+        info.paused_new = state.seq - self._paused_seq if self.paused else 0
+        info.filter_text = self.filter.text
+        self.query_one(StatusBar).show(state, info)
+        if self.paused:
+            return
+        self.stats.refreshes += 1
+        if self.stats.last_batch_wall:
+            self.stats.lag = max(now - self.stats.last_batch_wall, 0.0)
+            self.stats.max_lag = max(self.stats.max_lag, self.stats.lag)
+        self.query_one(GimbalPanel).show(state)
+        self.query_one(UavPanel).show(state)
+        self._show_log()
+        self.query_one(IdTable).show(state, self.filter)
+        self.query_one(DiagnosticsPanel).show(state)
+
+    def _show_log(self) -> None:
+        log = self.query_one(CommandLog)
+        source = self.state.command_log if self.info.view == "commands" else self.state.all_log
+        key = (self.state.seq, self.info.view, self.filter.text, log.raw, log.search)
+        if key == self._log_key:
+            return
+        self._log_key = key
+        if self.filter.active:
+            flt = self.filter
+            entries = [e for e in source if flt.matches_event(e.event, log.text_of(e))]
+        else:
+            entries = list(source)
+        log.set_entries(entries)
+        what = "commands + diagnostics" if self.info.view == "commands" else "all topics"
+        log.border_title = f"Log: {what}"
+        log.border_subtitle = f"{len(entries)} of {len(source)}" if self.filter.active else ""
+
+    # -- actions -------------------------------------------------------------------------------
+
+    def action_toggle_pause(self) -> None:
+        self.paused = not self.paused
+        if self.paused:
+            self._paused_seq = self.state.seq
+        self.refresh_view()
+
+    def action_filter(self) -> None:
+        self.query_one(PromptBar).open("filter", self.filter.text)
+
+    def action_search(self) -> None:
+        self.query_one(PromptBar).open("search", self.search_text)
+
+    def on_prompt_bar_done(self, message: PromptBar.Done) -> None:
+        log = self.query_one(CommandLog)
+        log.focus()
+        if message.value is None:
+            return
+        if message.mode == "filter":
+            self.set_filter(message.value)
+        elif message.mode == "search":
+            self.search_text = message.value.strip()
+            log.search = self.search_text
+            self._log_key = ()
+            if self.search_text and not log.find(self.search_text):
+                self.notify(f"not found: {self.search_text}", severity="warning", timeout=2)
+            log.refresh()
+
+    def set_filter(self, text: str) -> None:
+        self.filter = EventFilter.parse(text)
+        self._force_redraw()
+
+    def action_find_next(self) -> None:
+        self.query_one(CommandLog).find(self.search_text, backwards=True)
+
+    def action_find_previous(self) -> None:
+        self.query_one(CommandLog).find(self.search_text, backwards=False)
+
+    def action_clear_counters(self) -> None:
+        self.state.clear_counters()
+        self.notify("counters cleared", timeout=1.5)
+        self._force_redraw()
+
+    def action_toggle_raw(self) -> None:
+        log = self.query_one(CommandLog)
+        log.raw = not log.raw
+        self.info.raw = log.raw
+        self._force_redraw()
+
+    def action_toggle_view(self) -> None:
+        self.info.view = "all" if self.info.view == "commands" else "commands"
+        self._force_redraw()
+
+    def action_follow(self) -> None:
+        self.query_one(CommandLog).action_follow()
+
+    def action_help(self) -> None:
+        self.push_screen(HelpScreen())
+
+    def on_command_log_selected(self, message: CommandLog.Selected) -> None:
+        self.show_detail(message.entry)
+
+    def show_detail(self, entry: LogEntry) -> None:
+        self.push_screen(DetailScreen(entry.event))
+
+    def on_data_table_row_selected(self, message: DataTable.RowSelected) -> None:
+        """Enter on an ID row: filter the log by that ID (a second Enter clears it)."""
+        key = str(message.row_key.value or "")
+        if key.startswith("0x"):
+            self.set_filter("" if self.filter.text == key else key)
+
+    def _force_redraw(self) -> None:
+        self._log_key = ()
+        if self.paused:
+            # the user changed the view: show it, but keep the display frozen otherwise
+            self.paused = False
+            self.refresh_view()
+            self.paused = True
+            self.query_one(StatusBar).show(self.state, self.info)
+        else:
+            self.refresh_view()
+
+    async def action_quit(self) -> None:
+        """Stop the capture (its sinks finalise the recording), then leave."""
+        await asyncio.to_thread(self.stop_capture)
+        self.exit(0)
+
+    def stop_capture(self) -> None:
+        if self._capture_stopped or self.capture is None:
+            return
+        self._capture_stopped = True
+        self.capture.stop()
+        self.capture.join()
+
+
+def add_sink(capture: object, sink: Sink) -> None:
+    """Attach a sink to a capture that may already have others."""
+    adder = getattr(capture, "add_sink", None)
+    if callable(adder):
+        adder(sink)
+        return
+    sinks = getattr(capture, "sinks", None)
+    if isinstance(sinks, list):
+        sinks.append(sink)
+        return
+    raise TypeError("the capture accepts no extra sinks")
+
+
+class StartStopCapture(CaptureControl, Protocol):
+    def start(self) -> None: ...
+
+
+def run_app(
+    capture: StartStopCapture,
+    *,
+    recording: str | None = None,
+    source_label: str = "",
+) -> int:
+    """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
+
+    The capture is stopped and joined (so every sink, the recording included, is
+    finalised) whether the user quits, presses Ctrl+C or the UI fails.
+    """
+    bridge = TuiBridge()
+    add_sink(capture, bridge)
+    app = MonitorApp(bridge, source_label=source_label, recording=recording, capture=capture)
+    capture.start()
+    try:
+        result = app.run()
+    finally:
+        app.stop_capture()
+    return int(result or 0)

@@ -1,0 +1,67 @@
+"""A pop-up with every field, every warning and the raw bytes of one event."""
+
+from __future__ import annotations
+
+import json
+from typing import ClassVar
+
+from rich.table import Table
+from rich.text import Text
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import VerticalScroll
+from textual.screen import ModalScreen
+from textual.widgets import Static
+
+from analyzer.protocol.types import Event
+from analyzer.tui.formatting import event_raw, event_text, format_time
+
+
+def render_detail(event: Event) -> Table:
+    table = Table.grid(padding=(0, 2))
+    table.add_column(style="dim", no_wrap=True)
+    table.add_column()
+    table.add_row("event", Text(event_text(event), style="bold"))
+    table.add_row("topic", event.topic)
+    table.add_row("time", f"{format_time(event.time)}  ({event.time:.6f})")
+    table.add_row("source", event.source or "—")
+    for key, value in event.fields.items():
+        shown = value if isinstance(value, str) else json.dumps(value, default=str)
+        table.add_row(key, Text(shown, style="cyan" if key == "raw" else ""))
+    raw = event_raw(event)
+    table.add_row("raw bytes", Text(raw or "— (not carried by this event)", style="bold cyan"))
+    if event.warnings:
+        for warning in event.warnings:
+            table.add_row("warning", Text(warning, style="yellow"))
+    else:
+        table.add_row("warnings", Text("none", style="dim"))
+    return table
+
+
+class DetailScreen(ModalScreen[None]):
+    """Shows one event; Escape or Enter closes it."""
+
+    DEFAULT_CSS = """
+    DetailScreen { align: center middle; }
+    DetailScreen > VerticalScroll {
+        width: 90; max-height: 30; border: thick $accent; background: $surface; padding: 0 1;
+    }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "close", "Close"),
+        Binding("enter", "close", "Close", show=False),
+        Binding("q", "close", "Close", show=False),
+    ]
+
+    def __init__(self, event: Event) -> None:
+        super().__init__()
+        self.event = event
+
+    def compose(self) -> ComposeResult:
+        with VerticalScroll() as scroll:
+            scroll.border_title = "Event details"
+            yield Static(render_detail(self.event), id="detail")
+
+    def action_close(self) -> None:
+        self.dismiss(None)

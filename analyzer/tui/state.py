@@ -1,0 +1,428 @@
+"""What the monitor screen shows, as plain data: folds capture batches, knows no UI and no clock.
+
+Time comes only from the input: frame times, each batch's wall time, and the ``now``
+given to :meth:`MonitorState.advance`. "Bus time" is the time axis of the frames (Unix
+time for live sources, the log's times for a replay); between batches it runs on with
+the wall clock, so the age of the last feedback keeps growing when the source goes quiet.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, deque
+from dataclasses import dataclass, field
+
+from analyzer.pipeline import Batch
+from analyzer.protocol.ids import (
+    ALTITUDE_ID,
+    CAN_BITRATE,
+    CONTROL_ID,
+    FEEDBACK_ID,
+    GPS_ID,
+    TEXT_END_ID,
+    TEXT_ID,
+    UAV_ATTITUDE_ID,
+)
+from analyzer.protocol.types import (
+    LINK,
+    TOPIC_CAN_OTHER,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+    TOPIC_GIMBAL_RANGING,
+    TOPIC_UAV_ALTITUDE,
+    TOPIC_UAV_ATTITUDE,
+    TOPIC_UAV_GPS,
+    TOPIC_UAV_TEXT,
+    CanFrame,
+    Event,
+)
+
+LOG_LIMIT = 2000  # entries kept per log view
+HISTORY = 60  # seconds of frames/s and errors/s kept for the sparklines
+FEEDBACK_STALE_S = 1.0  # the gimbal answers about every 500 ms
+HIGHLIGHT_S = 1.0  # a changed data byte stays highlighted this long
+RATE_WINDOW_S = 1.0
+
+ID_LABELS: dict[int, str] = {
+    CONTROL_ID: "control",
+    FEEDBACK_ID: "feedback",
+    GPS_ID: "uav gps",
+    ALTITUDE_ID: "uav alt",
+    UAV_ATTITUDE_ID: "uav att",
+    TEXT_ID: "uav text",
+    TEXT_END_ID: "text end",
+}
+
+# The command log view shows these topics; the "all" view every decoded topic.
+COMMAND_VIEW_TOPICS = frozenset({TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_UAV_TEXT})
+
+# Last command of each group shown in the gimbal panel.
+COMMAND_GROUPS: dict[str, str] = {
+    "zoom": "zoom",
+    "digital_zoom": "zoom",
+    "zoom_1x": "zoom",
+    "tap_zoom": "zoom",
+    "focus": "focus",
+    "tap_focus": "focus",
+    "recording": "recording",
+    "snapshot": "snapshot",
+    "gimbal_control": "motion",
+    "specified_angle": "motion",
+    "look_down": "motion",
+    "forward": "motion",
+    "tracking": "motion",
+    "tracking_stop": "motion",
+}
+
+
+def frame_bits(frame: CanFrame) -> int:
+    """Bits a classic CAN frame occupies on the wire (without stuff bits), interframe included."""
+    return (67 if frame.extended else 47) + 8 * len(frame.data)
+
+
+class IdRow:
+    """One line of the bus sniffer table: a CAN ID (or a stream source + direction)."""
+
+    __slots__ = (
+        "can_id",
+        "changed_at",
+        "count",
+        "data",
+        "extended",
+        "key",
+        "label",
+        "last_time",
+        "protocol",
+        "rate_hz",
+        "window_count",
+    )
+
+    def __init__(self, key: str, can_id: int | None, label: str, protocol: bool) -> None:
+        self.key = key
+        self.can_id = can_id
+        self.label = label
+        self.protocol = protocol
+        self.extended = True
+        self.count = 0
+        self.window_count = 0
+        self.rate_hz = 0.0
+        self.last_time = 0.0
+        self.data = b""
+        self.changed_at: list[float] = []
+
+    def note_data(self, data: bytes, time: float) -> None:
+        """Remember which bytes differ from the previous frame, and when."""
+        old = self.data
+        changed = self.changed_at
+        if len(changed) < len(data):
+            changed.extend([time] * (len(data) - len(changed)))
+        for i, byte in enumerate(data):
+            if i >= len(old) or old[i] != byte:
+                changed[i] = time
+        self.data = data
+
+    def changed_mask(self, now: float, within: float = HIGHLIGHT_S) -> tuple[bool, ...]:
+        """Per data byte: did it change in the last ``within`` seconds?"""
+        if self.count <= 1:
+            return (False,) * len(self.data)
+        return tuple(now - t < within for t in self.changed_at[: len(self.data)])
+
+
+class LogEntry:
+    """An event in a log view, numbered in arrival order."""
+
+    __slots__ = ("event", "seq")
+
+    def __init__(self, seq: int, event: Event) -> None:
+        self.seq = seq
+        self.event = event
+
+
+@dataclass
+class Counters:
+    """Counts since start or since the user last cleared them."""
+
+    frames: int = 0
+    chunks: int = 0
+    bytes: int = 0
+    events: int = 0
+    warnings: int = 0
+    kinds: Counter[str] = field(default_factory=Counter)
+
+    @property
+    def errors(self) -> int:
+        return sum(n for kind, n in self.kinds.items() if kind != LINK)
+
+
+class MonitorState:
+    """Everything on the monitor screen, updated by :meth:`fold` and :meth:`advance`."""
+
+    def __init__(
+        self,
+        *,
+        log_limit: int = LOG_LIMIT,
+        history: int = HISTORY,
+        feedback_stale_s: float = FEEDBACK_STALE_S,
+    ) -> None:
+        self.feedback_stale_s = feedback_stale_s
+        # gimbal
+        self.attitude: Event | None = None
+        self.ranging: Event | None = None
+        self.last_feedback_time: float | None = None
+        self.feedback_count = 0
+        self.last_commands: dict[str, Event] = {}
+        # UAV
+        self.gps: Event | None = None
+        self.altitude: Event | None = None
+        self.uav_attitude: Event | None = None
+        self.text: Event | None = None
+        # logs
+        self.seq = 0
+        self.command_log: deque[LogEntry] = deque(maxlen=log_limit)
+        self.all_log: deque[LogEntry] = deque(maxlen=log_limit)
+        # bus sniffer
+        self.rows: dict[int | str, IdRow] = {}
+        self.rows_added = 0  # bumps when a row appears, so views know to add it
+        # counters: ``total`` never resets, ``counters`` is cleared by clear_counters()
+        self.total = Counters()
+        self.counters = Counters()
+        self.cleared_at: float | None = None
+        self.clear_count = 0
+        self.dropped_batches = 0
+        # link
+        self.link_state = ""
+        self.link_detail = ""
+        self.source_ended = False
+        # rates over windows of bus time
+        self.frames_per_s = 0.0
+        self.bits_per_s = 0.0
+        self.errors_per_s = 0.0
+        self.frames_history: deque[float] = deque([0.0] * history, maxlen=history)
+        self.errors_history: deque[float] = deque([0.0] * history, maxlen=history)
+        self._window_start: float | None = None
+        self._window_frames = 0
+        self._window_bits = 0
+        self._window_errors = 0
+        # clock
+        self.last_item_time: float | None = None
+        self._offset = 0.0  # bus time minus wall time at the last batch with items
+        self.now = 0.0  # current bus time
+        self.version = 0  # bumps on every change
+
+    # -- input -------------------------------------------------------------------------------
+
+    def fold(self, batch: Batch, wall_time: float | None = None) -> None:
+        """Take in one batch from the capture."""
+        wall = batch.wall_time if wall_time is None else wall_time
+        self.version += 1
+        if batch.items:
+            self._fold_items(batch)
+            last = self.last_item_time
+            if last is not None:
+                self._offset = last - wall
+        now = max(wall + self._offset, self.last_item_time or wall)
+        if batch.events:
+            self._fold_events(batch.events)
+        self._advance_to(now)
+
+    def advance(self, wall_now: float) -> None:
+        """Let time pass without data (ages grow, rates fall to zero)."""
+        now = wall_now + self._offset
+        if now > self.now:
+            self._advance_to(now)
+
+    def mark_dropped(self, batches: int) -> None:
+        """The display could not keep up and skipped batches (the capture itself lost nothing)."""
+        self.dropped_batches += batches
+        self.version += 1
+
+    def source_finished(self) -> None:
+        self.source_ended = True
+        self.version += 1
+
+    def clear_counters(self) -> None:
+        """The user's explicit reset of counters and per-ID counts (totals since start stay)."""
+        self.counters = Counters()
+        for row in self.rows.values():
+            row.count = 0
+            row.window_count = 0
+        self.cleared_at = self.now
+        self.clear_count += 1
+        self.version += 1
+
+    # -- derived -------------------------------------------------------------------------------
+
+    @property
+    def feedback_age(self) -> float | None:
+        if self.last_feedback_time is None:
+            return None
+        return max(self.now - self.last_feedback_time, 0.0)
+
+    @property
+    def feedback_stale(self) -> bool:
+        age = self.feedback_age
+        return age is None or age > self.feedback_stale_s
+
+    @property
+    def bus_load(self) -> float:
+        """Share of a 1 Mbit/s CAN bus used, 0..1+ (stuff bits not counted)."""
+        return self.bits_per_s / CAN_BITRATE
+
+    def age(self, event: Event | None) -> float | None:
+        return None if event is None else max(self.now - event.time, 0.0)
+
+    # -- folding -------------------------------------------------------------------------------
+
+    def _fold_items(self, batch: Batch) -> None:
+        rows = self.rows
+        total = self.total
+        counters = self.counters
+        window_end = None if self._window_start is None else self._window_start + RATE_WINDOW_S
+        frames = chunks = nbytes = bits = 0
+        last_time = self.last_item_time
+        for item in batch.items:
+            t = item.time
+            if window_end is None or t >= window_end or t < window_end - 2 * RATE_WINDOW_S:
+                self._window_frames += frames + chunks
+                self._window_bits += bits
+                self._count(total, counters, frames, chunks, nbytes)
+                frames = chunks = nbytes = bits = 0
+                self._advance_to(t)
+                window_end = (self._window_start or t) + RATE_WINDOW_S
+            data = item.data
+            if isinstance(item, CanFrame):
+                frames += 1
+                bits += (67 if item.extended else 47) + 8 * len(data)
+                key: int | str = item.can_id
+                row = rows.get(key)
+                if row is None:
+                    row = self._new_row(key, item)
+            else:
+                chunks += 1
+                key = f"{item.source} {item.direction}".strip()
+                row = rows.get(key)
+                if row is None:
+                    row = self._new_row(key, None)
+            nbytes += len(data)
+            row.count += 1
+            if data != row.data:
+                row.note_data(data, t)
+            row.last_time = t
+            if last_time is None or t > last_time:
+                last_time = t
+        self._window_frames += frames + chunks
+        self._window_bits += bits
+        self._count(total, counters, frames, chunks, nbytes)
+        self.last_item_time = last_time
+
+    @staticmethod
+    def _count(total: Counters, counters: Counters, frames: int, chunks: int, nbytes: int) -> None:
+        for c in (total, counters):
+            c.frames += frames
+            c.chunks += chunks
+            c.bytes += nbytes
+
+    def _new_row(self, key: int | str, frame: CanFrame | None) -> IdRow:
+        if frame is None:
+            row = IdRow(str(key), None, "stream", True)
+        else:
+            label = ID_LABELS.get(frame.can_id, "foreign")
+            text = f"0x{frame.can_id:08X}" if frame.extended else f"0x{frame.can_id:03X}"
+            row = IdRow(text, frame.can_id, label, frame.can_id in ID_LABELS)
+            row.extended = frame.extended
+            if frame.can_id in ID_LABELS and not frame.extended:
+                row.label += "!"  # a protocol ID sent as a standard frame
+        self.rows[key] = row
+        self.rows_added += 1
+        return row
+
+    def _fold_events(self, events: list[Event]) -> None:
+        total = self.total
+        counters = self.counters
+        for event in events:
+            topic = event.topic
+            if topic == TOPIC_CAN_OTHER:
+                continue
+            total.events += 1
+            counters.events += 1
+            if event.warnings:
+                total.warnings += 1
+                counters.warnings += 1
+            self.seq += 1
+            entry = LogEntry(self.seq, event)
+            self.all_log.append(entry)
+            if topic in COMMAND_VIEW_TOPICS:
+                self.command_log.append(entry)
+            if topic == TOPIC_GIMBAL_ATTITUDE:
+                self.attitude = event
+                self._note_feedback(event)
+            elif topic == TOPIC_COMMAND:
+                group = COMMAND_GROUPS.get(str(event.fields.get("name", "")), "other")
+                if group == "motion" and event.fields.get("axis") == "zoom":
+                    group = "zoom"
+                self.last_commands[group] = event
+            elif topic == TOPIC_DIAGNOSTICS:
+                kind = str(event.fields.get("kind", "?"))
+                total.kinds[kind] += 1
+                counters.kinds[kind] += 1
+                if kind == LINK:
+                    self.link_state = str(event.fields.get("state") or "")
+                    self.link_detail = str(event.fields.get("detail", ""))
+                else:
+                    self._window_errors += 1
+            elif topic == TOPIC_UAV_GPS:
+                self.gps = event
+            elif topic == TOPIC_UAV_ALTITUDE:
+                self.altitude = event
+            elif topic == TOPIC_UAV_ATTITUDE:
+                self.uav_attitude = event
+            elif topic == TOPIC_UAV_TEXT:
+                self.text = event
+            elif topic == TOPIC_GIMBAL_RANGING:
+                self.ranging = event
+                self._note_feedback(event)
+
+    def _note_feedback(self, event: Event) -> None:
+        self.feedback_count += 1
+        if self.last_feedback_time is None or event.time >= self.last_feedback_time:
+            self.last_feedback_time = event.time
+
+    # -- time --------------------------------------------------------------------------------
+
+    def _advance_to(self, now: float) -> None:
+        """Move bus time to ``now``, closing rate windows that ended on the way."""
+        start = self._window_start
+        if start is None or now < start:
+            # first data, or time went backwards (a new log): restart the windows
+            self._window_start = now
+            self.now = now
+            return
+        if now > self.now:
+            self.now = now
+        elapsed = now - start
+        if elapsed < RATE_WINDOW_S:
+            return
+        self._close_window(elapsed)
+        # whole seconds of silence after the window: zero samples (bounded by the history)
+        silent = int(elapsed // RATE_WINDOW_S) - 1
+        for _ in range(min(silent, self.frames_history.maxlen or 0)):
+            self.frames_history.append(0.0)
+            self.errors_history.append(0.0)
+        if silent > 0:
+            self.frames_per_s = self.bits_per_s = self.errors_per_s = 0.0
+            for row in self.rows.values():
+                row.rate_hz = 0.0
+        self._window_start = now
+
+    def _close_window(self, elapsed: float) -> None:
+        # after a long silence the window's frames are taken to fill its first second
+        span = max(elapsed if elapsed < 2 * RATE_WINDOW_S else RATE_WINDOW_S, 1e-9)
+        self.frames_per_s = self._window_frames / span
+        self.bits_per_s = self._window_bits / span
+        self.errors_per_s = self._window_errors / span
+        self.frames_history.append(self.frames_per_s)
+        self.errors_history.append(self.errors_per_s)
+        for row in self.rows.values():
+            row.rate_hz = max(row.count - row.window_count, 0) / span
+            row.window_count = row.count
+        self._window_frames = self._window_bits = self._window_errors = 0
