@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from analyzer.mcapio.channels import time_ns
 from analyzer.protocol.types import (
     BUS_ERROR,
     LINK,
@@ -112,12 +113,9 @@ _UP_WORDS = ("connected", "connect", "up", "open", "opened", "reconnected")
 
 
 def timestamp(seconds: float) -> dict[str, int]:
-    """Seconds -> foxglove time {sec, nsec} (negative or invalid times become 0)."""
-    if not math.isfinite(seconds) or seconds <= 0:
-        return {"sec": 0, "nsec": 0}
-    sec = math.floor(seconds)
-    nsec = min(round((seconds - sec) * 1e9), 999_999_999)
-    return {"sec": int(sec), "nsec": int(nsec)}
+    """Seconds -> foxglove time {sec, nsec}, equal to the message's log time."""
+    sec, nsec = divmod(time_ns(seconds), 1_000_000_000)
+    return {"sec": sec, "nsec": nsec}
 
 
 def _number(value: Any) -> float | None:

@@ -1,0 +1,113 @@
+"""Reading recordings back: finished files, truncated (crashed) files, damage, non-MCAP input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from analyzer.mcapio.reader import Recording, RecordingError, read_events, read_items
+from analyzer.mcapio.writer import McapSink
+from tests.test_mcap_support import batches, decode_all, event_dicts, traffic, write_recording
+
+
+def test_finished_file_gives_back_items_and_events(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    items = traffic()
+    write_recording(path, items, emit_other=True)
+    got = read_items(path)
+    assert list(got) == items
+    assert not got.recovered and got.note == ""
+    events = read_events(path)
+    assert event_dicts(list(events)) == event_dicts(decode_all(items, emit_other=True))
+    assert not events.recovered
+
+
+def test_metadata(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    write_recording(path)
+    assert Recording(path).metadata()["gimbal-analyzer"]["source"] == "test:traffic"
+
+
+def _live_recording(path: Path) -> list[list[object]]:
+    """A recording flushed after every batch, left unfinished; returns items per flush."""
+    sink = McapSink(path, metadata={"source": "t"}, flush_interval=None)
+    flushed: list[list[object]] = []
+    for batch in batches(traffic(2.0), size=15):
+        sink.handle(batch)
+        sink.flush()
+        flushed.append(list(batch.items))
+    # Leave the file as a killed recorder would: no summary, no footer.
+    sink._file.flush()
+    return flushed
+
+
+def test_unfinished_file_is_recovered_up_to_the_last_flush(tmp_path: Path) -> None:
+    path = tmp_path / "crashed.mcap"
+    flushed = _live_recording(path)
+    everything = [i for part in flushed for i in part]
+    got = read_items(path)
+    assert got.recovered
+    assert list(got) == everything
+    assert "recovered" in got.note
+    recording = Recording(path)
+    assert recording.recovered
+    assert recording.metadata()["gimbal-analyzer"]["source"] == "t"
+
+
+def test_every_truncation_point_reads_a_prefix_without_error(tmp_path: Path) -> None:
+    full = tmp_path / "full.mcap"
+    flushed = _live_recording(full)
+    everything = [i for part in flushed for i in part]
+    data = full.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    previous = 0
+    for size in range(8, len(data), max(1, len(data) // 150)):
+        cut.write_bytes(data[:size])
+        got = read_items(cut)
+        items = list(got)
+        assert got.recovered
+        assert items == everything[: len(items)]
+        assert len(items) >= previous  # more file, never fewer messages
+        previous = len(items)
+        list(read_events(cut))  # never raises either
+
+
+def test_truncated_finished_file_falls_back_to_recovery(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    items = traffic()
+    write_recording(path, items)
+    data = path.read_bytes()
+    path.write_bytes(data[:-40])  # footer gone, data section intact
+    got = read_items(path)
+    assert got.recovered
+    assert list(got) == items
+    assert "summary" in got.note
+
+
+def test_damaged_chunk_in_an_unfinished_file_is_skipped(tmp_path: Path) -> None:
+    path = tmp_path / "crashed.mcap"
+    flushed = _live_recording(path)
+    data = bytearray(path.read_bytes())
+    # Flip a byte in the middle of the file: one chunk fails its CRC.
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+    recording = Recording(path)
+    items = list(recording.items())
+    assert recording.recovery is not None
+    assert recording.recovery.damaged_chunks == 1
+    everything = [i for part in flushed for i in part]
+    assert 0 < len(items) < len(everything)
+    assert all(item in everything for item in items)
+
+
+def test_not_an_mcap_file(tmp_path: Path) -> None:
+    path = tmp_path / "x.mcap"
+    path.write_bytes(b"(1700000000.000000) can0 00000F01#0F04\n")
+    with pytest.raises(RecordingError, match="not an MCAP file"):
+        read_items(path)
+    path.write_bytes(b"")
+    with pytest.raises(RecordingError, match="empty"):
+        read_events(path)
+    with pytest.raises(RecordingError, match="cannot read"):
+        read_items(tmp_path / "missing.mcap")

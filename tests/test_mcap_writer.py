@@ -1,0 +1,238 @@
+"""McapSink: valid MCAP with CRCs, schemas, Foxglove views, metadata, flushing, write errors."""
+
+from __future__ import annotations
+
+import errno
+import io
+import json
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pytest
+from mcap.reader import NonSeekingReader, make_reader
+
+from analyzer import PROTOCOL_DOCUMENT, __version__
+from analyzer.errors import SourceError
+from analyzer.mcapio import writer as writer_module
+from analyzer.mcapio.channels import time_ns
+from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
+from analyzer.mcapio.reader import read_items
+from analyzer.mcapio.writer import McapSink
+from analyzer.pipeline import Batch
+from analyzer.protocol.schema import topic_schemas
+from analyzer.protocol.types import BUS_ERROR, CanFrame, diagnostic
+from tests.test_mcap_support import T0, batches, decode_all, traffic, write_recording
+
+
+def _messages(path: Path) -> list[tuple[Any, Any, Any]]:
+    with open(path, "rb") as f:
+        return list(make_reader(f, validate_crcs=True).iter_messages(log_time_order=False))
+
+
+def test_recording_passes_the_mcap_reader_with_crc_validation(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    items = traffic()
+    write_recording(path, items)
+    events = decode_all(items)
+    messages = _messages(path)
+    topics = Counter(channel.topic for _, channel, _ in messages)
+    assert topics["/can/frames"] == sum(isinstance(i, CanFrame) for i in items)
+    assert topics["/stream/bytes"] == 2
+    for topic, n in Counter(e.topic for e in events).items():
+        assert topics[topic] == n
+    # The sequential reader checks every chunk CRC as well.
+    with open(path, "rb") as f:
+        sequential = list(NonSeekingReader(f, validate_crcs=True).iter_messages())
+    assert len(sequential) == len(messages)
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    assert summary.statistics.message_count == len(messages)
+    assert summary.chunk_indexes
+
+
+def test_channels_are_json_with_valid_json_schemas(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    write_recording(path, emit_other=True)
+    core = topic_schemas()
+    seen: set[str] = set()
+    validators: dict[int, jsonschema.Draft202012Validator] = {}
+    for schema, channel, message in _messages(path):
+        assert channel.message_encoding == "json"
+        assert schema is not None and schema.encoding == "jsonschema"
+        if schema.id not in validators:
+            document = json.loads(schema.data)
+            jsonschema.Draft202012Validator.check_schema(document)
+            if channel.topic in core:
+                assert document == core[channel.topic]
+            validators[schema.id] = jsonschema.Draft202012Validator(document)
+        validators[schema.id].validate(json.loads(message.data))
+        seen.add(channel.topic)
+    assert {"/can/frames", "/stream/bytes", "/can/other", "/diagnostics/log"} <= seen
+    assert {"/uav/gps/fix", "/gimbal/ranging/fix"} <= seen
+    assert set(core) <= seen
+
+
+def test_log_and_publish_time_are_the_event_time(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    write_recording(path)
+    for _, _, message in _messages(path):
+        body = json.loads(message.data)
+        if "time" in body:
+            assert message.log_time == time_ns(body["time"])
+        else:  # Foxglove views carry a {sec, nsec} timestamp
+            stamp = body["timestamp"]
+            assert abs(message.log_time - (stamp["sec"] * 10**9 + stamp["nsec"])) <= 1
+        assert message.publish_time == message.log_time
+
+
+def test_location_fix_channels(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    write_recording(path)
+    fixes: dict[str, list[dict[str, Any]]] = {}
+    for schema, channel, message in _messages(path):
+        if schema.name == "foxglove.LocationFix":
+            fixes.setdefault(channel.topic, []).append(json.loads(message.data))
+    uav, target = fixes["/uav/gps/fix"], fixes["/gimbal/ranging/fix"]
+    assert uav[0]["latitude"] == pytest.approx(31.1234567)
+    assert uav[0]["longitude"] == pytest.approx(118.1234567)
+    assert uav[0]["frame_id"] == "uav"
+    # The UAV fix carries the last reported flight altitude.
+    assert uav[-1]["altitude"] == pytest.approx(506.78)
+    assert target[0]["latitude"] == pytest.approx(31.12)
+    assert target[0]["longitude"] == pytest.approx(118.12)
+    for fix in uav + target:
+        assert fix["position_covariance"] == [0.0] * 9
+        assert fix["position_covariance_type"] == 0
+        assert set(fix["timestamp"]) == {"sec", "nsec"}
+
+
+def test_diagnostics_become_foxglove_log_messages(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    items = traffic()
+    batch = batches(items)
+    batch.append(Batch([], [diagnostic(T0 + 9, "can0", BUS_ERROR, "CAN error frame", b"\x01\x02")]))
+    sink = McapSink(path, metadata={"source": "test"}, flush_interval=None)
+    for b in batch:
+        sink.handle(b)
+    sink.close()
+    logs = [
+        json.loads(message.data)
+        for schema, channel, message in _messages(path)
+        if channel.topic == "/diagnostics/log"
+    ]
+    assert {
+        schema.name for schema, channel, _ in _messages(path) if channel.topic == "/diagnostics/log"
+    } == {"foxglove.Log"}
+    assert len(logs) == 4
+    assert logs[0]["level"] == LOG_WARNING
+    assert logs[0]["message"].startswith("crc_mismatch: ")
+    assert logs[0]["name"] == "can0"
+    assert logs[-1]["level"] == LOG_ERROR
+    assert logs[-1]["message"] == "bus_error: CAN error frame [01 02]"
+    assert logs[-1]["timestamp"] == {"sec": int(T0 + 9), "nsec": 0}
+    assert {"file", "line"} <= set(logs[-1])
+
+
+def test_metadata_record(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    write_recording(path)
+    with open(path, "rb") as f:
+        metadata = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    info = metadata["gimbal-analyzer"]
+    assert info["source"] == "test:traffic"
+    assert info["tool_version"] == __version__
+    assert info["protocol_document"] == PROTOCOL_DOCUMENT
+    stats = metadata["gimbal-analyzer.stats"]
+    assert json.loads(stats["diagnostics_by_kind"]) == {"crc_mismatch": 2, "garbage": 1}
+
+
+def test_timed_flush_puts_older_messages_on_disk(tmp_path: Path) -> None:
+    path = tmp_path / "live.mcap"
+    now = [0.0]
+    sink = McapSink(path, metadata={"source": "t"}, flush_interval=0.5, clock=lambda: now[0])
+    try:
+        parts = batches(traffic(1.0), size=10)
+        for batch in parts[:3]:
+            sink.handle(batch)  # all within the same instant: nothing flushed yet
+        assert list(read_items(path)) == []
+        now[0] = 0.6
+        sink.handle(parts[3])  # interval passed: chunk closed and written
+        on_disk = read_items(path)
+        assert on_disk.recovered
+        assert list(on_disk) == [i for b in parts[:4] for i in b.items]
+    finally:
+        sink.close()
+    assert not read_items(path).recovered
+
+
+class _FullDisk(io.FileIO):
+    """A file on a disk that fills up after ``room`` bytes."""
+
+    room = 0
+
+    def write(self, data: Any) -> int:
+        left = self.room - self.tell()
+        if len(data) > left:
+            if left > 0:
+                super().write(bytes(data)[:left])
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return super().write(data)
+
+
+def test_disk_full_stops_with_a_clear_message_and_a_readable_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "full.mcap"
+
+    def small_disk(name: str, mode: str = "r") -> Any:
+        raw = _FullDisk(name, "w")
+        raw.room = 40_000
+        return io.BufferedWriter(raw)
+
+    monkeypatch.setattr(writer_module, "open", small_disk, raising=False)
+    now = [0.0]
+    sink = McapSink(
+        path, metadata={"source": "t"}, flush_interval=0.5, chunk_size=4096, clock=lambda: now[0]
+    )
+    written = []
+    with pytest.raises(SourceError, match="No space left on device"):
+        for batch in batches(traffic(20.0), size=20):
+            now[0] += 1.0
+            sink.handle(batch)
+            written.extend(batch.items)
+    assert sink.error is not None and "No space left" in sink.error
+    sink.handle(batches(traffic(0.2))[0])  # after the failure: ignored, no second error
+    sink.close()
+    recovered = read_items(path)
+    got = list(recovered)
+    assert recovered.recovered
+    assert 0 < len(got) <= len(written)
+    assert got == written[: len(got)]
+    assert path.stat().st_size <= 40_000
+
+
+def test_cannot_create_the_file(tmp_path: Path) -> None:
+    with pytest.raises(SourceError, match="cannot create"):
+        McapSink(tmp_path / "no" / "such" / "dir.mcap", metadata={})
+
+
+def test_close_twice_and_write_after_close(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    sink = McapSink(path, metadata={"source": "t"})
+    sink.write_item(CanFrame(T0, 0x0F01, bytes(8)))
+    sink.close()
+    sink.close()
+    sink.write_item(CanFrame(T0 + 1, 0x0F01, bytes(8)))
+    assert [m[2].log_time for m in _messages(path)] == [time_ns(T0)]
+
+
+def test_odd_times_do_not_break_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "rec.mcap"
+    sink = McapSink(path, metadata={"source": "t"}, flush_interval=None)
+    for t in (0.0, -5.0, float("nan"), 12.5):
+        sink.write_item(CanFrame(t, 0x0F01, bytes(8)))
+    sink.close()
+    assert [m[2].log_time for m in _messages(path)] == [0, 0, 0, 12_500_000_000]
