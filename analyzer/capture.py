@@ -185,6 +185,9 @@ class Capture:
             except EOFError:
                 self.stop_reason = "end of input"
                 return batch
+            except SourceError as exc:  # sources name themselves in their messages
+                self._fail(_reason(exc), exc)
+                return batch
             except Exception as exc:
                 self._fail(f"{self._describe_source()} failed: {_reason(exc)}", exc)
                 return batch

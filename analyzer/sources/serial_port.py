@@ -22,7 +22,7 @@ class SerialSource(QueuedSource):
 
     thread_name = "serial"
 
-    def __init__(self, spec: SerialSpec, *, source_name: str = "serial") -> None:
+    def __init__(self, spec: SerialSpec, *, source_name: str = "serial", port: Any = None) -> None:
         super().__init__()
         import serial
 
@@ -30,7 +30,9 @@ class SerialSource(QueuedSource):
         self.source_name = source_name
         self.description = f"serial:{spec.url}@{spec.baudrate}"
         try:
-            self.port: Any = serial.serial_for_url(spec.url, baudrate=spec.baudrate, timeout=POLL_S)
+            self.port: Any = port or serial.serial_for_url(
+                spec.url, baudrate=spec.baudrate, timeout=POLL_S
+            )
         except (serial.SerialException, ValueError, OSError) as exc:
             raise SourceError(f"cannot open {self.description}: {exc}") from exc
         self._put(link_event(source_name, f"opened {spec.url} at {spec.baudrate} baud", "open"))

@@ -97,7 +97,7 @@ def split_host_port(text: str, spec: str, *, default_port: int | None = None) ->
 def _split_rate(text: str) -> tuple[str, int | None]:
     """``NAME@123`` -> (NAME, 123); a trailing ``@`` part that is not digits stays in the name."""
     name, sep, rate = text.rpartition("@")
-    if sep and rate.isdigit() and name:
+    if sep and rate.isdigit():
         return name, int(rate)
     return text, None
 
@@ -113,6 +113,8 @@ def parse_source(spec: str) -> SourceSpec:
         if not interface or not sep or not channel:
             raise _bad(spec, "CAN sources need an interface and a channel")
         channel, bitrate = _split_rate(channel)
+        if not channel:
+            raise _bad(spec, "missing CAN channel")
         if bitrate is None and interface not in _NO_BITRATE:
             bitrate = DEFAULT_CAN_BITRATE
         if bitrate is not None and bitrate <= 0:

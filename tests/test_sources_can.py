@@ -1,0 +1,170 @@
+"""CAN source through python-can's virtual interface: frames arrive, nothing is ever sent."""
+
+from __future__ import annotations
+
+import time
+import uuid
+from collections.abc import Iterator
+from typing import Any
+
+import can
+import pytest
+
+from analyzer.errors import SourceError
+from analyzer.protocol.types import LINK, TOPIC_DIAGNOSTICS, CanFrame, Event
+from analyzer.sources import open_source
+from analyzer.sources.can_bus import CanSource, listen_only_kwargs
+from analyzer.sources.spec import CanSpec
+
+DEADLINE_S = 5.0
+
+
+@pytest.fixture
+def channel() -> str:
+    return f"test-{uuid.uuid4().hex[:8]}"
+
+
+@pytest.fixture
+def sender(channel: str) -> Iterator[can.BusABC]:
+    bus = can.Bus(interface="virtual", channel=channel)
+    yield bus
+    bus.shutdown()
+
+
+def read_frames(source: Any, count: int) -> list[Any]:
+    items: list[Any] = []
+    deadline = time.monotonic() + DEADLINE_S
+    while sum(isinstance(i, CanFrame) for i in items) < count and time.monotonic() < deadline:
+        items.extend(source.read(0.05))
+    return items
+
+
+def test_frames_arrive_with_their_fields(channel: str, sender: can.BusABC) -> None:
+    source = open_source(f"can:virtual:{channel}")
+    try:
+        sent = [
+            can.Message(arbitration_id=0x00000F01, data=bytes([0x0F, 4, 0x0C, 0xFE, 0, 0, 0, 0])),
+            can.Message(arbitration_id=0x123, data=b"\x01\x02", is_extended_id=False),
+            can.Message(arbitration_id=0x030F0001, data=bytes(8)),
+        ]
+        for msg in sent:
+            sender.send(msg)
+        items = read_frames(source, len(sent))
+    finally:
+        source.close()
+    frames = [i for i in items if isinstance(i, CanFrame)]
+    assert [(f.can_id, f.data, f.extended) for f in frames] == [
+        (0x00000F01, bytes([0x0F, 4, 0x0C, 0xFE, 0, 0, 0, 0]), True),
+        (0x123, b"\x01\x02", False),
+        (0x030F0001, bytes(8), True),
+    ]
+    assert all(f.channel == channel and f.direction == "rx" for f in frames)
+    assert all(abs(f.time - time.time()) < 60 for f in frames)
+    # the first read announces the opened bus as a link diagnostic
+    first = items[0]
+    assert isinstance(first, Event) and first.topic == TOPIC_DIAGNOSTICS
+    assert first.fields["kind"] == LINK and "receive-only" in first.fields["detail"]
+
+
+class SpyBus:
+    """Wraps a real bus and records every call that could put something on the wire."""
+
+    def __init__(self, bus: can.BusABC) -> None:
+        self.bus = bus
+        self.sent: list[Any] = []
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        return self.bus.recv(timeout)
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        self.sent.append(msg)
+
+    def send_periodic(self, *args: Any, **kwargs: Any) -> None:
+        self.sent.append(args)
+
+    def shutdown(self) -> None:
+        self.bus.shutdown()
+
+
+def test_source_never_sends(channel: str, sender: can.BusABC) -> None:
+    spy = SpyBus(can.Bus(interface="virtual", channel=channel))
+    observer = can.Bus(interface="virtual", channel=channel)
+    source = CanSource(CanSpec("virtual", channel, None), bus=spy)
+    try:
+        for i in range(50):
+            sender.send(
+                can.Message(arbitration_id=0x00000F01, data=bytes([0x0F, 7, 0, 0, 0, 0, 0, i]))
+            )
+        frames = [i for i in read_frames(source, 50) if isinstance(i, CanFrame)]
+        assert len(frames) == 50
+    finally:
+        source.close()
+    assert spy.sent == []
+    # Nothing but the 50 test frames ever reached another node on the bus.
+    seen = []
+    while (msg := observer.recv(0.05)) is not None:
+        seen.append(msg)
+    observer.shutdown()
+    assert len(seen) == 50
+
+
+def test_open_passes_listen_only_and_no_transmit(monkeypatch: pytest.MonkeyPatch) -> None:
+    calls: list[dict[str, Any]] = []
+
+    class FakeBus:
+        def recv(self, timeout: float | None = None) -> None:
+            return None
+
+        def shutdown(self) -> None:
+            pass
+
+    def fake_bus(**kwargs: Any) -> FakeBus:
+        calls.append(kwargs)
+        return FakeBus()
+
+    monkeypatch.setattr(can, "Bus", fake_bus)
+    open_source("can:slcan:/dev/ttyACM0@500000").close()
+    open_source("can:kvaser:0").close()
+    open_source("can:socketcan:can0").close()
+    assert calls[0] == {
+        "interface": "slcan",
+        "channel": "/dev/ttyACM0",
+        "bitrate": 500_000,
+        "listen_only": True,
+        "receive_own_messages": False,
+    }
+    assert calls[1]["driver_mode"] is False and calls[1]["bitrate"] == 1_000_000
+    assert "bitrate" not in calls[2]
+    assert not ({"listen_only", "driver_mode", "state", "monitor"} & set(calls[2]))
+
+
+def test_listen_only_options() -> None:
+    assert listen_only_kwargs("pcan") == {"state": can.BusState.PASSIVE}
+    assert listen_only_kwargs("vector") == {"listen_only": True}
+    assert listen_only_kwargs("virtual") == {}
+    assert listen_only_kwargs("socketcan") == {}
+
+
+def test_bus_failure_is_a_source_error() -> None:
+    class BrokenBus:
+        def recv(self, timeout: float | None = None) -> None:
+            raise can.CanOperationError("device unplugged\nmore detail")
+
+        def shutdown(self) -> None:
+            pass
+
+    source = CanSource(CanSpec("virtual", "x", None), bus=BrokenBus())
+    source.read(0.0)  # may or may not carry the announcement before the failure
+    with pytest.raises(SourceError, match="device unplugged"):
+        source.read(0.0)
+        source.read(0.0)
+
+
+def test_error_frames_are_kept(channel: str, sender: can.BusABC) -> None:
+    source = open_source(f"can:virtual:{channel}")
+    try:
+        sender.send(can.Message(arbitration_id=0, is_error_frame=True, data=bytes(8)))
+        frames = [i for i in read_frames(source, 1) if isinstance(i, CanFrame)]
+    finally:
+        source.close()
+    assert frames[0].is_error
