@@ -109,7 +109,8 @@ VIEW_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
 }
 
 _ZERO_COVARIANCE = [0.0] * 9
-_UP_WORDS = ("connected", "connect", "up", "open", "opened", "reconnected")
+# Link states (sources' link events) that are good news; the others are warnings.
+_GOOD_LINK_STATES = frozenset({"open", "connected", "gs_connected", "listening"})
 
 
 def timestamp(seconds: float) -> dict[str, int]:
@@ -150,7 +151,7 @@ def log_level(event: Event) -> int:
         return LOG_ERROR
     if kind == LINK:
         state = str(event.fields.get("state", "")).lower()
-        return LOG_INFO if state in _UP_WORDS else LOG_WARNING
+        return LOG_INFO if state in _GOOD_LINK_STATES else LOG_WARNING
     return LOG_WARNING
 
 

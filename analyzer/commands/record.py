@@ -1,0 +1,210 @@
+"""`gimbal-analyzer record`: capture a live source into an MCAP recording."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import threading
+import time
+from typing import IO, Any
+
+from analyzer.errors import SourceError, UsageError
+from analyzer.pipeline import Batch
+
+HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
+DESCRIPTION = """\
+Capture everything a source delivers into an MCAP file that opens in Foxglove:
+decoded events (one JSON channel per topic), the raw CAN frames / stream bytes
+(so the recording can be decoded again by a later version), UAV and ranging
+target positions for the Map panel and diagnostics for the Log panel.
+
+The file is flushed every half second: if the recorder is killed, everything
+older than about a second can still be read (gimbal-analyzer info / decode).
+Ctrl-C or SIGTERM finishes the file properly.
+
+Sources:
+  can:socketcan:can0            a CAN interface (received passively, never transmits)
+  tcp:192.168.42.200:2000       the IDU's TCP port (reconnects when the link drops)
+  proxy:2000->192.168.42.200:2000   between ground station and IDU, both directions
+  serial:/dev/ttyUSB0@115200    the UART pins
+  file:flight.log               replay a capture file (--speed 1 = recorded speed)
+
+Examples:
+  gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap
+  gimbal-analyzer record --source tcp:192.168.42.200:2000 -o bench.mcap --duration 600
+  gimbal-analyzer record --source proxy:2000->192.168.42.200:2000 -o gs.mcap --tui
+"""
+
+STATUS_INTERVAL_TTY = 0.5
+STATUS_INTERVAL_LOG = 10.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--source", required=True, metavar="SPEC", help="what to capture")
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="MCAP file")
+    parser.add_argument("--tui", action="store_true", help="watch the capture in the monitor UI")
+    parser.add_argument(
+        "--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)"
+    )
+    parser.add_argument(
+        "--speed",
+        type=float,
+        metavar="X",
+        help="file: sources only: replay at X times the recorded speed (default: as fast as read)",
+    )
+    parser.add_argument(
+        "--print", action="store_true", help="also print every event as a JSON line on stdout"
+    )
+    parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
+
+
+class EventPrinter:
+    """Sink printing each event as one JSON line."""
+
+    def __init__(self, stream: IO[str]) -> None:
+        self.stream = stream
+
+    def handle(self, batch: Batch) -> None:
+        write = self.stream.write
+        for event in batch.events:
+            write(json.dumps(event.to_dict(), default=str) + "\n")
+        if batch.events:
+            self.stream.flush()
+
+    def close(self) -> None:
+        self.stream.flush()
+
+
+def _megabytes(path: str) -> str:
+    try:
+        return f"{os.path.getsize(path) / 1e6:.1f} MB"
+    except OSError:
+        return "? MB"
+
+
+class StatusLine:
+    """Sink writing a short status line to stderr (overwritten in place on a terminal)."""
+
+    def __init__(self, stream: IO[str], path: str) -> None:
+        self.stream = stream
+        self.path = path
+        self.tty = stream.isatty()
+        self.interval = STATUS_INTERVAL_TTY if self.tty else STATUS_INTERVAL_LOG
+        self.capture: Any = None
+        self._next = time.monotonic() + self.interval
+        self._width = 0
+
+    def line(self) -> str:
+        stats = self.capture.stats if self.capture is not None else None
+        if stats is None:
+            return f"recording {self.path}"
+        parts = [
+            f"recording {self.path}",
+            f"{stats.elapsed_s:7.1f} s",
+            f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)",
+        ]
+        if stats.chunks:
+            parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
+        parts.append(f"{stats.events} events")
+        parts.append(f"{stats.diagnostics} diagnostics")
+        parts.append(_megabytes(self.path))
+        return "  ".join(parts)
+
+    def handle(self, batch: Batch) -> None:
+        now = time.monotonic()
+        if now < self._next:
+            return
+        self._next = now + self.interval
+        self._show(self.line())
+
+    def _show(self, text: str) -> None:
+        if self.tty:
+            pad = max(0, self._width - len(text))
+            self.stream.write("\r" + text + " " * pad)
+            self._width = len(text)
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.tty and self._width:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.capture import Capture, run_until_interrupted
+    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+    from analyzer.sources import open_source
+
+    if args.duration is not None and not args.duration > 0:
+        raise UsageError("--duration must be a positive number of seconds")
+    path = str(output_path(args.output))
+    run_app: Any = None
+    if args.tui:
+        try:
+            from analyzer.tui.app import run_app
+        except ImportError as exc:
+            raise UsageError(f"the monitor UI is not available ({exc})") from None
+    source = open_source(args.source, replay_speed=args.speed)
+    description = str(getattr(source, "description", args.source))
+    try:
+        sink = McapSink(
+            path,
+            metadata=recording_metadata(description, spec=args.source, command="record"),
+        )
+    except SourceError:
+        source.close()
+        raise
+    sinks: list[Any] = [sink]
+    status = None
+    if not args.quiet and not args.tui:
+        status = StatusLine(sys.stderr, path)
+        sinks.append(status)
+    if args.print and not args.tui:
+        sinks.append(EventPrinter(sys.stdout))
+    capture = Capture(source, sinks)
+    if status is not None:
+        status.capture = capture
+    timer: threading.Timer | None = None
+    if args.duration is not None:
+        timer = threading.Timer(args.duration, capture.stop)
+        timer.daemon = True
+    try:
+        if args.tui:
+            if timer is not None:
+                timer.start()
+            result = int(run_app(capture, recording=path, source_label=description))
+        else:
+            capture.start()
+            if timer is not None:
+                timer.start()
+            result = run_until_interrupted(capture)
+    finally:
+        if timer is not None:
+            timer.cancel()
+        if capture.running:
+            capture.stop()
+            capture.join()
+        sink.close()  # normally done by the capture; makes sure the file is finished
+    stats = capture.stats
+    if sink.error is not None:
+        raise SourceError(sink.error)
+    if capture.error is not None:
+        print(
+            f"gimbal-analyzer record: {capture.error}; the recording {path} is finished "
+            "and keeps everything up to then",
+            file=sys.stderr,
+        )
+        result = 1
+    reason = capture.stop_reason or "stopped"
+    if not args.quiet:
+        print(
+            f"recorded {stats.frames} frames, {stats.chunks} stream chunks, "
+            f"{stats.events} events, {stats.diagnostics} diagnostics in {stats.elapsed_s:.1f} s "
+            f"to {path} ({_megabytes(path)}); ended: {reason}",
+            file=sys.stderr,
+        )
+    return result
