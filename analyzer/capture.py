@@ -14,14 +14,8 @@ from typing import Any
 
 from analyzer.errors import SourceError
 from analyzer.pipeline import Batch, Sink
-from analyzer.protocol.types import (
-    LINK,
-    TOPIC_DIAGNOSTICS,
-    CanFrame,
-    Event,
-    StreamChunk,
-    diagnostic,
-)
+from analyzer.protocol.types import TOPIC_DIAGNOSTICS, CanFrame, Event, StreamChunk
+from analyzer.sources.base import link_event
 
 # Bits of a CAN 2.0 frame without stuffing: SOF, arbitration, control, data, CRC, ACK, EOF
 # and the 3-bit intermission. An extended frame with 8 data bytes is 131 bits, so a
@@ -111,6 +105,7 @@ class Capture:
         self.error: CaptureError | None = None
         self.stop_reason: str = ""
         self._stats = CaptureStats()
+        self._stats_lock = threading.Lock()  # snapshots copy the kinds dict while it grows
         self._bits = 0
         self._window: deque[tuple[float, int, int, int]] = deque()
         self._stop = threading.Event()
@@ -131,6 +126,10 @@ class Capture:
         self._window.append((self._started_at, 0, 0, 0))
         self._thread = threading.Thread(target=self._run, name="capture", daemon=True)
         self._thread.start()
+
+    def add_sink(self, sink: Sink) -> None:
+        """Attach one more sink, before ``start()`` or while running (from the next batch on)."""
+        self.sinks.append(sink)
 
     def stop(self) -> None:
         """Ask the reader thread to finish (returns at once; use join/wait to wait)."""
@@ -157,7 +156,8 @@ class Capture:
 
     @property
     def stats(self) -> CaptureStats:
-        snapshot = CaptureStats(**self._stats.as_dict())
+        with self._stats_lock:
+            snapshot = CaptureStats(**self._stats.as_dict())
         if self._started_at:
             snapshot.elapsed_s = time.monotonic() - self._started_at
         return snapshot
@@ -240,6 +240,10 @@ class Capture:
             batch.events.extend(self.decoder.tick(source_time + (now - seen_at)))
 
     def _count(self, batch: Batch) -> None:
+        with self._stats_lock:
+            self._count_locked(batch)
+
+    def _count_locked(self, batch: Batch) -> None:
         stats = self._stats
         for event in batch.events:
             if event.topic == TOPIC_DIAGNOSTICS:
@@ -282,7 +286,7 @@ class Capture:
             self.error = error
         self.stop_reason = "error"
         self._stop.set()
-        self._notes.append(diagnostic(time.time(), self._source_name, LINK, message))
+        self._notes.append(link_event(self._source_name, message, "failed"))
 
     def _finish(self, batch: Batch) -> None:
         try:

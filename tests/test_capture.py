@@ -269,6 +269,7 @@ def test_a_failing_source_is_kept_as_the_error() -> None:
     assert sink.closed == 1
     assert sink.events[0].topic == TOPIC_COMMAND
     assert sink.events[-1].fields["kind"] == LINK
+    assert sink.events[-1].fields["state"] == "failed"
 
 
 def test_sink_close_failure_is_reported() -> None:
@@ -323,6 +324,20 @@ def test_run_until_interrupted_returns_1_on_error() -> None:
     capture = Capture(Broken([]), [ListSink()])
     assert run_until_interrupted(capture) == 1
     assert "gone" in str(capture.error)
+
+
+def test_a_sink_added_later_gets_batches_and_is_closed() -> None:
+    first, late = ListSink(), ListSink()
+    capture = Capture(ScriptedSource([], ends=False), [first], batch_interval=0.01)
+    capture.start()
+    try:
+        wait_for(lambda: len(first.batches) >= 2)
+        capture.add_sink(late)
+        wait_for(lambda: len(late.batches) >= 2)
+    finally:
+        capture.stop()
+        capture.join(DEADLINE_S)
+    assert late.closed == 1 and first.closed == 1
 
 
 def test_start_twice_is_refused() -> None:

@@ -30,8 +30,10 @@ class SerialSource(QueuedSource):
         self.source_name = source_name
         self.description = f"serial:{spec.url}@{spec.baudrate}"
         try:
-            self.port: Any = port or serial.serial_for_url(
-                spec.url, baudrate=spec.baudrate, timeout=POLL_S
+            self.port: Any = (
+                port
+                if port is not None
+                else serial.serial_for_url(spec.url, baudrate=spec.baudrate, timeout=POLL_S)
             )
         except (serial.SerialException, ValueError, OSError) as exc:
             raise SourceError(f"cannot open {self.description}: {exc}") from exc

@@ -1,0 +1,328 @@
+"""Live load benchmark: a saturated 1 Mbit/s virtual CAN bus recorded by the capture engine.
+
+A sender thread drives python-can's virtual bus at about 7,600 extended 8-byte frames per
+second (the most a 1 Mbit/s bus carries without stuffing): gimbal traffic (commands,
+feedback in four segments, UAV GPS / altitude / attitude, text messages) mixed with
+foreign IDs. A Capture with an McapSink (or a counting sink with ``--sink count``) records
+it. Reported: frames sent vs captured vs written, the recorder's CPU use (CPU time of the
+capture and MCAP flush threads, measured per thread) and ratios against the targets of
+issue 4 (none lost, under 25% of one core).
+
+The virtual bus only connects buses in one process, so sender and recorder share the
+interpreter; the sender's own CPU time is measured separately and not counted.
+
+``convert`` throughput is measured by ``benchmarks/convert_throughput.py`` when it exists
+(it must provide ``report(frames: int) -> list[str]``); this script calls it at the end.
+
+    python benchmarks/live_load.py --seconds 30
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+RATE_FPS = 7600  # 1e6 / 131 bits per extended 8-byte frame, rounded down
+TARGET_CPU_PCT = 25.0
+
+
+def gimbal_frames() -> dict[str, list[tuple[int, bytes]]]:
+    """One example of each kind of protocol traffic, as (CAN ID, data) frames."""
+    from analyzer.protocol.codec import encode_command
+    from analyzer.protocol.feedback import encode_attitude, encode_ranging
+    from analyzer.protocol.ids import (
+        ALTITUDE_ID,
+        CONTROL_ID,
+        FEEDBACK_ID,
+        GPS_ID,
+        UAV_ATTITUDE_ID,
+    )
+    from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
+
+    attitude = encode_attitude(pitch_deg=-12.5, yaw_deg=187.25, motor_yaw_deg=7.25)
+    ranging = encode_ranging(
+        distance_m=812.4, height_m=120.0, latitude_deg=31.1234567, longitude_deg=118.1234567
+    )
+    return {
+        "command": [
+            (CONTROL_ID, encode_command("gimbal_control", pan_speed_dps=-5.0, tilt_speed_dps=2.5))
+        ],
+        "attitude": [(FEEDBACK_ID, attitude[i : i + 8]) for i in range(0, 32, 8)],
+        "ranging": [(FEEDBACK_ID, ranging[i : i + 8]) for i in range(0, 32, 8)],
+        "gps": [(GPS_ID, encode_gps(31.1234567, 118.1234567))],
+        "altitude": [(ALTITUDE_ID, encode_altitude(506.78))],
+        "uav_attitude": [(UAV_ATTITUDE_ID, encode_uav_attitude(1.5, -2.0, 93.0))],
+        "text": list(encode_text("RTL: low battery")),
+    }
+
+
+# frames of each kind per second; foreign IDs fill the rest of the bus
+SCHEDULE_HZ = {
+    "command": 10,
+    "attitude": 2,
+    "ranging": 2,
+    "gps": 5,
+    "altitude": 5,
+    "uav_attitude": 10,
+    "text": 0.2,
+}
+
+
+class Sender:
+    """Sends a paced mix of gimbal and foreign frames on a virtual channel."""
+
+    def __init__(self, channel: str, rate: int, seconds: float) -> None:
+        import can
+
+        self.bus = can.Bus(interface="virtual", channel=channel)
+        self.rate = rate
+        self.seconds = seconds
+        self.sent = 0
+        self.gimbal_sent = 0
+        self.cpu_s = 0.0
+        self.late_s = 0.0
+        self._messages = self._plan()
+        self.thread = threading.Thread(target=self._run, name="sender", daemon=True)
+
+    def _plan(self) -> list[Any]:
+        """One second of traffic, gimbal frames spread evenly among foreign ones."""
+        import can
+
+        kinds = gimbal_frames()
+        slots: list[tuple[float, int, bytes, bool]] = []
+        for phase, (kind, hz) in enumerate(SCHEDULE_HZ.items()):
+            if hz < 1:
+                continue
+            for n in range(int(hz)):
+                # kinds start at different phases so feedback messages never interleave
+                start = (n + phase / len(SCHEDULE_HZ)) / hz
+                for k, (can_id, data) in enumerate(kinds[kind]):
+                    slots.append((start + 0.0005 * k, can_id, data, True))
+        foreign = self.rate - len(slots)
+        for n in range(foreign):
+            can_id = 0x18FF0000 | (n % 0x40)
+            slots.append((n / foreign, can_id, n.to_bytes(4, "little") * 2, False))
+        slots.sort(key=lambda s: s[0])
+        self._text = [
+            can.Message(arbitration_id=i, data=d, is_extended_id=True) for i, d in kinds["text"]
+        ]
+        return [
+            (can.Message(arbitration_id=i, data=d, is_extended_id=True), gimbal)
+            for _, i, d, gimbal in slots
+        ]
+
+    def _run(self) -> None:
+        cpu0 = time.thread_time()
+        plan = self._messages
+        per_second = len(plan)
+        start = time.monotonic()
+        total = int(self.seconds * self.rate)
+        next_text = 5.0
+        while self.sent < total:
+            elapsed = time.monotonic() - start
+            due = min(total, int(elapsed * self.rate) + 1)
+            if due - self.sent > self.rate // 10:
+                self.late_s = max(self.late_s, (due - self.sent) / self.rate)
+            while self.sent < due:
+                msg, gimbal = plan[self.sent % per_second]
+                self.bus.send(msg)
+                self.sent += 1
+                self.gimbal_sent += gimbal
+            if elapsed >= next_text:  # a UAV text message every 5 s (on top of the rate)
+                next_text += 5.0
+                for msg in self._text:
+                    self.bus.send(msg)
+                    self.sent += 1
+                    self.gimbal_sent += 1
+                total += len(self._text)
+            time.sleep(0.002)
+        self.cpu_s = time.thread_time() - cpu0
+
+
+class CountingSink:
+    """Counts what it is handed; stands in when no MCAP writer is wanted."""
+
+    def __init__(self) -> None:
+        self.items_written = 0
+        self.events_written = 0
+        self.error: str | None = None
+
+    def handle(self, batch: Any) -> None:
+        self.items_written += len(batch.items)
+        self.events_written += len(batch.events)
+
+    def close(self) -> None:
+        pass
+
+
+def thread_cpu(thread: threading.Thread | None) -> float:
+    """CPU seconds a live thread has used (Linux/Unix), 0 when unknown."""
+    if thread is None or thread.ident is None or not hasattr(time, "pthread_getcpuclockid"):
+        return 0.0
+    try:
+        return time.clock_gettime(time.pthread_getcpuclockid(thread.ident))
+    except (OSError, ProcessLookupError):
+        return 0.0
+
+
+class CpuMeter:
+    """Samples the CPU time of named threads while they run (their clocks vanish on exit)."""
+
+    def __init__(self, names: tuple[str, ...]) -> None:
+        self.names = names
+        self.last: dict[int, float] = {}
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="cpu-meter", daemon=True)
+
+    def sample(self) -> None:
+        for thread in threading.enumerate():
+            if thread.name in self.names and thread.ident is not None:
+                self.last[thread.ident] = max(self.last.get(thread.ident, 0.0), thread_cpu(thread))
+
+    def _run(self) -> None:
+        while not self._stop.wait(0.05):
+            self.sample()
+
+    def total(self) -> float:
+        return sum(self.last.values())
+
+    def stop(self) -> None:
+        self._stop.set()
+        self.thread.join()
+
+
+def run(seconds: float, rate: int, sink_kind: str, out_dir: str) -> dict[str, Any]:
+    from analyzer.capture import Capture
+    from analyzer.sources import open_source
+
+    channel = f"live-load-{uuid.uuid4().hex[:8]}"
+    source = open_source(f"can:virtual:{channel}")
+    path = os.path.join(out_dir, "live_load.mcap")
+    sink: Any
+    if sink_kind == "mcap":
+        try:
+            from analyzer.mcapio.writer import McapSink, recording_metadata
+        except ImportError:
+            sink_kind = "count"
+        else:
+            sink = McapSink(path, metadata=recording_metadata(source.description, command="bench"))
+    if sink_kind == "count":
+        sink = CountingSink()
+    capture = Capture(source, [sink])
+    sender = Sender(channel, rate, seconds)
+    meter = CpuMeter(("capture", "mcap-flush"))
+    capture.start()
+    meter.thread.start()
+    wall0 = time.monotonic()
+    sender.thread.start()
+    sender.thread.join()
+    send_wall = time.monotonic() - wall0
+    deadline = time.monotonic() + 10.0
+    while capture.stats.frames < sender.sent and time.monotonic() < deadline:
+        time.sleep(0.05)
+    drain_s = time.monotonic() - wall0 - send_wall
+    meter.sample()
+    capture.stop()
+    capture.join(30.0)
+    meter.stop()
+    wall = time.monotonic() - wall0
+    sender.bus.shutdown()
+    stats = capture.stats
+    size = os.path.getsize(path) if sink_kind == "mcap" and os.path.exists(path) else 0
+    return {
+        "sink": sink_kind,
+        "seconds": seconds,
+        "wall_s": wall,
+        "send_wall_s": send_wall,
+        "drain_s": drain_s,
+        "sent": sender.sent,
+        "gimbal_sent": sender.gimbal_sent,
+        "captured": stats.frames,
+        "written": getattr(sink, "items_written", 0),
+        "events": stats.events,
+        "diagnostics": stats.diagnostics,
+        "diagnostic_kinds": stats.diagnostic_kinds,
+        "sender_cpu_s": sender.cpu_s,
+        "sender_late_s": sender.late_s,
+        "recorder_cpu_s": meter.total(),
+        "mcap_bytes": size,
+        "error": str(capture.error) if capture.error else "",
+        "max_bus_load_pct": stats.bus_load_pct,
+    }
+
+
+def report(result: dict[str, Any]) -> list[str]:
+    sent, captured, written = result["sent"], result["captured"], result["written"]
+    cpu_pct = 100.0 * result["recorder_cpu_s"] / result["send_wall_s"]
+    lines = [
+        f"sink: {result['sink']}   duration: {result['seconds']:g} s "
+        f"(sending took {result['send_wall_s']:.1f} s, drain {result['drain_s']:.2f} s)",
+        f"frames sent:      {sent:>9}  ({sent / result['send_wall_s']:.0f}/s, "
+        f"{result['gimbal_sent']} gimbal protocol frames)",
+        f"frames captured:  {captured:>9}  ratio {captured / sent:.6f}  lost {sent - captured}",
+        f"frames written:   {written:>9}  ratio {written / sent:.6f}",
+        f"events decoded:   {result['events']:>9}  diagnostics {result['diagnostics']} "
+        f"{result['diagnostic_kinds']}",
+        f"recorder CPU:     {result['recorder_cpu_s']:.2f} s = {cpu_pct:.1f}% of one core "
+        f"(target < {TARGET_CPU_PCT:.0f}%: ratio {cpu_pct / TARGET_CPU_PCT:.2f})",
+        f"sender CPU:       {result['sender_cpu_s']:.2f} s (not counted; same process)",
+    ]
+    if result["mcap_bytes"]:
+        lines.append(f"recording size:   {result['mcap_bytes'] / 1e6:.1f} MB")
+    if result["sender_late_s"] > 0.1:
+        lines.append(f"note: the sender fell behind by up to {result['sender_late_s']:.2f} s")
+    if result["error"]:
+        lines.append(f"capture error:    {result['error']}")
+    verdict = "PASS" if captured == sent == written and cpu_pct < TARGET_CPU_PCT else "FAIL"
+    lines.append(f"verdict: {verdict} (none lost, CPU under {TARGET_CPU_PCT:.0f}% of one core)")
+    return lines
+
+
+def convert_report(frames: int) -> list[str]:
+    """Hook for the ``convert`` throughput part (benchmarks/convert_throughput.py)."""
+    path = Path(__file__).with_name("convert_throughput.py")
+    if not path.exists():
+        return ["convert throughput: not measured here (benchmarks/convert_throughput.py missing)"]
+    spec = importlib.util.spec_from_file_location("convert_throughput", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    lines: list[str] = module.report(frames)
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=30.0, help="how long to send (default 30)")
+    parser.add_argument(
+        "--rate", type=int, default=RATE_FPS, help="frames per second (default 7600)"
+    )
+    parser.add_argument(
+        "--sink", choices=("mcap", "count"), default="mcap", help="what records (default mcap)"
+    )
+    parser.add_argument("--keep", metavar="DIR", help="keep the recording in DIR")
+    parser.add_argument("--no-convert", action="store_true", help="skip the convert hook")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        out_dir = args.keep or tmp
+        result = run(args.seconds, args.rate, args.sink, out_dir)
+        for line in report(result):
+            print(line)
+        if not args.no_convert:
+            for line in convert_report(result["sent"]):
+                print(line)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
