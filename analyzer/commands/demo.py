@@ -1,0 +1,225 @@
+"""`gimbal-analyzer demo`: simulated gimbal + ground station on a virtual bus, captured live."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import time
+from typing import IO, Any
+
+from analyzer.commands.simulate import add_fault_arguments, fault_config, seconds_value
+from analyzer.errors import SourceError, UsageError
+from analyzer.pipeline import Batch
+from analyzer.protocol.types import (
+    TOPIC_COMMAND,
+    TOPIC_UAV_ALTITUDE,
+    TOPIC_UAV_ATTITUDE,
+    TOPIC_UAV_GPS,
+    Event,
+)
+
+HELP = "see the whole tool work with no hardware: simulated gimbal, live decode, demo.mcap"
+DESCRIPTION = """\
+Starts a simulated gimbal (which also plays the UAV) and a scripted ground station
+on a python-can virtual bus inside this process, captures the bus with the real
+capture engine, records everything to demo.mcap and shows it live: the terminal
+UI on a terminal (q quits), plain decoded lines otherwise or with --no-tui
+(for 10 s unless --duration says otherwise).
+
+The simulator injects a few faults by default (dropped, corrupted, repeated and
+late feedback segments) so the diagnostics have something to show; --clean
+turns them off. Afterwards:
+
+  gimbal-analyzer info demo.mcap       what was recorded
+  foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
+"""
+
+CHANNEL = "gimbal-demo"
+PLAIN_DURATION = 10.0
+# Faults the demo injects unless --clean: rare enough to read, frequent enough to be seen.
+DEMO_FAULTS = {"drop": 0.02, "corrupt": 0.02, "duplicate": 0.02, "delay": 0.02, "seed": 7}
+QUIET_TOPICS = frozenset({TOPIC_UAV_GPS, TOPIC_UAV_ALTITUDE, TOPIC_UAV_ATTITUDE})
+QUIET_EVERY = 1.0  # plain output: UAV status lines at most once a second per topic
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "-o", "--output", default="demo.mcap", metavar="FILE", help="recording (default demo.mcap)"
+    )
+    parser.add_argument(
+        "--duration",
+        type=seconds_value,
+        metavar="S",
+        help=f"stop after S seconds (default: {PLAIN_DURATION:g} s for plain output, "
+        "until q in the UI)",
+    )
+    parser.add_argument(
+        "--no-tui", action="store_true", help="print decoded lines instead of the UI"
+    )
+    parser.add_argument(
+        "--all", action="store_true", help="plain output: print every event (UAV status too)"
+    )
+    parser.add_argument("--clean", action="store_true", help="inject no faults")
+    add_fault_arguments(parser)
+    parser.set_defaults(**DEMO_FAULTS)
+
+
+class LinePrinter:
+    """Sink printing each event as one plain line; UAV status thinned out unless ``everything``."""
+
+    def __init__(self, stream: IO[str], *, everything: bool = False) -> None:
+        self.stream = stream
+        self.everything = everything
+        self.hidden = 0
+        self._last: dict[str, float] = {}
+        self._last_command = ""
+        self._render: Any = _renderer()
+
+    def handle(self, batch: Batch) -> None:
+        lines = [self._render(e) for e in batch.events if self._shown(e)]
+        if lines:
+            self.stream.write("\n".join(lines) + "\n")
+            self.stream.flush()
+
+    def _shown(self, event: Event) -> bool:
+        if self.everything:
+            return True
+        if event.topic in QUIET_TOPICS:
+            if event.time - self._last.get(event.topic, -1e9) < QUIET_EVERY:
+                self.hidden += 1
+                return False
+            self._last[event.topic] = event.time
+        elif event.topic == TOPIC_COMMAND:
+            raw = str(event.fields.get("raw", ""))
+            last = self._last.get(TOPIC_COMMAND, -1e9)
+            if raw == self._last_command and event.time - last < QUIET_EVERY:
+                self.hidden += 1
+                return False
+            self._last_command = raw
+            self._last[TOPIC_COMMAND] = event.time
+        return True
+
+    def close(self) -> None:
+        self.stream.flush()
+
+
+def _renderer() -> Any:
+    try:
+        from analyzer.render import render_event
+    except ImportError:
+        return _plain
+    return lambda event: render_event(event, color=False)
+
+
+def _plain(event: Event) -> str:
+    from analyzer.sim.engine import describe_command
+
+    clock = time.strftime("%H:%M:%S", time.localtime(event.time))
+    stamp = f"{clock}.{int(event.time % 1 * 1000):03d}"
+    if event.topic == TOPIC_COMMAND:
+        text = describe_command(event.fields)
+    else:
+        text = " ".join(
+            f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in event.fields.items()
+        )
+    warnings = f"  !! {'; '.join(event.warnings)}" if event.warnings else ""
+    return f"{stamp} {event.topic:<17} {text}{warnings}"
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.capture import Capture
+    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+    from analyzer.sim.engine import SimConfig
+    from analyzer.sim.faults import FaultConfig
+    from analyzer.sim.scene import Scene
+    from analyzer.sim.transports import LinkSpec
+    from analyzer.sources import open_source
+
+    tui = not args.no_tui and sys.stdin.isatty() and sys.stdout.isatty()
+    run_app: Any = None
+    if tui:
+        try:
+            from analyzer.tui.app import run_app
+        except ImportError:
+            tui = False
+    duration = args.duration if args.duration is not None else (None if tui else PLAIN_DURATION)
+    if duration is not None and duration <= 0:
+        raise UsageError("--duration must be a positive number of seconds")
+    path = str(output_path(args.output))
+    spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
+    faults = FaultConfig() if args.clean else fault_config(args)
+    config = SimConfig(ranging=True, uav=True, faults=faults)
+
+    source = open_source(str(spec))
+    try:
+        sink = McapSink(
+            path,
+            metadata=recording_metadata(
+                f"demo: simulated gimbal and ground station on {spec}", command="demo"
+            ),
+        )
+    except SourceError:
+        source.close()
+        raise
+    printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
+    capture = Capture(source, [sink] if printer is None else [sink, printer])
+    try:
+        scene = Scene(spec, config)
+    except BaseException:
+        source.close()
+        sink.close()
+        raise
+    if not tui:
+        print(
+            f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
+            f"recording {path}; faults: {faults.describe()}; {duration:g} s",
+            flush=True,
+        )
+    timer: threading.Timer | None = None
+    if duration is not None:
+        timer = threading.Timer(duration, capture.stop)
+        timer.daemon = True
+    result = 0
+    try:
+        if tui:
+            scene.start()
+            if timer is not None:
+                timer.start()
+            result = int(run_app(capture, recording=path, source_label=f"demo on {spec}"))
+        else:
+            capture.start()
+            scene.start()
+            if timer is not None:
+                timer.start()
+            try:
+                capture.wait()
+            except KeyboardInterrupt:
+                capture.stop()
+                print(file=sys.stderr)
+    finally:
+        if timer is not None:
+            timer.cancel()
+        scene.stop()
+        if capture.running:
+            capture.stop()
+            capture.join()
+        sink.close()
+    if sink.error is not None:
+        raise SourceError(sink.error)
+    if capture.error is not None:
+        raise capture.error
+    if scene.errors:
+        raise SourceError(f"the simulation stopped: {scene.errors[0]}")
+    stats = capture.stats
+    hidden = printer.hidden if printer is not None else 0
+    print(
+        f"demo: {stats.frames} CAN frames, {stats.events} events, {stats.diagnostics} "
+        f"diagnostics in {stats.elapsed_s:.1f} s; recorded to {path}",
+        file=sys.stderr if tui else sys.stdout,
+    )
+    if hidden:
+        print(f"  ({hidden} repeated commands / UAV status lines not shown; --all shows them)")
+    if not tui:
+        print(f"  next: gimbal-analyzer info {path}   |   open {path} in Foxglove")
+    return result

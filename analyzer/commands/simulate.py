@@ -1,0 +1,193 @@
+"""`gimbal-analyzer simulate`: a simulated gimbal (and UAV) on a CAN bus, TCP or a serial port."""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import sys
+import time
+
+from analyzer.errors import UsageError
+from analyzer.sim.faults import FaultConfig
+
+HELP = "run a simulated gimbal that answers commands (CAN, TCP in the IDU's role, serial)"
+DESCRIPTION = """\
+A simulated gimbal for testing analyzers and ground stations without hardware.
+It decodes the commands it receives (gimbal_control speeds turn it, specified_angle
+moves it at 60 deg/s, look_down / forward / zoom / tracking act) and answers with
+attitude feedback every 500 ms as four 8-byte segments with a correct CRC.
+
+  gimbal-analyzer simulate --on tcp:127.0.0.1:2000      be the IDU on loopback port 2000
+  gimbal-analyzer simulate --on can:socketcan:vcan0 --uav --ranging
+  gimbal-analyzer simulate --on tcp:2000 --drop 0.05 --corrupt 0.02 --seed 1
+  gimbal-analyzer simulate --stop-feedback-at 10 --stop-feedback-for 3
+
+Then, in another terminal, e.g.:
+  gimbal-analyzer monitor --source tcp:127.0.0.1:2000
+  gimbal-analyzer send gimbal_control --tilt-speed 10 --repeat 50ms --to tcp:127.0.0.1:2000
+
+Links: can:INTERFACE:CHANNEL[@BITRATE] (python-can; can:virtual:NAME only reaches
+buses in the same process), tcp:[HOST:]PORT (a server on 127.0.0.1 unless a host
+is given), serial:PORT[@BAUD]. Fault rates are per feedback segment (0.05 or 5%).
+"""
+
+DEFAULT_LINK = "can:virtual:gimbal-demo"
+
+
+def rate_value(text: str) -> float:
+    """``0.05`` or ``5%`` -> 0.05."""
+    try:
+        value = float(text[:-1]) / 100 if text.endswith("%") else float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a rate (e.g. 0.05 or 5%)") from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text!r}: a rate must be between 0 and 1 (0%..100%)")
+    return value
+
+
+def seconds_value(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must not be negative")
+    return value
+
+
+def add_fault_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("fault injection (per feedback segment)")
+    for kind, what in (
+        ("drop", "leave a segment out"),
+        ("corrupt", "flip bits in a segment (the CRC then fails)"),
+        ("duplicate", "send a segment twice"),
+        ("delay", "send a segment (and those after it) late"),
+    ):
+        group.add_argument(
+            f"--{kind}", type=rate_value, default=0.0, metavar="RATE", help=f"{what}; e.g. 0.05"
+        )
+    group.add_argument(
+        "--delay-by", type=seconds_value, default=0.3, metavar="S", help="how late (default 0.3 s)"
+    )
+    group.add_argument(
+        "--stop-feedback-at",
+        type=seconds_value,
+        metavar="S",
+        help="stop all feedback S seconds after the start ...",
+    )
+    group.add_argument(
+        "--stop-feedback-for",
+        type=seconds_value,
+        default=3.0,
+        metavar="S",
+        help="... for S seconds (default 3)",
+    )
+    group.add_argument("--seed", type=int, help="seed of the fault generator (repeatable runs)")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--on",
+        default=DEFAULT_LINK,
+        metavar="LINK",
+        help=f"where to speak the protocol (default {DEFAULT_LINK})",
+    )
+    parser.add_argument("--ranging", action="store_true", help="also send laser-ranging feedback")
+    parser.add_argument(
+        "--uav", action="store_true", help="also play the UAV: GPS, altitude, attitude, text"
+    )
+    parser.add_argument(
+        "--gimbal-type", type=int, default=1, metavar="N", help="gimbal type of Note 1 (default 1)"
+    )
+    parser.add_argument(
+        "--duration", type=seconds_value, metavar="S", help="stop after S seconds (default: Ctrl-C)"
+    )
+    parser.add_argument(
+        "--quiet", action="store_true", help="print only the start and the end, not each command"
+    )
+    add_fault_arguments(parser)
+
+
+def fault_config(args: argparse.Namespace) -> FaultConfig:
+    return FaultConfig(
+        drop=args.drop,
+        corrupt=args.corrupt,
+        duplicate=args.duplicate,
+        delay=args.delay,
+        delay_s=args.delay_by,
+        stop_at=args.stop_feedback_at,
+        stop_for=args.stop_feedback_for,
+        seed=args.seed,
+    )
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.protocol.feedback import GIMBAL_TYPES
+    from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
+    from analyzer.sim.engine import SimConfig, SimulatedGimbal
+    from analyzer.sim.runner import SimulatorRunner
+    from analyzer.sim.transports import open_gimbal_link, parse_link
+
+    if args.gimbal_type not in GIMBAL_TYPES:
+        valid = ", ".join(f"{k} ({v})" for k, v in GIMBAL_TYPES.items())
+        raise UsageError(f"--gimbal-type {args.gimbal_type}: valid: {valid}")
+    spec = parse_link(args.on)
+
+    def say(text: str) -> None:
+        print(text, flush=True)
+
+    start = time.monotonic()
+    link = open_gimbal_link(spec, log=lambda text: say(f"[{time.monotonic() - start:7.2f}] {text}"))
+    config = SimConfig(
+        gimbal_type=args.gimbal_type, ranging=args.ranging, uav=args.uav, faults=fault_config(args)
+    )
+    gimbal = SimulatedGimbal(start, config)
+    kind = GIMBAL_TYPES[args.gimbal_type]
+    say(f"simulated gimbal, type {args.gimbal_type} ({kind}), on {link.name}")
+    if spec.kind == "can":
+        say(
+            f"  commands on CAN ID 0x{CONTROL_ID:08X}; attitude feedback every 500 ms on "
+            f"0x{FEEDBACK_ID:08X} (4 segments of 8 bytes)"
+        )
+        if spec.interface == "virtual":
+            say(
+                "  note: a python-can virtual bus only reaches this process; other programs reach "
+                "the simulator through --on tcp:127.0.0.1:2000 or a vcan interface"
+            )
+    else:
+        role = "as the IDU (TCP server)" if spec.kind == "tcp" else "on the UART"
+        say(f"  {role}: reads 0x0A control frames, answers with 0x0C attitude frames every 500 ms")
+        if spec.kind == "tcp" and not _is_loopback(spec.host):
+            say(f"  warning: {spec.host} is not a loopback address: reachable from the network")
+    say(f"  ranging feedback: {'every 1 s' if args.ranging else 'off (--ranging)'}")
+    say(
+        "  UAV: "
+        + (
+            "GPS 5 Hz, altitude 5 Hz, attitude 10 Hz, a text every 5 s, orbiting 150 m"
+            if args.uav
+            else "off (--uav); UAV frames received are used for heading and ranging"
+        )
+    )
+    say(f"  faults: {config.faults.describe()}")
+    say(f"  stops after {args.duration:g} s" if args.duration is not None else "  Ctrl-C to stop")
+    runner = SimulatorRunner(gimbal, link, log=None if args.quiet else say)
+    try:
+        runner.run(args.duration)
+    except KeyboardInterrupt:
+        print(file=sys.stderr)
+    finally:
+        link.close()
+    model = gimbal.model
+    say(f"done: {model.commands} command(s) acted on, {model.ignored} ignored")
+    say(f"  {gimbal.state_line()}")
+    say(f"  {gimbal.counts_line()}")
+    return 0

@@ -1,0 +1,79 @@
+"""A simulated gimbal and a scripted ground station sharing one link, each in its own thread."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from analyzer.sim.engine import SimConfig, SimulatedGimbal
+from analyzer.sim.ground import GroundScript, GroundStation
+from analyzer.sim.runner import SimulatorRunner
+from analyzer.sim.transports import Link, LinkSpec, open_gimbal_link, open_ground_link
+
+
+class Scene:
+    """Gimbal + ground station on ``spec`` (a virtual CAN bus in the demo); start() / stop().
+
+    The gimbal's link is opened first, so with TCP the ground station connects to it.
+    """
+
+    def __init__(
+        self,
+        spec: LinkSpec,
+        config: SimConfig | None = None,
+        *,
+        script: GroundScript | None = None,
+        log: Callable[[str], None] | None = None,
+    ) -> None:
+        self.links: list[Link] = []
+        gimbal_link = open_gimbal_link(spec)
+        self.links.append(gimbal_link)
+        try:
+            ground_spec = spec
+            address = getattr(gimbal_link, "address", None)
+            if address is not None:  # a TCP server on port 0: connect to the port it got
+                ground_spec = LinkSpec("tcp", host=address[0], port=address[1])
+            ground_link = open_ground_link(ground_spec)
+            self.links.append(ground_link)
+        except BaseException:
+            gimbal_link.close()
+            raise
+        self.gimbal = SimulatedGimbal(time.monotonic(), config)
+        self.runner = SimulatorRunner(self.gimbal, gimbal_link, log=log, status_every=None)
+        self.ground = GroundStation(ground_link, script)
+        self._threads = [
+            threading.Thread(target=self._guard(self.runner.run), name="sim-gimbal", daemon=True),
+            threading.Thread(target=self._guard(self.ground.run), name="sim-ground", daemon=True),
+        ]
+        self.errors: list[BaseException] = []
+
+    def _guard(self, body: Callable[[], None]) -> Callable[[], None]:
+        def run() -> None:
+            try:
+                body()
+            except Exception as exc:  # a link failed: keep the reason for the caller
+                self.errors.append(exc)
+
+        return run
+
+    def start(self) -> None:
+        for thread in self._threads:
+            thread.start()
+
+    def stop(self, timeout: float = 2.0) -> None:
+        self.runner.stop()
+        self.ground.stop()
+        for thread in self._threads:
+            if thread.is_alive():
+                thread.join(timeout)
+        for link in self.links:
+            link.close()
+        self.links.clear()
+
+    def __enter__(self) -> Scene:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

@@ -1,0 +1,366 @@
+"""Sending links for the simulator, the ground station and `send`: CAN bus, TCP, serial."""
+
+from __future__ import annotations
+
+import contextlib
+import selectors
+import socket
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from analyzer.errors import SourceError, UsageError
+from analyzer.protocol.framing import wrap_can, wrap_control
+from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, TCP_PORT
+from analyzer.protocol.types import FROM_IDU, TO_IDU, CanFrame, StreamChunk
+
+LOOPBACK = "127.0.0.1"
+DEFAULT_SERIAL_BAUD = 115200
+MAX_PENDING = 256 * 1024  # bytes queued for a TCP client that does not read: then drop it
+RECV_SIZE = 65536
+
+Item = CanFrame | StreamChunk
+Log = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    pass
+
+
+class Link(Protocol):
+    """Both ends of the simulator speak through one of these."""
+
+    name: str
+
+    def receive(self, timeout: float) -> list[Item]: ...
+
+    def send(self, can_id: int, data: bytes) -> None: ...
+
+    def close(self) -> None: ...
+
+
+# -- link specs --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class LinkSpec:
+    """A parsed ``can:IFACE:CHANNEL[@BITRATE]``, ``tcp:[HOST:]PORT`` or ``serial:PORT[@BAUD]``."""
+
+    kind: str  # "can", "tcp", "serial"
+    interface: str = ""  # python-can interface
+    channel: str = ""  # python-can channel / serial port
+    host: str = LOOPBACK
+    port: int = TCP_PORT
+    rate: int | None = None  # CAN bitrate / serial baud rate
+
+    def __str__(self) -> str:
+        if self.kind == "can":
+            rate = f"@{self.rate}" if self.rate else ""
+            return f"can:{self.interface}:{self.channel}{rate}"
+        if self.kind == "tcp":
+            return f"tcp:{self.host}:{self.port}"
+        return f"serial:{self.channel}@{self.rate or DEFAULT_SERIAL_BAUD}"
+
+
+def _split_rate(text: str, what: str) -> tuple[str, int | None]:
+    head, sep, tail = text.rpartition("@")
+    if not sep:
+        return text, None
+    if not tail.isdigit():
+        raise UsageError(f"{what}: {tail!r} after '@' is not a number")
+    return head, int(tail)
+
+
+def parse_link(spec: str) -> LinkSpec:
+    """Parse a link spec; raises UsageError with the accepted forms."""
+    kind, _, rest = spec.partition(":")
+    if kind == "can":
+        interface, _, channel = rest.partition(":")
+        if not interface or not channel:
+            raise UsageError(
+                f"{spec!r}: expected can:INTERFACE:CHANNEL[@BITRATE], e.g. can:virtual:gimbal-demo "
+                "or can:socketcan:vcan0"
+            )
+        channel, rate = _split_rate(channel, spec)
+        return LinkSpec("can", interface=interface, channel=channel, rate=rate)
+    if kind == "tcp":
+        host, sep, port = rest.rpartition(":")
+        if not sep:
+            host, port = LOOPBACK, rest
+        host = host.strip("[]") or LOOPBACK
+        if not port.isdigit() or int(port) > 65535:
+            raise UsageError(
+                f"{spec!r}: expected tcp:HOST:PORT or tcp:PORT, e.g. tcp:127.0.0.1:2000"
+            )
+        return LinkSpec("tcp", host=host, port=int(port))
+    if kind == "serial":
+        port_name, rate = _split_rate(rest, spec)
+        if not port_name:
+            raise UsageError(
+                f"{spec!r}: expected serial:PORT[@BAUD], e.g. serial:/dev/ttyUSB0@115200"
+            )
+        return LinkSpec("serial", channel=port_name, rate=rate or DEFAULT_SERIAL_BAUD)
+    raise UsageError(
+        f"{spec!r}: expected can:INTERFACE:CHANNEL, tcp:HOST:PORT or serial:PORT[@BAUD]"
+    )
+
+
+def to_stream(can_id: int, data: bytes) -> bytes:
+    """A frame as it travels on TCP / UART: commands in 0x0A frames, feedback bytes as they
+    are, anything else (UAV status) in a 0x0B frame with the CRC left unset (``00 00``)."""
+    if can_id == CONTROL_ID:
+        return wrap_control(data)
+    if can_id == FEEDBACK_ID:
+        return bytes(data)
+    return wrap_can(can_id, data)
+
+
+# -- CAN ---------------------------------------------------------------------------------------
+
+
+class CanLink:
+    """A python-can bus: sends frames with extended IDs, receives every frame of the bus."""
+
+    def __init__(self, spec: LinkSpec) -> None:
+        import can
+
+        self.name = str(spec)
+        kwargs: dict[str, Any] = {"interface": spec.interface, "channel": spec.channel}
+        if spec.rate:
+            kwargs["bitrate"] = spec.rate
+        try:
+            self.bus = can.Bus(**kwargs)
+        except (can.CanError, OSError, ValueError, ImportError) as exc:
+            raise SourceError(f"cannot open {self.name}: {exc}") from None
+        self._message = can.Message
+        self._error = can.CanError
+        self.send_errors = 0
+
+    def receive(self, timeout: float) -> list[Item]:
+        out: list[Item] = []
+        msg = self.bus.recv(timeout=max(0.0, timeout))
+        while msg is not None:
+            out.append(
+                CanFrame(
+                    msg.timestamp,
+                    msg.arbitration_id,
+                    bytes(msg.data),
+                    extended=msg.is_extended_id,
+                    channel=self.name,
+                    is_remote=msg.is_remote_frame,
+                    is_error=msg.is_error_frame,
+                    is_fd=msg.is_fd,
+                )
+            )
+            if len(out) >= 1000:
+                break
+            msg = self.bus.recv(timeout=0.0)
+        return out
+
+    def send(self, can_id: int, data: bytes) -> None:
+        msg = self._message(arbitration_id=can_id, data=data, is_extended_id=True)
+        try:
+            self.bus.send(msg, timeout=0.2)
+        except self._error:
+            self.send_errors += 1
+
+    def close(self) -> None:
+        self.bus.shutdown()
+
+
+# -- TCP ---------------------------------------------------------------------------------------
+
+
+class _Peer:
+    def __init__(self, sock: socket.socket, label: str) -> None:
+        self.sock = sock
+        self.label = label
+        self.pending = bytearray()
+
+
+class TcpServerLink:
+    """The IDU's side of TCP: accepts ground stations, reads their frames, sends to all."""
+
+    def __init__(self, spec: LinkSpec, log: Log = _quiet) -> None:
+        self.log = log
+        try:
+            self.server = socket.create_server((spec.host, spec.port))
+        except OSError as exc:
+            raise SourceError(f"cannot listen on {spec.host}:{spec.port}: {exc.strerror}") from None
+        self.server.setblocking(False)
+        host, port = self.server.getsockname()[:2]
+        self.address: tuple[str, int] = (host, port)
+        self.name = f"tcp:{host}:{port}"
+        self.selector = selectors.DefaultSelector()
+        self.selector.register(self.server, selectors.EVENT_READ)
+        self.peers: dict[socket.socket, _Peer] = {}
+
+    def receive(self, timeout: float) -> list[Item]:
+        out: list[Item] = []
+        for key, mask in self.selector.select(max(0.0, timeout)):
+            sock: socket.socket = key.fileobj  # type: ignore[assignment]
+            if sock is self.server:
+                self._accept()
+                continue
+            peer = self.peers.get(sock)
+            if peer is None:
+                continue
+            if mask & selectors.EVENT_WRITE:
+                self._flush(peer)
+            if mask & selectors.EVENT_READ and sock in self.peers:
+                try:
+                    data = sock.recv(RECV_SIZE)
+                except (BlockingIOError, InterruptedError):
+                    continue
+                except OSError:
+                    data = b""
+                if not data:
+                    self._drop(peer, "disconnected")
+                    continue
+                out.append(StreamChunk(time.time(), data, source=peer.label, direction=TO_IDU))
+        return out
+
+    def send(self, can_id: int, data: bytes) -> None:
+        payload = to_stream(can_id, data)
+        for peer in list(self.peers.values()):
+            peer.pending += payload
+            self._flush(peer)
+
+    def close(self) -> None:
+        for peer in list(self.peers.values()):
+            self._drop(peer, "closed", quiet=True)
+        self.selector.close()
+        self.server.close()
+
+    def _accept(self) -> None:
+        try:
+            sock, address = self.server.accept()
+        except (BlockingIOError, InterruptedError):
+            return
+        sock.setblocking(False)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        peer = _Peer(sock, f"tcp:{address[0]}:{address[1]}")
+        self.peers[sock] = peer
+        self.selector.register(sock, selectors.EVENT_READ)
+        self.log(f"ground station {address[0]}:{address[1]} connected")
+
+    def _flush(self, peer: _Peer) -> None:
+        if peer.pending:
+            try:
+                sent = peer.sock.send(peer.pending)
+                del peer.pending[:sent]
+            except (BlockingIOError, InterruptedError):
+                pass
+            except OSError:
+                self._drop(peer, "connection lost")
+                return
+        if len(peer.pending) > MAX_PENDING:
+            self._drop(peer, f"not reading ({len(peer.pending)} bytes queued)")
+            return
+        events = selectors.EVENT_READ | (selectors.EVENT_WRITE if peer.pending else 0)
+        self.selector.modify(peer.sock, events)
+
+    def _drop(self, peer: _Peer, why: str, quiet: bool = False) -> None:
+        self.peers.pop(peer.sock, None)
+        with contextlib.suppress(KeyError, ValueError):
+            self.selector.unregister(peer.sock)
+        peer.sock.close()
+        if not quiet:
+            self.log(f"ground station {peer.label.removeprefix('tcp:')} {why}")
+
+
+class TcpClientLink:
+    """A ground station's side of TCP: connects to the IDU (or the simulator)."""
+
+    def __init__(self, spec: LinkSpec, connect_timeout: float = 3.0) -> None:
+        self.name = str(spec)
+        try:
+            self.sock = socket.create_connection((spec.host, spec.port), timeout=connect_timeout)
+        except OSError as exc:
+            why = exc.strerror or str(exc)
+            raise SourceError(f"cannot connect to {spec.host}:{spec.port}: {why}") from None
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+    def receive(self, timeout: float) -> list[Item]:
+        self.sock.settimeout(max(0.001, timeout))
+        try:
+            data = self.sock.recv(RECV_SIZE)
+        except (TimeoutError, BlockingIOError):
+            return []
+        except OSError as exc:
+            raise SourceError(f"{self.name}: {exc.strerror or exc}") from None
+        if not data:
+            raise SourceError(f"{self.name}: the other side closed the connection")
+        return [StreamChunk(time.time(), data, source=self.name, direction=FROM_IDU)]
+
+    def send(self, can_id: int, data: bytes) -> None:
+        self.sock.settimeout(3.0)
+        try:
+            self.sock.sendall(to_stream(can_id, data))
+        except OSError as exc:
+            raise SourceError(f"{self.name}: {exc.strerror or exc}") from None
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+# -- serial ------------------------------------------------------------------------------------
+
+
+class SerialLink:
+    """A UART ("TTL") in the gimbal's role: the same framing as TCP."""
+
+    def __init__(self, spec: LinkSpec, direction: str = TO_IDU) -> None:
+        import serial
+
+        self.name = str(spec)
+        self.direction = direction
+        try:
+            self.port = serial.serial_for_url(spec.channel, baudrate=spec.rate, timeout=0)
+        except (serial.SerialException, ValueError) as exc:
+            raise SourceError(f"cannot open {self.name}: {exc}") from None
+        self._error = serial.SerialException
+
+    def receive(self, timeout: float) -> list[Item]:
+        self.port.timeout = max(0.0, timeout)
+        try:
+            data = self.port.read(1)
+            if data:
+                self.port.timeout = 0
+                data += self.port.read(RECV_SIZE)
+        except self._error as exc:
+            raise SourceError(f"{self.name}: {exc}") from None
+        if not data:
+            return []
+        return [StreamChunk(time.time(), data, source=self.name, direction=self.direction)]
+
+    def send(self, can_id: int, data: bytes) -> None:
+        try:
+            self.port.write(to_stream(can_id, data))
+        except self._error as exc:
+            raise SourceError(f"{self.name}: {exc}") from None
+
+    def close(self) -> None:
+        self.port.close()
+
+
+# -- opening -----------------------------------------------------------------------------------
+
+
+def open_gimbal_link(spec: LinkSpec, log: Log = _quiet) -> Link:
+    """The simulated gimbal's end: a CAN bus, a TCP server (IDU role) or a serial port."""
+    if spec.kind == "can":
+        return CanLink(spec)
+    if spec.kind == "tcp":
+        return TcpServerLink(spec, log)
+    return SerialLink(spec, direction=TO_IDU)
+
+
+def open_ground_link(spec: LinkSpec) -> Link:
+    """A ground station's end: a CAN bus, a TCP client or a serial port."""
+    if spec.kind == "can":
+        return CanLink(spec)
+    if spec.kind == "tcp":
+        return TcpClientLink(spec)
+    return SerialLink(spec, direction=FROM_IDU)
