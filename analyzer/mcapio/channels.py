@@ -127,11 +127,14 @@ def stream_chunk_from_dict(obj: dict[str, Any]) -> StreamChunk:
     )
 
 
+_MAX_SECONDS = (2**64 - 1) / 1e9
+
+
 def time_ns(seconds: float) -> int:
     """Event time in seconds -> MCAP log time in nanoseconds (clamped to the uint64 range)."""
-    if not math.isfinite(seconds) or seconds <= 0:
-        return 0
-    return min(round(seconds * 1e9), 2**64 - 1)
+    if 0 < seconds < _MAX_SECONDS:  # False for NaN too
+        return round(seconds * 1e9)
+    return 2**64 - 1 if seconds >= _MAX_SECONDS else 0
 
 
 def schema_name(topic: str) -> str:

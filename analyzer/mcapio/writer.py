@@ -59,6 +59,13 @@ def _json_default(value: Any) -> Any:
     return str(value)
 
 
+# One encoder for every message (json.dumps with options builds a new one per call).
+# Events never hold reference cycles, so the cycle check is skipped.
+_ENCODE = json.JSONEncoder(
+    separators=(",", ":"), default=_json_default, check_circular=False
+).encode
+
+
 def _describe(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
@@ -89,7 +96,7 @@ class McapSink:
         foxglove_views: bool = True,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        from mcap.writer import CompressionType, Writer
+        from analyzer.mcapio.chunked_writer import ChunkedWriter
 
         self.path = str(path)
         self.error: str | None = None
@@ -115,11 +122,7 @@ class McapSink:
             self._file = open(self.path, "wb")  # noqa: SIM115 (closed in close())
         except OSError as exc:
             raise SourceError(f"cannot create {self.path}: {_describe(exc)}") from None
-        self._writer = Writer(
-            self._file,
-            chunk_size=chunk_size,
-            compression=CompressionType.NONE,
-        )
+        self._writer = ChunkedWriter(self._file, chunk_size=chunk_size)
         info = {
             "tool": "gimbal-analyzer",
             "tool_version": __version__,
@@ -145,10 +148,8 @@ class McapSink:
             if self._closed:
                 return
             try:
-                for item in batch.items:
-                    self._write_item(item)
-                for event in batch.events:
-                    self._write_event(event)
+                self._write_items(batch.items)
+                self._write_events(batch.events)
                 if (
                     self._flush_interval is not None
                     and self._clock() - self._last_flush >= self._flush_interval
@@ -163,7 +164,7 @@ class McapSink:
             if self._closed:
                 return
             try:
-                self._write_item(item)
+                self._write_items([item])
             except OSError as exc:
                 self._fail(exc)
 
@@ -173,7 +174,7 @@ class McapSink:
             if self._closed:
                 return
             try:
-                self._write_event(event)
+                self._write_events([event])
             except OSError as exc:
                 self._fail(exc)
 
@@ -233,44 +234,58 @@ class McapSink:
         self._sequence[channel_id] = 0
         return channel_id
 
-    def _add(self, channel_id: int, log_time: int, data: bytes) -> None:
-        sequence = self._sequence[channel_id] + 1
-        self._sequence[channel_id] = sequence
-        self._writer.add_message(channel_id, log_time, data, log_time, sequence)
-        self.messages_written += 1
-        self._dirty = True
+    def _write_items(self, items: list[RawItem]) -> None:
+        add = self._writer.add_message
+        sequence = self._sequence
+        can_id = self._channels.get(TOPIC_CAN_FRAMES, 0)
+        stream_id = self._channels.get(TOPIC_STREAM_BYTES, 0)
+        for item in items:
+            if isinstance(item, CanFrame):
+                channel_id = can_id or self._channel(TOPIC_CAN_FRAMES, ROLE_RAW)
+                can_id = channel_id
+                data = can_frame_json(item)
+            else:
+                channel_id = stream_id or self._channel(TOPIC_STREAM_BYTES, ROLE_RAW)
+                stream_id = channel_id
+                data = stream_chunk_json(item)
+            log_time = time_ns(item.time)
+            number = sequence[channel_id] + 1
+            sequence[channel_id] = number
+            add(channel_id, log_time, data, log_time, number)
+            self.messages_written += 1
+            self.items_written += 1
+        if items:
+            self._dirty = True
+            self.last_time = items[-1].time
 
-    def _write_item(self, item: RawItem) -> None:
-        if isinstance(item, CanFrame):
-            channel_id = self._channels.get(TOPIC_CAN_FRAMES) or self._channel(
-                TOPIC_CAN_FRAMES, ROLE_RAW
-            )
-            data = can_frame_json(item)
-        else:
-            channel_id = self._channels.get(TOPIC_STREAM_BYTES) or self._channel(
-                TOPIC_STREAM_BYTES, ROLE_RAW
-            )
-            data = stream_chunk_json(item)
-        self._add(channel_id, time_ns(item.time), data)
-        self.items_written += 1
-        self.last_time = item.time
-
-    def _write_event(self, event: Event) -> None:
-        topic = event.topic
-        channel_id = self._channels.get(topic) or self._channel(topic, ROLE_EVENT)
-        data = json.dumps(event.to_dict(), separators=(",", ":"), default=_json_default)
-        log_time = time_ns(event.time)
-        self._add(channel_id, log_time, data.encode())
-        self.events_written += 1
-        self.last_time = event.time
-        if topic == TOPIC_DIAGNOSTICS:
-            self.stats.diagnostics[str(event.fields.get("kind", "unknown"))] += 1
-        elif topic == TOPIC_GIMBAL_ATTITUDE:
-            self.stats.attitude(event.time)
-        if self._views is not None:
-            for view_topic, message in self._views.views(event):
-                view_id = self._channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
-                self._add(view_id, log_time, json.dumps(message, separators=(",", ":")).encode())
+    def _write_events(self, events: list[Event]) -> None:
+        add = self._writer.add_message
+        sequence = self._sequence
+        channels = self._channels
+        views = self._views
+        for event in events:
+            topic = event.topic
+            channel_id = channels.get(topic) or self._channel(topic, ROLE_EVENT)
+            log_time = time_ns(event.time)
+            number = sequence[channel_id] + 1
+            sequence[channel_id] = number
+            add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
+            self.messages_written += 1
+            self.events_written += 1
+            if topic == TOPIC_DIAGNOSTICS:
+                self.stats.diagnostics[str(event.fields.get("kind", "unknown"))] += 1
+            elif topic == TOPIC_GIMBAL_ATTITUDE:
+                self.stats.attitude(event.time)
+            if views is not None:
+                for view_topic, message in views.views(event):
+                    view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
+                    number = sequence[view_id] + 1
+                    sequence[view_id] = number
+                    add(view_id, log_time, _ENCODE(message).encode(), log_time, number)
+                    self.messages_written += 1
+        if events:
+            self._dirty = True
+            self.last_time = events[-1].time
 
     def _flush_locked(self) -> None:
         self._last_flush = self._clock()

@@ -1,0 +1,248 @@
+"""A lean chunked MCAP writer: the per-message path is one struct.pack into the open chunk.
+
+It writes the same file layout as ``mcap.writer.Writer`` with chunking, all indexes,
+statistics, summary offsets and CRCs (chunk, summary and data section), uncompressed.
+The rarely written records (header, schema, channel, metadata, summary) are serialised by
+the mcap library's own record classes; only messages and message indexes, which are
+written for every frame, are packed here. Tests check every file with the mcap reader.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import IO
+
+from mcap.data_stream import RecordBuilder
+from mcap.opcode import Opcode
+from mcap.records import (
+    Channel,
+    Chunk,
+    ChunkIndex,
+    DataEnd,
+    Footer,
+    Header,
+    Metadata,
+    MetadataIndex,
+    Schema,
+    Statistics,
+    SummaryOffset,
+)
+
+MAGIC = b"\x89MCAP0\r\n"
+# Message record: opcode, record length, channel id, sequence, log time, publish time.
+_MESSAGE = struct.Struct("<BQHIQQ")
+_MESSAGE_FIXED = 2 + 4 + 8 + 8
+# Message index record head: opcode, record length, channel id, byte length of the pairs.
+_INDEX_HEAD = struct.Struct("<BQHI")
+
+
+class ChunkedWriter:
+    """Writes an MCAP file to ``stream`` (binary, opened by the caller, not closed here)."""
+
+    def __init__(self, stream: IO[bytes], *, chunk_size: int = 128 * 1024) -> None:
+        self._stream = stream
+        self._chunk_size = chunk_size
+        self._pos = 0
+        self._data_crc = 0
+        self._schemas: dict[int, Schema] = {}
+        self._channels: dict[int, Channel] = {}
+        self._chunk_indexes: list[ChunkIndex] = []
+        self._metadata_indexes: list[MetadataIndex] = []
+        self._channel_counts: dict[int, int] = {}
+        self._message_count = 0
+        self._chunk_count = 0
+        self._metadata_count = 0
+        self._start_time = 0
+        self._end_time = 0
+        # the open chunk
+        self._chunk = bytearray()
+        self._index: dict[int, list[int]] = {}  # channel id -> [log_time, offset, ...]
+
+    # -- low level -------------------------------------------------------------------------------
+
+    def _write(self, data: bytes | bytearray | memoryview) -> None:
+        self._stream.write(data)
+        self._data_crc = zlib.crc32(data, self._data_crc)
+        self._pos += len(data)
+
+    @staticmethod
+    def _record(record: object) -> bytes:
+        builder = RecordBuilder()
+        record.write(builder)  # type: ignore[attr-defined]
+        return bytes(builder.end())
+
+    # -- public API (a subset of mcap.writer.Writer) -----------------------------------------------
+
+    def start(self, profile: str = "", library: str = "") -> None:
+        self._write(MAGIC)
+        self._write(self._record(Header(profile=profile, library=library)))
+
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
+        schema_id = len(self._schemas) + 1
+        schema = Schema(id=schema_id, name=name, encoding=encoding, data=data)
+        self._schemas[schema_id] = schema
+        self._chunk += self._record(schema)
+        return schema_id
+
+    def register_channel(
+        self,
+        topic: str,
+        message_encoding: str,
+        schema_id: int,
+        metadata: dict[str, str] | None = None,
+    ) -> int:
+        channel_id = len(self._channels) + 1
+        channel = Channel(
+            id=channel_id,
+            topic=topic,
+            message_encoding=message_encoding,
+            schema_id=schema_id,
+            metadata=dict(metadata or {}),
+        )
+        self._channels[channel_id] = channel
+        self._channel_counts[channel_id] = 0
+        self._chunk += self._record(channel)
+        return channel_id
+
+    def add_message(
+        self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0
+    ) -> None:
+        chunk = self._chunk
+        index = self._index.get(channel_id)
+        if index is None:
+            index = self._index[channel_id] = []
+        index += (log_time, len(chunk))
+        chunk += _MESSAGE.pack(
+            Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel_id, sequence, log_time, publish_time
+        )
+        chunk += data
+        if len(chunk) >= self._chunk_size:
+            self._finish_chunk()
+
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        record = self._record(Metadata(name=name, metadata=dict(data)))
+        self._metadata_indexes.append(
+            MetadataIndex(offset=self._pos, length=len(record), name=name)
+        )
+        self._metadata_count += 1
+        self._write(record)
+
+    def flush(self) -> None:
+        """Close the open chunk (if it holds messages) and flush the stream."""
+        self._finish_chunk()
+        self._stream.flush()
+
+    def finish(self) -> None:
+        """Write the last chunk, the data end, the summary and the footer."""
+        self._finish_chunk()
+        self._write(self._record(DataEnd(data_section_crc=self._data_crc)))
+        summary_start = self._pos
+        parts: list[bytes] = []
+        offsets: list[SummaryOffset] = []
+        position = summary_start
+
+        def group(opcode: Opcode, records: list[bytes]) -> None:
+            nonlocal position
+            if not records:
+                return
+            size = sum(len(r) for r in records)
+            offsets.append(
+                SummaryOffset(group_opcode=opcode, group_start=position, group_length=size)
+            )
+            parts.extend(records)
+            position += size
+
+        group(Opcode.SCHEMA, [self._record(s) for s in self._schemas.values()])
+        group(Opcode.CHANNEL, [self._record(c) for c in self._channels.values()])
+        statistics = Statistics(
+            message_count=self._message_count,
+            schema_count=len(self._schemas),
+            channel_count=len(self._channels),
+            attachment_count=0,
+            metadata_count=self._metadata_count,
+            chunk_count=self._chunk_count,
+            message_start_time=self._start_time,
+            message_end_time=self._end_time,
+            channel_message_counts={k: v for k, v in self._channel_counts.items() if v},
+        )
+        group(Opcode.STATISTICS, [self._record(statistics)])
+        group(Opcode.CHUNK_INDEX, [self._record(c) for c in self._chunk_indexes])
+        group(Opcode.METADATA_INDEX, [self._record(m) for m in self._metadata_indexes])
+        summary_offset_start = position
+        parts.extend(self._record(o) for o in offsets)
+        summary = b"".join(parts)
+        crc = zlib.crc32(summary)
+        crc = zlib.crc32(
+            struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start, summary_offset_start),
+            crc,
+        )
+        self._stream.write(summary)
+        footer = Footer(
+            summary_start=summary_start,
+            summary_offset_start=summary_offset_start,
+            summary_crc=crc,
+        )
+        self._stream.write(self._record(footer))
+        self._stream.write(MAGIC)
+        self._stream.flush()
+
+    # -- chunks ----------------------------------------------------------------------------------
+
+    def _finish_chunk(self) -> None:
+        if not self._index:
+            return
+        data = bytes(self._chunk)
+        start = min(min(pairs[0::2]) for pairs in self._index.values())
+        end = max(max(pairs[0::2]) for pairs in self._index.values())
+        messages = 0
+        for channel_id, pairs in self._index.items():
+            self._channel_counts[channel_id] += len(pairs) // 2
+            messages += len(pairs) // 2
+        chunk = Chunk(
+            compression="",
+            data=data,
+            message_start_time=start,
+            message_end_time=end,
+            uncompressed_crc=zlib.crc32(data),
+            uncompressed_size=len(data),
+        )
+        chunk_record = self._record(chunk)
+        chunk_offset = self._pos
+        index_offset = chunk_offset + len(chunk_record)
+        offsets: dict[int, int] = {}
+        index_parts: list[bytes] = []
+        position = index_offset
+        for channel_id, pairs in self._index.items():
+            count = len(pairs)
+            record = _INDEX_HEAD.pack(
+                Opcode.MESSAGE_INDEX, 2 + 4 + 8 * count, channel_id, 8 * count
+            ) + struct.pack(f"<{count}Q", *pairs)
+            offsets[channel_id] = position
+            index_parts.append(record)
+            position += len(record)
+        indexes = b"".join(index_parts)
+        # Everything of the chunk goes out in one write: a crash cuts at most this tail.
+        self._write(chunk_record + indexes)
+        self._chunk_indexes.append(
+            ChunkIndex(
+                message_start_time=start,
+                message_end_time=end,
+                chunk_start_offset=chunk_offset,
+                chunk_length=len(chunk_record),
+                message_index_offsets=offsets,
+                message_index_length=len(indexes),
+                compression="",
+                compressed_size=len(data),
+                uncompressed_size=len(data),
+            )
+        )
+        if self._message_count == 0:
+            self._start_time, self._end_time = start, end
+        else:
+            self._start_time = min(self._start_time, start)
+            self._end_time = max(self._end_time, end)
+        self._message_count += messages
+        self._chunk_count += 1
+        self._chunk = bytearray()
+        self._index = {}
