@@ -151,6 +151,8 @@ def log_level(event: Event) -> int:
         return LOG_ERROR
     if kind == LINK:
         state = str(event.fields.get("state", "")).lower()
+        if state == "failed":  # the capture stopped on this failure
+            return LOG_ERROR
         return LOG_INFO if state in _GOOD_LINK_STATES else LOG_WARNING
     return LOG_WARNING
 
