@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -80,6 +82,7 @@ class MonitorApp(App[int]):
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("q", "quit", "Quit"),
+        Binding("ctrl+c", "quit", "Quit", show=False, priority=True),
         Binding("p", "toggle_pause", "Pause"),
         Binding("space", "toggle_pause", "Pause", show=False),
         Binding("f", "filter", "Filter"),
@@ -105,6 +108,7 @@ class MonitorApp(App[int]):
         refresh_hz: float = REFRESH_HZ,
         state: MonitorState | None = None,
         file_size: Callable[[str], int | None] = _file_size,
+        handle_sigterm: bool = False,
     ) -> None:
         super().__init__()
         self.bridge = bridge
@@ -121,6 +125,8 @@ class MonitorApp(App[int]):
         self._paused_seq = 0
         self._log_key: tuple[object, ...] = ()
         self._capture_stopped = False
+        self._handle_sigterm = handle_sigterm
+        self._mounted = False
 
     # -- layout --------------------------------------------------------------------------------
 
@@ -137,13 +143,32 @@ class MonitorApp(App[int]):
         yield Footer()
 
     def on_mount(self) -> None:
+        if self._handle_sigterm:
+            # SIGTERM quits like q does, so the recording is finalised
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                asyncio.get_running_loop().add_signal_handler(
+                    signal.SIGTERM, lambda: self.call_later(self.action_quit)
+                )
+        # widgets of the main screen, kept so redraws work while a pop-up screen is shown
+        self._status = self.query_one(StatusBar)
+        self._gimbal = self.query_one(GimbalPanel)
+        self._uav = self.query_one(UavPanel)
+        self._log_view = self.query_one(CommandLog)
+        self._ids = self.query_one(IdTable)
+        self._diagnostics = self.query_one(DiagnosticsPanel)
+        self._prompt = self.query_one(PromptBar)
+        self._mounted = True
         self.bridge.connect(self._wake)
         self.set_interval(1.0 / self.refresh_hz, self.refresh_view)
-        self.query_one(CommandLog).focus()
+        self._log_view.focus()
         self.refresh_view()
 
     def on_unmount(self) -> None:
+        self._mounted = False
         self.bridge.disconnect()
+        if self._handle_sigterm:
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                asyncio.get_running_loop().remove_signal_handler(signal.SIGTERM)
 
     # -- data in -------------------------------------------------------------------------------
 
@@ -174,6 +199,8 @@ class MonitorApp(App[int]):
 
     def refresh_view(self) -> None:
         """Redraw from the state (timer-driven, so the cost does not grow with the input rate)."""
+        if not self._mounted:
+            return
         now = self.clock()
         state = self.state
         state.advance(now)
@@ -183,21 +210,21 @@ class MonitorApp(App[int]):
         info.paused = self.paused
         info.paused_new = state.seq - self._paused_seq if self.paused else 0
         info.filter_text = self.filter.text
-        self.query_one(StatusBar).show(state, info)
+        self._status.show(state, info)
         if self.paused:
             return
         self.stats.refreshes += 1
         if self.stats.last_batch_wall:
             self.stats.lag = max(now - self.stats.last_batch_wall, 0.0)
             self.stats.max_lag = max(self.stats.max_lag, self.stats.lag)
-        self.query_one(GimbalPanel).show(state)
-        self.query_one(UavPanel).show(state)
+        self._gimbal.show(state)
+        self._uav.show(state)
         self._show_log()
-        self.query_one(IdTable).show(state, self.filter)
-        self.query_one(DiagnosticsPanel).show(state)
+        self._ids.show(state, self.filter)
+        self._diagnostics.show(state)
 
     def _show_log(self) -> None:
-        log = self.query_one(CommandLog)
+        log = self._log_view
         source = self.state.command_log if self.info.view == "commands" else self.state.all_log
         key = (self.state.seq, self.info.view, self.filter.text, log.raw, log.search)
         if key == self._log_key:
@@ -222,13 +249,13 @@ class MonitorApp(App[int]):
         self.refresh_view()
 
     def action_filter(self) -> None:
-        self.query_one(PromptBar).open("filter", self.filter.text)
+        self._prompt.open("filter", self.filter.text)
 
     def action_search(self) -> None:
-        self.query_one(PromptBar).open("search", self.search_text)
+        self._prompt.open("search", self.search_text)
 
     def on_prompt_bar_done(self, message: PromptBar.Done) -> None:
-        log = self.query_one(CommandLog)
+        log = self._log_view
         log.focus()
         if message.value is None:
             return
@@ -247,10 +274,10 @@ class MonitorApp(App[int]):
         self._force_redraw()
 
     def action_find_next(self) -> None:
-        self.query_one(CommandLog).find(self.search_text, backwards=True)
+        self._log_view.find(self.search_text, backwards=True)
 
     def action_find_previous(self) -> None:
-        self.query_one(CommandLog).find(self.search_text, backwards=False)
+        self._log_view.find(self.search_text, backwards=False)
 
     def action_clear_counters(self) -> None:
         self.state.clear_counters()
@@ -258,7 +285,7 @@ class MonitorApp(App[int]):
         self._force_redraw()
 
     def action_toggle_raw(self) -> None:
-        log = self.query_one(CommandLog)
+        log = self._log_view
         log.raw = not log.raw
         self.info.raw = log.raw
         self._force_redraw()
@@ -268,7 +295,7 @@ class MonitorApp(App[int]):
         self._force_redraw()
 
     def action_follow(self) -> None:
-        self.query_one(CommandLog).action_follow()
+        self._log_view.action_follow()
 
     def action_help(self) -> None:
         self.push_screen(HelpScreen())
@@ -292,7 +319,7 @@ class MonitorApp(App[int]):
             self.paused = False
             self.refresh_view()
             self.paused = True
-            self.query_one(StatusBar).show(self.state, self.info)
+            self._status.show(self.state, self.info)
         else:
             self.refresh_view()
 
@@ -335,14 +362,25 @@ def run_app(
     """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
 
     The capture is stopped and joined (so every sink, the recording included, is
-    finalised) whether the user quits, presses Ctrl+C or the UI fails.
+    finalised) whether the user quits (q, Ctrl+C, SIGTERM) or the UI fails. If the
+    capture ended with an error (``capture.error``, a SourceError) it is raised after
+    the terminal is restored, so the command exits 1 with that message.
     """
     bridge = TuiBridge()
     add_sink(capture, bridge)
-    app = MonitorApp(bridge, source_label=source_label, recording=recording, capture=capture)
+    app = MonitorApp(
+        bridge,
+        source_label=source_label,
+        recording=recording,
+        capture=capture,
+        handle_sigterm=True,
+    )
     capture.start()
     try:
         result = app.run()
     finally:
         app.stop_capture()
+    error = getattr(capture, "error", None)
+    if isinstance(error, Exception):
+        raise error
     return int(result or 0)

@@ -18,7 +18,7 @@ from textual.message import Message
 from textual.scroll_view import ScrollView
 from textual.strip import Strip
 
-from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS
+from analyzer.protocol.types import LINK, TOPIC_COMMAND, TOPIC_DIAGNOSTICS
 from analyzer.tui.formatting import event_raw, event_text, format_time
 from analyzer.tui.state import LogEntry
 
@@ -99,7 +99,7 @@ class CommandLog(ScrollView, can_focus=True):
             line.append(f"{raw or '—':<{RAW_WIDTH}}", _RAW)
         style: Style | None = None
         if event.topic == TOPIC_DIAGNOSTICS:
-            style = _DIAGNOSTIC
+            style = _WARNING if event.fields.get("kind") == LINK else _DIAGNOSTIC
         elif event.warnings:
             style = _WARNING
         elif event.topic != TOPIC_COMMAND:

@@ -52,35 +52,43 @@ class DiagnosticsPanel(Horizontal):
     DiagnosticsPanel #errors-spark > .sparkline--min-color { color: $error 30%; }
     """
 
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self._counters = Static(id="diag-counters")
+        self._frames_label = Static(id="frames-label")
+        self._frames = Sparkline([0.0], id="frames-spark")
+        self._errors_label = Static(id="errors-label")
+        self._errors = Sparkline([0.0], id="errors-spark")
+
     def compose(self) -> ComposeResult:
-        yield Static(id="diag-counters")
+        yield self._counters
         with Vertical(id="diag-graphs"):
-            yield Static(id="frames-label")
-            yield Sparkline([0.0], id="frames-spark")
-            yield Static(id="errors-label")
-            yield Sparkline([0.0], id="errors-spark")
+            yield self._frames_label
+            yield self._frames
+            yield self._errors_label
+            yield self._errors
 
     def on_mount(self) -> None:
         self.border_title = "Diagnostics"
 
     def show(self, state: MonitorState) -> None:
-        self.query_one("#diag-counters", Static).update(render_counters(state))
+        self._counters.update(render_counters(state))
         frames = list(state.frames_history)
         errors = list(state.errors_history)
         n = len(frames)
-        self.query_one("#frames-label", Static).update(
+        self._frames_label.update(
             Text.assemble(
                 ("frames/s ", "dim"),
                 f"{state.frames_per_s:,.0f}",
                 (f"  max {max(frames):,.0f}", "dim"),
             )
         )
-        self.query_one("#frames-spark", Sparkline).data = frames
-        self.query_one("#errors-label", Static).update(
+        self._frames.data = frames
+        self._errors_label.update(
             Text.assemble(
                 ("errors/s ", "dim"),
                 (f"{state.errors_per_s:,.1f}", "bold red" if state.errors_per_s else ""),
                 (f"  last {n} s", "dim"),
             )
         )
-        self.query_one("#errors-spark", Sparkline).data = errors
+        self._errors.data = errors

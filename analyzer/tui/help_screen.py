@@ -24,6 +24,7 @@ KEYS: tuple[tuple[str, str], ...] = (
     ("end / escape", "follow the newest entry again"),
     ("enter", "details of the selected event: every field and the raw bytes"),
     ("tab", "switch between the log and the ID table"),
+    ("enter on an ID row", "filter by that ID (enter again: show all)"),
     ("? / f1", "this help"),
 )
 
@@ -43,8 +44,6 @@ def render_help() -> Table:
     table.add_column()
     for key, what in KEYS:
         table.add_row(key, what)
-    table.add_row("", "")
-    table.add_row("filter", Text(FILTER_HELP))
     return table
 
 
@@ -68,6 +67,7 @@ class HelpScreen(ModalScreen[None]):
         with VerticalScroll() as scroll:
             scroll.border_title = "gimbal-analyzer monitor: keys"
             yield Static(render_help())
+            yield Static(Text("\n" + FILTER_HELP))
 
     def action_close(self) -> None:
         self.dismiss(None)

@@ -8,6 +8,7 @@ the wall clock, so the age of the last feedback keeps growing when the source go
 
 from __future__ import annotations
 
+import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
 
@@ -115,9 +116,10 @@ class IdRow:
         old = self.data
         changed = self.changed_at
         if len(changed) < len(data):
-            changed.extend([time] * (len(data) - len(changed)))
-        for i, byte in enumerate(data):
-            if i >= len(old) or old[i] != byte:
+            # bytes seen for the first time are not "changed"
+            changed.extend([-math.inf] * (len(data) - len(changed)))
+        for i in range(min(len(old), len(data))):
+            if old[i] != data[i]:
                 changed[i] = time
         self.data = data
 

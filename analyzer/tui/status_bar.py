@@ -25,21 +25,25 @@ class StatusInfo:
     raw: bool = False
 
 
-_BAD_WORDS = ("down", "lost", "disconnect", "error", "fail", "retry", "reconnect", "closed")
+_GOOD_STATES = frozenset({"open", "connected", "gs_connected"})
+_WAIT_STATES = frozenset({"listening", "reconnecting", "connecting"})
+_BAD_WORDS = ("down", "lost", "disconnect", "error", "fail", "refused", "closed")
 
 
 def link_text(state: MonitorState) -> tuple[str, str]:
-    """(words, style) for the connection state."""
+    """(words, style) for the connection state, from the last link diagnostic."""
+    link = state.link_state
     detail = state.link_detail
-    bad_detail = any(w in detail.lower() for w in _BAD_WORDS)
+    bad = any(w in (link or detail).lower() for w in _BAD_WORDS)
     if state.source_ended:
-        return ("ended: " + detail if bad_detail else "source ended"), "bold yellow"
-    if state.link_state or detail:
-        words = state.link_state or detail
-        if state.link_state and detail and detail != state.link_state:
-            words = f"{state.link_state}: {detail}"
-        bad = any(w in (state.link_state or detail).lower() for w in _BAD_WORDS)
-        return words, "bold white on red" if bad else "bold green"
+        return ("ended: " + detail if bad and detail else "source ended"), "bold yellow"
+    if link or detail:
+        words = link or detail
+        if link in _GOOD_STATES:
+            return words, "bold green"
+        if link in _WAIT_STATES or not bad:
+            return (f"{link}: {detail}" if link and detail else words), "bold yellow"
+        return (f"{link}: {detail}" if link and detail else words), "bold white on red"
     if state.total.frames or state.total.chunks:
         return "receiving", "bold green"
     return "waiting for data", "yellow"

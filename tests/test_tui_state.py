@@ -1,0 +1,271 @@
+"""The monitor's UI-free parts: screen model, filter, bridge and wording."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from analyzer.pipeline import Batch, RawItem
+from analyzer.protocol.codec import encode_command
+from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.feedback import encode_attitude, segments
+from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID
+from analyzer.protocol.types import (
+    CRC_MISMATCH,
+    LINK,
+    TOPIC_COMMAND,
+    CanFrame,
+    Event,
+    StreamChunk,
+    diagnostic,
+)
+from analyzer.protocol.uav import encode_gps
+from analyzer.tui.bridge import TuiBridge
+from analyzer.tui.demo_traffic import FOREIGN_BASE_ID, session
+from analyzer.tui.event_filter import EventFilter
+from analyzer.tui.formatting import compass, describe_params, event_text, format_age, value_bar
+from analyzer.tui.state import MonitorState, frame_bits
+
+T0 = 1_700_000_000.0
+
+
+def decoded(frames: list[CanFrame], wall: float | None = None) -> Batch:
+    decoder = Decoder()
+    events = [e for f in frames for e in decoder.feed(f)]
+    return Batch(list[RawItem](frames), events, wall if wall is not None else frames[-1].time)
+
+
+def attitude_frames(t: float, **values: float) -> list[CanFrame]:
+    message = encode_attitude(**values)  # type: ignore[arg-type]
+    return [CanFrame(t + i * 0.001, FEEDBACK_ID, s) for i, s in enumerate(segments(message))]
+
+
+def test_fold_shows_decoded_values() -> None:
+    state = MonitorState()
+    frames = [
+        CanFrame(T0, CONTROL_ID, encode_command("gimbal_control", pan_speed_dps=-5.0)),
+        CanFrame(T0 + 0.01, CONTROL_ID, encode_command("zoom", action="zoom_in")),
+        CanFrame(T0 + 0.02, CONTROL_ID, encode_command("recording", action="start")),
+        *attitude_frames(T0 + 0.1, pitch_deg=-12.5, yaw_deg=45.0, motor_yaw_deg=3.0),
+        CanFrame(T0 + 0.2, GPS_ID, encode_gps(31.1234567, 118.1234567)),
+        CanFrame(T0 + 0.3, 0x18FF0001, b"\x01\x02"),
+    ]
+    state.fold(decoded(frames))
+    assert state.attitude is not None
+    assert state.attitude.fields["pitch_deg"] == -12.5
+    assert state.attitude.fields["yaw_deg"] == 45.0
+    assert state.last_commands["zoom"].fields["action"] == "zoom_in"
+    assert state.last_commands["recording"].fields["action"] == "start"
+    assert state.last_commands["motion"].fields["pan_speed_dps"] == -5.0
+    assert state.gps is not None and state.gps.fields["latitude_deg"] == pytest.approx(31.1234567)
+    assert state.rows[CONTROL_ID].count == 3
+    assert state.rows[FEEDBACK_ID].count == 4
+    assert state.rows[0x18FF0001].label == "foreign"
+    assert not state.rows[0x18FF0001].protocol
+    assert [e.event.fields["name"] for e in state.command_log] == [
+        "gimbal_control",
+        "zoom",
+        "recording",
+    ]
+    assert len(state.all_log) == 5  # + attitude + gps
+    assert state.total.frames == len(frames)
+
+
+def test_feedback_age_goes_stale_with_injected_time_only() -> None:
+    state = MonitorState()
+    state.fold(decoded(attitude_frames(T0, pitch_deg=0.0, yaw_deg=0.0), wall=T0 + 0.01))
+    assert state.feedback_age == pytest.approx(0.003, abs=0.01)
+    assert not state.feedback_stale
+    state.advance(T0 + 0.6)
+    assert not state.feedback_stale
+    state.advance(T0 + 1.5)
+    assert state.feedback_stale
+    assert state.feedback_age == pytest.approx(1.497, abs=0.01)
+
+
+def test_replay_time_axis_follows_the_frames_not_the_wall_clock() -> None:
+    # a log recorded at t=100 s replayed now: ages are measured on the log's axis
+    state = MonitorState()
+    state.fold(decoded(attitude_frames(100.0, pitch_deg=1.0, yaw_deg=2.0), wall=T0))
+    assert state.now == pytest.approx(100.003)
+    state.advance(T0 + 0.5)
+    assert state.feedback_age == pytest.approx(0.5, abs=0.01)
+    state.advance(T0 + 2.0)
+    assert state.feedback_stale
+
+
+def test_rates_bus_load_and_sparkline_history() -> None:
+    state = MonitorState()
+    frames: list[RawItem] = [CanFrame(T0 + i / 100, 0x123, bytes(8)) for i in range(100)]
+    frames.append(CanFrame(T0 + 1.0, 0x123, bytes(8)))  # closes the first 1 s window
+    state.fold(Batch(frames, [], T0 + 1.0))
+    assert state.frames_per_s == pytest.approx(100.0)
+    assert state.rows[0x123].rate_hz == pytest.approx(100.0)
+    assert state.bus_load == pytest.approx(100 * 131 / 1_000_000)
+    assert state.frames_history[-1] == pytest.approx(100.0)
+    # silence: rates fall to zero, the history gets zero samples
+    state.advance(T0 + 5.0)
+    assert state.frames_per_s == 0.0
+    assert state.rows[0x123].rate_hz == 0.0
+    assert list(state.frames_history)[-3:] == [0.0, 0.0, 0.0]
+    assert frame_bits(CanFrame(0, 1, bytes(8), extended=False)) == 111
+
+
+def test_counters_only_reset_on_request_and_totals_never() -> None:
+    state = MonitorState()
+    bad = diagnostic(T0, "can", CRC_MISMATCH, "feedback CRC", b"\x01")
+    for i in range(3):
+        state.fold(Batch([CanFrame(T0 + i, 0x10, b"\x00")], [bad], T0 + i))
+    assert state.counters.kinds[CRC_MISMATCH] == 3
+    state.clear_counters()
+    assert state.counters.kinds[CRC_MISMATCH] == 0
+    assert state.rows[0x10].count == 0
+    assert state.total.kinds[CRC_MISMATCH] == 3
+    assert state.total.frames == 3
+    assert state.cleared_at is not None and state.clear_count == 1
+    state.fold(Batch([CanFrame(T0 + 5, 0x10, b"\x00")], [bad], T0 + 5))
+    assert state.counters.kinds[CRC_MISMATCH] == 1
+    assert state.total.kinds[CRC_MISMATCH] == 4
+    assert state.rows[0x10].count == 1
+
+
+def test_logs_are_bounded_and_foreign_events_stay_out() -> None:
+    state = MonitorState(log_limit=50)
+    events = [
+        Event(TOPIC_COMMAND, T0 + i, "can", {"name": "forward", "s_id": 15, "cmd": 2})
+        for i in range(500)
+    ]
+    events.append(Event("/can/other", T0 + 600, "can", {"can_id": 5}))
+    state.fold(Batch([], events, T0 + 600))
+    assert len(state.command_log) == 50
+    assert len(state.all_log) == 50
+    assert state.command_log[-1].seq == 500
+    assert state.total.events == 500
+
+
+def test_changed_bytes_are_highlighted_for_a_second() -> None:
+    state = MonitorState()
+    state.fold(Batch([CanFrame(T0, 0x20, bytes([1, 2, 3, 4]))], [], T0))
+    state.fold(Batch([CanFrame(T0 + 0.1, 0x20, bytes([1, 9, 3, 4]))], [], T0 + 0.1))
+    row = state.rows[0x20]
+    assert row.changed_mask(state.now) == (False, True, False, False)
+    state.advance(T0 + 2.0)
+    assert row.changed_mask(state.now) == (False, False, False, False)
+
+
+def test_link_state_and_stream_rows() -> None:
+    state = MonitorState()
+    link = diagnostic(T0, "tcp", LINK, "connected to 127.0.0.1:2000", state="connected")
+    chunk = StreamChunk(T0, b"\xeb\x90\x0a", source="tcp", direction="gs_to_idu")
+    state.fold(Batch([chunk], [link], T0))
+    assert state.link_state == "connected"
+    assert state.counters.errors == 0  # link changes are not errors
+    assert state.rows["tcp gs_to_idu"].count == 1
+    assert state.total.chunks == 1
+
+
+def test_demo_session_decodes_cleanly_into_the_state() -> None:
+    state = MonitorState()
+    frames = list(session(T0, 10.0, foreign_per_s=100, foreign_ids=4))
+    state.fold(decoded(frames))
+    assert state.counters.errors == 0
+    assert state.feedback_count == 25  # 20 attitude + 5 ranging
+    assert FOREIGN_BASE_ID + 3 in state.rows
+    assert state.text is not None and state.text.fields["text"].startswith("waypoint")
+
+
+# -- filter ------------------------------------------------------------------------------------
+
+
+def _cmd(name: str, **fields: object) -> Event:
+    return Event(TOPIC_COMMAND, T0, "can", {"name": name, **fields})
+
+
+def test_filter_terms() -> None:
+    zoom = _cmd("zoom", action="zoom_in")
+    pan = _cmd("gimbal_control", pan_speed_dps=1.0)
+    crc = diagnostic(T0, "can", CRC_MISMATCH, "bad")
+    gps = Event("/uav/gps", T0, "can", {"latitude_deg": 1.0})
+    flt = EventFilter.parse("zoom")
+    assert flt.matches_event(zoom, "zoom zoom_in")
+    assert not flt.matches_event(pan, "gimbal_control pan")
+    flt = EventFilter.parse("/gimbal -gimbal_control")
+    assert flt.matches_event(zoom, "") and not flt.matches_event(pan, "")
+    assert not flt.matches_event(gps, "")
+    flt = EventFilter.parse("0xFF15")
+    assert flt.matches_event(gps, "") and not flt.matches_event(zoom, "")
+    assert flt.matches_row(0xFF15, "uav gps", "0x0000FF15")
+    assert not flt.matches_row(0xF01, "control", "0x00000F01")
+    flt = EventFilter.parse("crc")
+    assert flt.matches_event(crc, "crc_mismatch: bad")
+    assert EventFilter.parse("/uav").matches_row(1, "x", "y")  # topics do not hide rows
+    assert not EventFilter.parse("  ").active
+
+
+# -- bridge ------------------------------------------------------------------------------------
+
+
+def test_bridge_coalesces_wakeups_and_hands_over_whole_batches() -> None:
+    bridge = TuiBridge()
+    wakes: list[int] = []
+    bridge.handle(Batch(wall_time=1.0))  # before the app runs: kept
+    bridge.connect(lambda: wakes.append(1))
+    assert len(wakes) == 1
+    for i in range(5):
+        bridge.handle(Batch(wall_time=2.0 + i))
+    assert len(wakes) == 1  # no new wake-up while one is pending
+    batches, dropped = bridge.take()
+    assert [b.wall_time for b in batches] == [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    assert dropped == 0
+    bridge.handle(Batch(wall_time=7.0))
+    assert len(wakes) == 2
+    bridge.close()
+    assert bridge.closed
+
+
+def test_bridge_backlog_is_bounded_and_counted() -> None:
+    bridge = TuiBridge(max_backlog=10)
+    for i in range(25):
+        bridge.handle(Batch(wall_time=float(i)))
+    batches, dropped = bridge.take()
+    assert len(batches) == 10 and dropped == 15
+    assert batches[0].wall_time == 15.0
+
+
+def test_bridge_from_another_thread_loses_nothing() -> None:
+    n = 2000
+    bridge = TuiBridge(max_backlog=n)
+    wakes = threading.Semaphore(0)
+    bridge.connect(wakes.release)
+
+    def produce() -> None:
+        for i in range(n):
+            bridge.handle(Batch(wall_time=float(i)))
+
+    thread = threading.Thread(target=produce)
+    thread.start()
+    got: list[float] = []
+    while len(got) < n:
+        assert wakes.acquire(timeout=5)
+        batches, _ = bridge.take()
+        got.extend(b.wall_time for b in batches)
+    thread.join()
+    assert got == [float(i) for i in range(n)]
+    assert bridge.notifications <= n
+
+
+# -- wording -----------------------------------------------------------------------------------
+
+
+def test_wording() -> None:
+    assert describe_params({"pan_speed_dps": -5.0, "tilt_speed_dps": 0.0}) == (
+        "pan -5.00 deg/s tilt 0.00 deg/s"
+    )
+    zoom = Event(TOPIC_COMMAND, 0, "can", {"name": "zoom", "action": "zoom_in", "raw": "0F 12"})
+    assert "zoom" in event_text(zoom) and "zoom_in" in event_text(zoom)
+    assert value_bar(0.0, -10, 10, 7) == "[--o--]"
+    assert value_bar(None, -10, 10, 7) == "[--|--]"
+    assert value_bar(10.0, -10, 10, 7) == "[--|-o]"
+    assert compass(44) == "NE" and compass(359) == "N"
+    assert format_age(None) == "never" and format_age(0.25) == "0.25 s"
