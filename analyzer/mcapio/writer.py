@@ -99,7 +99,8 @@ class McapSink:
         from analyzer.mcapio.chunked_writer import ChunkedWriter
 
         self.path = str(path)
-        self.error: str | None = None
+        self.error: str | None = None  # the full message after a write error
+        self.error_reason: str | None = None  # just the reason ("No space left on device")
         self.stats = EventStats()
         self.items_written = 0
         self.events_written = 0
@@ -319,6 +320,7 @@ class McapSink:
     def _fail(self, exc: OSError) -> None:
         """Stop for good after a write error, leaving a file the reader can recover."""
         reason = _describe(exc)
+        self.error_reason = reason
         good = self._good_offset
         self._closed = True
         self._stop.set()

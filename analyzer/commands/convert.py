@@ -1,0 +1,134 @@
+"""`gimbal-analyzer convert`: any capture file `decode` reads, as an MCAP recording."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+import time
+from typing import IO, Any
+
+from analyzer.errors import SourceError, UsageError
+
+HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
+DESCRIPTION = """\
+Decode a capture file and write an MCAP recording of it: the same channels as
+`record` (decoded events, the raw frames / bytes, Foxglove map and log views).
+Any input `decode` accepts works; an MCAP input is decoded again from its raw
+channels, so an old recording gets the fixes of a newer decoder.
+
+The output is written under a temporary name and renamed when complete.
+
+  gimbal-analyzer convert flight.log -o flight.mcap
+  gimbal-analyzer convert capture.pcap -o capture.mcap --port 2000
+  gimbal-analyzer convert uart.bin -o uart.mcap --format raw
+"""
+
+PROGRESS_INTERVAL = 0.2
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("input", help="capture file")
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="MCAP file to write")
+    parser.add_argument(
+        "--format", metavar="F", help="input format (default: detected from the file)"
+    )
+    parser.add_argument(
+        "--port", type=int, metavar="N", help="pcap inputs: TCP port of the IDU (default 2000)"
+    )
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
+
+
+class Progress:
+    """A progress line on stderr (only on a terminal)."""
+
+    def __init__(self, stream: IO[str], name: str, source: Any) -> None:
+        self.stream = stream
+        self.name = name
+        self.source = source
+        self.enabled = stream.isatty()
+        self._next = 0.0
+        self._width = 0
+
+    def fraction(self) -> float | None:
+        """Share of the input read, from the reader's position_bytes / size_bytes."""
+        size = getattr(self.source, "size_bytes", None)
+        position = getattr(self.source, "position_bytes", None)
+        if isinstance(size, int) and size > 0 and isinstance(position, int):
+            return max(0.0, min(1.0, position / size))
+        return None
+
+    def __call__(self, result: Any) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if now < self._next:
+            return
+        self._next = now + PROGRESS_INTERVAL
+        rate = result.items / result.seconds if result.seconds > 0 else 0.0
+        share = self.fraction()
+        bar = ""
+        if share is not None:
+            filled = int(share * 30)
+            bar = f"{share * 100:5.1f}% [{'#' * filled}{'.' * (30 - filled)}] "
+        text = f"converting {self.name} {bar}{result.items} items ({rate:,.0f}/s)"
+        self.stream.write("\r" + text + " " * max(0, self._width - len(text)))
+        self._width = len(text)
+        self.stream.flush()
+
+    def done(self) -> None:
+        if self.enabled and self._width:
+            self.stream.write("\r" + " " * self._width + "\r")
+            self.stream.flush()
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.inputs import open_input
+    from analyzer.mcapio.convert import convert_items
+    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+
+    if args.input != "-" and not os.path.exists(args.input):
+        raise UsageError(f"no such file: {args.input}")
+    target = output_path(args.output)
+    with contextlib.suppress(OSError):
+        if args.input != "-" and target.exists() and os.path.samefile(args.input, target):
+            raise UsageError("the output would overwrite the input")
+    source = open_input(args.input, args.format, args.port)
+    partial = f"{target}.partial"
+    meta = recording_metadata(
+        f"file:{args.input}", command="convert", input_format=args.format or "auto"
+    )
+    sink = McapSink(partial, metadata=meta, flush_interval=None)
+    progress = Progress(sys.stderr, args.input, source)
+    finished = False
+    try:
+        result = convert_items(source, sink, progress=None if args.quiet else progress)
+        sink.close()
+        os.replace(partial, target)
+        finished = True
+    except SourceError:
+        if sink.error_reason is not None:
+            raise SourceError(f"cannot write {target}: {sink.error_reason}") from None
+        raise
+    except OSError as exc:
+        raise SourceError(f"cannot write {target}: {exc.strerror or exc}") from None
+    finally:
+        progress.done()
+        closer = getattr(source, "close", None)
+        if callable(closer):
+            with contextlib.suppress(Exception):
+                closer()
+        if not finished:
+            sink.close()
+            with contextlib.suppress(OSError):
+                os.remove(partial)
+    if not args.quiet:
+        rate = result.items / result.seconds if result.seconds > 0 else 0.0
+        print(
+            f"converted {result.frames} CAN frames and {result.chunks} stream chunks "
+            f"({result.events} events, {result.diagnostics} diagnostics) to {target} "
+            f"in {result.seconds:.1f} s ({rate:,.0f} items/s)",
+            file=sys.stderr,
+        )
+    return 0

@@ -1,0 +1,195 @@
+"""Convert throughput (frames/s) against a bare mcap Writer.add_message loop, in the same run.
+
+Writes a candump log of mixed gimbal traffic, converts it to MCAP the way
+``gimbal-analyzer convert`` does (input reader, decoder, McapSink), and times a bare loop
+of ``mcap.writer.Writer.add_message`` writing the same number of JSON messages. Each side
+runs several times, interleaved, and the best time of each counts (the machine may be
+busy). Target: convert at no less than half the rate of the bare loop.
+
+  python benchmarks/convert_speed.py [--frames 200000] [--repeat 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from analyzer.protocol.codec import encode_command
+from analyzer.protocol.feedback import encode_attitude, encode_ranging
+from analyzer.protocol.ids import (
+    ALTITUDE_ID,
+    CONTROL_ID,
+    FEEDBACK_ID,
+    GPS_ID,
+    UAV_ATTITUDE_ID,
+)
+from analyzer.protocol.types import CanFrame
+from analyzer.protocol.uav import encode_altitude, encode_gps, encode_uav_attitude
+
+T0 = 1_700_000_000.0
+
+
+def _feedback(t: float, message: bytes, step: float) -> list[CanFrame]:
+    return [
+        CanFrame(t + k * step, FEEDBACK_ID, message[8 * k : 8 * k + 8], channel="can0")
+        for k in range(4)
+    ]
+
+
+def make_frames(count: int, *, gimbal_only: bool = False) -> list[CanFrame]:
+    """Gimbal traffic (commands at 20 Hz, feedback at 2 Hz, UAV status at 10 Hz).
+
+    By default padded with foreign IDs to a saturated 1 Mbit/s bus (about 7,600 frames/s,
+    the mix of the live-load benchmark). ``gimbal_only``: protocol frames only, the worst
+    case for convert since nearly every frame gives an event.
+    """
+    frames: list[CanFrame] = []
+    step = 1 / 7600
+    tick = 0
+    while len(frames) < count:
+        t = T0 + tick * 0.05  # one 50 ms slot
+        data = encode_command("gimbal_control", pan_speed_dps=(tick % 200) / 10, tilt_speed_dps=0)
+        slot = [CanFrame(t, CONTROL_ID, data, channel="can0")]
+        if tick % 2 == 0:
+            slot.append(CanFrame(t, GPS_ID, encode_gps(31.1234567, 118.1234567), channel="can0"))
+            slot.append(CanFrame(t, ALTITUDE_ID, encode_altitude(506.78), channel="can0"))
+            slot.append(CanFrame(t, UAV_ATTITUDE_ID, encode_uav_attitude(1, 2, 3), channel="can0"))
+        if tick % 10 == 3:
+            yaw = (tick / 10) % 360
+            slot += _feedback(t, encode_attitude(pitch_deg=-10, yaw_deg=yaw, motor_yaw_deg=1), step)
+        if tick % 10 == 8:
+            ranging = encode_ranging(
+                distance_m=100.0, height_m=20.0, latitude_deg=31.1, longitude_deg=118.1
+            )
+            slot += _feedback(t, ranging, step)
+        if not gimbal_only:
+            for k in range(380 - len(slot)):
+                ident = 0x18FF0000 + k % 64
+                slot.append(CanFrame(t + k * step, ident, bytes([k % 256] * 8), channel="can0"))
+        slot.sort(key=lambda fr: fr.time)
+        frames.extend(slot)
+        tick += 1
+    return frames[:count]
+
+
+def write_candump(frames: list[CanFrame], path: Path) -> None:
+    with open(path, "w") as f:
+        for fr in frames:
+            ident = f"{fr.can_id:08X}" if fr.extended else f"{fr.can_id:03X}"
+            f.write(f"({fr.time:.6f}) {fr.channel} {ident}#{fr.data.hex().upper()}\n")
+
+
+def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[float, Any, str]:
+    from analyzer.mcapio.convert import convert_items
+    from analyzer.mcapio.writer import McapSink, recording_metadata
+
+    try:
+        from analyzer.inputs import open_input
+    except ImportError:
+        open_input = None
+    started = time.perf_counter()
+    if open_input is not None:
+        items: Any = open_input(str(source_path), None, None)
+        how = "candump file through analyzer.inputs"
+    else:
+        items = frames
+        how = "in-memory frames (analyzer.inputs not available: input parsing not measured)"
+    sink = McapSink(out, metadata=recording_metadata("bench"), flush_interval=None)
+    result = convert_items(items, sink)
+    sink.close()
+    return time.perf_counter() - started, result, how
+
+
+def run_bare(count: int, out: Path, *, encode: bool) -> float:
+    """``count`` JSON messages through mcap.writer.Writer.add_message, nothing else."""
+    from mcap.writer import CompressionType, Writer
+
+    body = {
+        "time": T0,
+        "id": CONTROL_ID,
+        "extended": True,
+        "dlc": 8,
+        "data": "0F 04 0C FE 00 00 00 00",
+        "channel": "can0",
+    }
+    fixed = json.dumps(body).encode()
+    started = time.perf_counter()
+    with open(out, "wb") as f:
+        writer = Writer(f, chunk_size=128 * 1024, compression=CompressionType.NONE)
+        writer.start()
+        schema = writer.register_schema("frame", "jsonschema", b'{"type":"object"}')
+        channel = writer.register_channel("/can/frames", "json", schema)
+        for i in range(count):
+            stamp = 1_700_000_000_000_000_000 + i * 131_000
+            if encode:
+                body["time"] = stamp / 1e9
+                data = json.dumps(body).encode()
+            else:
+                data = fixed
+            writer.add_message(channel, stamp, data, stamp)
+        writer.finish()
+    return time.perf_counter() - started
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=200_000)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    for gimbal_only, title in (
+        (False, "saturated bus: gimbal traffic among foreign IDs (the live-load mix)"),
+        (True, "gimbal traffic only: nearly every frame gives an event (worst case)"),
+    ):
+        print(f"== {title}")
+        scenario(make_frames(args.frames, gimbal_only=gimbal_only), args.repeat)
+        print()
+    return 0
+
+
+def scenario(frames: list[CanFrame], repeat: int) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        log = folder / "traffic.log"
+        write_candump(frames, log)
+        convert_times: list[float] = []
+        bare_times: list[float] = []
+        bare_fixed: list[float] = []
+        result: Any = None
+        how = ""
+        for _ in range(repeat):
+            seconds, result, how = run_convert(log, frames, folder / "converted.mcap")
+            convert_times.append(seconds)
+            bare_times.append(run_bare(len(frames), folder / "bare.mcap", encode=True))
+            bare_fixed.append(run_bare(len(frames), folder / "bare2.mcap", encode=False))
+        size = os.path.getsize(folder / "converted.mcap")
+    n = len(frames)
+    convert_rate = n / min(convert_times)
+    bare_rate = n / min(bare_times)
+    fixed_rate = n / min(bare_fixed)
+    ratio = convert_rate / bare_rate
+    print(f"input: {n} CAN frames ({how})")
+    print(
+        f"convert:  {convert_rate:12,.0f} frames/s   "
+        f"({result.messages} MCAP messages: {result.frames} raw frames + {result.events} events "
+        f"+ Foxglove views; {size / 1e6:.1f} MB)"
+    )
+    print(
+        f"bare loop: {bare_rate:11,.0f} messages/s  (json.dumps + Writer.add_message, {n} messages)"
+    )
+    print(f"           {fixed_rate:11,.0f} messages/s  (Writer.add_message of pre-encoded bytes)")
+    verdict = "met" if ratio >= 0.5 else "NOT met"
+    print(f"ratio convert / bare loop: {ratio:.2f} (target >= 0.50: {verdict})")
+    print(f"ratio convert / pre-encoded loop: {convert_rate / fixed_rate:.2f}")
+    print(f"best of {repeat} runs each, interleaved")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
