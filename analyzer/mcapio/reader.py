@@ -24,7 +24,7 @@ from analyzer.mcapio.channels import (
 )
 from analyzer.mcapio.foxglove import VIEW_SCHEMAS
 from analyzer.pipeline import RawItem
-from analyzer.protocol.types import Event
+from analyzer.protocol.types import BAD_LINE, LINK, TOPIC_DIAGNOSTICS, Event
 
 MAGIC = b"\x89MCAP0\r\n"
 FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary start, offset start, crc
@@ -33,6 +33,10 @@ OPCODE_FOOTER = 0x02
 RECORD_SIZE_LIMIT = 1 << 30
 
 T = TypeVar("T")
+
+# Diagnostics that come from the source or the file reader, not from the decoder: decoding
+# the raw channels again cannot re-create them, so a replay carries them over.
+SOURCE_KINDS = frozenset({LINK, BAD_LINE})
 
 
 class RecordingError(SourceError):
@@ -299,6 +303,24 @@ class Recording:
             except (ValueError, KeyError, TypeError):
                 continue  # not one of ours: nothing to decode
 
+    def replay(self) -> Iterator[RawItem | Event]:
+        """Raw items plus the stored diagnostics a decoder cannot re-create (link changes,
+        unreadable input lines), in file order: what to feed a Decoder to decode again."""
+        wanted = {*RAW_TOPICS, TOPIC_DIAGNOSTICS}
+        for message in self.messages(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
+            try:
+                obj = json.loads(message.data)
+                if message.topic == TOPIC_CAN_FRAMES:
+                    yield can_frame_from_dict(obj)
+                elif message.topic == TOPIC_STREAM_BYTES:
+                    yield stream_chunk_from_dict(obj)
+                elif isinstance(obj, dict) and obj.get("kind") in SOURCE_KINDS:
+                    obj.setdefault("topic", message.topic)
+                    obj.setdefault("time", message.log_time / 1e9)
+                    yield Event.from_dict(obj)
+            except (ValueError, KeyError, TypeError):
+                continue
+
     def events(self) -> Iterator[Event]:
         """The decoded events as recorded."""
         for message in self.messages(roles={ROLE_EVENT}):
@@ -364,6 +386,12 @@ def read_items(path: str | os.PathLike[str]) -> RecordingIterator[RawItem]:
     """Raw CAN frames / stream chunks of a recording, in arrival order (for re-decoding)."""
     recording = Recording(path)
     return RecordingIterator(recording, recording.items())
+
+
+def read_replay(path: str | os.PathLike[str]) -> RecordingIterator[RawItem | Event]:
+    """Raw items and the source-level diagnostics (link, bad_line) in arrival order."""
+    recording = Recording(path)
+    return RecordingIterator(recording, recording.replay())
 
 
 def read_events(path: str | os.PathLike[str]) -> RecordingIterator[Event]:
