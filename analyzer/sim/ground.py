@@ -13,6 +13,7 @@ from analyzer.protocol.ids import CONTROL_ID
 from analyzer.sim.transports import Link
 
 REPEAT_S = 0.05  # gimbal_control is repeated every 50 ms, as the document recommends
+EPSILON = 1e-6  # times are sums of floats: compare with a little slack
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,7 @@ class GroundScript:
                 self._index = 0
                 continue
             step = self.steps[self._index]
-            if base + step.at > elapsed:
+            if base + step.at > elapsed + EPSILON:
                 break
             out.append(self._data[self._index])
             if step.until is not None:
@@ -81,10 +82,10 @@ class GroundScript:
             self._index += 1
         still: list[tuple[float, float, bytes]] = []
         for when, until, data in self._repeat:
-            if when <= elapsed and when <= until:
+            if when <= elapsed + EPSILON and when <= until + EPSILON:
                 out.append(data)
                 when = max(when + REPEAT_S, elapsed)
-            if when <= until:
+            if when <= until + EPSILON:
                 still.append((when, until, data))
         self._repeat = still
         return out

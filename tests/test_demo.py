@@ -1,0 +1,75 @@
+"""`gimbal-analyzer demo` off a terminal: ends by itself, prints decoded lines, writes an MCAP."""
+
+from __future__ import annotations
+
+import importlib.util
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from analyzer.cli import main
+from analyzer.commands import demo
+from analyzer.sim.ground import DEMO_SCRIPT, GroundScript
+
+HAVE_MCAP_SINK = importlib.util.find_spec("analyzer.mcapio.writer") is not None
+
+
+def topics_in(path: Path) -> Counter[str]:
+    from mcap.reader import make_reader
+
+    with path.open("rb") as stream:
+        reader = make_reader(stream, validate_crcs=True)
+        return Counter(channel.topic for _, channel, _ in reader.iter_messages())
+
+
+@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+def test_demo_off_a_terminal_ends_by_itself_and_records_demo_mcap(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(demo, "PLAIN_DURATION", 3.0)  # instead of 10 s, to keep the test short
+    assert main(["demo"]) == 0  # no --no-tui: stdout is not a terminal here
+    out = capsys.readouterr().out
+    assert out.startswith("demo: simulated gimbal + UAV and a scripted ground station")
+    assert "/gimbal/command" in out and "gimbal_control" in out
+    assert "/gimbal/attitude" in out
+    assert "recorded to demo.mcap" in out
+    topics = topics_in(tmp_path / "demo.mcap")
+    for topic in ("/can/frames", "/gimbal/command", "/gimbal/attitude", "/uav/gps"):
+        assert topics[topic] > 0, topics
+    assert topics["/gimbal/attitude"] >= 4
+
+
+@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+def test_demo_clean_has_no_fault_diagnostics(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "clean.mcap"
+    assert main(["demo", "--no-tui", "--clean", "--duration", "2", "-o", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "faults: none" in out
+    for kind in ("crc_mismatch", "incomplete", "duplicate"):
+        assert kind not in out
+    assert topics_in(path)["/gimbal/command"] > 0
+
+
+def test_demo_output_directory_must_exist(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(["demo", "--no-tui", "-o", str(tmp_path / "missing" / "x.mcap")])
+    assert code == 1
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_demo_script_moves_the_gimbal_early_and_loops() -> None:
+    script = GroundScript()
+    sent = [script.due(t / 100) for t in range(0, 3100)]
+    first = [data for batch in sent[:1000] for data in batch]
+    assert first[0][:2] == bytes([0x0F, 0x02])  # forward
+    gimbal_control = [d for d in first if d[1] == 0x04]
+    assert len(gimbal_control) > 40  # repeated every 50 ms while a move lasts
+    names = {s.name for s in DEMO_SCRIPT}
+    assert {"gimbal_control", "specified_angle", "tracking", "zoom", "look_down"} <= names
+    second_round = [d for batch in sent[1500:2500] for d in batch]
+    assert len(second_round) == len([d for batch in sent[:1000] for d in batch])
