@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import asyncio
-import importlib.util
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
+from textual.app import App
 from textual.pilot import Pilot
 
 from analyzer.capture import Capture
@@ -17,7 +19,7 @@ from analyzer.commands import monitor
 from analyzer.errors import UsageError
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import CanFrame
-from analyzer.tui.app import MonitorApp, add_sink
+from analyzer.tui.app import MonitorApp, add_sink, run_app
 from analyzer.tui.bridge import TuiBridge
 from analyzer.tui.demo_traffic import session
 from analyzer.tui.screen_text import screen_text
@@ -120,9 +122,15 @@ def test_a_finite_source_ends_and_the_screen_says_so() -> None:
     assert capture.stop_reason == "end of input"
 
 
-@pytest.mark.skipif(
-    importlib.util.find_spec("analyzer.inputs") is None, reason="file inputs not available"
-)
+def _file_inputs_available() -> bool:
+    try:
+        module = importlib.import_module("analyzer.inputs")
+    except ImportError:
+        return False
+    return hasattr(module, "open_input")
+
+
+@pytest.mark.skipif(not _file_inputs_available(), reason="file inputs not available yet")
 def test_monitor_replays_a_candump_file(tmp_path: Path) -> None:
     from analyzer.sources import open_source
 
@@ -165,3 +173,25 @@ def test_monitor_command_arguments() -> None:
         monitor.parse_speed("-1")
     with pytest.raises(UsageError):
         monitor.run(argparse.Namespace(source="tcp:127.0.0.1:1", speed="2"))
+
+
+def test_run_app_attaches_starts_and_stops_the_capture(monkeypatch: pytest.MonkeyPatch) -> None:
+    frames = list(session(T0, 1.0))
+    sink = RecordingSink()
+    capture = Capture(ListSource(frames), [sink], batch_interval=0.02)
+    seen: list[int] = []
+
+    async def auto_pilot(pilot: Pilot[Any]) -> None:
+        app = pilot.app
+        assert isinstance(app, MonitorApp)
+        await wait_for(pilot, lambda: app.state.total.frames == len(frames))
+        seen.append(app.state.total.frames)
+        await pilot.press("q")
+
+    def headless_run(self: MonitorApp) -> int | None:
+        return App.run(self, headless=True, size=(120, 40), auto_pilot=auto_pilot)
+
+    monkeypatch.setattr(MonitorApp, "run", headless_run)
+    assert run_app(capture, recording="x.mcap", source_label="test:list") == 0
+    assert seen == [len(frames)]
+    assert sink.closed and not capture.running

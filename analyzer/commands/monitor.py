@@ -75,4 +75,7 @@ def run(args: argparse.Namespace) -> int:
     source = open_source(args.source, replay_speed=speed)
     capture = Capture(source, [])
     label = str(getattr(source, "description", args.source))
-    return run_app(capture, source_label=label)
+    result = run_app(capture, source_label=label)
+    if capture.error is not None:
+        raise capture.error  # a SourceError: one line, exit 1
+    return result

@@ -362,9 +362,9 @@ def run_app(
     """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
 
     The capture is stopped and joined (so every sink, the recording included, is
-    finalised) whether the user quits (q, Ctrl+C, SIGTERM) or the UI fails. If the
-    capture ended with an error (``capture.error``, a SourceError) it is raised after
-    the terminal is restored, so the command exits 1 with that message.
+    finalised) whether the user quits (q, Ctrl+C, SIGTERM) or the UI fails. Returns 0,
+    or 1 when the capture ended with an error (left in ``capture.error`` for the caller
+    to report once the terminal is restored).
     """
     bridge = TuiBridge()
     add_sink(capture, bridge)
@@ -380,7 +380,6 @@ def run_app(
         result = app.run()
     finally:
         app.stop_capture()
-    error = getattr(capture, "error", None)
-    if isinstance(error, Exception):
-        raise error
+    if getattr(capture, "error", None) is not None:
+        return 1
     return int(result or 0)
