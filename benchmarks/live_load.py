@@ -11,8 +11,8 @@ issue 4 (none lost, under 25% of one core).
 The virtual bus only connects buses in one process, so sender and recorder share the
 interpreter; the sender's own CPU time is measured separately and not counted.
 
-``convert`` throughput is measured by ``benchmarks/convert_throughput.py`` when it exists
-(it must provide ``report(frames: int) -> list[str]``); this script calls it at the end.
+``convert`` throughput is measured by ``benchmarks/convert_speed.py``; this script runs it
+at the end with as many frames as were sent (skip with ``--no-convert``).
 
     python benchmarks/live_load.py --seconds 30
 """
@@ -20,8 +20,8 @@ interpreter; the sender's own CPU time is measured separately and not counted.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import os
+import subprocess
 import sys
 import tempfile
 import threading
@@ -289,15 +289,14 @@ def report(result: dict[str, Any]) -> list[str]:
 
 
 def convert_report(frames: int) -> list[str]:
-    """Hook for the ``convert`` throughput part (benchmarks/convert_throughput.py)."""
-    path = Path(__file__).with_name("convert_throughput.py")
+    """Run the ``convert`` throughput benchmark (benchmarks/convert_speed.py) for ``frames``."""
+    path = Path(__file__).with_name("convert_speed.py")
     if not path.exists():
-        return ["convert throughput: not measured here (benchmarks/convert_throughput.py missing)"]
-    spec = importlib.util.spec_from_file_location("convert_throughput", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    lines: list[str] = module.report(frames)
+        return ["convert throughput: not measured (benchmarks/convert_speed.py is missing)"]
+    command = [sys.executable, str(path), "--frames", str(frames), "--repeat", "1"]
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    lines = ["== convert throughput (benchmarks/convert_speed.py)"]
+    lines += (done.stdout + done.stderr).rstrip().splitlines()
     return lines
 
 

@@ -107,7 +107,9 @@ def test_bad_replay_speed(tmp_path: Path) -> None:
 
 
 def test_replays_a_real_candump_file(tmp_path: Path) -> None:
-    pytest.importorskip("analyzer.inputs")
+    inputs = pytest.importorskip("analyzer.inputs")
+    if not hasattr(inputs, "open_input"):
+        pytest.skip("analyzer.inputs.open_input is not there yet")
     path = tmp_path / "flight.log"
     path.write_text(
         "(1700000000.000000) can0 00000F01#0F040CFE00000000\n"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import time
 from collections.abc import Iterator
@@ -30,8 +31,8 @@ class FileReplaySource:
         if not os.path.exists(path):
             raise UsageError(f"no such file: {path}")
         try:
-            from analyzer.inputs import open_input
-        except ImportError as exc:
+            open_input = importlib.import_module("analyzer.inputs").open_input
+        except (ImportError, AttributeError) as exc:
             raise SourceError(f"cannot replay {path}: file inputs are not available") from exc
         self.path = path
         self.replay_speed = replay_speed
