@@ -158,3 +158,12 @@ def test_bad_source_is_a_usage_error(tmp_path: Path) -> None:
     assert proc.returncode == 2
     assert b"bad source" in proc.stderr
     assert not (tmp_path / "x.mcap").exists()
+
+
+def test_an_existing_recording_is_not_overwritten(tmp_path: Path) -> None:
+    from analyzer.cli import main
+
+    existing = tmp_path / "flight.mcap"
+    existing.write_bytes(b"earlier flight")
+    assert main(["record", "--source", "tcp:127.0.0.1:9", "-o", str(existing)]) == 2
+    assert existing.read_bytes() == b"earlier flight"

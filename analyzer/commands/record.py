@@ -58,6 +58,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--print", action="store_true", help="also print every event as a JSON line on stdout"
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="overwrite the output file if it exists"
+    )
 
 
 class EventPrinter:
@@ -100,11 +103,9 @@ class StatusLine:
         stats = self.capture.stats if self.capture is not None else None
         if stats is None:
             return f"recording {self.path}"
-        parts = [
-            f"recording {self.path}",
-            f"{stats.elapsed_s:7.1f} s",
-            f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)",
-        ]
+        parts = [f"recording {self.path}", f"{stats.elapsed_s:7.1f} s"]
+        if stats.frames or not stats.chunks:
+            parts.append(f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)")
         if stats.chunks:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
         parts.append(f"{stats.events} events")
@@ -141,7 +142,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.duration is not None and not args.duration > 0:
         raise UsageError("--duration must be a positive number of seconds")
-    path = str(output_path(args.output))
+    target = output_path(args.output)
+    if target.exists() and not args.force:
+        raise UsageError(f"{target} exists; choose another name or use --force to overwrite it")
+    path = str(target)
     run_app: Any = None
     if args.tui:
         try:
