@@ -51,8 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration",
         type=seconds_value,
         metavar="S",
-        help=f"stop after S seconds (default: {PLAIN_DURATION:g} s for plain output, "
-        "until q in the UI)",
+        help=f"stop after S seconds (default {PLAIN_DURATION:g} s for plain output; the UI "
+        "runs until q, and with --duration its screen stays after the capture stops)",
     )
     parser.add_argument(
         "--no-tui", action="store_true", help="print decoded lines instead of the UI"
@@ -176,9 +176,14 @@ def run(args: argparse.Namespace) -> int:
             f"recording {path}; faults: {faults.describe()}; {duration:g} s",
             flush=True,
         )
+
+    def finish() -> None:
+        capture.stop()
+        scene.stop()
+
     timer: threading.Timer | None = None
     if duration is not None:
-        timer = threading.Timer(duration, capture.stop)
+        timer = threading.Timer(duration, finish)
         timer.daemon = True
     result = 0
     try:

@@ -47,6 +47,7 @@ class Scene:
             threading.Thread(target=self._guard(self.ground.run), name="sim-ground", daemon=True),
         ]
         self.errors: list[BaseException] = []
+        self._stopping = threading.Lock()
 
     def _guard(self, body: Callable[[], None]) -> Callable[[], None]:
         def run() -> None:
@@ -62,14 +63,16 @@ class Scene:
             thread.start()
 
     def stop(self, timeout: float = 2.0) -> None:
+        """Stop both threads and close the links; safe to call twice, from any thread."""
         self.runner.stop()
         self.ground.stop()
-        for thread in self._threads:
-            if thread.is_alive():
-                thread.join(timeout)
-        for link in self.links:
+        with self._stopping:
+            for thread in self._threads:
+                if thread.is_alive() and thread is not threading.current_thread():
+                    thread.join(timeout)
+            links, self.links = self.links, []
+        for link in links:
             link.close()
-        self.links.clear()
 
     def __enter__(self) -> Scene:
         self.start()
