@@ -128,8 +128,20 @@ def channel() -> str:
     return f"sim-test-{uuid.uuid4().hex[:8]}"
 
 
-def test_virtual_bus_commands_are_decoded_and_feedback_follows_them() -> None:
-    spec = parse_link(f"can:virtual:{channel()}")
+VCAN = os.path.exists("/sys/class/net/vcan0")
+
+
+@pytest.mark.parametrize(
+    "bus",
+    [
+        "virtual",
+        pytest.param(
+            "socketcan", marks=pytest.mark.skipif(not VCAN, reason="no vcan0 interface here")
+        ),
+    ],
+)
+def test_can_bus_commands_are_decoded_and_feedback_follows_them(bus: str) -> None:
+    spec = parse_link(f"can:virtual:{channel()}" if bus == "virtual" else "can:socketcan:vcan0")
     with captured(str(spec)) as (sink, _), simulator(spec) as runner:
         ground = open_ground_link(spec)
         try:
