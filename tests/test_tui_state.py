@@ -87,6 +87,7 @@ def test_feedback_age_goes_stale_with_injected_time_only() -> None:
 def test_replay_time_axis_follows_the_frames_not_the_wall_clock() -> None:
     # a log recorded at t=100 s replayed now: ages are measured on the log's axis
     state = MonitorState()
+    state.advance(T0 - 5.0)  # the screen ran on the wall clock before data came
     state.fold(decoded(attitude_frames(100.0, pitch_deg=1.0, yaw_deg=2.0), wall=T0))
     assert state.now == pytest.approx(100.003)
     state.advance(T0 + 0.5)
@@ -269,3 +270,14 @@ def test_wording() -> None:
     assert value_bar(10.0, -10, 10, 7) == "[--|-o]"
     assert compass(44) == "NE" and compass(359) == "N"
     assert format_age(None) == "never" and format_age(0.25) == "0.25 s"
+
+
+def test_a_new_time_axis_restarts_the_rate_windows() -> None:
+    state = MonitorState()
+    first: list[RawItem] = [CanFrame(100.0 + i / 10, 0x1, b"\x00") for i in range(25)]
+    state.fold(Batch(first, [], T0))
+    second: list[RawItem] = [CanFrame(5.0 + i / 10, 0x1, b"\x00") for i in range(25)]
+    state.fold(Batch(second, [], T0 + 3.0))
+    assert state.now == pytest.approx(7.4)
+    assert state.frames_per_s == pytest.approx(10.0)
+    assert all(rate >= 0 for rate in state.frames_history)

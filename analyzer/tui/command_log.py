@@ -78,7 +78,7 @@ class CommandLog(ScrollView, can_focus=True):
             self._texts.clear()
         self.virtual_size = Size(0, len(entries))
         if self.cursor_seq is None:
-            self.scroll_end(animate=False, immediate=True, x_axis=False)
+            self.scroll_end(animate=False, immediate=True, x_axis=False, force=True)
         self.refresh()
 
     def text_of(self, entry: LogEntry) -> str:
@@ -156,9 +156,9 @@ class CommandLog(ScrollView, can_focus=True):
         top = self.scroll_offset.y
         height = max(self.size.height, 1)
         if index < top:
-            self.scroll_to(y=index, animate=False, immediate=True)
+            self.scroll_to(y=index, animate=False, immediate=True, force=True)
         elif index >= top + height:
-            self.scroll_to(y=index - height + 1, animate=False, immediate=True)
+            self.scroll_to(y=index - height + 1, animate=False, immediate=True, force=True)
         self.refresh()
 
     def move_to_seq(self, seq: int) -> None:
@@ -193,7 +193,7 @@ class CommandLog(ScrollView, can_focus=True):
     def action_follow(self) -> None:
         """Back to following the newest entry."""
         self.cursor_seq = None
-        self.scroll_end(animate=False, immediate=True, x_axis=False)
+        self.scroll_end(animate=False, immediate=True, x_axis=False, force=True)
         self.refresh()
 
     def action_select(self) -> None:

@@ -102,15 +102,30 @@ def format_value(key: str, value: Any) -> tuple[str, str]:
     return key, str(value)
 
 
+# Enum-like fields whose label alone says enough ("zoom_in", "geodetic").
+_WORD_FIELDS = frozenset({"action", "mode", "palette", "coordinate_system"})
+
+
 def describe_params(fields: Mapping[str, Any]) -> str:
-    """Parameters of a command in plain words: 'pan -5.00 deg/s tilt 0.00 deg/s'."""
-    parts: list[str] = []
+    """Parameters of a command in plain words: 'pan -5.00 deg/s tilt 0.00 deg/s'.
+
+    Actions and modes come first, then values with units, then other words; the axis
+    of specified_angle is left out because its value's name says it ('pitch -45.00 deg').
+    """
+    words: list[str] = []
+    values: list[str] = []
+    rest: list[str] = []
     for key, value in fields.items():
-        if key in _META_FIELDS or key.endswith("_raw"):
+        if key in _META_FIELDS or key.endswith("_raw") or key == "axis":
             continue
         label, text = format_value(key, value)
-        parts.append(text if label in ("action", "mode", "axis", "palette") else f"{label} {text}")
-    return " ".join(parts)
+        if key in ("action", "mode", "palette"):
+            words.append(text)
+        elif key in _WORD_FIELDS:
+            rest.append(text)
+        else:
+            values.append(f"{label} {text}")
+    return " ".join(words + values + rest)
 
 
 def _own_text(event: Event) -> str:

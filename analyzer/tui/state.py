@@ -222,15 +222,24 @@ class MonitorState:
             last = self.last_item_time
             if last is not None:
                 self._offset = last - wall
-        now = max(wall + self._offset, self.last_item_time or wall)
+                self.now = last  # the frames define the time axis (a replay may start anew)
         if batch.events:
             self._fold_events(batch.events)
-        self._advance_to(now)
+        self.advance(wall)
 
     def advance(self, wall_now: float) -> None:
-        """Let time pass without data (ages grow, rates fall to zero)."""
+        """Let time pass: ages grow; after a second without frames, rates fall to zero.
+
+        While frames flow, rate windows are closed by the frames' own times (so the
+        capture's batching delay does not skew them); the clock closes them only in silence.
+        """
         now = wall_now + self._offset
+        last = self.last_item_time
+        if last is not None and now < last:
+            now = last
         if now > self.now:
+            self.now = now
+        if last is None or now - last >= RATE_WINDOW_S:
             self._advance_to(now)
 
     def mark_dropped(self, batches: int) -> None:
@@ -310,8 +319,7 @@ class MonitorState:
             if data != row.data:
                 row.note_data(data, t)
             row.last_time = t
-            if last_time is None or t > last_time:
-                last_time = t
+            last_time = t
         self._window_frames += frames + chunks
         self._window_bits += bits
         self._count(total, counters, frames, chunks, nbytes)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
+from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import Event
 from analyzer.tui.formatting import short_age
 from analyzer.tui.state import MonitorState
@@ -60,6 +61,14 @@ def render_uav(state: MonitorState) -> Text:
             f"{f.get('longitude_deg', 0.0):.6f}"
         )
     lines.append(_line(state, "laser", rng, body))
+    rates = Text(f"{'rates':<9}", style="dim")
+    for label, can_id in (("gps", GPS_ID), ("alt", ALTITUDE_ID), ("att", UAV_ATTITUDE_ID)):
+        row = state.rows.get(can_id)
+        rates.append(f"{label} ", style="dim")
+        rates.append(f"{row.rate_hz:5.1f}" if row is not None else "    —", style="bold")
+        rates.append("  ")
+    rates.append("Hz", style="dim")
+    lines.append(rates)
     text = Text("\n").join(lines)
     text.no_wrap = True
     text.overflow = "ellipsis"
