@@ -113,16 +113,14 @@ def _renderer() -> Any:
 
 
 def _plain(event: Event) -> str:
-    from analyzer.sim.engine import describe_command
+    from analyzer.sim.engine import describe_command, format_fields
 
     clock = time.strftime("%H:%M:%S", time.localtime(event.time))
     stamp = f"{clock}.{int(event.time % 1 * 1000):03d}"
     if event.topic == TOPIC_COMMAND:
         text = describe_command(event.fields)
     else:
-        text = " ".join(
-            f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in event.fields.items()
-        )
+        text = format_fields(event.fields)
     warnings = f"  !! {'; '.join(event.warnings)}" if event.warnings else ""
     return f"{stamp} {event.topic:<17} {text}{warnings}"
 

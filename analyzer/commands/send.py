@@ -285,6 +285,8 @@ def transmit(
 
     spec = parse_link(destination)
     link = open_ground_link(spec)
+    if spec.kind == "can" and spec.interface == "virtual":
+        print(f"  note: {spec} reaches only buses inside this process; nothing else hears it")
     decoder = Decoder()
     replies: list[Any] = []
 
@@ -322,5 +324,6 @@ def transmit(
 
 
 def _summary(fields: dict[str, Any]) -> str:
-    shown = {k: v for k, v in fields.items() if k not in ("raw", "transport", "direction")}
-    return " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in shown.items())
+    from analyzer.sim.engine import format_fields
+
+    return format_fields(fields, frozenset({"raw", "transport", "direction"}))

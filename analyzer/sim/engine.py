@@ -24,7 +24,6 @@ FEEDBACK_PERIOD = 0.5  # chapter 2.2: one attitude message every 500 ms
 RANGING_PERIOD = 1.0
 
 # Fields of a command event that say nothing a reader needs in a one-line summary.
-# (Labels are shown, so their ``*_raw`` numbers are left out too.)
 _QUIET_FIELDS = frozenset({"s_id", "cmd", "name", "raw", "component", "transport", "direction"})
 
 
@@ -152,13 +151,21 @@ _UAV_FIELDS: dict[str, tuple[tuple[str, str], ...]] = {
 _UAV_NAMES = {GPS_ID: "gps", ALTITUDE_ID: "altitude", UAV_ATTITUDE_ID: "uav_attitude"}
 
 
+def format_fields(fields: dict[str, Any], skip: frozenset[str] = frozenset()) -> str:
+    """``key=value`` pairs on one line, floats to 10 significant digits, without trailing zeros."""
+    return " ".join(
+        f"{key}={value:.10g}" if isinstance(value, float) else f"{key}={value}"
+        for key, value in fields.items()
+        if key not in skip
+    )
+
+
 def describe_command(fields: dict[str, Any]) -> str:
     """A decoded command as one short line: ``gimbal_control pan_speed_dps=-5 ...``."""
     parts = [str(fields.get("name", "?"))]
     if fields.get("component") == "dual_sensor":
         parts.append("(dual_sensor)")
-    for key, value in fields.items():
-        if key in _QUIET_FIELDS or key.endswith("_raw"):
-            continue
-        parts.append(f"{key}={value:g}" if isinstance(value, float) else f"{key}={value}")
-    return " ".join(parts)
+    # Labels are shown, so their ``*_raw`` numbers are left out too.
+    shown = {k: v for k, v in fields.items() if not k.endswith("_raw")}
+    text = format_fields(shown, _QUIET_FIELDS)
+    return " ".join([*parts, text] if text else parts)
