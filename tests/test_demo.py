@@ -73,3 +73,13 @@ def test_demo_script_moves_the_gimbal_early_and_loops() -> None:
     assert {"gimbal_control", "specified_angle", "tracking", "zoom", "look_down"} <= names
     second_round = [d for batch in sent[1500:2500] for d in batch]
     assert len(second_round) == len([d for batch in sent[:1000] for d in batch])
+
+
+def test_demo_replaces_demo_mcap_but_no_other_file_without_force(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    precious = tmp_path / "flight.mcap"
+    precious.write_bytes(b"keep me")
+    assert main(["demo", "--no-tui", "-o", str(precious)]) == 2
+    assert "use --force" in capsys.readouterr().err
+    assert precious.read_bytes() == b"keep me"

@@ -36,6 +36,7 @@ turns them off. Afterwards:
 """
 
 CHANNEL = "gimbal-demo"
+DEFAULT_OUTPUT = "demo.mcap"
 PLAIN_DURATION = 10.0
 # Faults the demo injects unless --clean: rare enough to read, frequent enough to be seen.
 DEMO_FAULTS = {"drop": 0.02, "corrupt": 0.02, "duplicate": 0.02, "delay": 0.02, "seed": 7}
@@ -45,7 +46,14 @@ QUIET_EVERY = 1.0  # plain output: UAV status lines at most once a second per to
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "-o", "--output", default="demo.mcap", metavar="FILE", help="recording (default demo.mcap)"
+        "-o",
+        "--output",
+        default=DEFAULT_OUTPUT,
+        metavar="FILE",
+        help=f"recording (default {DEFAULT_OUTPUT}, replaced on every run)",
+    )
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="overwrite another existing output file"
     )
     parser.add_argument(
         "--duration",
@@ -144,7 +152,10 @@ def run(args: argparse.Namespace) -> int:
     duration = args.duration if args.duration is not None else (None if tui else PLAIN_DURATION)
     if duration is not None and duration <= 0:
         raise UsageError("--duration must be a positive number of seconds")
-    path = str(output_path(args.output))
+    target = output_path(args.output)
+    if target.exists() and not args.force and args.output != DEFAULT_OUTPUT:
+        raise UsageError(f"{target} exists; choose another name or use --force to overwrite it")
+    path = str(target)
     spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
     faults = FaultConfig() if args.clean else fault_config(args)
     config = SimConfig(ranging=True, uav=True, faults=faults)
