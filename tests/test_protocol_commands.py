@@ -204,6 +204,10 @@ def test_encode_errors_name_the_valid_range() -> None:
         encode_command("palette", palette="purple")
     with pytest.raises(EncodeError, match="give axis or one of"):
         encode_command("specified_angle")
+    with pytest.raises(EncodeError, match="axis=yaw takes yaw_deg, not pitch_deg"):
+        encode_command("specified_angle", yaw_deg=1, pitch_deg=2)
+    with pytest.raises(EncodeError, match="mode=single takes no value, not shots"):
+        encode_command("snapshot", mode="single", shots=3)
     with pytest.raises(EncodeError, match="does not exist for S_ID 0x1F"):
         encode_command("look_down", s_id=0x1F)
     # fault injection may go past the range

@@ -111,6 +111,14 @@ def test_repeated_segment_is_reported_and_message_kept() -> None:
     assert r.bytes_framed + r.bytes_discarded == r.bytes_fed
 
 
+def test_repeated_last_segment_is_a_duplicate() -> None:
+    a, b = segments(attitude_by_hand()), segments(attitude_by_hand())
+    r = FeedbackReassembler("can0")
+    out = feed_all(r, [*a, a[3], *b])
+    assert kinds(out) == ["message", "duplicate", "message"]
+    assert r.bytes_framed + r.bytes_discarded == r.bytes_fed
+
+
 def test_corrupted_segment_is_a_crc_mismatch() -> None:
     a = segments(attitude_by_hand())
     bad = bytes([a[2][0] ^ 0x40]) + a[2][1:]

@@ -97,16 +97,27 @@ def encode_command(
     buffer = bytearray(CAN_DATA_SIZE)
     buffer[0], buffer[1] = row.s_id, row.cmd
     fields: list[Field] = list(row.params)
+    choice_label = ""
     if row.selector is not None:
         selector = row.selector
         choice = params.pop(selector.name, None)
         if choice is None:
             choice = _infer_variant(row, params)
         raw = selector.to_raw(choice, check_range=check_range)
+        choice_label = (selector.labels or {}).get(raw, str(raw))
         selector.write(buffer, raw, check_range=check_range)
         fields.extend(row.variants.get(raw, ()))
     known = {f.name for f in fields}
     unknown = sorted(set(params) - known)
+    if unknown and row.selector is not None:
+        variant_names = [f.name for variant in row.variants.values() for f in variant]
+        misplaced = sorted(set(unknown) & set(variant_names))
+        if misplaced:
+            takes = ", ".join(f.name for f in fields if f.name in variant_names) or "no value"
+            raise EncodeError(
+                f"{name}: {row.selector.name}={choice_label} takes {takes}, "
+                f"not {', '.join(misplaced)} (give only one of {', '.join(variant_names)})"
+            )
     if unknown:
         valid = ", ".join(sorted(f.name for f in row.all_fields())) or "none"
         raise EncodeError(f"{name}: unknown parameter(s) {', '.join(unknown)}; valid: {valid}")

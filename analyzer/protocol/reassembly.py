@@ -61,6 +61,7 @@ class FeedbackReassembler:
         self.bytes_framed = 0
         self.bytes_discarded = 0
         self._pending: list[Segment] = []
+        self._last_tail = b""  # last segment of the last message, to spot its repeat
 
     @property
     def pending(self) -> int:
@@ -107,11 +108,18 @@ class FeedbackReassembler:
         if any(n != 8 for n in sizes):
             warnings.append(f"segment lengths {sizes}, expected 8 each")
         self.bytes_framed += len(data)
+        self._last_tail = segs[-1].data
         out.append(Message(segs[-1].time, data, tuple(segs), tuple(warnings)))
 
     def _resolve(self, out: list[Message | Event], *, final: bool, time: float) -> None:
         pending = self._pending
         while pending:
+            if self._last_tail and pending[0].data == self._last_tail:
+                self._report(
+                    out, DUPLICATE, "last feedback segment repeated", pending[:1], pending[0].time
+                )
+                del pending[:1]
+                continue
             if not _is_header(pending[0].data):
                 k = next((i for i, s in enumerate(pending) if _is_header(s.data)), len(pending))
                 if k == len(pending) < SEGMENTS_PER_MESSAGE and not final:
