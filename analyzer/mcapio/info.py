@@ -5,11 +5,12 @@ from __future__ import annotations
 import json
 import os
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME
-from analyzer.mcapio.reader import Recording, channel_role
+from analyzer.mcapio.reader import RawMessage, Recording, channel_role
 from analyzer.mcapio.stats import GAP_THRESHOLD_S, EventStats
 from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
 
@@ -156,23 +157,33 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
 def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInfo:
     counts: Counter[str] = Counter()
     roles: dict[str, str] = {}
+    times: dict[str, list[int]] = {}  # topic -> [first, last] log time
+
+    def tally(topic: str, role: str, log_time: int) -> None:
+        counts[topic] += 1
+        span = times.get(topic)
+        if span is None:
+            times[topic] = [log_time, log_time]
+            roles[topic] = role
+        elif log_time < span[0]:
+            span[0] = log_time
+        elif log_time > span[1]:
+            span[1] = log_time
+
     stats = EventStats()
-    start: int | None = None
-    end: int | None = None
-    scanned = 0
-    for message in recording.messages():
-        scanned += 1
-        counts[message.topic] += 1
-        roles.setdefault(message.topic, message.role)
-        t = message.log_time
-        if start is None or t < start:
-            start = t
-        if end is None or t > end:
-            end = t
+    content = set(SCANNED_TOPICS)
+    if recording.recovered:
+        messages = recording.messages(topics=content, tally=tally)
+    else:  # a finished file without statistics: count while reading everything
+        messages = (m for m in recording.messages() if _tallied(tally, m) and m.topic in content)
+    for message in messages:
         if message.topic == TOPIC_DIAGNOSTICS:
             stats.diagnostics[_kind(message.data)] += 1
-        elif message.topic == TOPIC_GIMBAL_ATTITUDE:
-            stats.attitude(t / 1e9)
+        else:
+            stats.attitude(message.log_time / 1e9)
+    scanned = sum(counts.values())
+    start = min((span[0] for span in times.values()), default=None)
+    end = max((span[1] for span in times.values()), default=None)
     duration = 0.0 if start is None or end is None else (end - start) / 1e9
     topics = [
         TopicInfo(
@@ -184,7 +195,7 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         )
         for topic, n in sorted(counts.items())
     ]
-    why = "recovered file" if recording.recovered else "no summary statistics"
+    why = "recovered file" if recording.recovered else "the file has no summary statistics"
     return RecordingInfo(
         path=recording.path,
         size_bytes=recording.size,
@@ -200,3 +211,8 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         stats_from=f"the same scan: {why}",
         scanned_messages=scanned,
     )
+
+
+def _tallied(tally: Callable[[str, str, int], None], message: RawMessage) -> bool:
+    tally(message.topic, message.role, message.log_time)
+    return True

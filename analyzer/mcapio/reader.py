@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import struct
@@ -27,12 +28,19 @@ from analyzer.pipeline import RawItem
 from analyzer.protocol.types import BAD_LINE, LINK, TOPIC_DIAGNOSTICS, Event
 
 MAGIC = b"\x89MCAP0\r\n"
+OPCODE_SCHEMA = 0x03
+OPCODE_CHANNEL = 0x04
+OPCODE_MESSAGE = 0x05
+OPCODE_CHUNK = 0x06
+_RECORD_HEAD = struct.Struct("<BQ")
+_MESSAGE_HEAD = struct.Struct("<HIQ")  # channel id, sequence, log time
 FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary start, offset start, crc
 OPCODE_FOOTER = 0x02
 # A record longer than this in a damaged tail is garbage, not data.
 RECORD_SIZE_LIMIT = 1 << 30
 
 T = TypeVar("T")
+Tally = Callable[[str, str, int], None]
 
 # Diagnostics that come from the source or the file reader, not from the decoder: decoding
 # the raw channels again cannot re-create them, so a replay carries them over.
@@ -118,6 +126,8 @@ class Recording:
         self._summary: Any = None
         # topic -> schema name of channels met by the recover path
         self.recovered_schemas: dict[str, str] = {}
+        # damaged chunks of a finished file that reading skipped
+        self.damage: list[str] = []
         if not self.recovered:
             self._load_summary()
 
@@ -149,9 +159,11 @@ class Recording:
 
     @property
     def recovery_note(self) -> str:
-        """One line for the user when the file was recovered ('' otherwise)."""
+        """One line for the user when the file was recovered or damaged ('' otherwise)."""
         if not self.recovered:
-            return ""
+            if not self.damage:
+                return ""
+            return f"{len(self.damage)} damaged chunk(s) skipped; first: {self.damage[0]}"
         if self.recovery is None:
             return f"unfinished recording, read through the recover path: {self.problem}"
         return self.recovery.describe()
@@ -192,49 +204,120 @@ class Recording:
         self,
         topics: set[str] | None = None,
         roles: set[str] | None = None,
+        *,
+        tally: Tally | None = None,
     ) -> Iterator[RawMessage]:
-        """Messages in file order (= arrival order), filtered by topic and/or channel role."""
+        """Messages in file order (= arrival order), filtered by topic and/or channel role.
+
+        Recovered files only: ``tally(topic, role, log_time)`` is called for every message
+        read, wanted or not, so one pass can count everything and yield only a few topics.
+        """
 
         def wanted(topic: str, role: str) -> bool:
             return (topics is None or topic in topics) and (roles is None or role in roles)
 
         if self.recovered:
-            yield from self._recover(wanted)
+            yield from self._recover(wanted, tally)
         else:
             yield from self._read_finished(wanted)
 
     def _read_finished(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage]:
+        """Through the summary's chunk index, reading only chunks that hold wanted channels.
+
+        Every chunk read is checked against its CRC. Uncompressed chunks (ours) are walked
+        record by record without building an object per message; anything else goes
+        through the mcap library.
+        """
+        summary = self._summary
+        if summary is None or not summary.chunk_indexes:
+            yield from self._read_with_library(wanted)
+            return
+        chosen = {
+            channel_id: (ch.topic, channel_role(ch.topic, ch.metadata))
+            for channel_id, ch in summary.channels.items()
+            if wanted(ch.topic, channel_role(ch.topic, ch.metadata))
+        }
+        if not chosen:
+            return
+        indexes = sorted(
+            (
+                index
+                for index in summary.chunk_indexes
+                if not index.message_index_offsets or chosen.keys() & index.message_index_offsets
+            ),
+            key=lambda index: index.chunk_start_offset,
+        )
+        with open(self.path, "rb") as f:
+            for index in indexes:
+                try:
+                    yield from self._finished_chunk(f, index, chosen)
+                except RecordingError as exc:  # skip it, keep reading, tell the caller
+                    self.damage.append(str(exc))
+
+    def _finished_chunk(
+        self, f: IO[bytes], index: Any, chosen: dict[int, tuple[str, str]]
+    ) -> Iterator[RawMessage]:
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Chunk, Message
+        from mcap.stream_reader import breakup_chunk
+
+        where = f"{self.path}: damaged recording: chunk at byte {index.chunk_start_offset}"
+        f.seek(index.chunk_start_offset)
+        raw = f.read(index.chunk_length)
+        if len(raw) < index.chunk_length or raw[0] != OPCODE_CHUNK:
+            raise RecordingError(f"{where} is missing")
+        try:
+            chunk = Chunk.read(ReadDataStream(io.BytesIO(raw[9:])))
+        except Exception as exc:  # a record that does not parse
+            raise RecordingError(f"{where} does not parse ({exc})") from None
+        if not _intact(chunk):
+            try:
+                records = breakup_chunk(chunk, validate_crc=True)
+            except Exception as exc:  # CRC mismatch or an unreadable compression
+                raise RecordingError(f"{where}: {exc}") from None
+            for record in records:
+                if isinstance(record, Message) and record.channel_id in chosen:
+                    topic, role = chosen[record.channel_id]
+                    yield RawMessage(topic, role, record.log_time, record.data)
+            return
+        data = chunk.data
+        pos, size = 0, len(data)
+        unpack_record, unpack_message = _RECORD_HEAD.unpack_from, _MESSAGE_HEAD.unpack_from
+        while pos + 9 <= size:
+            opcode, length = unpack_record(data, pos)
+            body, end = pos + 9, pos + 9 + length
+            if end > size:
+                raise RecordingError(f"{where} has a record running past its end")
+            if opcode == OPCODE_MESSAGE and length >= 22:
+                channel_id, _, log_time = unpack_message(data, body)
+                known = chosen.get(channel_id)
+                if known is not None:
+                    yield RawMessage(known[0], known[1], log_time, data[body + 22 : end])
+            pos = end
+
+    def _read_with_library(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage]:
+        """Files without a chunk index (other writers): the mcap library reads them."""
         from mcap.exceptions import McapError
         from mcap.reader import make_reader
         from mcap.stream_reader import CRCValidationError
 
-        summary = self._summary
-        selected: list[str] | None = None
-        if summary is not None:
-            selected = [
-                ch.topic
-                for ch in summary.channels.values()
-                if wanted(ch.topic, channel_role(ch.topic, ch.metadata))
-            ]
-            if not selected:
-                return
         roles: dict[int, str] = {}
         try:
             with open(self.path, "rb") as f:
                 reader = make_reader(f, validate_crcs=True)
-                for _, channel, message in reader.iter_messages(
-                    topics=selected, log_time_order=False
-                ):
+                for _, channel, message in reader.iter_messages(log_time_order=False):
                     role = roles.get(channel.id)
                     if role is None:
                         role = roles[channel.id] = channel_role(channel.topic, channel.metadata)
-                    if selected is None and not wanted(channel.topic, role):
-                        continue
-                    yield RawMessage(channel.topic, role, message.log_time, message.data)
+                    if wanted(channel.topic, role):
+                        yield RawMessage(channel.topic, role, message.log_time, message.data)
         except (CRCValidationError, McapError, struct.error, ValueError) as exc:
             raise RecordingError(f"{self.path}: damaged recording: {exc}") from None
 
-    def _recover(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage]:
+    def _recover(
+        self, wanted: Callable[[str, str], bool], tally: Tally | None
+    ) -> Iterator[RawMessage]:
+        from mcap.data_stream import ReadDataStream
         from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Schema
         from mcap.stream_reader import StreamReader, breakup_chunk
 
@@ -254,9 +337,40 @@ class Recording:
                 self.recovered_schemas[record.topic] = schemas.get(record.schema_id, "")
             elif isinstance(record, Message):
                 known = channels.get(record.channel_id)
-                if known is not None and wanted(*known):
+                if known is not None:
                     report.messages += 1
-                    yield RawMessage(known[0], known[1], record.log_time, record.data)
+                    if tally is not None:
+                        tally(known[0], known[1], record.log_time)
+                    if wanted(*known):
+                        yield RawMessage(known[0], known[1], record.log_time, record.data)
+
+        def walk(data: bytes) -> Iterator[RawMessage]:
+            """The records of an uncompressed chunk, without an object per message."""
+            pos, size = 0, len(data)
+            chosen: dict[int, bool] = {}
+            while pos + 9 <= size:
+                opcode, length = _RECORD_HEAD.unpack_from(data, pos)
+                body, end = pos + 9, pos + 9 + length
+                if end > size:
+                    break
+                if opcode == OPCODE_MESSAGE and length >= 22:
+                    channel_id, _, log_time = _MESSAGE_HEAD.unpack_from(data, body)
+                    known = channels.get(channel_id)
+                    if known is not None:
+                        report.messages += 1
+                        if tally is not None:
+                            tally(known[0], known[1], log_time)
+                        take = chosen.get(channel_id)
+                        if take is None:
+                            take = chosen[channel_id] = wanted(*known)
+                        if take:
+                            yield RawMessage(known[0], known[1], log_time, data[body + 22 : end])
+                elif opcode == OPCODE_SCHEMA:
+                    yield from handle(Schema.read(ReadDataStream(io.BytesIO(data[body:end]))))
+                elif opcode == OPCODE_CHANNEL:
+                    yield from handle(Channel.read(ReadDataStream(io.BytesIO(data[body:end]))))
+                    chosen.clear()
+                pos = end
 
         with open(self.path, "rb") as f:
             reader = StreamReader(f, emit_chunks=True, record_size_limit=RECORD_SIZE_LIMIT)
@@ -271,6 +385,13 @@ class Recording:
                         report.reason = f"stopped at byte {report.good_bytes}: {_why(exc)}"
                     break
                 if isinstance(record, Chunk):
+                    if _intact(record):
+                        report.good_bytes = f.tell()
+                        try:
+                            yield from walk(record.data)
+                        except (struct.error, ValueError, UnicodeDecodeError):
+                            report.damaged_chunks += 1
+                        continue
                     inner = _chunk_records(record, breakup_chunk)
                     if inner is None:
                         if f.tell() >= self.size:  # the last, half-written chunk
@@ -341,6 +462,13 @@ def _why(exc: BaseException) -> str:
     if name == "EndOfFile" or not text:
         return "end of file inside a record (recording not finished)"
     return f"{name}: {text}"
+
+
+def _intact(chunk: Any) -> bool:
+    """An uncompressed chunk that is complete and passes its CRC (walked directly)."""
+    if chunk.compression != "" or len(chunk.data) != chunk.uncompressed_size:
+        return False
+    return not chunk.uncompressed_crc or zlib.crc32(chunk.data) == chunk.uncompressed_crc
 
 
 def _chunk_records(chunk: Any, breakup: Callable[..., list[Any]]) -> list[Any] | None:
