@@ -114,6 +114,7 @@ class Capture:
         self._notes: list[Event] = []
         self._thread: threading.Thread | None = None
         self._started_at = 0.0
+        self._ended_at = 0.0  # when the reader stopped: elapsed time stops there
         self._last_item = (0.0, 0.0)  # (source time, monotonic time) of the newest item
         self._source_name = str(getattr(source, "source_name", "capture"))
 
@@ -159,7 +160,8 @@ class Capture:
         with self._stats_lock:
             snapshot = CaptureStats(**self._stats.as_dict())
         if self._started_at:
-            snapshot.elapsed_s = time.monotonic() - self._started_at
+            end = self._ended_at or time.monotonic()
+            snapshot.elapsed_s = end - self._started_at
         return snapshot
 
     # -- the reader thread ------------------------------------------------------------------------
@@ -289,6 +291,7 @@ class Capture:
         self._notes.append(link_event(self._source_name, message, "failed"))
 
     def _finish(self, batch: Batch) -> None:
+        self._ended_at = time.monotonic()
         try:
             with contextlib.suppress(Exception):
                 self.source.close()

@@ -346,3 +346,25 @@ def test_start_twice_is_refused() -> None:
     with pytest.raises(RuntimeError):
         capture.start()
     capture.wait()
+
+
+def test_elapsed_time_stops_when_the_capture_ends() -> None:
+    import time as _time
+
+    from analyzer.capture import Capture
+
+    class Ends:
+        description = "ends at once"
+
+        def read(self, timeout: float) -> list[object]:
+            raise EOFError
+
+        def close(self) -> None:
+            pass
+
+    capture = Capture(Ends(), [])  # type: ignore[arg-type]
+    capture.start()
+    capture.wait()
+    first = capture.stats.elapsed_s
+    _time.sleep(0.05)
+    assert capture.stats.elapsed_s == first
