@@ -162,7 +162,7 @@ def test_link_state_and_stream_rows() -> None:
     state.fold(Batch([chunk], [link], T0))
     assert state.link_state == "connected"
     assert state.counters.errors == 0  # link changes are not errors
-    assert state.rows["tcp gs_to_idu"].count == 1
+    assert state.rows["tcp →idu"].count == 1
     assert state.total.chunks == 1
 
 
@@ -174,6 +174,8 @@ def test_demo_session_decodes_cleanly_into_the_state() -> None:
     assert state.feedback_count == 25  # 20 attitude + 5 ranging
     assert FOREIGN_BASE_ID + 3 in state.rows
     assert state.text is not None and state.text.fields["text"].startswith("waypoint")
+    assert state.topic_rates["/uav/gps"] == pytest.approx(10.0)
+    assert state.topic_rates["/gimbal/attitude"] == pytest.approx(2.0)
 
 
 # -- filter ------------------------------------------------------------------------------------

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
-from analyzer.protocol.types import Event
+from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, Event
 from analyzer.tui.formatting import compass, describe_params, format_age, short_age, value_bar
 from analyzer.tui.state import MonitorState
 
@@ -87,12 +87,15 @@ def render_gimbal(state: MonitorState) -> Text:
         f"{format_age(age)} ago" if age is not None else "none yet",
         style="bold white on red" if stale else "bold green",
     )
-    feedback.append(f"  ({state.feedback_count} messages)", style="dim")
+    rate = state.topic_rates.get(TOPIC_GIMBAL_ATTITUDE, 0.0)
+    feedback.append(f"  {rate:.1f}/s  {state.feedback_count:,} messages", style="dim")
     if state.ranging is not None:
         rf = state.ranging.fields
         feedback.append("  ranging ", style="dim")
-        feedback.append(f"{rf.get('distance_m', 0):.1f} m")
-        feedback.append(f" h {rf.get('height_m', 0):.1f} m", style="dim")
+        if rf.get("success", True):
+            feedback.append(f"{rf.get('distance_m', 0):.1f} m")
+        else:
+            feedback.append("no target")
     lines.append(feedback)
     text = Text("\n").join(lines)
     text.no_wrap = True

@@ -24,7 +24,9 @@ from analyzer.protocol.ids import (
     UAV_ATTITUDE_ID,
 )
 from analyzer.protocol.types import (
+    FROM_IDU,
     LINK,
+    TO_IDU,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -74,6 +76,9 @@ COMMAND_GROUPS: dict[str, str] = {
     "tracking": "motion",
     "tracking_stop": "motion",
 }
+
+
+_ARROWS = {TO_IDU: "→idu", FROM_IDU: "←idu"}
 
 
 def frame_bits(frame: CanFrame) -> int:
@@ -199,6 +204,8 @@ class MonitorState:
         self.frames_per_s = 0.0
         self.bits_per_s = 0.0
         self.errors_per_s = 0.0
+        self.topic_rates: dict[str, float] = {}  # events/s per topic in the last window
+        self._window_topics: Counter[str] = Counter()
         self.frames_history: deque[float] = deque([0.0] * history, maxlen=history)
         self.errors_history: deque[float] = deque([0.0] * history, maxlen=history)
         self._window_start: float | None = None
@@ -223,7 +230,7 @@ class MonitorState:
             if last is not None:
                 self._offset = last - wall
                 self.now = last  # the frames define the time axis (a replay may start anew)
-        if batch.events:
+        else:
             self._fold_events(batch.events)
         self.advance(wall)
 
@@ -285,6 +292,10 @@ class MonitorState:
     # -- folding -------------------------------------------------------------------------------
 
     def _fold_items(self, batch: Batch) -> None:
+        """Items in order; the batch's events are folded in step, so each lands in its window."""
+        events = batch.events
+        n_events = len(events)
+        next_event = 0
         rows = self.rows
         total = self.total
         counters = self.counters
@@ -294,6 +305,11 @@ class MonitorState:
         for item in batch.items:
             t = item.time
             if window_end is None or t >= window_end or t < window_end - 2 * RATE_WINDOW_S:
+                first = next_event
+                while next_event < n_events and events[next_event].time < t:
+                    next_event += 1
+                if next_event > first:
+                    self._fold_events(events[first:next_event])
                 self._window_frames += frames + chunks
                 self._window_bits += bits
                 self._count(total, counters, frames, chunks, nbytes)
@@ -310,7 +326,7 @@ class MonitorState:
                     row = self._new_row(key, item)
             else:
                 chunks += 1
-                key = f"{item.source} {item.direction}".strip()
+                key = f"{item.source} {_ARROWS.get(item.direction, item.direction)}".strip()
                 row = rows.get(key)
                 if row is None:
                     row = self._new_row(key, None)
@@ -324,6 +340,8 @@ class MonitorState:
         self._window_bits += bits
         self._count(total, counters, frames, chunks, nbytes)
         self.last_item_time = last_time
+        if next_event < n_events:
+            self._fold_events(events[next_event:])
 
     @staticmethod
     def _count(total: Counters, counters: Counters, frames: int, chunks: int, nbytes: int) -> None:
@@ -355,6 +373,7 @@ class MonitorState:
                 continue
             total.events += 1
             counters.events += 1
+            self._window_topics[topic] += 1
             if event.warnings:
                 total.warnings += 1
                 counters.warnings += 1
@@ -420,6 +439,7 @@ class MonitorState:
             self.errors_history.append(0.0)
         if silent > 0:
             self.frames_per_s = self.bits_per_s = self.errors_per_s = 0.0
+            self.topic_rates = {}
             for row in self.rows.values():
                 row.rate_hz = 0.0
         self._window_start = now
@@ -435,4 +455,6 @@ class MonitorState:
         for row in self.rows.values():
             row.rate_hz = max(row.count - row.window_count, 0) / span
             row.window_count = row.count
+        self.topic_rates = {topic: n / span for topic, n in self._window_topics.items()}
+        self._window_topics = Counter()
         self._window_frames = self._window_bits = self._window_errors = 0

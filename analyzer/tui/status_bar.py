@@ -64,9 +64,12 @@ def render_status(state: MonitorState, info: StatusInfo) -> Text:
         text.append("not recording", "dim")
     text.append(" │ ", "dim")
     text.append(f"{state.frames_per_s:,.0f}", "bold")
-    text.append(" frames/s  bus ", "dim")
-    load = state.bus_load * 100
-    text.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
+    if state.total.chunks and not state.total.frames:
+        text.append(" chunks/s", "dim")  # a TCP / UART stream: no CAN bus to load
+    else:
+        text.append(" frames/s  bus ", "dim")
+        load = state.bus_load * 100
+        text.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
     text.append(" │ ", "dim")
     text.append(f"view {info.view}", "dim")
     if info.raw:

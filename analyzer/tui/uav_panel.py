@@ -5,8 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
-from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID, UAV_ATTITUDE_ID
-from analyzer.protocol.types import Event
+from analyzer.protocol.types import TOPIC_UAV_ALTITUDE, TOPIC_UAV_ATTITUDE, TOPIC_UAV_GPS, Event
 from analyzer.tui.formatting import short_age
 from analyzer.tui.state import MonitorState
 
@@ -59,13 +58,18 @@ def render_uav(state: MonitorState) -> Text:
         body = (
             f"{f.get('distance_m', 0.0):.1f} m  to {f.get('latitude_deg', 0.0):.6f} "
             f"{f.get('longitude_deg', 0.0):.6f}"
+            if f.get("success", True)
+            else "no target (ranging failed)"
         )
     lines.append(_line(state, "laser", rng, body))
     rates = Text(f"{'rates':<9}", style="dim")
-    for label, can_id in (("gps", GPS_ID), ("alt", ALTITUDE_ID), ("att", UAV_ATTITUDE_ID)):
-        row = state.rows.get(can_id)
+    for label, topic in (
+        ("gps", TOPIC_UAV_GPS),
+        ("alt", TOPIC_UAV_ALTITUDE),
+        ("att", TOPIC_UAV_ATTITUDE),
+    ):
         rates.append(f"{label} ", style="dim")
-        rates.append(f"{row.rate_hz:5.1f}" if row is not None else "    —", style="bold")
+        rates.append(f"{state.topic_rates.get(topic, 0.0):5.1f}", style="bold")
         rates.append("  ")
     rates.append("Hz", style="dim")
     lines.append(rates)
