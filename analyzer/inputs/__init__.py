@@ -1,0 +1,165 @@
+"""Capture file readers, one module per format, and ``open_input`` to pick the right one."""
+
+from __future__ import annotations
+
+import gzip
+import os
+import re
+from collections.abc import Iterable
+
+from analyzer.errors import UsageError
+from analyzer.inputs.base import InputItem, InputReader, open_binary
+from analyzer.protocol.ids import TCP_PORT
+
+__all__ = ["FORMATS", "InputItem", "InputReader", "detect_format", "open_input"]
+
+# --format values and what they read.
+FORMATS: dict[str, str] = {
+    "candump": "candump -L log or candump screen output (.log; '-' = standard input)",
+    "asc": "Vector ASC (.asc) through python-can",
+    "blf": "Vector BLF (.blf) through python-can",
+    "trc": "PCAN-View TRC (.trc) through python-can",
+    "csv": "python-can CSV (.csv)",
+    "mf4": "ASAM MDF4 (.mf4) through python-can (needs asammdf)",
+    "pcap": "pcap / pcapng capture of the IDU's TCP link (.pcap, .pcapng)",
+    "stream": "raw byte dump of a TCP or UART stream (.bin)",
+    "mcap": "MCAP recording of this project (.mcap)",
+}
+ALIASES = {"log": "candump", "pcapng": "pcap", "bin": "stream", "raw": "stream"}
+EXTENSIONS = {
+    ".log": "candump",
+    ".candump": "candump",
+    ".asc": "asc",
+    ".blf": "blf",
+    ".trc": "trc",
+    ".csv": "csv",
+    ".mf4": "mf4",
+    ".pcap": "pcap",
+    ".pcapng": "pcap",
+    ".cap": "pcap",
+    ".bin": "stream",
+    ".raw": "stream",
+    ".mcap": "mcap",
+}
+SNIFF_BYTES = 4096
+_PCAP_MAGICS = (
+    b"\xd4\xc3\xb2\xa1",
+    b"\xa1\xb2\xc3\xd4",
+    b"\x4d\x3c\xb2\xa1",
+    b"\xa1\xb2\x3c\x4d",
+    b"\x0a\x0d\x0d\x0a",  # pcapng
+)
+
+_CANDUMP_LOG = re.compile(rb"^\(\d+(?:\.\d+)?\)\s+\S+\s+[0-9A-Fa-f]{1,8}##?\S*", re.M)
+_CANDUMP_SCREEN = re.compile(
+    rb"^\s*(?:\([^)]*\)\s+)?\S+\s+(?:[RT]X\s+\S\s+\S\s+)?[0-9A-Fa-f]{1,8}\s+\[\d{1,2}\]", re.M
+)
+
+
+def normalise_format(fmt: str) -> str:
+    """A --format value -> one of FORMATS; UsageError naming the valid ones."""
+    name = fmt.strip().lower().lstrip(".")
+    name = ALIASES.get(name, name)
+    if name not in FORMATS:
+        raise UsageError(f"unknown format {fmt!r}; valid: {', '.join(FORMATS)}")
+    return name
+
+
+def detect_format(path: str) -> str:
+    """The format of a file from its name, else from its first bytes."""
+    name = os.path.basename(path).lower()
+    if name.endswith(".gz"):
+        name = name[:-3]
+    ext = os.path.splitext(name)[1]
+    if ext in EXTENSIONS:
+        return EXTENSIONS[ext]
+    found = sniff_format(_head(path))
+    if found is None:
+        raise UsageError(
+            f"cannot tell the format of {path} from its name or content; "
+            f"give --format ({', '.join(FORMATS)})"
+        )
+    return found
+
+
+def sniff_format(head: bytes) -> str | None:
+    """Recognise a format from the first few KiB of a file (None when unsure)."""
+    if head[:4] in _PCAP_MAGICS:
+        return "pcap"
+    if head[:5] == b"\x89MCAP":
+        return "mcap"
+    if head[:4] == b"LOGG":
+        return "blf"
+    if head[:2] == b"\xeb\x90":
+        return "stream"
+    text = head.lstrip(b"\xef\xbb\xbf")
+    if _CANDUMP_LOG.search(text) or _CANDUMP_SCREEN.search(text):
+        return "candump"
+    lowered = text[:512].lower()
+    if lowered.startswith(b"date ") or b"\nbase hex" in lowered or b"\nbase dec" in lowered:
+        return "asc"
+    if lowered.startswith(b";$fileversion") or lowered.startswith(b";   start time"):
+        return "trc"
+    if lowered.startswith(b"timestamp,arbitration_id"):
+        return "csv"
+    return None
+
+
+def _head(path: str) -> bytes:
+    with open_binary(path) as handle:
+        head = handle.read(SNIFF_BYTES)
+    if head[:2] == b"\x1f\x8b":
+        try:
+            with gzip.open(path, "rb") as packed:
+                head = packed.read(SNIFF_BYTES)
+        except (OSError, EOFError):
+            pass
+    return head
+
+
+def open_input(
+    path: str,
+    fmt: str | None = None,
+    port: int = TCP_PORT,
+    *,
+    wanted_ids: Iterable[int] | None = None,
+) -> InputReader:
+    """Open a capture file (``-`` = standard input) for reading items.
+
+    Iterating the result gives ``CanFrame`` / ``StreamChunk`` items and ``Event``
+    diagnostics for unreadable lines or records; ``size_bytes`` / ``position_bytes``
+    tell how far it got. ``wanted_ids`` lets the candump reader skip frames with other
+    IDs cheaply (they are still counted). Unknown or unreadable files raise UsageError.
+    """
+    name = normalise_format(fmt) if fmt else None
+    if path == "-":
+        from analyzer.inputs.stdin import StdinCandumpReader, StdinStreamReader
+
+        if name in (None, "candump"):
+            return StdinCandumpReader(wanted_ids=wanted_ids)
+        if name == "stream":
+            return StdinStreamReader()
+        raise UsageError(f"standard input can be read as candump text or a stream, not {name}")
+    if name is None:
+        name = detect_format(path)
+        if name == "candump" and b"\0" in _head(path):
+            raise UsageError(f"{path} is not candump text (it holds binary data); give --format")
+    if name == "candump":
+        from analyzer.inputs.candump import CandumpReader
+
+        return CandumpReader(path, wanted_ids=wanted_ids)
+    if name == "pcap":
+        from analyzer.inputs.pcap import PcapReader
+
+        return PcapReader(path, port=port)
+    if name == "stream":
+        from analyzer.inputs.raw_stream import RawStreamReader
+
+        return RawStreamReader(path)
+    if name == "mcap":
+        from analyzer.inputs.mcap import McapReader
+
+        return McapReader(path)
+    from analyzer.inputs.python_can import PythonCanReader
+
+    return PythonCanReader(path, name)

@@ -1,0 +1,78 @@
+"""What every file reader offers: iteration over items, progress in bytes, counters, close."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from typing import IO, Any
+
+from analyzer.errors import UsageError
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
+
+InputItem = CanFrame | StreamChunk | Event
+
+
+class InputReader:
+    """Base of the file readers.
+
+    Iterating gives ``CanFrame`` / ``StreamChunk`` items in file order, and ``Event``
+    diagnostics for lines or records that could not be read (decoding goes on after
+    them). ``size_bytes`` is the file size (None when unknown, e.g. standard input) and
+    ``position_bytes`` how far reading has got, for a progress bar. ``stats`` counts what
+    was read so that nothing is dropped silently.
+    """
+
+    format_name = "unknown"
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.source = "stdin" if path == "-" else os.path.basename(path) or path
+        self.size_bytes: int | None = None
+        self.position_bytes = 0
+        self.first_time: float | None = None  # time of the first frame read (skipped ones too)
+        self.last_time: float | None = None
+        self._closers: list[Any] = []
+
+    def __iter__(self) -> Iterator[InputItem]:
+        raise NotImplementedError
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return {}
+
+    def close(self) -> None:
+        while self._closers:
+            closer = self._closers.pop()
+            with contextlib.suppress(Exception):  # must not hide the real outcome
+                closer.close()
+
+    def __enter__(self) -> InputReader:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _open_binary(self) -> IO[bytes]:
+        """Open ``path`` for reading bytes; UsageError with one line when that fails."""
+        handle = open_binary(self.path)
+        self._closers.append(handle)
+        try:
+            self.size_bytes = os.fstat(handle.fileno()).st_size
+        except OSError:
+            self.size_bytes = None
+        return handle
+
+
+def open_binary(path: str) -> IO[bytes]:
+    """Open a file for reading bytes, turning OS errors into a one-line UsageError."""
+    if os.path.isdir(path):
+        raise UsageError(f"{path} is a directory, not a capture file")
+    try:
+        return open(path, "rb")
+    except FileNotFoundError:
+        raise UsageError(f"no such file: {path}") from None
+    except PermissionError:
+        raise UsageError(f"cannot read {path}: permission denied") from None
+    except OSError as exc:
+        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None

@@ -1,0 +1,489 @@
+"""candump text: ``-L`` log lines and the default screen output, parsed tolerantly and fast."""
+
+from __future__ import annotations
+
+import datetime
+import gzip
+from binascii import unhexlify
+from collections.abc import Callable, Iterable, Iterator
+from typing import IO
+
+from analyzer.inputs.base import InputItem, InputReader
+from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
+
+CAN_ERR_FLAG = 0x20000000
+CAN_EFF_MASK = 0x1FFFFFFF
+BLOCK_SIZE = 1 << 20  # bytes read at a time
+MAX_LINE = 1 << 16  # longer runs without a line end are cut (and reported as bad lines)
+RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
+MAX_CLASSIC_HEX = 16  # 8 data bytes
+MAX_FD_HEX = 128  # 64 data bytes
+_DIRECTIONS = {b"R": "rx", b"r": "rx", b"T": "tx", b"t": "tx"}
+_HEXDIGITS = frozenset(b"0123456789abcdefABCDEF")
+_NAN = float("nan")
+
+# Parsed ID text -> (can_id, extended, is_error, wanted); None marks an invalid ID text.
+IdInfo = tuple[int, bool, bool, bool]
+
+
+class LineError(ValueError):
+    """Why a line is not a CAN frame (becomes the detail of a bad_line diagnostic)."""
+
+
+class CandumpParser:
+    """Turns candump text lines into CanFrames and bad_line diagnostics.
+
+    Both ``candump -L`` (``(1436509052.249713) can0 030F0001#EB900C...``, with optional
+    ``R``/``T`` suffix, ``#R`` remote frames, ``##`` CAN FD frames and error frames) and
+    the default output (``can0  030F0001   [8]  EB 90 0C ...``, with the ``-t``, ``-x``,
+    ``-a`` and ``-e`` variants) are understood, line by line.
+
+    ``wanted_ids``: when given, valid frames with other IDs are checked and counted
+    (``frames_skipped``) but not returned, which keeps decoding a busy bus cheap; error
+    frames are always returned. ``clock`` gives the time of lines without a timestamp
+    (live input); without it they get 0.0.
+    """
+
+    def __init__(
+        self,
+        source: str,
+        *,
+        wanted_ids: Iterable[int] | None = None,
+        clock: Callable[[], float] | None = None,
+    ) -> None:
+        self.source = source
+        self.wanted_ids = None if wanted_ids is None else frozenset(wanted_ids)
+        self.clock = clock
+        self.lines = 0
+        self.frames = 0  # valid frames, skipped ones included
+        self.frames_skipped = 0
+        self.bad_lines = 0
+        self.blank_lines = 0
+        self.note_lines = 0  # error-frame explanations of ``candump -e``
+        self.first_time: float | None = None
+        self.last_time: float | None = None
+        self._ids: dict[bytes, IdInfo | None] = {}
+        self._skip: set[bytes] = set()  # ID texts of valid frames that are not wanted
+        self._want: dict[bytes, IdInfo] = {}  # ID texts of frames to return
+        self._channels: dict[bytes, str] = {}
+        self._after_error = False
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return {
+            "lines": self.lines,
+            "frames": self.frames,
+            "frames_skipped": self.frames_skipped,
+            "bad_lines": self.bad_lines,
+            "blank_lines": self.blank_lines,
+            "note_lines": self.note_lines,
+        }
+
+    # -- ID and channel caches -------------------------------------------------------------
+
+    def _id_info(self, text: bytes) -> IdInfo | None:
+        info: IdInfo | None = None
+        if 0 < len(text) <= 8 and all(c in _HEXDIGITS for c in text):
+            value = int(text, 16)
+            extended = len(text) > 3
+            error = extended and bool(value & CAN_ERR_FLAG)
+            can_id = value & CAN_EFF_MASK
+            if value <= CAN_EFF_MASK or error:
+                wanted = error or self.wanted_ids is None or can_id in self.wanted_ids
+                info = (can_id, extended, error, wanted)
+        if len(self._ids) < 100_000:  # a file of random IDs must not grow the caches forever
+            self._ids[text] = info
+            if info is not None:
+                if info[3]:
+                    self._want[text] = info
+                else:
+                    self._skip.add(text)
+        return info
+
+    def _channel(self, text: bytes) -> str:
+        name = self._channels.get(text)
+        if name is None:
+            name = text.decode("ascii", "replace")
+            if len(self._channels) < 10_000:
+                self._channels[text] = name
+        return name
+
+    # -- lines -----------------------------------------------------------------------------
+
+    def parse_lines(self, lines: list[bytes]) -> list[InputItem]:
+        """Parse a list of lines (without line ends); returns frames and diagnostics."""
+        out: list[InputItem] = []
+        append = out.append
+        skip = self._skip
+        want = self._want
+        directions = _DIRECTIONS
+        lineno = self.lines
+        skipped = 0
+        pending: bytes | None = None  # timestamp text of the last skipped frame, parsed lazily
+        for line in lines:
+            lineno += 1
+            # Fast path: a well-formed ``candump -L`` line, ``(time) channel id#data [R|T]``.
+            parts = line.split(b" ")
+            nparts = len(parts)
+            if nparts == 3 or (nparts == 4 and parts[3] in directions):
+                stamp = parts[0]
+                id_text, sharp, data = parts[2].partition(b"#")
+                if not sharp:
+                    pass  # no '#': the slow path says what is wrong
+                elif id_text in skip:
+                    if (
+                        len(data) <= MAX_CLASSIC_HEX
+                        and stamp[:1] == b"("
+                        and stamp[-1:] == b")"
+                        and stamp[1:-1].replace(b".", b"", 1).isdigit()
+                    ):
+                        try:
+                            unhexlify(data)
+                            skipped += 1
+                            pending = stamp
+                            continue
+                        except ValueError:
+                            pass
+                else:
+                    info = want.get(id_text)
+                    if info is not None and stamp[:1] == b"(" and stamp[-1:] == b")":
+                        try:
+                            ts = float(stamp[1:-1])
+                            if len(data) <= MAX_CLASSIC_HEX:
+                                payload = unhexlify(data)
+                                is_fd = is_remote = False
+                            else:
+                                payload, is_fd, is_remote = _log_payload(data)
+                        except ValueError:  # LineError too; the slow path says why
+                            ts = _NAN
+                        if -1e15 < ts < 1e15:
+                            self.frames += 1
+                            if self.first_time is None:
+                                self.first_time = ts
+                            self.last_time = ts
+                            pending = None
+                            self._after_error = info[2]
+                            append(
+                                CanFrame(
+                                    ts,
+                                    info[0],
+                                    payload,
+                                    info[1],
+                                    self._channel(parts[1]),
+                                    is_remote,
+                                    info[2],
+                                    is_fd,
+                                    directions[parts[3]] if nparts == 4 else "",
+                                )
+                            )
+                            continue
+            # Everything else: unseen IDs, other layouts, blanks, comments, damaged lines.
+            if skipped:
+                self._count_skipped(skipped, pending)
+                skipped = 0
+                pending = None
+            item = self._slow_line(line, lineno)
+            if item is not None:
+                append(item)
+        if skipped:
+            self._count_skipped(skipped, pending)
+        self.lines = lineno
+        return out
+
+    def _count_skipped(self, count: int, stamp: bytes | None) -> None:
+        self.frames += count
+        self.frames_skipped += count
+        self._after_error = False
+        if stamp is not None:
+            ts = float(stamp[1:-1])
+            if self.first_time is None:
+                self.first_time = ts
+            self.last_time = ts
+
+    def parse_line(self, line: bytes) -> InputItem | None:
+        """Parse one line (line end allowed); None for blank lines and skipped frames."""
+        items = self.parse_lines([line.rstrip(b"\r\n")])
+        return items[0] if items else None
+
+    def _payload(self, data: bytes) -> tuple[bytes, bool, bool] | None:
+        """The part after ``#`` of a ``-L`` frame -> (data, is_fd, is_remote), None if bad."""
+        try:
+            return _log_payload(data)
+        except LineError:
+            return None
+
+    def _bad(self, line: bytes, lineno: int, why: str) -> Event:
+        self.bad_lines += 1
+        self._after_error = False
+        shown = line[:RAW_LIMIT]
+        text = shown.decode("ascii", "replace").strip()
+        if len(text) > 60:
+            text = text[:57] + "..."
+        return diagnostic(
+            self.last_time if self.last_time is not None else 0.0,
+            self.source,
+            BAD_LINE,
+            f"line {lineno}: {why}: {text!r}",
+            shown,
+            line=lineno,
+        )
+
+    def _slow_line(self, line: bytes, lineno: int) -> InputItem | None:
+        stripped = line.strip()
+        if not stripped:
+            self.blank_lines += 1
+            return None
+        if line[:1] == b"\t" and self._after_error:
+            self.note_lines += 1  # ``candump -e`` explains an error frame on extra lines
+            return None
+        if stripped[:1] == b"#":
+            return self._bad(line, lineno, "comment line")
+        try:
+            if stripped[:1] == b"(" and (b"#" in stripped or b"[" not in stripped):
+                frame, timed = self._log_line(stripped), True
+            else:
+                frame, timed = self._screen_line(stripped)
+        except LineError as exc:
+            return self._bad(line, lineno, str(exc))
+        self._after_error = frame.is_error
+        self.frames += 1
+        if timed:
+            if self.first_time is None:
+                self.first_time = frame.time
+            self.last_time = frame.time
+        if not (frame.is_error or self.wanted_ids is None or frame.can_id in self.wanted_ids):
+            self.frames_skipped += 1
+            return None
+        return frame
+
+    def _frame_id(self, text: bytes) -> IdInfo:
+        info = self._ids[text] if text in self._ids else self._id_info(text)
+        if info is None:
+            raise LineError(f"bad CAN ID {text.decode('ascii', 'replace')!r}")
+        return info
+
+    def _log_line(self, line: bytes) -> CanFrame:
+        """A ``candump -L`` line the fast path did not take: find out what is wrong."""
+        close = line.find(b")")
+        if close < 0:
+            raise LineError("timestamp not closed by ')'")
+        ts = _timestamp(line[1:close])
+        parts = line[close + 1 :].split()
+        if len(parts) < 2:
+            raise LineError("expected '(time) channel id#data'")
+        if len(parts) > 3 or (len(parts) == 3 and parts[2] not in _DIRECTIONS):
+            raise LineError("unexpected text after the frame")
+        frame = parts[1]
+        h = frame.find(b"#")
+        if h < 0:
+            raise LineError("no '#' between CAN ID and data")
+        info = self._frame_id(frame[:h])
+        payload, is_fd, is_remote = _log_payload(frame[h + 1 :])
+        direction = _DIRECTIONS[parts[2]] if len(parts) == 3 else ""
+        return CanFrame(
+            ts,
+            info[0],
+            payload,
+            info[1],
+            self._channel(parts[0]),
+            is_remote,
+            info[2],
+            is_fd,
+            direction,
+        )
+
+    def _screen_line(self, line: bytes) -> tuple[CanFrame, bool]:
+        """The default ``candump`` output: ``[(time)] can0 [RX - -] 123 [8] 11 22 ...``.
+
+        Returns the frame and whether its time is known (from the line or the clock).
+        """
+        tokens = line.split()
+        i = 0
+        ts: float | None = None
+        if tokens[0][:1] == b"(":
+            if tokens[0].endswith(b")"):
+                ts = _timestamp(tokens[0][1:-1])
+                i = 1
+            elif len(tokens) > 1 and tokens[1].endswith(b")"):
+                ts = _date_time(tokens[0][1:] + b" " + tokens[1][:-1])
+                i = 2
+            else:
+                raise LineError("timestamp not closed by ')'")
+        if len(tokens) < i + 3:
+            raise LineError("not a candump line")
+        channel = tokens[i]
+        i += 1
+        direction = ""
+        if tokens[i] in (b"RX", b"TX"):
+            direction = tokens[i].decode().lower()
+            i += 1
+            flags = 0
+            while i < len(tokens) and flags < 2 and tokens[i] in (b"-", b"B", b"E"):
+                i += 1
+                flags += 1
+        if len(tokens) < i + 2:
+            raise LineError("not a candump line")
+        info = self._frame_id(tokens[i])
+        length_text = tokens[i + 1]
+        if not (length_text[:1] == b"[" and length_text[-1:] == b"]"):
+            raise LineError("no data length in brackets after the CAN ID")
+        inner = length_text[1:-1]
+        if not inner.isdigit():
+            raise LineError("data length is not a number")
+        length = int(inner)
+        is_fd = len(inner) == 2  # candump prints CAN FD lengths with two digits
+        if length > (64 if is_fd else 8):
+            raise LineError(f"data length {length} too large")
+        rest = tokens[i + 2 :]
+        is_remote = False
+        payload = b""
+        if rest[:2] == [b"remote", b"request"]:
+            is_remote = True
+            rest = rest[2:]
+        else:
+            hex_bytes = rest[:length]
+            if len(hex_bytes) < length or not all(
+                len(t) == 2 and t[0] in _HEXDIGITS and t[1] in _HEXDIGITS for t in hex_bytes
+            ):
+                raise LineError(f"expected {length} data bytes in hex")
+            payload = bytes(int(t, 16) for t in hex_bytes)
+            rest = rest[length:]
+        is_error = info[2]
+        if rest[:1] == [b"ERRORFRAME"]:
+            is_error = True
+            rest = rest[1:]
+        if rest and not rest[0].startswith(b"'"):  # ``-a`` appends the data as ASCII in quotes
+            raise LineError("unexpected text after the data")
+        timed = ts is not None or self.clock is not None
+        when = ts if ts is not None else (self.clock() if self.clock is not None else 0.0)
+        frame = CanFrame(
+            when,
+            info[0],
+            payload,
+            info[1],
+            self._channel(channel),
+            is_remote,
+            is_error,
+            is_fd,
+            direction,
+        )
+        return frame, timed
+
+
+def _timestamp(text: bytes) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise LineError("bad timestamp") from None
+    if not -1e15 < value < 1e15:
+        raise LineError("bad timestamp")
+    return value
+
+
+def _date_time(text: bytes) -> float:
+    """``candump -t A`` times: ``2015-07-10 08:17:32.249713`` in local time."""
+    try:
+        return datetime.datetime.strptime(text.decode("ascii"), "%Y-%m-%d %H:%M:%S.%f").timestamp()
+    except (ValueError, UnicodeDecodeError, OverflowError, OSError):
+        raise LineError("bad date/time stamp") from None
+
+
+def _hex(text: bytes, limit: int, what: str) -> bytes:
+    if len(text) > limit:
+        raise LineError(f"{what}: more than {limit // 2} data bytes")
+    if len(text) & 1:
+        raise LineError(f"{what}: odd number of hex digits")
+    if not all(c in _HEXDIGITS for c in text):
+        raise LineError(f"{what}: data is not hex")
+    return unhexlify(text)
+
+
+def _log_payload(data: bytes) -> tuple[bytes, bool, bool]:
+    """The text after ``id#`` -> (data, is_fd, is_remote); LineError says what is wrong."""
+    if data[:1] == b"#":  # CAN FD: ##<flags><data>
+        if data[1:2] == b"#":
+            raise LineError("CAN XL frames are not supported")
+        if len(data) < 2 or data[1] not in _HEXDIGITS:
+            raise LineError("CAN FD frame without its flags digit")
+        return _hex(data[2:], MAX_FD_HEX, "CAN FD frame"), True, False
+    if data[:1] in (b"R", b"r"):  # remote request, optionally with its DLC: R, R5, R5_9
+        rest = data[1:].split(b"_", 1)[0]
+        if rest and not (len(rest) == 1 and rest in b"012345678"):
+            raise LineError("bad DLC of a remote frame")
+        return b"", False, True
+    under = data.find(b"_")  # len8_dlc: 8 data bytes and a DLC 9..F, e.g. 1122334455667788_C
+    if under >= 0:
+        dlc = data[under + 1 :]
+        if len(dlc) != 1 or dlc not in b"9ABCDEFabcdef" or under != MAX_CLASSIC_HEX:
+            raise LineError("bad DLC suffix")
+        data = data[:under]
+    return _hex(data, MAX_CLASSIC_HEX, "CAN frame"), False, False
+
+
+def split_blocks(handle: IO[bytes], block_size: int = BLOCK_SIZE) -> Iterator[list[bytes]]:
+    """Read a file in large blocks and give its lines (line ends removed) a block at a time."""
+    tail = b""
+    while True:
+        block = handle.read(block_size)
+        if not block:
+            break
+        if tail:
+            block = tail + block
+        if b"\r" in block:  # CRLF line ends
+            block = block.replace(b"\r\n", b"\n")
+        lines = block.split(b"\n")
+        tail = lines.pop()
+        if len(tail) > MAX_LINE:  # no line end in sight: hand it on rather than hoard it
+            lines.append(tail)
+            tail = b""
+        yield lines
+    if tail:
+        yield [tail.rstrip(b"\r")]
+
+
+class CandumpReader(InputReader):
+    """A candump text file (``-L`` or default output), plain or gzip-compressed."""
+
+    format_name = "candump"
+
+    def __init__(
+        self,
+        path: str,
+        *,
+        wanted_ids: Iterable[int] | None = None,
+        block_size: int = BLOCK_SIZE,
+    ) -> None:
+        super().__init__(path)
+        self.block_size = block_size
+        self._raw = self._open_binary()
+        self._handle: IO[bytes] = self._raw
+        if self._raw.read(2) == b"\x1f\x8b":
+            self._raw.seek(0)
+            self._handle = gzip.GzipFile(fileobj=self._raw, mode="rb")  # type: ignore[assignment]
+            self._closers.append(self._handle)
+        else:
+            self._raw.seek(0)
+        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids)
+
+    def __iter__(self) -> Iterator[InputItem]:
+        parser = self.parser
+        raw = self._raw
+        try:
+            for lines in split_blocks(self._handle, self.block_size):
+                items = parser.parse_lines(lines)
+                self.position_bytes = raw.tell()
+                self.first_time, self.last_time = parser.first_time, parser.last_time
+                yield from items
+        except (OSError, EOFError, gzip.BadGzipFile) as exc:
+            yield diagnostic(
+                parser.last_time or 0.0,
+                self.source,
+                BAD_LINE,
+                f"reading stopped after line {parser.lines}: {exc}",
+                line=parser.lines,
+            )
+        self.position_bytes = raw.tell()
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return self.parser.stats

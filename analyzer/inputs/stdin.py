@@ -1,0 +1,75 @@
+"""Standard input: candump text read line by line as it arrives (``candump -L can0 | ...``)."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Iterable, Iterator
+from typing import IO
+
+from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.candump import CandumpParser
+from analyzer.protocol.types import StreamChunk
+
+STREAM_READ_SIZE = 4096
+
+
+class StdinCandumpReader(InputReader):
+    """candump text from a pipe; every line is handed on as soon as it is complete.
+
+    Lines without a timestamp (plain ``candump can0``) get the time they were read.
+    """
+
+    format_name = "candump"
+
+    def __init__(
+        self, stream: IO[bytes] | None = None, *, wanted_ids: Iterable[int] | None = None
+    ) -> None:
+        super().__init__("-")
+        self._stream = stream if stream is not None else sys.stdin.buffer
+        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids, clock=time.time)
+
+    def __iter__(self) -> Iterator[InputItem]:
+        parser = self.parser
+        readline = self._stream.readline
+        while True:
+            line = readline()
+            if not line:
+                break
+            self.position_bytes += len(line)
+            items = parser.parse_lines([line.rstrip(b"\r\n")])
+            self.first_time, self.last_time = parser.first_time, parser.last_time
+            yield from items
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return self.parser.stats
+
+
+class StdinStreamReader(InputReader):
+    """Raw TCP / UART bytes from a pipe, handed on as they arrive, stamped with the clock."""
+
+    format_name = "stream"
+
+    def __init__(self, stream: IO[bytes] | None = None) -> None:
+        super().__init__("-")
+        self._stream = stream if stream is not None else sys.stdin.buffer
+        self.chunks = 0
+
+    def __iter__(self) -> Iterator[InputItem]:
+        read = getattr(self._stream, "read1", self._stream.read)
+        while True:
+            data = read(STREAM_READ_SIZE)
+            if not data:
+                break
+            self.position_bytes += len(data)
+            self.chunks += 1
+            now = time.time()
+            if self.first_time is None:
+                self.first_time = now
+            self.last_time = now
+            yield StreamChunk(now, bytes(data), self.source)
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return {"bytes": self.position_bytes, "chunks": self.chunks}
