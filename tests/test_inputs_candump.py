@@ -238,7 +238,7 @@ def test_python_can_writer_output_reads_the_same(tmp_path: Path) -> None:
     ours = list(open_input(str(path)))
     theirs = list(can.LogReader(str(path)))
     assert len(ours) == len(theirs) == 4
-    for frame, msg in zip(ours, theirs):
+    for frame, msg in zip(ours, theirs, strict=True):
         assert isinstance(frame, CanFrame)
         assert frame.time == pytest.approx(msg.timestamp)
         assert frame.can_id == msg.arbitration_id
@@ -273,7 +273,7 @@ def log_line(frame: CanFrame) -> bytes:
 def test_written_frames_parse_back(frames_in: list[CanFrame]) -> None:
     items, parser = parse(*[log_line(f) for f in frames_in])
     assert len(items) == len(frames_in)
-    for got, want in zip(items, frames_in):
+    for got, want in zip(items, frames_in, strict=True):
         assert got.can_id == want.can_id and got.data == want.data
         assert got.time == pytest.approx(want.time, abs=1e-6)
         assert got.direction == want.direction
