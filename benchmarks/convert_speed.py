@@ -91,13 +91,14 @@ def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[f
     from analyzer.mcapio.convert import convert_items
     from analyzer.mcapio.writer import McapSink, recording_metadata
 
+    open_input: Any = None
     try:
         from analyzer.inputs import open_input
     except ImportError:
-        open_input = None
+        pass
     started = time.perf_counter()
     if open_input is not None:
-        items: Any = open_input(str(source_path), None, None)
+        items: Any = open_input(str(source_path))
         how = "candump file through analyzer.inputs"
     else:
         items = frames

@@ -94,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
     with contextlib.suppress(OSError):
         if args.input != "-" and target.exists() and os.path.samefile(args.input, target):
             raise UsageError("the output would overwrite the input")
-    source = open_input(args.input, args.format, args.port)
+    from analyzer.protocol.ids import TCP_PORT
+
+    source = open_input(args.input, args.format, TCP_PORT if args.port is None else args.port)
     partial = f"{target}.partial"
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"

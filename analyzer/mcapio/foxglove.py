@@ -108,6 +108,11 @@ VIEW_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
     TOPIC_DIAGNOSTICS_LOG: (LOG, LOG_SCHEMA),
 }
 
+# Topics whose events have a Foxglove view (UAV altitude only feeds the UAV fix).
+VIEW_INPUT_TOPICS = frozenset(
+    {TOPIC_UAV_ALTITUDE, TOPIC_UAV_GPS, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS}
+)
+
 _ZERO_COVARIANCE = [0.0] * 9
 # Link states (sources' link events) that are good news; the others are warnings.
 _GOOD_LINK_STATES = frozenset({"open", "connected", "gs_connected", "listening"})

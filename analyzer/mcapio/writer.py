@@ -30,7 +30,7 @@ from analyzer.mcapio.channels import (
     stream_chunk_json,
     time_ns,
 )
-from analyzer.mcapio.foxglove import VIEW_SCHEMAS, FoxgloveViews
+from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
 from analyzer.mcapio.stats import EventStats
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE, CanFrame, Event
@@ -277,7 +277,7 @@ class McapSink:
                 self.stats.diagnostics[str(event.fields.get("kind", "unknown"))] += 1
             elif topic == TOPIC_GIMBAL_ATTITUDE:
                 self.stats.attitude(event.time)
-            if views is not None:
+            if views is not None and topic in VIEW_INPUT_TOPICS:
                 for view_topic, message in views.views(event):
                     view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
                     number = sequence[view_id] + 1
