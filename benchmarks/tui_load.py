@@ -95,7 +95,8 @@ class MeasuredApp(MonitorApp):
         super().refresh_view()
         self.draw_s += time.perf_counter() - t
         newest = self.state.last_item_time
-        if newest is not None and not self.paused:
+        running = bool(getattr(self.capture, "running", False))
+        if newest is not None and not self.paused and running:
             self.staleness.append(time.time() - newest)
         self.backlogs.append(self.bridge.backlog)
 
