@@ -108,10 +108,11 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[min(int(q * len(ordered)), len(ordered) - 1)]
 
 
-async def run_app_under_load(seconds: float, rate: float) -> dict[str, Any]:
+async def run_app_under_load(seconds: float, rate: float, ids: int = 40) -> dict[str, Any]:
+    foreign = max(rate - PROTOCOL_RATE, 0)
     frames = [
         (f.time, f.can_id, f.data)
-        for f in session(0.0, seconds, foreign_per_s=max(rate - PROTOCOL_RATE, 0), foreign_ids=40)
+        for f in session(0.0, seconds, foreign_per_s=foreign, foreign_ids=ids)
     ]
     source = PacedSource(frames)
     bridge = TuiBridge()
@@ -175,9 +176,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--rate", type=float, default=8000.0, help="frames/s offered")
+    parser.add_argument("--ids", type=int, default=40, help="foreign CAN IDs on the bus")
     args = parser.parse_args()
     print(f"model fold alone: {fold_throughput():,.0f} frames/s on one core")
-    result = asyncio.run(run_app_under_load(args.seconds, args.rate))
+    result = asyncio.run(run_app_under_load(args.seconds, args.rate, args.ids))
     width = max(len(k) for k in result)
     for key, value in result.items():
         shown = f"{value:,.1f}" if isinstance(value, float) else f"{value:,}"

@@ -7,6 +7,7 @@ from collections.abc import Callable, Coroutine
 from typing import Any
 
 import pytest
+from rich.text import Text
 from textual.pilot import Pilot
 
 from analyzer.pipeline import Batch, RawItem
@@ -22,6 +23,7 @@ from analyzer.tui.command_log import CommandLog
 from analyzer.tui.detail_screen import DetailScreen
 from analyzer.tui.gimbal_panel import render_gimbal
 from analyzer.tui.help_screen import HelpScreen
+from analyzer.tui.id_table import IdTable
 from analyzer.tui.screen_text import screen_text
 
 T0 = 1_700_000_000.0
@@ -258,5 +260,32 @@ def test_end_of_source_is_shown_and_backlog_drops_are_counted() -> None:
             text = screen_text(app)
             assert "source ended" in text
             assert "display skipped 3 batches" in text
+
+    run(body)
+
+
+def test_id_table_rows_are_keyed_and_updated_in_place() -> None:
+    async def body() -> None:
+        clock = Clock(T0 + 0.5)
+        app, bridge = make_app(clock)
+        async with app.run_test(size=SIZE) as pilot:
+            decoder = Decoder()
+            bridge.handle(batch_of(sample_frames(), decoder))
+            await settle(app, pilot)
+            table = app.query_one(IdTable)
+            rows_before = table.row_count
+            updates_before = table.updates
+            later = [CanFrame(T0 + 0.45, 0x18FF0001, bytes([1, 2, 3, 4, 5, 6, 7, 9]))]
+            bridge.handle(batch_of(later, decoder))
+            await settle(app, pilot)
+            assert table.row_count == rows_before  # same key, same row
+            assert table.updates > updates_before
+            cells = [str(c) for c in table.get_row("0x18FF0001")]
+            assert cells[2].strip() == "2"
+            assert cells[4] == "01 02 03 04 05 06 07 09"
+            data = table.get_cell("0x18FF0001", "data")
+            assert isinstance(data, Text)
+            changed = [data.plain[s.start : s.end] for s in data.spans if s.style]
+            assert changed == ["09"]  # only the byte that changed is highlighted
 
     run(body)

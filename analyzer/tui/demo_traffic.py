@@ -100,7 +100,7 @@ def session(
         for k in range(n):
             index = k % foreign_ids
             counter = (k // foreign_ids) & 0xFFFF
-            data = bytes([index, 0x10, counter & 0xFF, counter >> 8, 0, 0, 0x55, 0xAA])
+            data = bytes([index & 0xFF, 0x10, counter & 0xFF, counter >> 8, 0, 0, 0x55, 0xAA])
             timeline.append((k / foreign_per_s, FOREIGN_BASE_ID + index, data))
     timeline.sort(key=lambda entry: entry[0])
     for offset, can_id, data in timeline:

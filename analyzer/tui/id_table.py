@@ -83,10 +83,14 @@ class IdTable(DataTable[object]):
             if added:
                 self.sort("id", key=lambda cell: str(cell))
             self._rows_added = state.rows_added
+        # only rows on screen are rewritten; the others catch up when scrolled into view
         rows = {r.key: r for r in state.rows.values()} if self._shown else {}
-        for key, old in self._shown.items():
+        top = max(int(self.scroll_y), 0)
+        for ordered in self.ordered_rows[top : top + self.size.height + 1]:
+            key = str(ordered.key.value)
             current = rows.get(key)
-            if current is None:
+            old = self._shown.get(key)
+            if current is None or old is None:
                 continue
             row = current
             signature = _row_signature(row, now)
