@@ -74,7 +74,7 @@ class PcapStats:
     tcp_packets: int = 0  # TCP segments to or from the port
     other_packets: int = 0  # not IP/TCP, or another port
     bad_packets: int = 0  # too short or malformed headers
-    truncated_packets: int = 0  # captured shorter than sent (snap length)
+    truncated_packets: int = 0  # segments of the port captured shorter than sent
     fragments: int = 0  # IP fragments (not reassembled)
     can_frames: int = 0  # SocketCAN captures
     flows: int = 0
@@ -152,7 +152,34 @@ class PcapReader(InputReader):
             for name, state in flow.directions.items():
                 yield from self._results(flow, name, state.flush(time))
         self._collect()
+        yield from self._capture_problems(time)
         self.position_bytes = self.size_bytes or 0
+
+    def _capture_problems(self, time: float) -> list[InputItem]:
+        counts = self.counts
+        out: list[InputItem] = []
+        if counts.truncated_packets:
+            out.append(
+                diagnostic(
+                    time,
+                    self.source,
+                    INCOMPLETE,
+                    f"{counts.truncated_packets} TCP segment(s) of port {self.port} were captured "
+                    "shorter than sent (snap length or a cut-off file): bytes are missing",
+                    packets=counts.truncated_packets,
+                )
+            )
+        if counts.bad_packets:
+            out.append(
+                diagnostic(
+                    time,
+                    self.source,
+                    BAD_FRAME,
+                    f"{counts.bad_packets} packet(s) too short or malformed to read",
+                    packets=counts.bad_packets,
+                )
+            )
+        return out
 
     @property
     def stats(self) -> dict[str, int]:
@@ -209,18 +236,14 @@ class PcapReader(InputReader):
             if int.from_bytes(ip[6:8], "big") & 0x3FFF:  # more fragments / fragment offset
                 counts.fragments += 1
                 return []
-            if len(ip) < total:
-                counts.truncated_packets += 1
             src = socket.inet_ntop(socket.AF_INET, ip[12:16])
             dst = socket.inet_ntop(socket.AF_INET, ip[16:20])
-            return self._tcp(time, src, dst, ip[header:total])
+            return self._tcp(time, src, dst, ip[header:total], len(ip) < total)
         if version == 6:
             if len(ip) < 40:
                 counts.bad_packets += 1
                 return []
             total = 40 + int.from_bytes(ip[4:6], "big")
-            if len(ip) < total:
-                counts.truncated_packets += 1
             nxt, offset = ip[6], 40
             while nxt in IPV6_SKIPPED_HEADERS and len(ip) >= offset + 8:
                 nxt, offset = ip[offset], offset + (ip[offset + 1] + 1) * 8
@@ -232,11 +255,11 @@ class PcapReader(InputReader):
                 return []
             src = "[" + socket.inet_ntop(socket.AF_INET6, ip[8:24]) + "]"
             dst = "[" + socket.inet_ntop(socket.AF_INET6, ip[24:40]) + "]"
-            return self._tcp(time, src, dst, ip[offset:total])
+            return self._tcp(time, src, dst, ip[offset:total], len(ip) < total)
         self.counts.other_packets += 1
         return []
 
-    def _tcp(self, time: float, src: str, dst: str, tcp: bytes) -> list[InputItem]:
+    def _tcp(self, time: float, src: str, dst: str, tcp: bytes, truncated: bool) -> list[InputItem]:
         counts = self.counts
         if len(tcp) < 20:
             counts.bad_packets += 1
@@ -254,6 +277,8 @@ class PcapReader(InputReader):
             counts.bad_packets += 1
             return []
         counts.tcp_packets += 1
+        if truncated:
+            counts.truncated_packets += 1
         flags = tcp[13]
         key = (client, server)
         flow = self._flows.get(key)
