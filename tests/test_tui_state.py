@@ -283,3 +283,12 @@ def test_a_new_time_axis_restarts_the_rate_windows() -> None:
     assert state.now == pytest.approx(7.4)
     assert state.frames_per_s == pytest.approx(10.0)
     assert all(rate >= 0 for rate in state.frames_history)
+
+
+def test_the_id_table_is_bounded() -> None:
+    state = MonitorState(max_rows=10)
+    frames: list[RawItem] = [CanFrame(T0 + i / 1000, 0x1000 + i, b"\x01") for i in range(100)]
+    state.fold(Batch(frames, [], T0 + 0.1))
+    assert len(state.rows) == 11
+    assert state.rows["more IDs"].count == 90
+    assert sum(row.count for row in state.rows.values()) == 100

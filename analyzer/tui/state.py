@@ -45,6 +45,8 @@ HISTORY = 60  # seconds of frames/s and errors/s kept for the sparklines
 FEEDBACK_STALE_S = 1.0  # the gimbal answers about every 500 ms
 HIGHLIGHT_S = 1.0  # a changed data byte stays highlighted this long
 RATE_WINDOW_S = 1.0
+MAX_ROWS = 2048  # distinct IDs with a row of their own; the rest share one row
+OVERFLOW_KEY = "more IDs"
 
 ID_LABELS: dict[int, str] = {
     CONTROL_ID: "control",
@@ -170,8 +172,10 @@ class MonitorState:
         log_limit: int = LOG_LIMIT,
         history: int = HISTORY,
         feedback_stale_s: float = FEEDBACK_STALE_S,
+        max_rows: int = MAX_ROWS,
     ) -> None:
         self.feedback_stale_s = feedback_stale_s
+        self.max_rows = max_rows
         # gimbal
         self.attitude: Event | None = None
         self.ranging: Event | None = None
@@ -351,6 +355,13 @@ class MonitorState:
             c.bytes += nbytes
 
     def _new_row(self, key: int | str, frame: CanFrame | None) -> IdRow:
+        if len(self.rows) >= self.max_rows:
+            # a bus full of random IDs must not grow the table without bound
+            row = self.rows.get(OVERFLOW_KEY)
+            if row is None:
+                row = self.rows[OVERFLOW_KEY] = IdRow(OVERFLOW_KEY, None, "other IDs", False)
+                self.rows_added += 1
+            return row
         if frame is None:
             row = IdRow(str(key), None, "stream", True)
         else:
