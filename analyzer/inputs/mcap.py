@@ -12,10 +12,12 @@ from analyzer.protocol.types import INCOMPLETE, diagnostic
 
 
 class McapReader(InputReader):
-    """Raw items of a recording (``analyzer.mcapio.reader.read_items``).
+    """Raw items of a recording, for decoding again.
 
-    A recording whose writer was killed is recovered as far as it can be read; a
-    diagnostic then says so at the end.
+    ``read_replay`` also gives back the diagnostics a new decode cannot re-create (link
+    state, bad lines of the original input); ``read_items`` is the fallback. A recording
+    whose writer was killed is recovered as far as it can be read; a diagnostic then says
+    so at the end.
     """
 
     format_name = "mcap"

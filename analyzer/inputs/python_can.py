@@ -60,8 +60,11 @@ class PythonCanReader(InputReader):
         if text:
             handle = io.TextIOWrapper(handle, encoding="utf-8", errors="replace", newline=None)
             self._closers.append(handle)
+        options: dict[str, Any] = {}
+        if fmt == "asc":
+            options["relative_timestamp"] = not _asc_date_readable(can, handle)
         try:
-            self._reader = reader_class(handle)
+            self._reader = reader_class(handle, **options)
         except ImportError as exc:
             self.close()
             raise UsageError(
@@ -104,6 +107,24 @@ class PythonCanReader(InputReader):
     @property
     def stats(self) -> dict[str, int]:
         return {"frames": self.frames}
+
+
+def _asc_date_readable(can: Any, handle: IO[str]) -> bool:
+    """Whether the ``date`` header of an ASC file gives absolute times (then they are used)."""
+    try:
+        head = handle.read(4096)
+        handle.seek(0)
+    except (OSError, ValueError):
+        return False
+    for line in head.splitlines()[:10]:
+        words = line.strip().split(None, 2)
+        if len(words) == 3 and words[0].lower() == "date":
+            try:
+                can.ASCReader._datetime_to_timestamp(words[2])
+                return True
+            except Exception:  # any unexpected date layout: keep times relative
+                return False
+    return False
 
 
 def _tell(handle: IO[bytes]) -> int:

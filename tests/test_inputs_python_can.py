@@ -1,0 +1,106 @@
+"""python-can log formats (ASC, BLF, TRC, CSV and their .gz forms) read into CanFrames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import can
+import pytest
+
+from analyzer.errors import UsageError
+from analyzer.inputs import open_input
+from analyzer.protocol.codec import encode_command
+from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.feedback import encode_attitude, segments
+from analyzer.protocol.ids import FEEDBACK_ID
+from analyzer.protocol.types import (
+    BAD_LINE,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+    CanFrame,
+    Event,
+)
+
+T0 = 1_700_000_000.0
+
+
+def messages() -> list[can.Message]:
+    out = [
+        can.Message(timestamp=T0, arbitration_id=0xF01, data=encode_command("look_down")),
+        can.Message(
+            timestamp=T0 + 0.1, arbitration_id=0x7E8, is_extended_id=False, data=b"\x01\x02"
+        ),
+    ]
+    feedback = segments(encode_attitude(pitch_deg=-10.0, yaw_deg=100.0, motor_yaw_deg=5.0))
+    for i, seg in enumerate(feedback):
+        out.append(
+            can.Message(timestamp=T0 + 0.2 + i * 0.001, arbitration_id=FEEDBACK_ID, data=seg)
+        )
+    return out
+
+
+def write(path: Path, msgs: list[can.Message]) -> Path:
+    with can.Logger(str(path)) as logger:
+        for msg in msgs:
+            logger.on_message_received(msg)
+    return path
+
+
+@pytest.mark.parametrize("name", ["x.asc", "x.blf", "x.trc", "x.csv", "x.asc.gz", "x.trc.gz"])
+def test_formats_read_and_decode(tmp_path: Path, name: str) -> None:
+    path = write(tmp_path / name, messages())
+    reader = open_input(str(path))
+    frames = list(reader)
+    assert all(isinstance(f, CanFrame) for f in frames)
+    assert [f.can_id for f in frames] == [m.arbitration_id for m in messages()]
+    assert [f.data for f in frames] == [bytes(m.data) for m in messages()]
+    assert frames[1].extended is False
+    assert reader.stats == {"frames": 6}
+    assert reader.position_bytes == reader.size_bytes
+    decoder = Decoder()
+    topics = [e.topic for f in frames for e in decoder.feed(f)]
+    assert topics == [TOPIC_COMMAND, TOPIC_GIMBAL_ATTITUDE]
+
+
+@pytest.mark.parametrize("name", ["x.asc", "x.blf", "x.csv"])
+def test_times_are_kept(tmp_path: Path, name: str) -> None:
+    frames = list(open_input(str(write(tmp_path / name, messages()))))
+    assert frames[1].time - frames[0].time == pytest.approx(0.1, abs=1e-3)
+    assert frames[0].time == pytest.approx(T0, abs=1e-3)
+
+
+def test_explicit_format_overrides_the_extension(tmp_path: Path) -> None:
+    path = write(tmp_path / "x.asc", messages())
+    renamed = path.rename(tmp_path / "export.txt")
+    assert len(list(open_input(str(renamed), "asc"))) == 6
+
+
+def test_damaged_csv_stops_with_a_diagnostic(tmp_path: Path) -> None:
+    path = write(tmp_path / "x.csv", messages())
+    lines = path.read_text().splitlines()
+    lines.insert(3, "this,is,not,a,frame")
+    path.write_text("\n".join(lines) + "\n")
+    items = list(open_input(str(path)))
+    assert [type(i) for i in items] == [CanFrame, CanFrame, Event]
+    assert items[-1].topic == TOPIC_DIAGNOSTICS and items[-1].fields["kind"] == BAD_LINE
+    assert "after frame 2" in items[-1].fields["detail"]
+
+
+def test_mf4_without_its_package_is_a_usage_error(tmp_path: Path) -> None:
+    path = tmp_path / "x.mf4"
+    path.write_bytes(b"MDF     4.10    ")
+    try:
+        import asammdf  # noqa: F401
+    except ImportError:
+        with pytest.raises(UsageError, match="mf4"):
+            open_input(str(path))
+    else:  # pragma: no cover - only where asammdf is installed
+        pytest.skip("asammdf installed")
+
+
+def test_not_a_blf_is_a_usage_error(tmp_path: Path) -> None:
+    path = tmp_path / "x.blf"
+    path.write_bytes(b"this is not a BLF file at all, not even close, no" * 4)
+    with pytest.raises(UsageError, match=r"x\.blf"):
+        open_input(str(path))
