@@ -93,7 +93,9 @@ def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[f
 
     open_input: Any = None
     try:
-        from analyzer.inputs import open_input
+        import analyzer.inputs as inputs_module
+
+        open_input = getattr(inputs_module, "open_input", None)
     except ImportError:
         pass
     started = time.perf_counter()

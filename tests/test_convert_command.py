@@ -47,8 +47,9 @@ def test_candump_convert_decode_round_trip(
     direct = _decode(inputs.open_input(str(log)))
     assert direct, "the candump decodes to events"
     recorded = list(read_items(out))
+    assert all(isinstance(f, CanFrame) for f in recorded)
     assert len(recorded) == len(frames)
-    assert [(f.can_id, f.data, f.extended) for f in recorded] == [
+    assert [(f.can_id, f.data, f.extended) for f in recorded if isinstance(f, CanFrame)] == [
         (f.can_id, f.data, f.extended) for f in frames
     ]
     # Re-decoding the raw channel gives exactly what decoding the candump gives...

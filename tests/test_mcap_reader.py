@@ -174,6 +174,7 @@ def test_damaged_chunk_in_a_finished_file_is_skipped_and_reported(tmp_path: Path
     write_recording(path, items, chunk_size=2048)
     with open(path, "rb") as f:
         summary = make_reader(f).get_summary()
+    assert summary is not None
     raw_id = next(c.id for c in summary.channels.values() if c.topic == "/can/frames")
     with_raw = [c for c in summary.chunk_indexes if raw_id in c.message_index_offsets]
     victim = sorted(with_raw, key=lambda c: c.chunk_start_offset)[3]

@@ -48,7 +48,7 @@ def test_recording_passes_the_mcap_reader_with_crc_validation(tmp_path: Path) ->
     assert len(sequential) == len(messages)
     with open(path, "rb") as f:
         summary = make_reader(f).get_summary()
-    assert summary is not None
+    assert summary is not None and summary.statistics is not None
     assert summary.statistics.message_count == len(messages)
     assert summary.chunk_indexes
 
@@ -274,6 +274,7 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path) -> None:
                 for _, c, m in reader.iter_messages()
             ]
             metadata = [(m.name, m.metadata) for m in reader.iter_metadata()]
+        assert summary is not None and summary.statistics is not None
         stats = summary.statistics
         return (
             messages,
@@ -286,8 +287,8 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path) -> None:
         )
 
     assert content(ours) == content(theirs)
-    with open(ours, "rb") as f:
-        records = list(StreamReader(f, validate_crcs=True).records)
+    with open(ours, "rb") as stream:
+        records = list(StreamReader(stream, validate_crcs=True).records)
     data_end = [r for r in records if isinstance(r, DataEnd)]
     assert data_end and data_end[0].data_section_crc != 0  # validated by the stream reader
     raw = ours.read_bytes()

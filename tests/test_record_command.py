@@ -87,7 +87,10 @@ def _record(tmp_path: Path, seconds: float, sig: int) -> tuple[Path, FakeIdu, fl
     path = tmp_path / "flight.mcap"
     proc = _start_recorder(idu.port, path)
     try:
-        assert idu.connected.wait(20), proc.stderr.read() if proc.poll() is not None else ""
+        if not idu.connected.wait(20):
+            proc.kill()
+            _, err = proc.communicate()
+            pytest.fail(f"the recorder did not connect: {err.decode()}")
         time.sleep(seconds)
         signalled = time.time()
         proc.send_signal(sig)
@@ -136,7 +139,8 @@ def test_sigterm_and_ctrl_c_finish_the_file(tmp_path: Path, sig: int) -> None:
     with open(path, "rb") as f:
         reader = make_reader(f, validate_crcs=True)
         summary = reader.get_summary()
-        assert summary is not None and summary.statistics.message_count > 0
+        assert summary is not None and summary.statistics is not None
+        assert summary.statistics.message_count > 0
         messages = list(reader.iter_messages())
     assert len(messages) == summary.statistics.message_count
     sent = [frame for t, frame in idu.sent if t < signalled - 0.3]
