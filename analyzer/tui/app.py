@@ -325,6 +325,9 @@ class MonitorApp(App[int]):
 
     async def action_quit(self) -> None:
         """Stop the capture (its sinks finalise the recording), then leave."""
+        if self.capture is not None and not self._capture_stopped:
+            what = "finalising the recording" if self.info.recording else "stopping the capture"
+            self.notify(f"{what}…", timeout=10)
         await asyncio.to_thread(self.stop_capture)
         self.exit(0)
 
