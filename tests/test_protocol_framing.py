@@ -101,6 +101,15 @@ def test_feedback_frames_with_and_without_padding() -> None:
     assert f.bytes_framed == f.bytes_fed
 
 
+def test_damaged_feedback_frame_takes_its_padding_along() -> None:
+    attitude = bytearray(encode_attitude(pitch_deg=5, yaw_deg=6))
+    attitude[20] ^= 0x01
+    f = StreamFramer("tcp")
+    out = run(f, bytes(attitude) + LOOK_DOWN)
+    assert summary(out) == ["crc_mismatch", "frame 0A"]
+    assert out[0].fields["byte_count"] == 32  # type: ignore[union-attr]
+
+
 def test_stream_ending_inside_a_frame_is_incomplete() -> None:
     f = StreamFramer("tcp")
     out = run(f, LOOK_DOWN[:10])

@@ -214,7 +214,11 @@ class StreamFramer:
                 )
                 del buf[:restart]
                 continue
-            out.append(self._diag(time, CRC_MISMATCH, _crc_detail(frame), frame))
+            if frame_type in FRAME_SIZES:
+                # The zero padding of a damaged feedback frame belongs to it, as for a good one.
+                while size < min(len(buf), FEEDBACK_MESSAGE_SIZE) and buf[size] == 0:
+                    size += 1
+            out.append(self._diag(time, CRC_MISMATCH, _crc_detail(frame), bytes(buf[:size])))
             del buf[:size]
         return out
 
