@@ -1,0 +1,198 @@
+"""One readable line per event: aligned time, source, topic and name, then values with units."""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Any
+
+from analyzer.protocol.types import (
+    FROM_IDU,
+    TO_IDU,
+    TOPIC_CAN_OTHER,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+    TOPIC_GIMBAL_RANGING,
+    TOPIC_UAV_ALTITUDE,
+    TOPIC_UAV_ATTITUDE,
+    TOPIC_UAV_GPS,
+    TOPIC_UAV_TEXT,
+    Event,
+)
+
+TIME_WIDTH = 12
+WHERE_WIDTH = 14
+TOPIC_WIDTH = 17
+LABEL_WIDTH = 16
+RAW_SHOWN = 24  # bytes of a diagnostic's raw data shown on its line
+EPOCH_THRESHOLD = 1e8  # times above this are Unix times; below, seconds from some start
+
+DIRECTION_WORDS = {TO_IDU: "gs->idu", FROM_IDU: "idu->gs"}
+
+# Short names of the topics that carry no name field.
+TOPIC_LABELS = {
+    TOPIC_GIMBAL_ATTITUDE: "attitude",
+    TOPIC_GIMBAL_RANGING: "ranging",
+    TOPIC_UAV_GPS: "gps",
+    TOPIC_UAV_ALTITUDE: "altitude",
+    TOPIC_UAV_ATTITUDE: "attitude",
+    TOPIC_UAV_TEXT: "text",
+    TOPIC_CAN_OTHER: "other frame",
+}
+
+# Field-name suffix -> unit words; the suffix is dropped from the shown name.
+UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("_speed_dps", "deg/s"),
+    ("_dps", "deg/s"),
+    ("_deg", "deg"),
+    ("_pct", "%"),
+    ("_m", "m"),
+    ("_s", "s"),
+)
+PRECISE = frozenset({"latitude_deg", "longitude_deg"})  # shown with 7 decimals
+
+# Fields that identify the event or say where it came from, not values.
+META_FIELDS = frozenset(
+    {
+        "s_id",
+        "cmd",
+        "name",
+        "component",
+        "raw",
+        "transport",
+        "direction",
+        "crc_set",
+        "byte_count",
+        "start_time",
+        "frames",
+        "gimbal_type_name",
+        "control_mode_name",
+    }
+)
+
+# ANSI styles, used only when asked for colour.
+_RESET = "\033[0m"
+_STYLES = {
+    "time": "\033[2m",
+    "where": "\033[34m",
+    "topic": "\033[36m",
+    "label": "\033[1m",
+    "diagnostic": "\033[1;31m",
+    "warning": "\033[33m",
+}
+
+
+def format_time(t: float) -> str:
+    """Local wall-clock ``HH:MM:SS.mmm`` for Unix times, else seconds with milliseconds."""
+    if t >= EPOCH_THRESHOLD:
+        whole = int(t)
+        millis = min(round((t - whole) * 1000), 999)
+        return _time.strftime("%H:%M:%S", _time.localtime(whole)) + f".{millis:03d}"
+    return f"{t:.3f}"
+
+
+def where(event: Event) -> str:
+    """Source of an event, with the direction for TCP/UART streams."""
+    direction = event.fields.get("direction")
+    words = DIRECTION_WORDS.get(direction, direction) if isinstance(direction, str) else ""
+    return f"{event.source} {words}" if words else event.source
+
+
+def label(event: Event) -> str:
+    """The name column: command name, diagnostic kind, or a short topic name."""
+    if event.topic == TOPIC_DIAGNOSTICS:
+        return str(event.fields.get("kind", "diagnostic")).upper()
+    name = event.fields.get("name")
+    if event.topic == TOPIC_COMMAND and name:
+        return str(name)
+    return TOPIC_LABELS.get(event.topic, event.topic.rsplit("/", 1)[-1])
+
+
+def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
+    """One field as ``name value unit``, e.g. ``pan -5.00 deg/s``."""
+    shown, unit = key, ""
+    for suffix, words in UNIT_SUFFIXES:
+        if key.endswith(suffix) and len(key) > len(suffix):
+            shown, unit = key[: -len(suffix)], words
+            break
+    shown = shown.replace("_", " ")
+    if key == "control_mode" and fields.get("control_mode_name"):
+        value = fields["control_mode_name"]
+    if isinstance(value, bool):
+        text = "yes" if value else "no"
+    elif isinstance(value, float):
+        text = f"{value:.7f}" if key in PRECISE else f"{value:.2f}"
+    else:
+        text = str(value)
+    return f"{shown} {text} {unit}".rstrip()
+
+
+def describe(event: Event) -> str:
+    """The values of an event in plain words (no time, source, topic or name columns)."""
+    fields = event.fields
+    topic = event.topic
+    if topic == TOPIC_DIAGNOSTICS:
+        text = str(fields.get("detail", ""))
+        raw = str(fields.get("raw", ""))
+        if raw:
+            parts = raw.split()
+            more = f" ... ({len(parts)} bytes)" if len(parts) > RAW_SHOWN else ""
+            text += f"  raw {' '.join(parts[:RAW_SHOWN])}{more}"
+        return text
+    if topic == TOPIC_UAV_TEXT:
+        return repr(str(fields.get("text", "")))
+    if topic == TOPIC_CAN_OTHER:
+        can_id = int(fields.get("can_id", 0))
+        ident = f"0x{can_id:08X}" if fields.get("extended", True) else f"0x{can_id:03X}"
+        if fields.get("remote"):
+            return f"id {ident} remote request"
+        return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
+    words: list[str] = []
+    if topic == TOPIC_COMMAND:
+        if fields.get("component") not in (None, "gimbal"):
+            words.append(str(fields["component"]))
+        if fields.get("name") == "unknown":
+            words.append(f"s_id 0x{fields.get('s_id', 0):02X} cmd 0x{fields.get('cmd', 0):02X}")
+            words.append(f"raw {fields.get('raw', '')}")
+    labelled = {k[:-4] for k in fields if k.endswith("_raw") and k[:-4] in fields}
+    for key, value in fields.items():
+        if key in META_FIELDS or (key.endswith("_raw") and key[:-4] in labelled):
+            continue
+        words.append(value_words(key, value, fields))
+    return "  ".join(words)
+
+
+def describe_event(event: Event) -> str:
+    """Name and values in plain words, e.g. ``gimbal_control pan -5.00 deg/s tilt 0.00 deg/s``."""
+    text = describe(event)
+    return f"{label(event)} {text}".rstrip()
+
+
+def render_event(event: Event, color: bool = False) -> str:
+    """One aligned line: time, source (and direction), topic, name, values, warnings."""
+    diagnostic = event.topic == TOPIC_DIAGNOSTICS
+    columns = [
+        (format_time(event.time).rjust(TIME_WIDTH), "time"),
+        (where(event).ljust(WHERE_WIDTH), "where"),
+        (event.topic.ljust(TOPIC_WIDTH), "topic"),
+        (label(event).ljust(LABEL_WIDTH), "diagnostic" if diagnostic else "label"),
+    ]
+    try:
+        body = describe(event)
+    except (TypeError, ValueError):  # fields of an unexpected type: show them as they are
+        body = "  ".join(f"{k} {v}" for k, v in event.fields.items())
+    warnings = "; ".join(str(w) for w in event.warnings)
+    if not color:
+        line = " ".join(text for text, _ in columns) + " " + body
+        if warnings:
+            line = f"{line.rstrip()}  ! {warnings}"
+        return line.rstrip()
+    parts = [f"{_STYLES[style]}{text}{_RESET}" for text, style in columns]
+    line = " ".join(parts) + " " + (_paint(body, "diagnostic") if diagnostic else body)
+    if warnings:
+        line = f"{line.rstrip()}  {_paint('! ' + warnings, 'warning')}"
+    return line.rstrip()
+
+
+def _paint(text: str, style: str) -> str:
+    return f"{_STYLES[style]}{text}{_RESET}" if text else text
