@@ -21,7 +21,7 @@ from analyzer.protocol.types import (
 )
 
 TIME_WIDTH = 12
-WHERE_WIDTH = 14
+WHERE_WIDTH = 17
 TOPIC_WIDTH = 17
 LABEL_WIDTH = 16
 RAW_SHOWN = 24  # bytes of a diagnostic's raw data shown on its line
@@ -91,11 +91,23 @@ def format_time(t: float) -> str:
     return f"{t:.3f}"
 
 
+def short_source(source: str) -> str:
+    """``tcp:10.0.0.5:50211-192.168.42.200:2000`` -> ``tcp:50211`` (the client's port)."""
+    if source.startswith("tcp:") and "-" in source:
+        client = source[4:].split("-", 1)[0]
+        port = client.rsplit(":", 1)[-1]
+        if port.isdigit():
+            generation = source.rsplit("#", 1)[1] if "#" in source else ""
+            return f"tcp:{port}" + (f"#{generation}" if generation else "")
+    return source
+
+
 def where(event: Event) -> str:
-    """Source of an event, with the direction for TCP/UART streams."""
+    """Source of an event (TCP flows by client port), with the direction for streams."""
     direction = event.fields.get("direction")
     words = DIRECTION_WORDS.get(direction, direction) if isinstance(direction, str) else ""
-    return f"{event.source} {words}" if words else event.source
+    source = short_source(event.source)
+    return f"{source} {words}" if words else source
 
 
 def label(event: Event) -> str:

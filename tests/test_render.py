@@ -32,14 +32,14 @@ def command(name: str, **params: object) -> Event:
 
 def body(line: str) -> str:
     """The line after the fixed columns."""
-    return line[12 + 1 + 14 + 1 + 17 + 1 + 16 + 1 :]
+    return line[12 + 1 + 17 + 1 + 17 + 1 + 16 + 1 :]
 
 
 def test_command_line_has_aligned_columns_and_units_in_words() -> None:
     line = render_event(command("gimbal_control", pan_speed_dps=-5.0, tilt_speed_dps=0))
     assert line.startswith(format_time(T).rjust(12) + " can0 ")
-    assert line[28:45] == "/gimbal/command  "
-    assert line[46:62] == "gimbal_control  "
+    assert line[31:48] == "/gimbal/command  "
+    assert line[49:65] == "gimbal_control  "
     assert body(line) == "pan -5.00 deg/s  tilt 0.00 deg/s"
 
 
@@ -96,10 +96,16 @@ def test_feedback_and_uav_lines() -> None:
     assert lines[5] == "'takeoff'"
 
 
-def test_stream_events_show_the_direction() -> None:
-    chunk = StreamChunk(T, wrap_control(encode_command("look_down")), "tcp", "gs_to_idu")
+def test_stream_events_show_the_direction_and_the_client_port() -> None:
+    chunk = StreamChunk(T, wrap_control(encode_command("look_down")), "uart", "gs_to_idu")
     (event,) = decode(chunk)
-    assert " tcp gs->idu " in render_event(event)
+    assert " uart gs->idu " in render_event(event)
+    flow = "tcp:10.0.0.5:50211-192.168.42.200:2000"
+    (event,) = decode(StreamChunk(T, wrap_control(encode_command("look_down")), flow, "idu_to_gs"))
+    line = render_event(event)
+    assert " tcp:50211 idu->gs " in line and line.index("/gimbal/command") == 31
+    (event,) = decode(StreamChunk(T, wrap_control(encode_command("forward")), flow + "#2", "x"))
+    assert " tcp:50211#2 x " in render_event(event)
 
 
 def test_other_frames() -> None:

@@ -1,0 +1,292 @@
+"""``gimbal-analyzer decode``: a capture file as readable lines, JSON lines or a summary."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from collections.abc import Callable
+from typing import IO, Any
+
+from analyzer.errors import UsageError
+
+HELP = "decode a capture file (candump, python-can logs, pcap, raw dumps, MCAP) into events"
+
+DESCRIPTION = """\
+Decode a capture file and print one line per decoded message or diagnostic.
+
+The format comes from the file name (.log candump; .asc .blf .trc .csv .mf4
+through python-can, .gz too; .pcap/.pcapng; .bin raw TCP/UART bytes; .mcap)
+or from its content; --format overrides it. Damaged lines, CRC errors, lost
+segments and the like are reported as /diagnostics events and decoding goes
+on: the exit code is 0 whenever the file could be read.
+
+examples:
+  gimbal-analyzer decode samples/flight-candump.log
+  gimbal-analyzer decode samples/idu-tcp.pcap --json
+  gimbal-analyzer decode samples/uart-dump.bin --summary
+  gimbal-analyzer decode export.txt --format asc --topic /gimbal/command
+  gimbal-analyzer decode flight.log --name gimbal_control --name crc_mismatch
+  gimbal-analyzer decode flight.log --raw          # also frames of other devices
+  candump -L can0 | gimbal-analyzer decode -       # live from a CAN interface
+
+--topic takes a topic (/gimbal/command), a prefix (/uav) or a last part
+(attitude, diagnostics); --name a command name (gimbal_control) or a
+diagnostic kind (crc_mismatch); both may be repeated. --summary counts every
+event, whatever the filters.
+"""
+
+PROGRESS_INTERVAL_S = 0.2
+PROGRESS_EVERY_ITEMS = 2048
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from analyzer.inputs import FORMATS
+
+    parser.add_argument("file", help="capture file; '-' reads candump text from standard input")
+    parser.add_argument(
+        "-f",
+        "--format",
+        metavar="FORMAT",
+        help="file format instead of guessing it: " + ", ".join(FORMATS),
+    )
+    parser.add_argument(
+        "--port",
+        type=int,
+        default=2000,
+        help="TCP port of the IDU in pcap captures (default: 2000)",
+    )
+    parser.add_argument("--json", action="store_true", help="one JSON object per event")
+    parser.add_argument(
+        "--summary",
+        action="store_true",
+        help="print counts per topic and diagnostic, feedback rate and gaps, CRC error rate",
+    )
+    parser.add_argument(
+        "--topic", action="append", default=[], help="only events of this topic (repeatable)"
+    )
+    parser.add_argument(
+        "--name",
+        action="append",
+        default=[],
+        help="only commands of this name / diagnostics of this kind (repeatable)",
+    )
+    parser.add_argument(
+        "--raw", action="store_true", help="also show CAN frames that are not part of the protocol"
+    )
+    parser.add_argument(
+        "--color",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help="colour the lines (auto: when standard output is a terminal and NO_COLOR is unset)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.inputs import open_input
+    from analyzer.protocol.decoder import Decoder
+    from analyzer.protocol.ids import PROTOCOL_IDS
+    from analyzer.protocol.types import CanFrame, StreamChunk
+    from analyzer.summary import Summary
+
+    if not 0 < args.port < 65536:
+        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    wanted = event_filter(args.topic, args.name)
+    out = sys.stdout
+    color = use_color(args.color, out)
+    reader = open_input(
+        args.file, args.format, args.port, wanted_ids=None if args.raw else PROTOCOL_IDS
+    )
+    live = args.file == "-"
+    decoder = Decoder(emit_other=args.raw)
+    summary = Summary(args.file, reader.format_name) if args.summary else None
+    # With --summary only the summary is printed (as one JSON object with --json).
+    printer = None if args.summary else make_printer(args.json, color)
+    progress = Progress.maybe(reader, sys.stderr, out, args.summary)
+
+    counts = {"events": 0, "diagnostics": 0}
+    lines: list[str] = []
+
+    def handle(events: list[Any]) -> None:
+        for event in events:
+            counts["events"] += 1
+            if event.topic == "/diagnostics":
+                counts["diagnostics"] += 1
+            if summary is not None:
+                summary.add(event)
+            if printer is not None and (wanted is None or wanted(event)):
+                lines.append(printer(event))
+
+    feed_can = decoder.feed_can
+    feed_stream = decoder.feed_stream
+    seen = 0
+    items: Any = reader  # CanFrame | StreamChunk | Event, dispatched on the exact type
+    try:
+        for item in items:
+            kind = type(item)
+            if kind is CanFrame:
+                events = feed_can(item)
+            elif kind is StreamChunk:
+                events = feed_stream(item)
+            else:
+                events = [item]
+            if events:
+                handle(events)
+                if lines and (live or len(lines) >= 512):
+                    _write(out, lines, flush=live)
+            seen += 1
+            if progress is not None and not seen % PROGRESS_EVERY_ITEMS:
+                progress.update()
+        handle(decoder.close())
+        _write(out, lines, flush=True)
+    finally:
+        if progress is not None:
+            progress.clear()
+        reader.close()
+    if summary is not None:
+        summary.finish(
+            input_stats=reader.stats,
+            decoder_stats=decoder.stats,
+            first_time=reader.first_time,
+            last_time=reader.last_time,
+        )
+        if args.json:
+            out.write(json.dumps(summary.to_dict(), default=str) + "\n")
+        else:
+            out.write(summary.render(color) + "\n")
+        out.flush()
+    elif sys.stderr.isatty() and not live:
+        sys.stderr.write(
+            f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
+            f"from {args.file}\n"
+        )
+    return 0
+
+
+def _write(out: IO[str], lines: list[str], flush: bool) -> None:
+    if lines:
+        out.write("\n".join(lines) + "\n")
+        lines.clear()
+    if flush:
+        out.flush()
+
+
+def use_color(choice: str, out: IO[str]) -> bool:
+    """Colour when asked for, or (auto) on a terminal unless NO_COLOR is set."""
+    if choice == "always":
+        return True
+    if choice == "never":
+        return False
+    return bool(out.isatty()) and not os.environ.get("NO_COLOR")
+
+
+def make_printer(as_json: bool, color: bool) -> Callable[[Any], str]:
+    if as_json:
+
+        def to_json(event: Any) -> str:
+            return json.dumps(event.to_dict(), default=str)
+
+        return to_json
+    from analyzer.render import render_event
+
+    return lambda event: render_event(event, color=color)
+
+
+def event_filter(topics: list[str], names: list[str]) -> Callable[[Any], bool] | None:
+    """A predicate from --topic / --name values; UsageError for values that match nothing."""
+    from analyzer.protocol.codec import COMMANDS
+    from analyzer.protocol.types import DIAGNOSTIC_KINDS, TOPIC_CAN_OTHER, TOPICS
+
+    known_topics = (*TOPICS, TOPIC_CAN_OTHER)
+    topic_set: set[str] = set()
+    for value in _split(topics):
+        matched = [t for t in known_topics if _topic_matches(t, value)]
+        if not matched:
+            raise UsageError(f"unknown topic {value!r}; valid: {', '.join(known_topics)}")
+        topic_set.update(matched)
+    known_names = {row.name for row in COMMANDS} | {"unknown", *DIAGNOSTIC_KINDS}
+    name_set: set[str] = set()
+    for value in _split(names):
+        if value not in known_names:
+            raise UsageError(
+                f"unknown name {value!r}; valid: command names (see 'gimbal-analyzer commands') "
+                f"or diagnostic kinds ({', '.join(DIAGNOSTIC_KINDS)})"
+            )
+        name_set.add(value)
+    if not topic_set and not name_set:
+        return None
+
+    def wanted(event: Any) -> bool:
+        if topic_set and event.topic not in topic_set:
+            return False
+        if name_set:
+            fields = event.fields
+            return fields.get("name") in name_set or fields.get("kind") in name_set
+        return True
+
+    return wanted
+
+
+def _split(values: list[str]) -> list[str]:
+    return [part.strip() for value in values for part in value.split(",") if part.strip()]
+
+
+def _topic_matches(topic: str, value: str) -> bool:
+    value = value.rstrip("/")
+    if not value:
+        return False
+    if value.startswith("/"):
+        return topic == value or topic.startswith(value + "/")
+    return topic.endswith("/" + value) or topic.lstrip("/") == value
+
+
+class Progress:
+    """A one-line progress bar on stderr, redrawn at most every PROGRESS_INTERVAL_S."""
+
+    def __init__(self, reader: Any, stream: IO[str]) -> None:
+        self.reader = reader
+        self.stream = stream
+        self.started = time.monotonic()
+        self.last_draw = 0.0
+        self.drawn = False
+
+    @classmethod
+    def maybe(cls, reader: Any, err: IO[str], out: IO[str], quiet_output: bool) -> Progress | None:
+        """Only for files of known size, when stderr is a terminal that events do not use."""
+        if not reader.size_bytes or not _isatty(err):
+            return None
+        if _isatty(out) and not quiet_output:
+            return None  # the event lines themselves show progress
+        return cls(reader, err)
+
+    def update(self) -> None:
+        now = time.monotonic()
+        if now - self.last_draw < PROGRESS_INTERVAL_S:
+            return
+        self.last_draw = now
+        size = self.reader.size_bytes or 1
+        done = min(self.reader.position_bytes, size)
+        fraction = done / size
+        width = 30
+        filled = int(fraction * width)
+        rate = done / max(now - self.started, 1e-6) / 1e6
+        self.stream.write(
+            f"\r{self.reader.source[:30]} [{'#' * filled}{'.' * (width - filled)}] "
+            f"{fraction * 100:5.1f}%  {done / 1e6:.1f}/{size / 1e6:.1f} MB  {rate:.1f} MB/s"
+        )
+        self.stream.flush()
+        self.drawn = True
+
+    def clear(self) -> None:
+        if self.drawn:
+            self.stream.write("\r\033[K")
+            self.stream.flush()
+
+
+def _isatty(stream: IO[str]) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
