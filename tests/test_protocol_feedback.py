@@ -111,6 +111,24 @@ def test_repeated_segment_is_reported_and_message_kept() -> None:
     assert r.bytes_framed + r.bytes_discarded == r.bytes_fed
 
 
+def test_two_repeats_in_one_message() -> None:
+    a, b = segments(attitude_by_hand()), segments(attitude_by_hand())
+    r = FeedbackReassembler("can0")
+    out = feed_all(r, [a[0], a[1], a[1], a[2], a[2], a[3], *b])
+    assert kinds(out) == ["duplicate", "duplicate", "message", "message"]
+    assert isinstance(out[2], Message)
+    assert out[2].warnings == ("segment 2 was repeated", "segment 3 was repeated")
+
+
+def test_a_lone_last_segment_long_after_is_no_repeat() -> None:
+    # A gimbal at rest sends identical messages; if the next one loses its first
+    # three segments, what is left equals the last segment but comes 500 ms later.
+    a = segments(attitude_by_hand())
+    r = FeedbackReassembler("can0")
+    out = feed_all(r, a, 0.0) + r.feed(a[3], 0.5) + feed_all(r, a, 1.0)
+    assert kinds(out) == ["message", "incomplete", "message"]
+
+
 def test_repeated_last_segment_is_a_duplicate() -> None:
     a, b = segments(attitude_by_hand()), segments(attitude_by_hand())
     r = FeedbackReassembler("can0")

@@ -188,6 +188,7 @@ class Decoder:
             return events
         status = STATUS_FRAMES[can_id]
         fields, more = decode_status(can_id, frame.data)
+        fields["raw"] = hexstr(frame.data)
         fields.update(extra)
         return [Event(status.topic, frame.time, source, fields, warnings + more)]
 
@@ -206,6 +207,7 @@ class Decoder:
                 continue
             layout, fields, more = decode_feedback(result.data)
             assert layout is not None  # the reassembler only passes CRC-checked messages
+            fields["raw"] = hexstr(result.data)
             fields.update(extra)
             out.append(
                 Event(
@@ -255,6 +257,7 @@ class Decoder:
             return events
         layout, fields, more = decode_feedback(data)
         assert layout is not None
+        fields["raw"] = hexstr(data)
         fields.update(extra)
         fields["transport"] = "stream"
         return [Event(layout.topic, frame.time, source, fields, warnings + more)]

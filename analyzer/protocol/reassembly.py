@@ -61,7 +61,11 @@ class FeedbackReassembler:
         self.bytes_framed = 0
         self.bytes_discarded = 0
         self._pending: list[Segment] = []
-        self._last_tail = b""  # last segment of the last message, to spot its repeat
+        # The last segment of the last message, to spot its repeat. Only right after that
+        # message: a lone equal segment 500 ms later is what is left of the next message
+        # (a gimbal at rest sends the same message again and again).
+        self._last_tail = b""
+        self._last_tail_time = 0.0
 
     @property
     def pending(self) -> int:
@@ -109,12 +113,17 @@ class FeedbackReassembler:
             warnings.append(f"segment lengths {sizes}, expected 8 each")
         self.bytes_framed += len(data)
         self._last_tail = segs[-1].data
+        self._last_tail_time = segs[-1].time
         out.append(Message(segs[-1].time, data, tuple(segs), tuple(warnings)))
 
     def _resolve(self, out: list[Message | Event], *, final: bool, time: float) -> None:
         pending = self._pending
         while pending:
-            if self._last_tail and pending[0].data == self._last_tail:
+            if (
+                self._last_tail
+                and pending[0].data == self._last_tail
+                and pending[0].time - self._last_tail_time <= self.late_after
+            ):
                 self._report(
                     out, DUPLICATE, "last feedback segment repeated", pending[:1], pending[0].time
                 )
@@ -150,26 +159,33 @@ class FeedbackReassembler:
                 self._emit(out, first)
                 del pending[:SEGMENTS_PER_MESSAGE]
                 continue
-            repeats = [
-                i for i in range(1, SEGMENTS_PER_MESSAGE) if pending[i].data == pending[i - 1].data
-            ]
-            if repeats:
-                if len(pending) <= SEGMENTS_PER_MESSAGE and not final:
-                    break  # wait for one more segment to tell a repeat from corruption
-                if len(pending) > SEGMENTS_PER_MESSAGE:
-                    k = repeats[0]
-                    candidate = pending[:k] + pending[k + 1 : SEGMENTS_PER_MESSAGE + 1]
-                    if _crc_ok(b"".join(s.data for s in candidate)):
+            # Segments that repeat the one before them: drop them and try again.
+            candidate, repeated, used = [pending[0]], [], 1
+            while len(candidate) < SEGMENTS_PER_MESSAGE and used < len(pending):
+                segment = pending[used]
+                if segment.data == candidate[-1].data:
+                    repeated.append((len(candidate), segment))
+                else:
+                    candidate.append(segment)
+                used += 1
+            if repeated:
+                if len(candidate) < SEGMENTS_PER_MESSAGE and not final:
+                    break  # wait for more segments to tell a repeat from corruption
+                if len(candidate) == SEGMENTS_PER_MESSAGE and _crc_ok(
+                    b"".join(s.data for s in candidate)
+                ):
+                    for number, segment in repeated:
                         self._report(
                             out,
                             DUPLICATE,
-                            f"feedback segment {k + 1} repeated",
-                            [pending[k]],
-                            pending[k].time,
+                            f"feedback segment {number} repeated",
+                            [segment],
+                            segment.time,
                         )
-                        self._emit(out, candidate, (f"segment {k + 1} was repeated",))
-                        del pending[: SEGMENTS_PER_MESSAGE + 1]
-                        continue
+                    notes = tuple(f"segment {number} was repeated" for number, _ in repeated)
+                    self._emit(out, candidate, notes)
+                    del pending[:used]
+                    continue
             restart = next(
                 (i for i in range(1, SEGMENTS_PER_MESSAGE) if _is_header(pending[i].data)), 0
             )

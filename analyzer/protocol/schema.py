@@ -57,6 +57,11 @@ def _envelope(topic: str, title: str, description: str) -> dict[str, Any]:
                 "items": {"type": "string"},
                 "description": "doubts about the values (out of range, unused bytes set, ...)",
             },
+            "raw": {
+                "type": "string",
+                "description": "the bytes the event was decoded from, hex (the 8 CAN bytes, the "
+                "32-byte feedback message or the stream frame)",
+            },
             **_TRANSPORT,
         },
         "required": ["topic", "time", "source", "warnings"],

@@ -15,6 +15,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_TEXT,
     Event,
     diagnostic,
+    hexstr,
 )
 
 
@@ -195,7 +196,7 @@ class TextAssembler:
             TOPIC_UAV_TEXT,
             time,
             self.source,
-            {"text": text, "frames": self._frames, "start_time": self._start},
+            {"text": text, "frames": self._frames, "start_time": self._start, "raw": hexstr(raw)},
             warnings,
         )
         self._reset()
