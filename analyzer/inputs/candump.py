@@ -21,6 +21,7 @@ MAX_FD_HEX = 128  # 64 data bytes
 _DIRECTIONS = {b"R": "rx", b"r": "rx", b"T": "tx", b"t": "tx"}
 _HEXDIGITS = frozenset(b"0123456789abcdefABCDEF")
 _NAN = float("nan")
+_DIGITS = b"0123456789"
 
 # Parsed ID text -> (can_id, extended, is_error, wanted); None marks an invalid ID text.
 IdInfo = tuple[int, bool, bool, bool]
@@ -117,34 +118,45 @@ class CandumpParser:
         skip = self._skip
         want = self._want
         directions = _DIRECTIONS
+        digits = _DIGITS
         lineno = self.lines
         skipped = 0
-        pending: bytes | None = None  # timestamp text of the last skipped frame, parsed lazily
+        # Timestamp texts of the first and last of a run of skipped frames, parsed lazily.
+        run_start = pending = b""
         for line in lines:
             lineno += 1
             # Fast path: a well-formed ``candump -L`` line, ``(time) channel id#data [R|T]``.
+            # A timestamp is checked by deleting its digits: ``(.)`` must remain.
             parts = line.split(b" ")
             nparts = len(parts)
-            if nparts == 3 or (nparts == 4 and parts[3] in directions):
-                stamp = parts[0]
-                id_text, sharp, data = parts[2].partition(b"#")
-                if not sharp:
-                    pass  # no '#': the slow path says what is wrong
-                elif id_text in skip:
+            if nparts == 3:
+                stamp, channel, frame = parts
+                direction = ""
+            elif nparts == 4 and parts[3] in directions:
+                stamp, channel, frame, suffix = parts
+                direction = directions[suffix]
+            else:
+                stamp = b""
+            if stamp:
+                id_text, sharp, data = frame.partition(b"#")
+                if id_text in skip:
                     if (
-                        len(data) <= MAX_CLASSIC_HEX
-                        and stamp[:1] == b"("
-                        and stamp[-1:] == b")"
-                        and stamp[1:-1].replace(b".", b"", 1).isdigit()
+                        sharp
+                        and len(data) <= MAX_CLASSIC_HEX
+                        and len(stamp) > 3
+                        and stamp.translate(None, digits) == b"(.)"
                     ):
                         try:
                             unhexlify(data)
+                        except ValueError:
+                            pass
+                        else:
+                            if not skipped:
+                                run_start = stamp
                             skipped += 1
                             pending = stamp
                             continue
-                        except ValueError:
-                            pass
-                else:
+                elif sharp:
                     info = want.get(id_text)
                     if info is not None and stamp[:1] == b"(" and stamp[-1:] == b")":
                         try:
@@ -157,11 +169,13 @@ class CandumpParser:
                         except ValueError:  # LineError too; the slow path says why
                             ts = _NAN
                         if -1e15 < ts < 1e15:
+                            if skipped:
+                                self._count_skipped(skipped, run_start, pending)
+                                skipped = 0
                             self.frames += 1
                             if self.first_time is None:
                                 self.first_time = ts
                             self.last_time = ts
-                            pending = None
                             self._after_error = info[2]
                             append(
                                 CanFrame(
@@ -169,36 +183,34 @@ class CandumpParser:
                                     info[0],
                                     payload,
                                     info[1],
-                                    self._channel(parts[1]),
+                                    self._channel(channel),
                                     is_remote,
                                     info[2],
                                     is_fd,
-                                    directions[parts[3]] if nparts == 4 else "",
+                                    direction,
                                 )
                             )
                             continue
             # Everything else: unseen IDs, other layouts, blanks, comments, damaged lines.
             if skipped:
-                self._count_skipped(skipped, pending)
+                self._count_skipped(skipped, run_start, pending)
                 skipped = 0
-                pending = None
             item = self._slow_line(line, lineno)
             if item is not None:
                 append(item)
         if skipped:
-            self._count_skipped(skipped, pending)
+            self._count_skipped(skipped, run_start, pending)
         self.lines = lineno
         return out
 
-    def _count_skipped(self, count: int, stamp: bytes | None) -> None:
+    def _count_skipped(self, count: int, first: bytes, last: bytes) -> None:
+        """A run of ``count`` skipped frames, with the timestamp texts of its ends."""
         self.frames += count
         self.frames_skipped += count
         self._after_error = False
-        if stamp is not None:
-            ts = float(stamp[1:-1])
-            if self.first_time is None:
-                self.first_time = ts
-            self.last_time = ts
+        if self.first_time is None:
+            self.first_time = float(first[1:-1])
+        self.last_time = float(last[1:-1])
 
     def parse_line(self, line: bytes) -> InputItem | None:
         """Parse one line (line end allowed); None for blank lines and skipped frames."""
