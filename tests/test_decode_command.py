@@ -251,3 +251,26 @@ def test_live_pipe_prints_each_event_as_it_arrives(tmp_path: Path) -> None:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_ctrl_c_on_live_input_still_prints_the_summary(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    class Interrupting(io.RawIOBase):
+        def __init__(self) -> None:
+            self.lines = [f"(1.0) can0 00000F01#{encode_command('look_down').hex()}\n".encode()]
+
+        def readable(self) -> bool:
+            return True
+
+        def readline(self, size: int | None = -1) -> bytes:
+            if self.lines:
+                return self.lines.pop()
+            raise KeyboardInterrupt
+
+    fake = io.TextIOWrapper(io.BufferedReader(Interrupting()))
+    fake.buffer.readline = fake.buffer.raw.readline  # type: ignore[attr-defined,method-assign]
+    monkeypatch.setattr(sys, "stdin", fake)
+    code, out, _ = run(capsys, "-", "--summary")
+    assert code == 130
+    assert "/gimbal/command" in out and "1 lines" in out

@@ -122,23 +122,29 @@ def run(args: argparse.Namespace) -> int:
     feed_can = decoder.feed_can
     feed_stream = decoder.feed_stream
     seen = 0
+    interrupted = False
     items: Any = reader  # CanFrame | StreamChunk | Event, dispatched on the exact type
     try:
-        for item in items:
-            kind = type(item)
-            if kind is CanFrame:
-                events = feed_can(item)
-            elif kind is StreamChunk:
-                events = feed_stream(item)
-            else:
-                events = [item]
-            if events:
-                handle(events)
-                if lines and (live or len(lines) >= 512):
-                    _write(out, lines, flush=live)
-            seen += 1
-            if progress is not None and not seen % PROGRESS_EVERY_ITEMS:
-                progress.update()
+        try:
+            for item in items:
+                kind = type(item)
+                if kind is CanFrame:
+                    events = feed_can(item)
+                elif kind is StreamChunk:
+                    events = feed_stream(item)
+                else:
+                    events = [item]
+                if events:
+                    handle(events)
+                    if lines and (live or len(lines) >= 512):
+                        _write(out, lines, flush=live)
+                seen += 1
+                if progress is not None and not seen % PROGRESS_EVERY_ITEMS:
+                    progress.update()
+        except KeyboardInterrupt:
+            if not live:
+                raise
+            interrupted = True  # Ctrl-C ends live input: finish as at its end
         handle(decoder.close())
         _write(out, lines, flush=True)
     finally:
@@ -162,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
             f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
             f"from {args.file}\n"
         )
-    return 0
+    return 130 if interrupted else 0
 
 
 def _write(out: IO[str], lines: list[str], flush: bool) -> None:
