@@ -238,7 +238,8 @@ def test_live_pipe_prints_each_event_as_it_arrives(tmp_path: Path) -> None:
         proc.stdin.write(line.encode())
         proc.stdin.flush()
         got: list[bytes] = []
-        reader = threading.Thread(target=lambda: got.append(proc.stdout.readline()), daemon=True)
+        stdout = proc.stdout
+        reader = threading.Thread(target=lambda: got.append(stdout.readline()), daemon=True)
         reader.start()
         reader.join(timeout=30)
         assert got and b"look_down" in got[0], "no output while the pipe is still open"
@@ -269,7 +270,7 @@ def test_ctrl_c_on_live_input_still_prints_the_summary(
             raise KeyboardInterrupt
 
     fake = io.TextIOWrapper(io.BufferedReader(Interrupting()))
-    fake.buffer.readline = fake.buffer.raw.readline  # type: ignore[attr-defined,method-assign]
+    fake.buffer.readline = fake.buffer.raw.readline  # type: ignore[method-assign]
     monkeypatch.setattr(sys, "stdin", fake)
     code, out, _ = run(capsys, "-", "--summary")
     assert code == 130

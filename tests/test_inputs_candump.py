@@ -210,7 +210,7 @@ def test_reader_across_small_blocks_keeps_line_numbers(tmp_path: Path) -> None:
 def test_reader_crlf_and_missing_final_newline(tmp_path: Path) -> None:
     path = tmp_path / "crlf.log"
     path.write_bytes(b"(1.0) can0 123#11 R\r\n(2.0) can0 123#22\r\n(3.0) can0 123#33")
-    frames = list(CandumpReader(str(path), block_size=5))
+    frames: list[Any] = list(CandumpReader(str(path), block_size=5))
     assert [f.data for f in frames] == [b"\x11", b"\x22", b"\x33"]
     assert frames[0].direction == "rx"
 

@@ -131,7 +131,7 @@ def test_raw_dump_with_garbage_decodes(tmp_path: Path) -> None:
     data = b"\x00\x13junk" + LOOK_DOWN + LOOK_DOWN[:7] + b"\xeb" + LOOK_DOWN
     path.write_bytes(data)
     reader = open_input(str(path))
-    items = list(reader)
+    items: list[Any] = list(reader)
     assert all(isinstance(i, StreamChunk) for i in items)
     assert b"".join(i.data for i in items) == data
     assert reader.position_bytes == reader.size_bytes == len(data)
@@ -149,7 +149,7 @@ def test_raw_dump_in_small_chunks(tmp_path: Path) -> None:
     path = tmp_path / "tcp.bin"
     path.write_bytes(LOOK_DOWN * 3)
     reader = RawStreamReader(str(path), direction="gs_to_idu", chunk_size=5)
-    chunks = list(reader)
+    chunks: list[Any] = list(reader)
     assert len(chunks) == 15 and all(c.direction == "gs_to_idu" for c in chunks)
 
 
@@ -187,7 +187,8 @@ def test_dash_as_stream(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(LOOK_DOWN)))
     reader = open_input("-", "stream")
     assert isinstance(reader, StdinStreamReader)
-    assert b"".join(c.data for c in reader) == LOOK_DOWN
+    chunks: list[Any] = list(reader)
+    assert b"".join(c.data for c in chunks) == LOOK_DOWN
 
 
 def test_dash_cannot_be_pcap() -> None:

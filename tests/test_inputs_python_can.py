@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import can
 import pytest
@@ -51,7 +52,7 @@ def write(path: Path, msgs: list[can.Message]) -> Path:
 def test_formats_read_and_decode(tmp_path: Path, name: str) -> None:
     path = write(tmp_path / name, messages())
     reader = open_input(str(path))
-    frames = list(reader)
+    frames: list[Any] = list(reader)
     assert all(isinstance(f, CanFrame) for f in frames)
     assert [f.can_id for f in frames] == [m.arbitration_id for m in messages()]
     assert [f.data for f in frames] == [bytes(m.data) for m in messages()]
@@ -81,7 +82,7 @@ def test_damaged_csv_stops_with_a_diagnostic(tmp_path: Path) -> None:
     lines = path.read_text().splitlines()
     lines.insert(3, "this,is,not,a,frame")
     path.write_text("\n".join(lines) + "\n")
-    items = list(open_input(str(path)))
+    items: list[Any] = list(open_input(str(path)))
     assert [type(i) for i in items] == [CanFrame, CanFrame, Event]
     assert items[-1].topic == TOPIC_DIAGNOSTICS and items[-1].fields["kind"] == BAD_LINE
     assert "after frame 2" in items[-1].fields["detail"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import pytest
 from hypothesis import given
@@ -25,7 +26,7 @@ def decode(*items: CanFrame | StreamChunk, emit_other: bool = False) -> list[Eve
     return [e for item in items for e in decoder.feed(item)] + decoder.close()
 
 
-def command(name: str, **params: object) -> Event:
+def command(name: str, **params: Any) -> Event:
     (event,) = decode(CanFrame(T, 0xF01, encode_command(name, **params), channel="can0"))
     return event
 
