@@ -70,6 +70,12 @@ META_FIELDS = frozenset(
     }
 )
 
+# Command fields whose label alone says enough, shown before / after the values.
+LEADING_WORDS = frozenset({"action", "mode", "palette"})
+TRAILING_WORDS = frozenset({"coordinate_system"})
+# Fields shown after the values that change, so narrow views keep the angles.
+TRAILING_FIELDS = {TOPIC_GIMBAL_ATTITUDE: frozenset({"gimbal_type", "tracking", "control_mode"})}
+
 # ANSI styles, used only when asked for colour.
 _RESET = "\033[0m"
 _STYLES = {
@@ -159,10 +165,12 @@ def describe(event: Event) -> str:
         if fields.get("remote"):
             return f"id {ident} remote request"
         return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
+    head: list[str] = []
     words: list[str] = []
+    tail: list[str] = []
     if topic == TOPIC_COMMAND:
         if fields.get("component") not in (None, "gimbal"):
-            words.append(str(fields["component"]))
+            head.append(str(fields["component"]))
         if fields.get("name") == "unknown":
             words.append(f"s_id 0x{fields.get('s_id', 0):02X} cmd 0x{fields.get('cmd', 0):02X}")
             words.append(f"raw {fields.get('raw', '')}")
@@ -170,8 +178,17 @@ def describe(event: Event) -> str:
     for key, value in fields.items():
         if key in META_FIELDS or (key.endswith("_raw") and key[:-4] in labelled):
             continue
-        words.append(value_words(key, value, fields))
-    return "  ".join(words)
+        if topic == TOPIC_COMMAND and key in LEADING_WORDS and isinstance(value, str):
+            head.append(value)  # "zoom_in", "single", "iron_red" say it alone
+        elif topic == TOPIC_COMMAND and key in TRAILING_WORDS and isinstance(value, str):
+            tail.append(value)
+        elif key in TRAILING_FIELDS.get(topic, ()):
+            tail.append(value_words(key, value, fields))
+        elif topic == TOPIC_COMMAND and key == "axis" and isinstance(value, str):
+            continue  # the value's own name says it: "pitch -45.00 deg"
+        else:
+            words.append(value_words(key, value, fields))
+    return "  ".join(head + words + tail)
 
 
 def describe_event(event: Event) -> str:

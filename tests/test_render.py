@@ -52,11 +52,11 @@ def test_describe_event_is_the_words_without_columns() -> None:
 @pytest.mark.parametrize(
     ("name", "params", "words"),
     [
-        ("specified_angle", {"yaw_deg": 45}, "axis yaw  coordinate system geodetic  yaw 45.00 deg"),
+        ("specified_angle", {"yaw_deg": 45}, "yaw 45.00 deg  geodetic"),
         ("specified_angle", {"zoom": 10}, "zoom 10.00"),
-        ("palette", {"palette": "iron_red"}, "dual_sensor  palette iron_red"),
+        ("palette", {"palette": "iron_red"}, "dual_sensor  iron_red"),
         ("tracking", {"x": 100, "y": 200, "width": 32, "height": 48}, "x 100  y 200  width 32"),
-        ("snapshot", {"mode": "time_lapse", "delay_s": 5}, "mode time_lapse  delay 5 s"),
+        ("snapshot", {"mode": "time_lapse", "delay_s": 5}, "time_lapse  delay 5 s"),
         ("look_down", {}, ""),
     ],
 )

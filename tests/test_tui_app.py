@@ -199,7 +199,7 @@ def test_filter_search_raw_view_and_clear() -> None:
             assert not app.filter.active
             await pilot.press("v")  # every decoded topic
             await settle(app, pilot)
-            assert any("attitude pitch -37.25" in line for line in log_lines(app))
+            assert any("attitude pitch -37.25 deg" in line for line in log_lines(app))
             await pilot.press("v")
             await pilot.press("r")
             await settle(app, pilot)

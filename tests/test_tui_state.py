@@ -262,9 +262,10 @@ def test_bridge_from_another_thread_loses_nothing() -> None:
 
 
 def test_wording() -> None:
-    assert describe_params({"pan_speed_dps": -5.0, "tilt_speed_dps": 0.0}) == (
-        "pan -5.00 deg/s tilt 0.00 deg/s"
-    )
+    pan = Event(TOPIC_COMMAND, 0, "can", {"name": "gimbal_control", "pan_speed_dps": -5.0,
+                                          "tilt_speed_dps": 0.0})  # fmt: skip
+    assert describe_params(pan) == "pan -5.00 deg/s tilt 0.00 deg/s"
+    assert event_text(pan) == "gimbal_control pan -5.00 deg/s tilt 0.00 deg/s"
     zoom = Event(TOPIC_COMMAND, 0, "can", {"name": "zoom", "action": "zoom_in", "raw": "0F 12"})
     assert "zoom" in event_text(zoom) and "zoom_in" in event_text(zoom)
     assert value_bar(0.0, -10, 10, 7) == "[--o--]"

@@ -36,7 +36,7 @@ def _command_line(state: MonitorState, label: str, event: Event | None, width: i
         line.append(f"{'—':<{room + 7}}")
         return line
     name = str(event.fields.get("name", ""))
-    params = describe_params(event.fields)
+    params = describe_params(event)
     summary = f"{name} {params}".strip() if label == "move" else params or name
     if len(summary) > room:
         summary = summary[: room - 1] + "…"
