@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import time as _time
 from collections import Counter
-from dataclasses import dataclass
 from typing import Any
 
+from analyzer.feedback_track import FeedbackTrack
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     TOPIC_COMMAND,
@@ -20,32 +20,6 @@ EXPECTED_FEEDBACK_HZ = 2.0  # the gimbal answers with one message about every 50
 FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
 FEEDBACK_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING})
 EPOCH_THRESHOLD = 1e8
-
-
-@dataclass
-class FeedbackTrack:
-    """Feedback messages of one source: how many, when, and the longest silence."""
-
-    count: int = 0
-    first: float = 0.0
-    last: float = 0.0
-    longest_gap: float = 0.0
-    gap_end: float = 0.0  # time of the message that ended the longest gap
-
-    def add(self, t: float) -> None:
-        if self.count:
-            gap = t - self.last
-            if gap > self.longest_gap:
-                self.longest_gap, self.gap_end = gap, t
-        else:
-            self.first = t
-        self.count += 1
-        self.last = t
-
-    @property
-    def rate_hz(self) -> float | None:
-        span = self.last - self.first
-        return (self.count - 1) / span if self.count > 1 and span > 0 else None
 
 
 class Summary:
@@ -210,7 +184,8 @@ class Summary:
                     rate_text = alarm(rate_text + " OFF")
             lines.append(f"    {track.count:,} messages, {rate_text}")
             if track.count > 1:
-                gap = f"longest gap {track.longest_gap:.3f} s, ended {_when(track.gap_end)}"
+                ended = _when(track.gap_end or 0.0)
+                gap = f"longest gap {track.longest_gap:.3f} s, ended {ended}"
                 expected_gap = 1.0 / EXPECTED_FEEDBACK_HZ
                 if track.longest_gap > 2 * expected_gap:
                     gap = alarm(gap)

@@ -9,9 +9,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from analyzer.feedback_track import GAP_THRESHOLD_S
 from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME
 from analyzer.mcapio.reader import RawMessage, Recording, channel_role
-from analyzer.mcapio.stats import GAP_THRESHOLD_S, EventStats
+from analyzer.mcapio.stats import EventStats
 from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
 
 SCANNED_TOPICS = (TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE)
@@ -147,7 +148,7 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
         if message.topic == TOPIC_DIAGNOSTICS:
             stats.diagnostics[_kind(message.data)] += 1
         else:
-            stats.attitude(message.log_time / 1e9)
+            stats.feedback.add(message.log_time / 1e9)
     info.stats = stats
     info.scanned_messages = scanned
     info.stats_from = f"a scan of {' and '.join(SCANNED_TOPICS)} only, {scanned} messages"
@@ -180,7 +181,7 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         if message.topic == TOPIC_DIAGNOSTICS:
             stats.diagnostics[_kind(message.data)] += 1
         else:
-            stats.attitude(message.log_time / 1e9)
+            stats.feedback.add(message.log_time / 1e9)
     scanned = sum(counts.values())
     start = min((span[0] for span in times.values()), default=None)
     end = max((span[1] for span in times.values()), default=None)

@@ -33,7 +33,7 @@ from analyzer.mcapio.channels import (
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
 from analyzer.mcapio.stats import EventStats
 from analyzer.pipeline import Batch, RawItem
-from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE, CanFrame, Event
+from analyzer.protocol.types import CanFrame, Event
 
 # Small chunks: a crash loses at most the chunk being built, and the time-based flush
 # closes chunks long before they fill up in live use.
@@ -273,10 +273,7 @@ class McapSink:
             add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
             self.messages_written += 1
             self.events_written += 1
-            if topic == TOPIC_DIAGNOSTICS:
-                self.stats.diagnostics[str(event.fields.get("kind", "unknown"))] += 1
-            elif topic == TOPIC_GIMBAL_ATTITUDE:
-                self.stats.attitude(event.time)
+            self.stats.add(topic, event.time, str(event.fields.get("kind", "unknown")))
             if views is not None and topic in VIEW_INPUT_TOPICS:
                 for view_topic, message in views.views(event):
                     view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
