@@ -55,7 +55,9 @@ TO_IDU = "gs_to_idu"
 FROM_IDU = "idu_to_gs"
 
 
-@dataclass(frozen=True, slots=True)
+# Frames and chunks are treated as immutable, but not frozen: a frozen dataclass costs
+# about 2 us more to build, which is a third of the per-frame budget of `decode`.
+@dataclass(slots=True)
 class CanFrame:
     """One CAN frame as seen on a bus or in a log file."""
 
@@ -74,7 +76,7 @@ class CanFrame:
         return len(self.data)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class StreamChunk:
     """Bytes read from a TCP or UART stream in one go."""
 
