@@ -63,47 +63,32 @@ class LinkSpec:
         return f"serial:{self.channel}@{self.rate or DEFAULT_SERIAL_BAUD}"
 
 
-def _split_rate(text: str, what: str) -> tuple[str, int | None]:
-    head, sep, tail = text.rpartition("@")
-    if not sep:
-        return text, None
-    if not tail.isdigit():
-        raise UsageError(f"{what}: {tail!r} after '@' is not a number")
-    return head, int(tail)
-
-
 def parse_link(spec: str) -> LinkSpec:
-    """Parse a link spec; raises UsageError with the accepted forms."""
+    """Parse a link with the ``--source`` grammar; ``tcp:PORT`` alone means loopback here.
+
+    Raises UsageError naming the accepted forms. There is no default address: a link
+    that sends or listens is always named in full.
+    """
+    from analyzer.sources.spec import CanSpec, SerialSpec, SpecError, TcpSpec, parse_source
+
+    forms = "expected can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (or tcp:PORT on loopback) "
+    forms += "or serial:PORT[@BAUD]"
     kind, _, rest = spec.partition(":")
-    if kind == "can":
-        interface, _, channel = rest.partition(":")
-        if not interface or not channel:
-            raise UsageError(
-                f"{spec!r}: expected can:INTERFACE:CHANNEL[@BITRATE], e.g. can:virtual:gimbal-demo "
-                "or can:socketcan:vcan0"
-            )
-        channel, rate = _split_rate(channel, spec)
-        return LinkSpec("can", interface=interface, channel=channel, rate=rate)
-    if kind == "tcp":
-        host, sep, port = rest.rpartition(":")
-        if not sep:
-            host, port = LOOPBACK, rest
-        host = host.strip("[]") or LOOPBACK
-        if not port.isdigit() or int(port) > 65535:
-            raise UsageError(
-                f"{spec!r}: expected tcp:HOST:PORT or tcp:PORT, e.g. tcp:127.0.0.1:2000"
-            )
-        return LinkSpec("tcp", host=host, port=int(port))
-    if kind == "serial":
-        port_name, rate = _split_rate(rest, spec)
-        if not port_name:
-            raise UsageError(
-                f"{spec!r}: expected serial:PORT[@BAUD], e.g. serial:/dev/ttyUSB0@115200"
-            )
-        return LinkSpec("serial", channel=port_name, rate=rate or DEFAULT_SERIAL_BAUD)
-    raise UsageError(
-        f"{spec!r}: expected can:INTERFACE:CHANNEL, tcp:HOST:PORT or serial:PORT[@BAUD]"
-    )
+    if kind not in ("can", "tcp", "serial") or (kind == "tcp" and not rest):
+        raise UsageError(f"{spec!r}: {forms}")
+    if kind == "tcp" and rest.isdigit():
+        spec = f"tcp:{LOOPBACK}:{rest}"
+    try:
+        parsed = parse_source(spec)
+    except SpecError as exc:
+        raise UsageError(f"{spec!r}: {exc.why}; {forms}") from None
+    if isinstance(parsed, CanSpec):
+        return LinkSpec("can", interface=parsed.interface, channel=parsed.channel,
+                        rate=parsed.bitrate)  # fmt: skip
+    if isinstance(parsed, TcpSpec):
+        return LinkSpec("tcp", host=parsed.host, port=parsed.port)
+    assert isinstance(parsed, SerialSpec)
+    return LinkSpec("serial", channel=parsed.url, rate=parsed.baudrate)
 
 
 def to_stream(can_id: int, data: bytes) -> bytes:

@@ -59,8 +59,17 @@ SourceSpec = CanSpec | TcpSpec | ProxySpec | SerialSpec | FileSpec
 _NO_BITRATE = frozenset({"virtual", "socketcan", "udp_multicast"})
 
 
-def _bad(spec: str, why: str) -> UsageError:
-    return UsageError(f"bad source {spec!r}: {why}; valid forms: {SOURCE_FORMS}")
+class SpecError(UsageError):
+    """A spec that does not parse; ``why`` says what is wrong with it, in a few words."""
+
+    def __init__(self, spec: str, why: str) -> None:
+        super().__init__(f"bad source {spec!r}: {why}; valid forms: {SOURCE_FORMS}")
+        self.spec = spec
+        self.why = why
+
+
+def _bad(spec: str, why: str) -> SpecError:
+    return SpecError(spec, why)
 
 
 def _port(text: str, spec: str) -> int:
