@@ -73,3 +73,32 @@ def test_record_tui_shows_the_screen_and_q_finalises_the_recording(tmp_path: Pat
     assert not events.recovered, "the recording was not finalised"
     assert topics.count("/gimbal/command") == 45
     assert "/gimbal/attitude" in topics
+
+
+def test_record_tui_with_a_duration_quits_by_itself(tmp_path: Path) -> None:
+    out = tmp_path / "timed.mcap"
+    primary, secondary = os.openpty()
+    env = {**os.environ, "TERM": "xterm-256color", "COLUMNS": "120", "LINES": "40"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "analyzer", "record", "--source", f"file:{SAMPLE}",
+         "--speed", "1", "--duration", "2", "-o", str(out), "--tui"],
+        stdin=secondary, stdout=secondary, stderr=secondary, cwd=ROOT, env=env,
+        start_new_session=True,
+    )  # fmt: skip
+    os.close(secondary)
+    stop = threading.Event()
+    drain = threading.Thread(target=read_until, args=(primary, b"\0", 60, stop))
+    drain.start()
+    try:
+        assert proc.wait(timeout=30) == 0  # no key pressed: the duration ends it
+    finally:
+        stop.set()
+        drain.join()
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        os.close(primary)
+    events = read_events(out)
+    assert not events.recovered, "the recording was not finalised"
+    commands = [e for e in events if e.topic == "/gimbal/command"]
+    assert 0 < len(commands) < 45  # two seconds of a twenty-second flight

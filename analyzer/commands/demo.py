@@ -200,7 +200,14 @@ def run(args: argparse.Namespace) -> int:
             scene.start()
             if timer is not None:
                 timer.start()
-            result = int(run_app(capture, recording=path, source_label=f"demo on {spec}"))
+            result = int(
+                run_app(
+                    capture,
+                    recording=path,
+                    source_label=f"demo on {spec}",
+                    exit_when_done=args.duration is not None,
+                )
+            )
         else:
             capture.start()
             scene.start()

@@ -180,7 +180,14 @@ def run(args: argparse.Namespace) -> int:
         if args.tui:
             if timer is not None:
                 timer.start()
-            result = int(run_app(capture, recording=path, source_label=description))
+            result = int(
+                run_app(
+                    capture,
+                    recording=path,
+                    source_label=description,
+                    exit_when_done=args.duration is not None,
+                )
+            )
         else:
             capture.start()
             if timer is not None:

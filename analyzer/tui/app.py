@@ -109,6 +109,7 @@ class MonitorApp(App[int]):
         state: MonitorState | None = None,
         file_size: Callable[[str], int | None] = _file_size,
         handle_sigterm: bool = False,
+        exit_when_done: bool = False,
     ) -> None:
         super().__init__()
         self.bridge = bridge
@@ -126,6 +127,7 @@ class MonitorApp(App[int]):
         self._log_key: tuple[object, ...] = ()
         self._capture_stopped = False
         self._handle_sigterm = handle_sigterm
+        self.exit_when_done = exit_when_done  # quit once the source has ended and is shown
         self._mounted = False
 
     # -- layout --------------------------------------------------------------------------------
@@ -193,6 +195,8 @@ class MonitorApp(App[int]):
             state.mark_dropped(dropped)
         if self.bridge.closed and not state.source_ended and not self.bridge.backlog:
             state.source_finished()
+            if self.exit_when_done:
+                self.exit(0)
         return len(batches)
 
     # -- drawing -------------------------------------------------------------------------------
@@ -361,8 +365,12 @@ def run_app(
     *,
     recording: str | None = None,
     source_label: str = "",
+    exit_when_done: bool = False,
 ) -> int:
     """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
+
+    With ``exit_when_done`` the UI also quits by itself when the capture ends (a
+    ``--duration`` ran out, a replayed file ended); otherwise it stays to be read.
 
     The capture is stopped and joined (so every sink, the recording included, is
     finalised) whether the user quits (q, Ctrl+C, SIGTERM) or the UI fails. Returns 0,
@@ -377,6 +385,7 @@ def run_app(
         recording=recording,
         capture=capture,
         handle_sigterm=True,
+        exit_when_done=exit_when_done,
     )
     capture.start()
     try:
