@@ -101,6 +101,14 @@ def test_mf4_without_its_package_is_a_usage_error(
         open_input(str(path))
 
 
+def test_a_text_log_that_gives_no_frame_says_so(tmp_path: Path) -> None:
+    path = tmp_path / "junk.asc"
+    path.write_text("this is\nnot an ASC export\nat all\n")
+    items: list[Any] = list(open_input(str(path)))
+    assert len(items) == 1 and items[0].fields["kind"] == BAD_LINE
+    assert "no CAN frame could be read" in items[0].fields["detail"]
+
+
 def test_not_a_blf_is_a_usage_error(tmp_path: Path) -> None:
     path = tmp_path / "x.blf"
     path.write_bytes(b"this is not a BLF file at all, not even close, no" * 4)

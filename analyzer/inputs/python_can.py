@@ -103,6 +103,18 @@ class PythonCanReader(InputReader):
                 self.position_bytes = _tell(raw)
             yield frame
         self.position_bytes = self.size_bytes or _tell(raw)
+        if not self.frames and self.size_bytes:
+            # python-can's text readers skip lines they do not understand without a word;
+            # a non-empty file that gave nothing is worth saying so.
+            kind = BAD_LINE if READERS[self.format_name][1] else BAD_FRAME
+            yield diagnostic(
+                0.0,
+                self.source,
+                kind,
+                f"no CAN frame could be read from {self.size_bytes:,} bytes read as "
+                f"{self.format_name.upper()}; check the file's format (--format)",
+                frames_read=0,
+            )
 
     @property
     def stats(self) -> dict[str, int]:
