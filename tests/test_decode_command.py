@@ -275,3 +275,14 @@ def test_ctrl_c_on_live_input_still_prints_the_summary(
     code, out, _ = run(capsys, "-", "--summary")
     assert code == 130
     assert "/gimbal/command" in out and "1 lines" in out
+
+
+def test_wrong_port_says_which_ports_the_capture_has(capsys: pytest.CaptureFixture[str]) -> None:
+    sample = Path(__file__).resolve().parent.parent / "samples" / "idu-tcp.pcap"
+    assert main(["decode", str(sample), "--port", "2001"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert "no TCP traffic to or from port 2001" in captured.err
+    assert "TCP ports seen: 2000 (" in captured.err
+    assert main(["decode", str(sample)]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -125,6 +125,8 @@ def run(args: argparse.Namespace) -> int:
             sink.close()
             with contextlib.suppress(OSError):
                 os.remove(partial)
+    for note in getattr(source, "notes", ()):
+        print(f"note: {note}", file=sys.stderr)
     if not args.quiet:
         rate = result.items / result.seconds if result.seconds > 0 else 0.0
         print(

@@ -168,6 +168,8 @@ def run(args: argparse.Namespace) -> int:
             f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
             f"from {args.file}\n"
         )
+    for note in reader.notes:
+        sys.stderr.write(f"note: {note}\n")
     return 130 if interrupted else 0
 
 

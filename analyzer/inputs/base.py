@@ -32,6 +32,9 @@ class InputReader:
         self.position_bytes = 0
         self.first_time: float | None = None  # time of the first frame read (skipped ones too)
         self.last_time: float | None = None
+        # Facts about the input for the user that are no protocol diagnostic, known once
+        # it has been read (e.g. "no TCP traffic on port 2000; ports seen: ...").
+        self.notes: list[str] = []
         self._closers: list[Any] = []
 
     def __iter__(self) -> Iterator[InputItem]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import socket
 import struct
+from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -68,6 +69,9 @@ class _Flow:
         return state
 
 
+MAX_PORTS_SEEN = 64  # distinct other TCP ports counted for the "wrong port?" note
+
+
 @dataclass
 class PcapStats:
     packets: int = 0
@@ -125,6 +129,7 @@ class PcapReader(InputReader):
             )
         self._flows: dict[tuple[Any, ...], _Flow] = {}
         self.counts = PcapStats()
+        self._other_ports: Counter[int] = Counter()  # TCP packets by the lower port number
 
     def __iter__(self) -> Iterator[InputItem]:
         raw = self._raw
@@ -154,6 +159,14 @@ class PcapReader(InputReader):
         self._collect()
         yield from self._capture_problems(time)
         self.position_bytes = self.size_bytes or 0
+        if not counts.tcp_packets and self._other_ports:
+            seen = ", ".join(
+                f"{port} ({n} packets)" for port, n in self._other_ports.most_common(5)
+            )
+            self.notes.append(
+                f"no TCP traffic to or from port {self.port} in {self.source}; "
+                f"TCP ports seen: {seen}. Give the IDU's port with --port."
+            )
 
     def _capture_problems(self, time: float) -> list[InputItem]:
         counts = self.counts
@@ -271,6 +284,8 @@ class PcapReader(InputReader):
             direction, client, server = FROM_IDU, (dst, dport), (src, sport)
         else:
             counts.other_packets += 1
+            if len(self._other_ports) < MAX_PORTS_SEEN or min(sport, dport) in self._other_ports:
+                self._other_ports[min(sport, dport)] += 1
             return []
         offset = (tcp[12] >> 4) * 4
         if offset < 20:
