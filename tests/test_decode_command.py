@@ -286,3 +286,15 @@ def test_wrong_port_says_which_ports_the_capture_has(capsys: pytest.CaptureFixtu
     assert "TCP ports seen: 2000 (" in captured.err
     assert main(["decode", str(sample)]) == 0
     assert "note:" not in capsys.readouterr().err
+
+
+def test_a_log_without_protocol_frames_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "other-bus.log"
+    path.write_text(f"({T0:.6f}) can0 18FEF100#0011\n({T0 + 1:.6f}) can0 123#01\n")
+    assert main(["decode", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "none of the 2 CAN frames uses a protocol ID" in err
+    assert main(["decode", str(log_file(tmp_path))]) == 0
+    assert "note:" not in capsys.readouterr().err

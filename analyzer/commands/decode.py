@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import IO, Any
 
 from analyzer.errors import UsageError
+from analyzer.protocol.ids import PROTOCOL_IDS
 
 HELP = "decode a capture file (candump, python-can logs, pcap, raw dumps, MCAP) into events"
 
@@ -168,9 +169,21 @@ def run(args: argparse.Namespace) -> int:
             f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
             f"from {args.file}\n"
         )
-    for note in reader.notes:
+    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder.stats)]:
         sys.stderr.write(f"note: {note}\n")
     return 130 if interrupted else 0
+
+
+def _nothing_for_us(input_stats: dict[str, int], decoder_stats: dict[str, int]) -> list[str]:
+    """A note when CAN frames were read but none of them belongs to the protocol."""
+    frames = input_stats.get("frames", decoder_stats.get("frames", 0))
+    if frames and not decoder_stats.get("protocol_frames") and not decoder_stats.get("chunks"):
+        ids = ", ".join(f"0x{i:08X}" for i in sorted(PROTOCOL_IDS))
+        return [
+            f"none of the {frames:,} CAN frames uses a protocol ID ({ids}); "
+            "is this the gimbal's bus? (--raw shows them)"
+        ]
+    return []
 
 
 def _write(out: IO[str], lines: list[str], flush: bool) -> None:
