@@ -87,3 +87,20 @@ def test_convert_user_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "overwrite the input" in capsys.readouterr().err
     assert main(["convert", str(log), "-o", str(tmp_path / "no" / "x.mcap")]) == 1
     assert "does not exist" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("sample", ["flight-candump.log", "idu-tcp.pcap", "uart-dump.bin"])
+def test_samples_decode_the_same_after_convert(
+    sample: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The candump sample ends with a damaged line: its bad_line diagnostic must come
+    # back from the recording too, not only the frames.
+    path = Path(__file__).resolve().parent.parent / "samples" / sample
+    out = tmp_path / "sample.mcap"
+    assert main(["convert", str(path), "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["decode", str(path), "--json"]) == 0
+    direct = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert main(["decode", str(out), "--json"]) == 0
+    again = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert direct and again == direct

@@ -14,9 +14,9 @@ from analyzer.protocol.types import INCOMPLETE, diagnostic
 class McapReader(InputReader):
     """Raw items of a recording, for decoding again.
 
-    ``read_replay`` also gives back the diagnostics a new decode cannot re-create (link
-    state, bad lines of the original input); ``read_items`` is the fallback. A recording
-    whose writer was killed is recovered as far as it can be read; a diagnostic then says
+    Besides the raw items, ``read_replay`` gives back the diagnostics a new decode cannot
+    re-create (link state, bad lines of the original input). A recording whose writer was
+    killed is recovered as far as it can be read; a diagnostic then says
     so at the end.
     """
 
@@ -27,10 +27,10 @@ class McapReader(InputReader):
         open_binary(path).close()  # a missing or unreadable file: one-line UsageError
         self.size_bytes = os.path.getsize(path)
         try:
-            from analyzer.mcapio.reader import read_items
+            from analyzer.mcapio.reader import read_replay
         except ImportError as exc:
             raise UsageError(f"cannot read {path}: MCAP support is not available ({exc})") from None
-        self._items: Any = read_items(path)
+        self._items: Any = read_replay(path)
         self.items = 0
 
     def __iter__(self) -> Iterator[InputItem]:
