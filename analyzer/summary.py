@@ -222,6 +222,8 @@ class Summary:
             protocol = d.get("protocol_frames", 0)
             other = frames - protocol
             parts.append(f"{frames:,} CAN frames ({protocol:,} protocol, {other:,} other)")
+        if s.get("recorded_events"):
+            parts.append(f"{s['recorded_events']:,} events as recorded (not decoded again)")
         if d.get("chunks"):
             parts.append(f"{d['chunks']:,} stream chunks")
         if s.get("bad_lines"):

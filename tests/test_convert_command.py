@@ -104,3 +104,17 @@ def test_samples_decode_the_same_after_convert(
     assert main(["decode", str(out), "--json"]) == 0
     again = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
     assert direct and again == direct
+
+
+def test_decode_stored_shows_the_recorded_events(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log, out = tmp_path / "flight.log", tmp_path / "flight.mcap"
+    _candump(log)
+    assert main(["convert", str(log), "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["decode", str(out), "--json", "--stored"]) == 0
+    stored = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert stored == [json.loads(json.dumps(e.to_dict())) for e in read_events(out)]
+    assert main(["decode", str(log), "--stored"]) == 2
+    assert "--stored reads MCAP recordings" in capsys.readouterr().err

@@ -59,6 +59,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=2000,
         help="TCP port of the IDU in pcap captures (default: 2000)",
     )
+    parser.add_argument(
+        "--stored",
+        action="store_true",
+        help="MCAP recordings: show the events as recorded instead of decoding the raw "
+        "frames again with this version (the default)",
+    )
     parser.add_argument("--json", action="store_true", help="one JSON object per event")
     parser.add_argument(
         "--summary",
@@ -98,7 +104,11 @@ def run(args: argparse.Namespace) -> int:
     out = sys.stdout
     color = use_color(args.color, out)
     reader = open_input(
-        args.file, args.format, args.port, wanted_ids=None if args.raw else PROTOCOL_IDS
+        args.file,
+        args.format,
+        args.port,
+        wanted_ids=None if args.raw else PROTOCOL_IDS,
+        stored=args.stored,
     )
     live = args.file == "-"
     decoder = Decoder(emit_other=args.raw)

@@ -123,15 +123,20 @@ def open_input(
     port: int = TCP_PORT,
     *,
     wanted_ids: Iterable[int] | None = None,
+    stored: bool = False,
 ) -> InputReader:
     """Open a capture file (``-`` = standard input) for reading items.
 
     Iterating the result gives ``CanFrame`` / ``StreamChunk`` items and ``Event``
     diagnostics for unreadable lines or records; ``size_bytes`` / ``position_bytes``
     tell how far it got. ``wanted_ids`` lets the candump reader skip frames with other
-    IDs cheaply (they are still counted). Unknown or unreadable files raise UsageError.
+    IDs cheaply (they are still counted). ``stored`` reads the events an MCAP recording
+    holds instead of its raw frames (only for MCAP). Unknown or unreadable files raise
+    UsageError.
     """
     name = normalise_format(fmt) if fmt else None
+    if stored and (path == "-" or (name or detect_format(path)) != "mcap"):
+        raise UsageError(f"--stored reads MCAP recordings; {path} is not one")
     if path == "-":
         from analyzer.inputs.stdin import StdinCandumpReader, StdinStreamReader
 
@@ -159,7 +164,7 @@ def open_input(
     if name == "mcap":
         from analyzer.inputs.mcap import McapReader
 
-        return McapReader(path)
+        return McapReader(path, stored=stored)
     from analyzer.inputs.python_can import PythonCanReader
 
     return PythonCanReader(path, name)

@@ -22,15 +22,17 @@ class McapReader(InputReader):
 
     format_name = "mcap"
 
-    def __init__(self, path: str) -> None:
+    def __init__(self, path: str, *, stored: bool = False) -> None:
         super().__init__(path)
         open_binary(path).close()  # a missing or unreadable file: one-line UsageError
         self.size_bytes = os.path.getsize(path)
         try:
-            from analyzer.mcapio.reader import read_replay
+            from analyzer.mcapio.reader import read_events, read_replay
         except ImportError as exc:
             raise UsageError(f"cannot read {path}: MCAP support is not available ({exc})") from None
-        self._items: Any = read_replay(path)
+        # stored: the events as recorded (decoded by the version that wrote the file).
+        self._items: Any = read_events(path) if stored else read_replay(path)
+        self.stored = stored
         self.items = 0
 
     def __iter__(self) -> Iterator[InputItem]:
@@ -47,4 +49,4 @@ class McapReader(InputReader):
 
     @property
     def stats(self) -> dict[str, int]:
-        return {"items": self.items}
+        return {"recorded_events" if self.stored else "items": self.items}
