@@ -124,6 +124,15 @@ PALETTES = {
     0xE: "cryogenic_blue",
 }
 
+# Parameter sets that the gimbal and the dual-sensor camera share.
+TAP_POINT = (_tap_point(1, "x"), _tap_point(3, "y"))
+TRACKING_BOX = (
+    _box_centre(1, "x"),
+    _box_centre(3, "y"),
+    _box_size(5, "width", "horizontal length"),
+    _box_size(6, "height", "vertical width"),
+)
+
 G = COMPONENT_GIMBAL
 DS = COMPONENT_DUAL_SENSOR
 
@@ -134,7 +143,7 @@ COMMANDS: tuple[Command, ...] = (
         0x01,
         "tap_zoom",
         "TapZoom",
-        (_tap_point(1, "x"), _tap_point(3, "y")),
+        TAP_POINT,
         description="Turn the target point to the image centre and zoom in twice.",
     ),
     Command(
@@ -157,12 +166,7 @@ COMMANDS: tuple[Command, ...] = (
         0x05,
         "tracking",
         "Tracking",
-        (
-            _box_centre(1, "x"),
-            _box_centre(3, "y"),
-            _box_size(5, "width", "horizontal length"),
-            _box_size(6, "height", "vertical width"),
-        ),
+        TRACKING_BOX,
         description="Start tracking the target in the given box.",
     ),
     Command(G, 0x06, "tracking_stop", "Tracking stop", description="Stop target tracking."),
@@ -286,7 +290,7 @@ COMMANDS: tuple[Command, ...] = (
         0x01,
         "tap_zoom",
         "TapZoom (Dual-Sensor)",
-        (_tap_point(1, "x"), _tap_point(3, "y")),
+        TAP_POINT,
         description="Turn the target point to the image centre and zoom in twice.",
     ),
     Command(
@@ -320,12 +324,7 @@ COMMANDS: tuple[Command, ...] = (
         0x05,
         "tracking",
         "Tracking (Dual-Sensor)",
-        (
-            _box_centre(1, "x"),
-            _box_centre(3, "y"),
-            _box_size(5, "width", "horizontal length"),
-            _box_size(6, "height", "vertical width"),
-        ),
+        TRACKING_BOX,
         description="Start tracking the target in the given box.",
     ),
     Command(
