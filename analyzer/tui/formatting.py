@@ -14,32 +14,27 @@ def format_time(t: float) -> str:
     return render.format_time(t).rjust(12)
 
 
-def format_age(age: float | None) -> str:
-    """How long ago, e.g. '0.25 s', '12 s', '3 min'; 'never' for None."""
-    if age is None:
-        return "never"
+def _age(age: float, units: tuple[str, str, str]) -> str:
+    """Seconds below two minutes, minutes below two hours, then hours."""
+    seconds, minutes, hours = units
     age = max(age, 0.0)
     if age < 10:
-        return f"{age:.2f} s"
+        return f"{age:.2f}{seconds}"
     if age < 120:
-        return f"{age:.0f} s"
+        return f"{age:.0f}{seconds}"
     if age < 7200:
-        return f"{age / 60:.0f} min"
-    return f"{age / 3600:.0f} h"
+        return f"{age / 60:.0f}{minutes}"
+    return f"{age / 3600:.0f}{hours}"
+
+
+def format_age(age: float | None) -> str:
+    """How long ago, e.g. '0.25 s', '12 s', '3 min'; 'never' for None."""
+    return "never" if age is None else _age(age, (" s", " min", " h"))
 
 
 def short_age(age: float | None) -> str:
     """Compact age for tight columns: '0.25s', '12s', '3m', '2h'; '—' for None."""
-    if age is None:
-        return "—"
-    age = max(age, 0.0)
-    if age < 10:
-        return f"{age:.2f}s"
-    if age < 120:
-        return f"{age:.0f}s"
-    if age < 7200:
-        return f"{age / 60:.0f}m"
-    return f"{age / 3600:.0f}h"
+    return "—" if age is None else _age(age, ("s", "m", "h"))
 
 
 def format_size(size: int | None) -> str:
