@@ -416,13 +416,11 @@ class Recording:
         """Raw CAN frames and stream chunks, for decoding again."""
         for message in self.messages(topics=set(RAW_TOPICS), roles={ROLE_RAW}):
             try:
-                obj = json.loads(message.data)
-                if message.topic == TOPIC_CAN_FRAMES:
-                    yield can_frame_from_dict(obj)
-                elif message.topic == TOPIC_STREAM_BYTES:
-                    yield stream_chunk_from_dict(obj)
+                item = _raw_item(message.topic, json.loads(message.data))
             except (ValueError, KeyError, TypeError):
                 continue  # not one of ours: nothing to decode
+            if item is not None:
+                yield item
 
     def replay(self) -> Iterator[RawItem | Event]:
         """Raw items plus the stored diagnostics a decoder cannot re-create (link changes,
@@ -431,10 +429,9 @@ class Recording:
         for message in self.messages(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
             try:
                 obj = json.loads(message.data)
-                if message.topic == TOPIC_CAN_FRAMES:
-                    yield can_frame_from_dict(obj)
-                elif message.topic == TOPIC_STREAM_BYTES:
-                    yield stream_chunk_from_dict(obj)
+                item = _raw_item(message.topic, obj)
+                if item is not None:
+                    yield item
                 elif isinstance(obj, dict) and obj.get("kind") in SOURCE_KINDS:
                     obj.setdefault("topic", message.topic)
                     obj.setdefault("time", message.log_time / 1e9)
@@ -508,6 +505,15 @@ class RecordingIterator(Generic[T]):
     def note(self) -> str:
         """'' for a finished file; else what the recover path read (complete after iterating)."""
         return self.recording.recovery_note
+
+
+def _raw_item(topic: str, obj: Any) -> RawItem | None:
+    """The frame or chunk of a raw-channel message (None for other topics)."""
+    if topic == TOPIC_CAN_FRAMES:
+        return can_frame_from_dict(obj)
+    if topic == TOPIC_STREAM_BYTES:
+        return stream_chunk_from_dict(obj)
+    return None
 
 
 def read_items(path: str | os.PathLike[str]) -> RecordingIterator[RawItem]:
