@@ -5,6 +5,7 @@ from __future__ import annotations
 import time as _time
 from typing import Any
 
+from analyzer.protocol.fields import CODE_SUFFIX
 from analyzer.protocol.types import (
     FROM_IDU,
     TO_IDU,
@@ -65,8 +66,6 @@ META_FIELDS = frozenset(
         "byte_count",
         "start_time",
         "frames",
-        "gimbal_type_name",
-        "control_mode_name",
     }
 )
 
@@ -134,8 +133,6 @@ def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
             shown, unit = key[: -len(suffix)], words
             break
     shown = shown.replace("_", " ")
-    if key == "control_mode" and fields.get("control_mode_name"):
-        value = fields["control_mode_name"]
     if isinstance(value, bool):
         text = "yes" if value else "no"
     elif isinstance(value, float):
@@ -174,10 +171,9 @@ def describe(event: Event) -> str:
         if fields.get("name") == "unknown":
             words.append(f"s_id 0x{fields.get('s_id', 0):02X} cmd 0x{fields.get('cmd', 0):02X}")
             words.append(f"raw {fields.get('raw', '')}")
-    labelled = {k[:-4] for k in fields if k.endswith("_raw") and k[:-4] in fields}
     for key, value in fields.items():
-        if key in META_FIELDS or (key.endswith("_raw") and key[:-4] in labelled):
-            continue
+        if key in META_FIELDS or (key.endswith(CODE_SUFFIX) and key[: -len(CODE_SUFFIX)] in fields):
+            continue  # the label says it; the number stays in the JSON
         if topic == TOPIC_COMMAND and key in LEADING_WORDS and isinstance(value, str):
             head.append(value)  # "zoom_in", "single", "iron_red" say it alone
         elif topic == TOPIC_COMMAND and key in TRAILING_WORDS and isinstance(value, str):

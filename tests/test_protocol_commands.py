@@ -149,9 +149,9 @@ def test_look_down_is_one_key_to_down() -> None:
 
 def test_coordinate_system_flag() -> None:
     fields, _ = decode_command(bytes.fromhex("0F 08 01 C2 01 01 00 00"))
-    assert fields["coordinate_system"] == "airframe" and fields["coordinate_system_raw"] == 1
+    assert fields["coordinate_system"] == "airframe" and fields["coordinate_system_code"] == 1
     fields, _ = decode_command(bytes.fromhex("0F 08 01 C2 01 07 00 00"))
-    assert fields["coordinate_system"] == "geodetic" and fields["coordinate_system_raw"] == 7
+    assert fields["coordinate_system"] == "geodetic" and fields["coordinate_system_code"] == 7
     assert encode_command("specified_angle", yaw_deg=45, coordinate_system="airframe")[5] == 1
 
 

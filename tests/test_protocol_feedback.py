@@ -34,9 +34,9 @@ def test_attitude_layout_by_hand() -> None:
     assert fields["pitch_deg"] == -45.0
     assert fields["yaw_deg"] == 270.0
     assert fields["motor_yaw_deg"] == 12.34
-    assert fields["gimbal_type"] == 1 and fields["gimbal_type_name"].startswith("35x")
+    assert fields["gimbal_type_code"] == 1 and fields["gimbal_type"].startswith("35x")
     assert fields["tracking"] is False
-    assert fields["control_mode"] == 3 and fields["control_mode_name"] == "locking"
+    assert fields["control_mode_code"] == 3 and fields["control_mode"] == "locking"
     assert encode_attitude(pitch_deg=-45, yaw_deg=270, motor_yaw_deg=12.34) == message
 
 

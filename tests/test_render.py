@@ -63,7 +63,7 @@ def test_describe_event_is_the_words_without_columns() -> None:
 def test_command_parameters(name: str, params: dict[str, object], words: str) -> None:
     line = render_event(command(name, **params))
     assert words in body(line)
-    assert "_raw" not in line
+    assert "_raw" not in line and "_code" not in line
 
 
 def test_unknown_command_shows_its_bytes_and_warning() -> None:

@@ -150,11 +150,11 @@ def test_can_bus_commands_are_decoded_and_feedback_follows_them(bus: str) -> Non
             commands = [e for e in sink.events if e.topic == TOPIC_COMMAND]
             assert commands and commands[0].fields["name"] == "gimbal_control"
             assert commands[0].fields["tilt_speed_dps"] == 20.0
-            assert attitude(sink.events, lambda f: f["control_mode_name"] == "full_lock")
+            assert attitude(sink.events, lambda f: f["control_mode"] == "full_lock")
 
             ground.send(CONTROL_ID, encode_command("specified_angle", pitch_deg=-30))
             assert wait_for(lambda: attitude(sink.events, lambda f: f["pitch_deg"] == -30.0))
-            assert attitude(sink.events, lambda f: f["control_mode_name"] == "locking")
+            assert attitude(sink.events, lambda f: f["control_mode"] == "locking")
             assert diagnostic_kinds(sink.events) <= {"link"}
             # The simulator decoded the same commands with the same decoder.
             names = {e.fields["name"] for e in runner.received if e.topic == TOPIC_COMMAND}

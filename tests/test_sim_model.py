@@ -183,7 +183,7 @@ def test_attitude_feedback_every_500_ms_with_good_crc_and_the_model_values() -> 
     assert all(not e.warnings for e in events)
     assert attitudes[-1].fields["pitch_deg"] == -30.0
     assert attitudes[1].fields["pitch_deg"] == -30.0  # 60 deg/s: there after 0.5 s
-    assert attitudes[0].fields["control_mode"] == 3
+    assert attitudes[0].fields["control_mode_code"] == 3
 
 
 def test_feedback_is_sent_as_four_8_byte_segments_on_the_feedback_id() -> None:

@@ -58,7 +58,6 @@ ATTITUDE = FeedbackLayout(
                 16,
                 "u8",
                 labels=GIMBAL_TYPES,
-                label_as="gimbal_type_name",
                 default=1,
                 description="gimbal type (Note 1)",
             ),
@@ -75,7 +74,6 @@ ATTITUDE = FeedbackLayout(
                 18,
                 "u8",
                 labels=CONTROL_MODES,
-                label_as="control_mode_name",
                 default=3,
                 description="control mode (Note 2)",
             ),
@@ -180,7 +178,10 @@ def decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, An
         warnings.append("padding after the CRC is not zero: " + padding.hex(" ").upper())
     if layout is ATTITUDE:
         raw_motor = ATTITUDE.layout.fields[5].read_raw(data)
-        if abs(raw_motor) > MOTOR_YAW_LIMIT and fields["gimbal_type"] not in WIDE_MOTOR_YAW_TYPES:
+        if (
+            abs(raw_motor) > MOTOR_YAW_LIMIT
+            and fields["gimbal_type_code"] not in WIDE_MOTOR_YAW_TYPES
+        ):
             warnings.append(
                 f"motor_yaw_deg: {raw_motor / 100:.2f} deg out of range [-170.00, 170.00] deg "
                 "for this gimbal type"

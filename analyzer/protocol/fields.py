@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import struct
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -19,6 +20,36 @@ _KINDS: dict[str, tuple[str, int, int, int]] = {
 }
 
 _STRUCTS = {kind: struct.Struct(fmt) for kind, (fmt, _, _, _) in _KINDS.items()}
+
+
+# A labelled field ``X`` holds the label (a string); ``X_code`` holds the raw number.
+CODE_SUFFIX = "_code"
+UNKNOWN_PREFIX = "unknown_0x"
+# Characters escaped in label patterns (only these: the pattern is also an ECMA-262 regex).
+_REGEX_SPECIAL = re.compile(r"[.^$*+?()\[\]{}|\\/]")
+
+
+def label_pattern(fields: list[Field]) -> str:
+    """Regular expression matching the labels of ``fields`` (and ``unknown_0x..``)."""
+    names: dict[str, None] = {}
+    width = 2
+    for f in fields:
+        names.update(dict.fromkeys((f.labels or {}).values()))
+        if f.other_label:
+            names[f.other_label] = None
+        width = max(width, 2 * f.size)
+    known = "|".join(_REGEX_SPECIAL.sub(r"\\\g<0>", n) for n in names)
+    return f"^({known}|{UNKNOWN_PREFIX}[0-9a-f]{{{width}}})$"
+
+
+def _unknown_code(label: str) -> int | None:
+    """``unknown_0x7f`` -> 127; None for anything else."""
+    if not label.startswith(UNKNOWN_PREFIX):
+        return None
+    digits = label[len(UNKNOWN_PREFIX) :]
+    if not digits or any(c not in "0123456789abcdefABCDEF" for c in digits):
+        return None
+    return int(digits, 16)
 
 
 class EncodeError(ValueError):
@@ -43,13 +74,25 @@ class Field:
     maximum: int | None = None
     labels: Mapping[int, str] | None = None
     other_label: str | None = None  # label for raw values that are not in ``labels``
-    label_as: str | None = None  # put the label in this field and keep the raw number in ``name``
     boolean: bool = False
     expected: int | None = None  # a fixed raw value the document prescribes
     default: Any = None  # value used by encode() when the caller leaves it out
     description: str = ""
     soft_maximum: int | None = None  # above this: valid only on some models (warn)
     soft_note: str = ""
+
+    @property
+    def code_name(self) -> str:
+        """Name of the companion field that keeps the raw number of a labelled value."""
+        return self.name + CODE_SUFFIX
+
+    def unknown_label(self, raw: int) -> str:
+        """Label of a raw value the table does not know: ``unknown_0x7f``."""
+        return f"{UNKNOWN_PREFIX}{raw:0{2 * self.size}x}"
+
+    def label_pattern(self) -> str:
+        """Regular expression matching every label this field can decode to."""
+        return label_pattern([self])
 
     @property
     def size(self) -> int:
@@ -87,12 +130,9 @@ class Field:
             label = self.labels.get(raw, self.other_label)
             if label is None:
                 warnings.append(f"{self.name}: unknown value {raw} (0x{raw:02X})")
-            if self.label_as:
-                out[self.name] = raw
-                out[self.label_as] = label if label is not None else "unknown"
-            else:
-                out[self.name] = label if label is not None else raw
-                out[self.name + "_raw"] = raw
+                label = self.unknown_label(raw)
+            out[self.name] = label
+            out[self.name + CODE_SUFFIX] = raw
             return
         if self.boolean:
             out[self.name] = raw != 0
@@ -135,8 +175,11 @@ class Field:
                     return raw
             if self.other_label is not None and value == self.other_label:
                 return 0
-            valid = ", ".join(self.labels.values())
-            raise EncodeError(f"{self.name}: unknown value {value!r}; valid: {valid}")
+            code = _unknown_code(value)
+            if code is None:
+                valid = ", ".join(self.labels.values())
+                raise EncodeError(f"{self.name}: unknown value {value!r}; valid: {valid}")
+            value = code  # a decoded unknown value, checked below like a raw number
         if isinstance(value, bool):
             raw = int(value)
         elif isinstance(value, int) and self.labels is not None:
@@ -178,13 +221,16 @@ class Field:
         text = self.description
         if self.unit:
             text = f"{text} [{self.unit}]" if text else f"[{self.unit}]"
-        if self.labels is not None and not self.label_as:
-            names = list(self.labels.values())
+        if self.labels is not None:
+            values = ", ".join(f"{k} = {v}" for k, v in self.labels.items())
             if self.other_label:
-                names.append(self.other_label)
-            schema = {"type": ["string", "integer"], "enum": [*names]}
-            schema["description"] = text + " (label; a raw number when unknown)"
-            return schema
+                values += f", other = {self.other_label}"
+            return {
+                "type": "string",
+                "pattern": self.label_pattern(),
+                "description": f"{text} ({values}; '{UNKNOWN_PREFIX}..' for a value the "
+                f"document does not list; the number is in {self.code_name})",
+            }
         if self.boolean:
             return {"type": "boolean", "description": text}
         schema["type"] = "integer" if self.div == 1 else "number"

@@ -6,7 +6,7 @@ from typing import Any
 
 from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
-from analyzer.protocol.fields import Field
+from analyzer.protocol.fields import Field, label_pattern
 from analyzer.protocol.ids import COMPONENT_NAMES
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
@@ -69,28 +69,32 @@ def _envelope(topic: str, title: str, description: str) -> dict[str, Any]:
 
 
 def _add_fields(schema: dict[str, Any], fields: tuple[Field, ...], *, required: bool) -> None:
+    """Add the properties of ``fields``; a labelled ``X`` is followed by its number ``X_code``."""
     props = schema["properties"]
+    labelled: dict[str, list[Field]] = {}
     for f in fields:
-        new = f.json_schema()
-        old = props.get(f.name)
-        if old is None:
-            props[f.name] = new
-        elif "enum" in old and "enum" in new:
-            # The same name with different label sets (e.g. ``action``): allow all.
-            old["enum"] = list(dict.fromkeys([*old["enum"], *new["enum"]]))
-        if f.labels is not None:
-            if f.label_as:
-                props[f.name] = {"type": "integer", "description": f"{f.description} (raw)"}
-                props[f.label_as] = {
-                    "type": "string",
-                    "description": f"{f.description}: "
-                    + ", ".join(f"{k} = {v}" for k, v in f.labels.items())
-                    + ", or 'unknown'",
-                }
-            else:
-                props[f.name + "_raw"] = {"type": "integer", "description": f"{f.name} as a number"}
-        if required:
-            schema["required"].append(f.name)
+        if f.name not in props:
+            props[f.name] = f.json_schema()
+            if required:
+                schema["required"].append(f.name)
+        if f.labels is None:
+            continue
+        same = labelled.setdefault(f.name, [])
+        same.append(f)
+        if len(same) > 1:
+            # The same name with different label sets (e.g. ``action``) accepts all of them.
+            props[f.name]["pattern"] = label_pattern(same)
+            props[f.name]["description"] = (
+                f"{f.description} (a label; the number is in {f.code_name})"
+            )
+        props[f.code_name] = {
+            "type": "integer",
+            "minimum": 0,
+            "maximum": 2 ** (8 * max(g.size for g in same)) - 1,
+            "description": f"{f.name} as the raw number on the wire",
+        }
+        if required and len(same) == 1:
+            schema["required"].append(f.code_name)
 
 
 def command_schema() -> dict[str, Any]:
@@ -113,8 +117,7 @@ def command_schema() -> dict[str, Any]:
     props["component"] = {"type": "string", "enum": [*COMPONENT_NAMES.values(), "unknown"]}
     props["raw"] = {"type": "string", "description": "the 8 CAN data bytes in hex"}
     schema["required"] += ["s_id", "cmd", "name", "raw"]
-    for row in COMMANDS:
-        _add_fields(schema, row.all_fields(), required=False)
+    _add_fields(schema, tuple(f for row in COMMANDS for f in row.all_fields()), required=False)
     return schema
 
 
@@ -159,6 +162,17 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
             "byte_count": {"type": "integer", "description": "how many bytes it accounts for"},
             "segments": {"type": "integer", "description": "feedback segments concerned"},
             "can_id": {"type": "integer"},
+            "line": {"type": "integer", "description": "line number in the input file"},
+            "state": {
+                "type": "string",
+                "description": "link diagnostics: the new state (open, connected, lost, ...)",
+            },
+            "peer": {"type": "string", "description": "link diagnostics: the other end"},
+            "retry_in_s": {"type": "number", "description": "link diagnostics: next attempt"},
+            "packets": {"type": "integer", "description": "pcap packets concerned"},
+            "packets_read": {"type": "integer", "description": "pcap packets read until then"},
+            "frames_read": {"type": "integer", "description": "frames read until then"},
+            "missing_bytes": {"type": "integer", "description": "bytes a capture lacks"},
         }
     )
     diag["required"] += ["kind", "detail", "raw"]

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.protocol.feedback import encode_attitude, encode_ranging
+from analyzer.protocol.fields import CODE_SUFFIX
 from analyzer.protocol.ids import ALTITUDE_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
@@ -165,7 +166,7 @@ def describe_command(fields: dict[str, Any]) -> str:
     parts = [str(fields.get("name", "?"))]
     if fields.get("component") == "dual_sensor":
         parts.append("(dual_sensor)")
-    # Labels are shown, so their ``*_raw`` numbers are left out too.
-    shown = {k: v for k, v in fields.items() if not k.endswith("_raw")}
+    # Labels are shown, so their ``*_code`` numbers are left out.
+    shown = {k: v for k, v in fields.items() if not k.endswith(CODE_SUFFIX)}
     text = format_fields(shown, _QUIET_FIELDS)
     return " ".join([*parts, text] if text else parts)

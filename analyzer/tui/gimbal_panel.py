@@ -52,7 +52,7 @@ def render_gimbal(state: MonitorState) -> Text:
     pitch = f.get("pitch_deg")
     yaw = f.get("yaw_deg")
     motor = f.get("motor_yaw_deg")
-    gimbal_type = f.get("gimbal_type")
+    gimbal_type = f.get("gimbal_type_code")
     motor_range = WIDE_MOTOR_YAW_RANGE if gimbal_type in WIDE_MOTOR_YAW_TYPES else MOTOR_YAW_RANGE
     lines = [
         _axis("pitch", pitch, *PITCH_RANGE),
@@ -63,9 +63,9 @@ def render_gimbal(state: MonitorState) -> Text:
     if att is None:
         info.append("—")
     else:
-        info.append(str(f.get("gimbal_type_name") or f"type {gimbal_type}"), style="bold")
-        info.append(f" ({gimbal_type})  mode ", style="dim")
-        info.append(str(f.get("control_mode_name") or f.get("control_mode", "?")), style="bold")
+        info.append(str(f.get("gimbal_type") or "?"), style="bold")
+        info.append(f" ({f.get('gimbal_type_code', '?')})  mode ", style="dim")
+        info.append(str(f.get("control_mode") or "?"), style="bold")
         info.append("  tracking ", style="dim")
         tracking = bool(f.get("tracking"))
         info.append("YES" if tracking else "no", style="bold green" if tracking else "bold")
