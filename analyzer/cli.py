@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "send": "analyzer.commands.send",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",
+    "export": "analyzer.commands.export",
 }
 
 DESCRIPTION = """\

@@ -1,0 +1,109 @@
+"""`gimbal-analyzer export`: the protocol tables as a DBC file or a Wireshark dissector."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from analyzer.errors import SourceError, UsageError
+
+HELP = "export the protocol as a DBC file (cantools, SavvyCAN) or a Wireshark Lua dissector"
+DESCRIPTION = """\
+Write the protocol tables in the form another tool reads, generated from the
+same command table that drives decoding:
+
+  dbc        a DBC file: the control frame 0x00000F01 with extended
+             multiplexing (S_ID, then CMD, then the control type of
+             specified_angle / the mode of snapshot), every parameter with
+             scale, unit, range and value labels; the UAV GPS / altitude /
+             attitude and text frames; the feedback ID (its 32-byte messages
+             span four frames: decode those with gimbal-analyzer).
+  wireshark  a Lua dissector for the IDU's TCP link (port 2000, changeable in
+             Edit > Preferences > Protocols > GIMBAL): frame types 0x0A, 0x0B,
+             0x0C and 0x10, commands and feedback with units and labels,
+             CRC checked, frames split over or glued in TCP segments joined.
+
+examples:
+  gimbal-analyzer export dbc -o gimbal.dbc
+  gimbal-analyzer export wireshark -o gimbal.lua
+  gimbal-analyzer export dbc                     # to standard output
+  gimbal-analyzer export dbc -o exports/gimbal.dbc --check
+
+An existing file is replaced only with --force. --check writes nothing and
+exits 1 when FILE differs from what the table gives (a stale export).
+"""
+
+# format -> (module, function returning the file text, what it is)
+FORMATS: dict[str, tuple[str, str, str]] = {
+    "dbc": ("analyzer.export.dbc", "dbc_text", "DBC file"),
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("format", choices=list(FORMATS), help="what to export")
+    parser.add_argument(
+        "-o", "--output", metavar="FILE", help="file to write (default: standard output)"
+    )
+    parser.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="write nothing; exit 1 if FILE differs from the export of the current table",
+    )
+
+
+def rendered(name: str) -> str:
+    """The text of one export."""
+    module, function, _ = FORMATS[name]
+    text: str = getattr(importlib.import_module(module), function)()
+    return text
+
+
+def run(args: argparse.Namespace) -> int:
+    text = rendered(args.format)
+    what = FORMATS[args.format][2]
+    if args.check:
+        if not args.output:
+            raise UsageError("--check needs -o FILE")
+        path = Path(args.output)
+        if not path.is_file() or path.read_text(encoding="utf-8") != text:
+            print(
+                f"{path} is out of date (run: gimbal-analyzer export {args.format} "
+                f"-o {path} --force)"
+            )
+            return 1
+        print(f"{path} matches the protocol table")
+        return 0
+    if not args.output or args.output == "-":
+        sys.stdout.write(text)
+        return 0
+    _write(Path(args.output), text, force=args.force)
+    print(f"wrote {what} {args.output}", file=sys.stderr)
+    return 0
+
+
+def _write(path: Path, text: str, *, force: bool) -> None:
+    """Write through a temporary file and an atomic rename; never replace without force."""
+    if path.is_symlink():
+        raise UsageError(f"{path} is a symbolic link; give the real path")
+    if path.exists() and not force:
+        raise UsageError(f"{path} exists; add --force to replace it")
+    if path.is_dir():
+        raise UsageError(f"{path} is a directory")
+    directory = path.parent
+    try:
+        fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:
+        raise UsageError(f"cannot write {path}: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as out:
+            out.write(text)
+        os.chmod(temp, 0o644)
+        os.replace(temp, path)
+    except OSError as exc:
+        os.unlink(temp)
+        raise SourceError(f"cannot write {path}: {exc.strerror}") from None
