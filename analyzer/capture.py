@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 from types import FrameType
 from typing import Any
 
-from analyzer.errors import SourceError
+from analyzer.errors import OutputError, SourceError
 from analyzer.pipeline import Batch, Sink
 from analyzer.protocol.types import TOPIC_DIAGNOSTICS, CanFrame, Event, StreamChunk
 from analyzer.sources.base import link_event
@@ -27,6 +27,7 @@ DEFAULT_BITRATE = 1_000_000
 TICK_INTERVAL_S = 0.25  # how often the decoder is asked about stale partial messages
 RATE_WINDOW_S = 1.0  # frames_per_s / bus_load_pct are averaged over this window
 MAX_BATCH_ITEMS = 20_000  # a batch is handed over early when it grows this large
+OUTPUT_CLOSED = "output closed"  # stop_reason when a printing sink's reader went away
 
 
 class CaptureError(SourceError):
@@ -84,7 +85,8 @@ class Capture:
     at the end. When the source ends, fails, ``stop()`` is called or a sink raises, the
     thread delivers a last batch to the sinks that still work, closes the source and
     closes every sink. Failures are kept in ``error`` (a CaptureError, one clear line);
-    ``stop_reason`` says why it ended: "end of input", "stopped", "error".
+    ``stop_reason`` says why it ended: "end of input", "stopped", "error", or "output
+    closed" when a sink's reader went away (BrokenPipeError: a quiet stop, not an error).
     """
 
     def __init__(
@@ -275,6 +277,14 @@ class Capture:
                 continue
             try:
                 sink.handle(batch)
+            except BrokenPipeError:
+                # The reader of a printed output went away (| head): stop as asked.
+                self._failed_sinks.add(index)
+                self.stop_reason = OUTPUT_CLOSED
+                self._stop.set()
+            except OutputError as exc:  # says itself what could not be written
+                self._failed_sinks.add(index)
+                self._fail(str(exc), exc)
             except Exception as exc:
                 self._failed_sinks.add(index)
                 name = sink.__class__.__name__

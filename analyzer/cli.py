@@ -9,7 +9,17 @@ from collections.abc import Sequence
 from types import ModuleType
 
 from analyzer import __version__
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    OutputError,
+    SourceError,
+    UsageError,
+    exit_code_table,
+)
+from analyzer.stdio import guarded_stdout, interrupt_name, sigterm_as_interrupt, silence_stdout
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
 # run(args) -> int, and keeps heavy imports (textual, mcap, can) inside run().
@@ -49,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="gimbal-analyzer",
         description=DESCRIPTION,
+        epilog="exit codes (the same for every command):\n" + exit_code_table(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
@@ -70,28 +81,46 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one command; every failure ends as one line on stderr and an exit code from
+    the table in ``analyzer.errors`` (no tracebacks for the user's mistakes or the OS's)."""
+    with guarded_stdout(), sigterm_as_interrupt():
+        name = "gimbal-analyzer"
+        try:
+            parser = build_parser()
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit:  # --help, --version, a usage error: argparse printed it
+                sys.stdout.flush()
+                raise
+            if args.command:
+                name = f"gimbal-analyzer {args.command}"
+            result = _run(parser, args, name)
+            sys.stdout.flush()
+            return result
+        except OutputError as exc:
+            print(f"{name}: error: {exc}", file=sys.stderr)
+            silence_stdout()
+            return EXIT_FAILED
+        except BrokenPipeError:
+            # Output piped into `head` and the like: not an error.
+            silence_stdout()
+            return EXIT_OK
+        except KeyboardInterrupt as exc:
+            print(f"{name}: interrupted ({interrupt_name(exc)})", file=sys.stderr)
+            return EXIT_INTERRUPTED
+
+
+def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -> int:
     module = getattr(args, "_module", None)
     if module is None:
         parser.print_help()
-        return 2
+        return EXIT_USAGE
     try:
         result: int = module.run(args)
         return result
     except UsageError as exc:
-        print(f"gimbal-analyzer {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     except SourceError as exc:
-        print(f"gimbal-analyzer {args.command}: error: {exc}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:
-        # Output piped into `head` and the like: not an error. Point stdout at
-        # devnull so the interpreter's final flush does not fail again.
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        return EXIT_FAILED

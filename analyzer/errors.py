@@ -1,11 +1,59 @@
-"""Errors that reach the user as one clear line instead of a traceback."""
+"""Errors that reach the user as one clear line, and the exit codes every command uses."""
 
 from __future__ import annotations
+
+# The exit codes of every command (README "Exit codes" shows the same table).
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+EXIT_CODES: tuple[tuple[int, str], ...] = (
+    (
+        EXIT_OK,
+        "success; also a record / monitor / demo ended by Ctrl-C or SIGTERM, "
+        "and output cut short by its reader (| head)",
+    ),
+    (
+        EXIT_FAILED,
+        "the work started but failed: a write failure (disk full, standard output "
+        "unwritable), a source that failed, a live capture that never received anything",
+    ),
+    (
+        EXIT_USAGE,
+        "bad usage, an input that cannot be read or recognised, an output refused "
+        "(exists without --force, is one of the inputs, is a symlink)",
+    ),
+    (EXIT_INTERRUPTED, "interrupted (Ctrl-C or SIGTERM) before anything useful was done"),
+)
+
+
+def exit_code_table() -> str:
+    """The table as plain text, for ``--help``."""
+    return "\n".join(f"  {code:<4} {words}" for code, words in EXIT_CODES)
 
 
 class UsageError(Exception):
     """Bad input from the user (unknown file format, bad option value...): exit code 2."""
 
 
+class InputError(UsageError):
+    """An input file that cannot be read or is not what it claims to be: exit code 2."""
+
+
 class SourceError(Exception):
     """A capture source could not be opened or failed for good: exit code 1."""
+
+
+class OutputError(Exception):
+    """Writing an output failed (disk full, standard output unwritable): exit code 1."""
+
+
+class OutputClosed(BrokenPipeError):
+    """The reader of standard output went away (``| head``): end quietly, exit code 0."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C: ``signal_name`` says which one it was."""
+
+    signal_name = "SIGTERM"

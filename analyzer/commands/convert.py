@@ -9,7 +9,8 @@ import sys
 import time
 from typing import IO, Any
 
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import EXIT_INTERRUPTED, SourceError, UsageError
+from analyzer.stdio import interrupt_name
 
 HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
 DESCRIPTION = """\
@@ -18,7 +19,8 @@ Decode a capture file and write an MCAP recording of it: the same channels as
 Any input `decode` accepts works; an MCAP input is decoded again from its raw
 channels, so an old recording gets the fixes of a newer decoder.
 
-The output is written under a temporary name and renamed when complete.
+The output is written under a temporary name and renamed when complete; Ctrl-C
+or SIGTERM stops the conversion and removes the unfinished output.
 
   gimbal-analyzer convert flight.log -o flight.mcap
   gimbal-analyzer convert capture.pcap -o capture.mcap --port 2000
@@ -104,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
     sink = McapSink(partial, metadata=meta, flush_interval=None)
     progress = Progress(sys.stderr, args.input, source)
     finished = False
+    interrupted = ""
     try:
         result = convert_items(source, sink, progress=None if args.quiet else progress)
         sink.close()
@@ -115,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
         raise
     except OSError as exc:
         raise SourceError(f"cannot write {target}: {exc.strerror or exc}") from None
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the finally removes the partial file
+        interrupted = interrupt_name(exc)
     finally:
         progress.done()
         closer = getattr(source, "close", None)
@@ -125,6 +130,13 @@ def run(args: argparse.Namespace) -> int:
             sink.close()
             with contextlib.suppress(OSError):
                 os.remove(partial)
+    if interrupted:
+        print(
+            f"gimbal-analyzer convert: interrupted ({interrupted}): {target} was not written "
+            "(the unfinished output was removed)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED
     for note in getattr(source, "notes", ()):
         print(f"note: {note}", file=sys.stderr)
     if not args.quiet:

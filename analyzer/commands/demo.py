@@ -134,7 +134,7 @@ def _plain(event: Event) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.capture import Capture
+    from analyzer.capture import OUTPUT_CLOSED, Capture
     from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
@@ -179,12 +179,6 @@ def run(args: argparse.Namespace) -> int:
         source.close()
         sink.close()
         raise
-    if not tui:
-        print(
-            f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
-            f"recording {path}; faults: {faults.describe()}; {duration:g} s",
-            flush=True,
-        )
 
     def finish() -> None:
         capture.stop()
@@ -209,6 +203,12 @@ def run(args: argparse.Namespace) -> int:
                 )
             )
         else:
+            # Inside the try: a failed write here must still finish the recording.
+            print(
+                f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
+                f"recording {path}; faults: {faults.describe()}; {duration:g} s",
+                flush=True,
+            )
             capture.start()
             scene.start()
             if timer is not None:
@@ -225,11 +225,16 @@ def run(args: argparse.Namespace) -> int:
         if capture.running:
             capture.stop()
             capture.join()
+        source.close()  # the capture closes it too; here for a failure before it started
         sink.close()
     if sink.error is not None:
         raise SourceError(sink.error)
     if capture.error is not None:
-        raise capture.error
+        raise SourceError(
+            f"{capture.error}; the recording {path} is finished and keeps everything up to then"
+        )
+    if capture.stop_reason == OUTPUT_CLOSED:
+        return result  # the reader of the lines went away (| head): nothing more to say
     if scene.errors:
         raise SourceError(f"the simulation stopped: {scene.errors[0]}")
     stats = capture.stats

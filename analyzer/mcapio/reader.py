@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Any, Generic, TypeVar
 
-from analyzer.errors import SourceError
+from analyzer.errors import InputError
 from analyzer.mcapio.channels import (
     RAW_TOPICS,
     ROLE_EVENT,
@@ -47,8 +47,8 @@ Tally = Callable[[str, str, int], None]
 SOURCE_KINDS = frozenset({LINK, BAD_LINE})
 
 
-class RecordingError(SourceError):
-    """The file is not an MCAP recording, or is damaged beyond its readable part."""
+class RecordingError(InputError):
+    """The file is not an MCAP recording, or is damaged beyond its readable part (exit 2)."""
 
 
 @dataclass(frozen=True, slots=True)

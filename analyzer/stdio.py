@@ -1,0 +1,99 @@
+"""Standard output that fails with one clear error, and a SIGTERM that acts like Ctrl-C."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import threading
+from collections.abc import Iterable, Iterator
+from types import FrameType
+from typing import Any, TextIO, cast
+
+from analyzer.errors import OutputClosed, OutputError, Terminated
+
+
+class GuardedStdout:
+    """Wraps standard output: a closed pipe raises ``OutputClosed``, any other write
+    failure (``> /dev/full``, a full disk) ``OutputError`` with the reason in words."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+
+    def _failed(self, exc: OSError) -> Exception:
+        if isinstance(exc, BrokenPipeError):
+            return OutputClosed(exc.errno, exc.strerror)
+        return OutputError(f"cannot write to standard output: {exc.strerror or exc}")
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def isatty(self) -> bool:
+        try:
+            return bool(self.stream.isatty())
+        except (AttributeError, ValueError):
+            return False
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.stream, name)
+
+
+@contextlib.contextmanager
+def guarded_stdout() -> Iterator[GuardedStdout]:
+    """``sys.stdout`` is a GuardedStdout inside the block."""
+    original = sys.stdout
+    guard = GuardedStdout(original)
+    sys.stdout = cast(TextIO, guard)
+    try:
+        yield guard
+    finally:
+        if sys.stdout is guard:
+            sys.stdout = original
+
+
+def silence_stdout() -> None:
+    """Point file descriptor 1 at /dev/null, so the interpreter's last flush of what is
+    still buffered cannot fail again after the error was reported."""
+    stream = getattr(sys.stdout, "stream", sys.stdout)
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        fd = stream.fileno()
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Inside the block SIGTERM raises ``Terminated`` (a KeyboardInterrupt) in the main
+    thread, so every command cleans up after it as after Ctrl-C."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_sigterm(signum: int, frame: FrameType | None) -> None:
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def interrupt_name(exc: BaseException) -> str:
+    """``SIGTERM`` for a Terminated, ``Ctrl-C`` for any other KeyboardInterrupt."""
+    return exc.signal_name if isinstance(exc, Terminated) else "Ctrl-C"

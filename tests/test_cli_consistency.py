@@ -1,0 +1,87 @@
+"""One table of exit codes, SIGTERM handled like Ctrl-C, one grammar for links."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from analyzer.cli import main
+from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
+CANDUMP_LINE = "(1715680800.010000) can0 030F0000#0F01000000000000\n"
+
+
+def test_readme_shows_the_exit_code_table() -> None:
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Exit codes", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| (\d+) \| (.+) \|$", section, re.MULTILINE)
+
+    def plain(text: str) -> str:
+        return text.replace("`", "").replace("\\|", "|")
+
+    assert [(int(code), plain(words)) for code, words in rows] == list(EXIT_CODES)
+
+
+def test_help_shows_the_exit_code_table(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        from analyzer.cli import build_parser
+
+        build_parser().parse_args(["--help"])
+    out = capsys.readouterr().out
+    for code, _ in EXIT_CODES:
+        assert re.search(rf"^  {code} ", out, re.MULTILINE)
+
+
+def test_unreadable_mcap_input_is_exit_2_in_every_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    empty = tmp_path / "empty.mcap"
+    empty.write_bytes(b"")
+    not_mcap = tmp_path / "text.mcap"
+    not_mcap.write_text("hello\n")
+    for path in (empty, not_mcap):
+        for args in (
+            ["info", str(path)],
+            ["decode", str(path)],
+            ["convert", str(path), "-o", str(tmp_path / "out.mcap")],
+        ):
+            code = main(args)
+            err = capsys.readouterr().err
+            assert code == EXIT_USAGE, (args, err)
+            assert "error:" in err and "Traceback" not in err
+    assert not (tmp_path / "out.mcap").exists()
+
+
+def test_sigterm_during_convert_removes_the_partial_output_and_says_so(tmp_path: Path) -> None:
+    out = tmp_path / "out.mcap"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "analyzer", "convert", "-", "-o", str(out), "-q"],
+        stdin=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=tmp_path,
+        env=ENV,
+    )
+    assert proc.stdin is not None and proc.stderr is not None
+    proc.stdin.write(CANDUMP_LINE.encode() * 100)
+    proc.stdin.flush()
+    deadline = time.monotonic() + 30
+    while not any(p.name != "out.mcap" for p in tmp_path.iterdir()):  # the temporary file
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)  # stdin stays open: convert is waiting for more input
+    code = proc.wait(timeout=30)
+    err = proc.stderr.read().decode()
+    proc.stdin.close()
+    assert code == EXIT_INTERRUPTED, err
+    assert "Traceback" not in err
+    assert "interrupted (SIGTERM)" in err and "was not written" in err
+    assert list(tmp_path.iterdir()) == []  # neither the output nor a partial file
