@@ -10,6 +10,7 @@ from analyzer.protocol.fields import Field, label_pattern
 from analyzer.protocol.ids import COMPONENT_NAMES
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_UAV_TEXT,
@@ -121,6 +122,38 @@ def command_schema() -> dict[str, Any]:
     return schema
 
 
+def response_schema() -> dict[str, Any]:
+    """Findings of the response analysis: did the gimbal do what a command asked?"""
+    from analyzer.analysis.findings import CHECKS, OPTIONAL_FIELDS, VERDICTS
+
+    schema = _envelope(
+        TOPIC_ANALYSIS_RESPONSE,
+        "response finding",
+        "A command compared with the attitude feedback that followed it (or a finding on "
+        "the feedback itself); 'time' is the command's time.",
+    )
+    props = schema["properties"]
+    props.update(
+        {
+            "command": {
+                "type": "string",
+                "description": "the command's name, or 'feedback' for feedback health",
+            },
+            "check": {"type": "string", "enum": list(CHECKS), "description": "what was checked"},
+            "verdict": {
+                "type": "string",
+                "enum": list(VERDICTS),
+                "description": "unknown when the feedback does not allow a judgement",
+            },
+            "detail": {"type": "string", "description": "the finding in one sentence"},
+        }
+    )
+    for name, (kind, description) in OPTIONAL_FIELDS.items():
+        props[name] = {"type": kind, "description": description}
+    schema["required"] += ["command", "check", "verdict", "detail"]
+    return schema
+
+
 def topic_schemas() -> dict[str, dict[str, Any]]:
     """Topic -> JSON Schema of its events."""
     out: dict[str, dict[str, Any]] = {TOPIC_COMMAND: command_schema()}
@@ -177,6 +210,7 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
     )
     diag["required"] += ["kind", "detail", "raw"]
     out[TOPIC_DIAGNOSTICS] = diag
+    out[TOPIC_ANALYSIS_RESPONSE] = response_schema()
     assert set(out) == set(TOPICS)
     return out
 

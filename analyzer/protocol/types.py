@@ -15,6 +15,7 @@ TOPIC_UAV_ATTITUDE = "/uav/attitude"
 TOPIC_UAV_TEXT = "/uav/text"
 TOPIC_DIAGNOSTICS = "/diagnostics"
 TOPIC_CAN_OTHER = "/can/other"
+TOPIC_ANALYSIS_RESPONSE = "/analysis/response"  # findings of the response analysis
 
 TOPICS = (
     TOPIC_COMMAND,
@@ -25,6 +26,7 @@ TOPICS = (
     TOPIC_UAV_ATTITUDE,
     TOPIC_UAV_TEXT,
     TOPIC_DIAGNOSTICS,
+    TOPIC_ANALYSIS_RESPONSE,
 )
 
 # Diagnostic kinds (the ``kind`` field of /diagnostics events).

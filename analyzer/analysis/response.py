@@ -1,0 +1,409 @@
+"""The response analyzer: decoded events in, /analysis/response findings out; no IO, no clock."""
+
+from __future__ import annotations
+
+from collections import Counter, deque
+from dataclasses import dataclass, field
+from typing import Any
+
+from analyzer.analysis.findings import (
+    CHECK_LIMIT,
+    CHECK_TARGET,
+    CHECK_TRACKING,
+    FEEDBACK_COMMAND,
+    NOT_OBEYED,
+    OBEYED,
+    PARTIAL,
+    UNKNOWN,
+    Finding,
+    worst,
+)
+from analyzer.analysis.health import FeedbackHealth
+from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
+from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from, wrap180
+from analyzer.analysis.targets import AxisGoal, judge_axis
+from analyzer.feedback_track import GAP_THRESHOLD_S
+from analyzer.protocol.types import (
+    CRC_MISMATCH,
+    INCOMPLETE,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+    TOPIC_GIMBAL_RANGING,
+    TOPIC_UAV_ATTITUDE,
+    Event,
+)
+
+DEFAULT_TOLERANCE_DEG = 1.0
+DEFAULT_TIME_ALLOWED_S = 5.0
+STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
+STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
+FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
+LOOK_DOWN_DEG = -90.0
+HISTORY = 4096  # attitude samples kept (over half an hour at 2 Hz)
+DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
+# Commands that move the gimbal: each one ends what the previous motion command asked for.
+MOTION = frozenset(
+    {"gimbal_control", "specified_angle", "look_down", "forward", "tap_zoom", "tracking"}
+)
+
+REFERENCE_NOTES = {
+    "north": "yaw measured from north, since the flight controller's attitude is present",
+    "airframe": "yaw measured from the airframe's nose, since no flight-controller attitude "
+    "(0x0000FF13) was seen",
+    "airframe_asked": "yaw measured from the airframe's nose, as the command asked (DATA4 = 1)",
+}
+BOTH = frozenset({PITCH, YAW})
+# Which axes a motion command takes over (yaw stands for both yaw references).
+AXES = {
+    "gimbal_control": BOTH,
+    "look_down": frozenset({PITCH}),
+    "forward": BOTH,
+    "tap_zoom": BOTH,
+    "tracking": BOTH,
+}
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The judgement's knobs (the ``analyze`` options)."""
+
+    tolerance_deg: float = DEFAULT_TOLERANCE_DEG
+    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S
+
+    def __post_init__(self) -> None:
+        if not self.tolerance_deg > 0:
+            raise ValueError("the tolerance must be more than 0 deg")
+        if not self.time_allowed_s > 0:
+            raise ValueError("the time allowed must be more than 0 s")
+
+
+@dataclass
+class _TargetCheck:
+    command: str
+    time: float
+    goals: tuple[AxisGoal, ...]
+    deadline: float
+    reference: str = ""
+    raw_target: float = 0.0
+
+
+@dataclass
+class _TrackingCheck:
+    command: str
+    time: float
+    want: bool
+    deadline: float
+
+
+@dataclass
+class _BurstCheck:
+    burst: Burst
+    observe_until: float
+    findings: list[Finding] = field(default_factory=list)
+
+
+class ResponseAnalyzer:
+    """``feed(event)`` and ``close()`` return /analysis/response events as they are decided."""
+
+    def __init__(self, settings: Settings | None = None) -> None:
+        self.settings = settings or Settings()
+        self.health = FeedbackHealth()
+        self.verdicts: Counter[str] = Counter()
+        self.samples: deque[Sample] = deque(maxlen=HISTORY)
+        self._targets: list[_TargetCheck] = []
+        self._tracking: list[_TrackingCheck] = []
+        self._burst: Burst | None = None
+        self._bursts: list[_BurstCheck] = []
+        self._fc_attitude: float | None = None
+        self._motion: tuple[str, float] | None = None
+        self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
+
+    # -- input ---------------------------------------------------------------------------
+
+    def feed(self, event: Event) -> list[Event]:
+        t, topic = event.time, event.topic
+        out: list[Finding] = []
+        if topic == TOPIC_GIMBAL_ATTITUDE:
+            out += self.health.feedback(t)
+            sample = sample_from(t, event.fields)
+            if sample is not None:
+                self.samples.append(sample)
+                out += self._limits(sample)
+                out += self._settle(t, sample)
+        elif topic == TOPIC_GIMBAL_RANGING:
+            out += self.health.feedback(t)
+            out += self._settle(t, None)
+        elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_FEEDBACK:
+            out += self.health.error(t)
+            out += self._settle(t, None)
+        else:
+            out += self.health.tick(t)
+            out += self._settle(t, None)
+            if topic == TOPIC_UAV_ATTITUDE:
+                self._fc_attitude = t
+            elif topic == TOPIC_COMMAND:
+                out += self._command(t, event.fields)
+        return self._emit(out)
+
+    def close(self) -> list[Event]:
+        """The end of the input: judge what is still open with what was seen."""
+        out: list[Finding] = []
+        end = self.samples[-1].time if self.samples else None
+        for check in self._targets:
+            out.append(self._judge_target(check, "the input ended", end))
+        self._targets = []
+        for tracking in self._tracking:
+            out.append(self._judge_tracking(tracking, None, "the input ended"))
+        self._tracking = []
+        self._end_burst()
+        for pending in self._bursts:
+            out += self._judge_burst(pending)
+        self._bursts = []
+        out += self.health.close()
+        return self._emit(out)
+
+    def _emit(self, findings: list[Finding]) -> list[Event]:
+        for finding in findings:
+            self.verdicts[finding.verdict] += 1
+        return [f.to_event() for f in findings]
+
+    # -- commands -------------------------------------------------------------------------
+
+    def _command(self, t: float, fields: dict[str, Any]) -> list[Finding]:
+        name = str(fields.get("name", ""))
+        out: list[Finding] = []
+        if name == "gimbal_control":
+            pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
+            burst = self._burst
+            if pan == 0 and tilt == 0:
+                if burst is not None:
+                    burst.stopped_at = t
+                    self._end_burst()
+                return out
+            if burst is not None and burst.same_speeds(pan, tilt) and t - burst.last <= BURST_GAP_S:
+                burst.times.append(t)
+                return out
+        if name not in MOTION and name != "tracking_stop":
+            return out
+        if name in MOTION:
+            axes = AXES.get(name) or frozenset({PITCH if fields.get("axis") == "pitch" else YAW})
+            if name == "specified_angle" and fields.get("axis") not in ("pitch", "yaw"):
+                axes = frozenset()  # zoom
+            out += self._interrupt(t, name, axes)
+            self._motion = (name, t)
+        allowed = self.settings.time_allowed_s
+        if name == "gimbal_control":
+            pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
+            self._burst = Burst(name, pan, tilt, [t])
+        elif name == "specified_angle":
+            check = self._angle_check(t, fields)
+            if check is not None:
+                self._targets.append(check)
+        elif name == "look_down":
+            goal = AxisGoal(PITCH, LOOK_DOWN_DEG, "pitch")
+            self._targets.append(_TargetCheck(name, t, (goal,), t + allowed))
+        elif name == "forward":
+            goals = (AxisGoal(PITCH, 0.0, "pitch"), AxisGoal(MOTOR_YAW, 0.0, "yaw (airframe)"))
+            self._targets.append(_TargetCheck(name, t, goals, t + allowed))
+        if name in ("tracking", "tracking_stop"):
+            for old in self._tracking:
+                why = f"{name} came {t - old.time:.1f} s later"
+                out.append(self._judge_tracking(old, None, why))
+            self._tracking = [_TrackingCheck(name, t, name == "tracking", t + allowed)]
+        return out
+
+    def _angle_check(self, t: float, fields: dict[str, Any]) -> _TargetCheck | None:
+        allowed = self.settings.time_allowed_s
+        axis = fields.get("axis")
+        if axis == "pitch" and isinstance(fields.get("pitch_deg"), (int, float)):
+            target = float(fields["pitch_deg"])
+            goal = AxisGoal(PITCH, target, "pitch")
+            return _TargetCheck("specified_angle", t, (goal,), t + allowed)
+        if axis != "yaw" or not isinstance(fields.get("yaw_deg"), (int, float)):
+            return None  # zoom: the feedback does not report it
+        target = float(fields["yaw_deg"])
+        if fields.get("coordinate_system") == "airframe":
+            reference, goal = "airframe_asked", AxisGoal(MOTOR_YAW, wrap180(target), "yaw")
+        elif self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S:
+            reference, goal = "north", AxisGoal(YAW, target % 360.0, "yaw")
+        else:
+            reference, goal = "airframe", AxisGoal(MOTOR_YAW, wrap180(target), "yaw")
+        return _TargetCheck("specified_angle", t, (goal,), t + allowed, reference, target)
+
+    def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
+        """A new motion command: earlier targets on its axes, and bursts, end here."""
+        out: list[Finding] = []
+        keep: list[_TargetCheck] = []
+        for check in self._targets:
+            if {PITCH if g.axis == PITCH else YAW for g in check.goals} & axes:
+                why = f"{name} came {t - check.time:.1f} s later"
+                out.append(self._judge_target(check, why, t))
+            else:
+                keep.append(check)
+        self._targets = keep
+        self._end_burst()
+        for pending in self._bursts:
+            pending.observe_until = min(pending.observe_until, t)
+            out += self._judge_burst(pending)
+        self._bursts = []
+        return out
+
+    def _end_burst(self) -> None:
+        burst, self._burst = self._burst, None
+        if burst is not None:
+            until = burst.end + STOP_GRACE_S + STOP_OBSERVE_S
+            self._bursts.append(_BurstCheck(burst, until))
+
+    # -- time passing ---------------------------------------------------------------------
+
+    def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
+        """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
+        out: list[Finding] = []
+        late = GAP_THRESHOLD_S  # without feedback, wait this long past a deadline
+        keep: list[_TargetCheck] = []
+        for check in self._targets:
+            if t > check.deadline + (0.0 if sample is not None else late):
+                out.append(self._judge_target(check, "", check.deadline))
+            else:
+                keep.append(check)
+        self._targets = keep
+        still: list[_TrackingCheck] = []
+        for tracking in self._tracking:
+            if sample is not None and sample.tracking == tracking.want and t > tracking.time:
+                out.append(self._judge_tracking(tracking, sample, ""))
+            elif t > tracking.deadline + (0.0 if sample is not None else late):
+                out.append(self._judge_tracking(tracking, None, ""))
+            else:
+                still.append(tracking)
+        self._tracking = still
+        if self._burst is not None and t - self._burst.last > BURST_GAP_S:
+            self._end_burst()
+        waiting: list[_BurstCheck] = []
+        for pending in self._bursts:
+            if t > pending.observe_until + (0.0 if sample is not None else late):
+                out += self._judge_burst(pending)
+            else:
+                waiting.append(pending)
+        self._bursts = waiting
+        return out
+
+    def _between(self, start: float, end: float) -> list[Sample]:
+        return [s for s in self.samples if start < s.time <= end]
+
+    def _before(self, t: float) -> Sample | None:
+        found = None
+        for s in self.samples:
+            if s.time > t:
+                break
+            found = s
+        return found
+
+    # -- judgements -----------------------------------------------------------------------
+
+    def _judge_target(self, check: _TargetCheck, cut_short: str, end: float | None) -> Finding:
+        stop = check.deadline if end is None else min(end, check.deadline)
+        samples = self._between(check.time, stop)
+        before = self._before(check.time)
+        results = [
+            judge_axis(
+                goal,
+                check.time,
+                before,
+                samples,
+                self.settings.tolerance_deg,
+                self.settings.time_allowed_s,
+                cut_short=cut_short,
+            )
+            for goal in check.goals
+        ]
+        verdict = worst(*(r.verdict for r in results))
+        detail = "; ".join(dict.fromkeys(r.text for r in results))
+        if check.reference:
+            detail += f"; {REFERENCE_NOTES[check.reference]}"
+        extra: dict[str, Any] = {
+            "axis": "+".join(g.axis for g in check.goals),
+            "target_deg": check.raw_target if check.reference else check.goals[0].target,
+            "yaw_reference": ("north" if check.reference == "north" else "airframe")
+            if check.reference
+            else None,
+        }
+        errors = [r.error_deg for r in results if r.error_deg is not None]
+        if errors:
+            extra["error_deg"] = max(errors, key=abs)
+        responses = [r.response_s for r in results]
+        if responses and all(r is not None for r in responses):
+            extra["response_s"] = max(r for r in responses if r is not None)
+        overshoots = [r.overshoot_deg for r in results if r.overshoot_deg is not None]
+        if overshoots:
+            extra["overshoot_deg"] = max(overshoots)
+        if len(results) == 1:
+            extra["start_deg"] = results[0].start_deg
+            extra["final_deg"] = results[0].final_deg
+        if samples:
+            extra["observed_at"] = samples[-1].time
+        return Finding(check.command, check.time, CHECK_TARGET, verdict, detail + ".", extra)
+
+    def _judge_tracking(
+        self, check: _TrackingCheck, sample: Sample | None, cut_short: str
+    ) -> Finding:
+        flag = "on" if check.want else "off"
+        extra: dict[str, Any] = {}
+        if sample is not None:
+            extra["response_s"] = sample.time - check.time
+            extra["observed_at"] = sample.time
+            text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.1f} s"
+            return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text + ".", extra)
+        seen = self._between(check.time, check.deadline)
+        if not seen:
+            allowed = self.settings.time_allowed_s
+            why = f"before {cut_short}" if cut_short else f"within {allowed:g} s"
+            text = f"no attitude feedback came {why}: the tracking flag could not be checked"
+            return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text + ".", extra)
+        extra["observed_at"] = seen[-1].time
+        span = seen[-1].time - check.time
+        verdict = UNKNOWN if cut_short else NOT_OBEYED
+        other = "off" if check.want else "on"
+        text = f"the feedback's tracking flag stayed {other} for {span:.1f} s"
+        if cut_short:
+            text += f", until {cut_short}"
+        return Finding(check.command, check.time, CHECK_TRACKING, verdict, text + ".", extra)
+
+    def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:
+        burst = pending.burst
+        inside = self._between(burst.start, burst.last + 0.05)
+        rate = judge_rate(burst, self._before(burst.start), inside)
+        out = [rate]
+        repeat = judge_repeat(burst, rate.verdict)
+        if repeat is not None:
+            out.append(repeat)
+        after = self._between(burst.end + STOP_GRACE_S, pending.observe_until)
+        stop = judge_stop(burst, after, self.settings.tolerance_deg)
+        if stop is not None:
+            out.append(stop)
+        return out
+
+    def _limits(self, sample: Sample) -> list[Finding]:
+        out: list[Finding] = []
+        for axis in (PITCH, MOTOR_YAW):
+            limit = sample.at_limit(axis)
+            if limit is not None and self._at_limit[axis] is None:
+                name, t = self._motion if self._motion else (FEEDBACK_COMMAND, sample.time)
+                verdict = PARTIAL if self._motion else UNKNOWN
+                word = "pitch" if axis == PITCH else "yaw motor"
+                text = (
+                    f"the gimbal is at its {word} limit {limit:.1f} deg "
+                    f"{sample.time - t:.1f} s after {name}: it cannot turn further that way."
+                )
+                extra = {"axis": axis, "limit_deg": limit, "observed_at": sample.time}
+                out.append(Finding(name, t, CHECK_LIMIT, verdict, text, extra))
+            self._at_limit[axis] = limit
+        return out
+
+
+def _speed(fields: dict[str, Any], name: str) -> float:
+    value = fields.get(name, 0.0)
+    return float(value) if isinstance(value, (int, float)) else 0.0
+
+
+__all__ = ["NOT_OBEYED", "OBEYED", "PARTIAL", "UNKNOWN", "ResponseAnalyzer", "Settings"]
