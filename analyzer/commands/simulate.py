@@ -8,6 +8,7 @@ import sys
 import time
 
 from analyzer.errors import UsageError
+from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.faults import FaultConfig
 
 HELP = "run a simulated gimbal that answers commands (CAN, TCP in the IDU's role, serial)"
@@ -21,6 +22,7 @@ attitude feedback every 500 ms as four 8-byte segments with a correct CRC.
   gimbal-analyzer simulate --on can:socketcan:vcan0 --uav --ranging
   gimbal-analyzer simulate --on tcp:2000 --drop 0.05 --corrupt 0.02 --seed 1
   gimbal-analyzer simulate --stop-feedback-at 10 --stop-feedback-for 3
+  gimbal-analyzer simulate --sluggish 0.4 --ignore tracking --drift 2
 
 Then, in another terminal, e.g.:
   gimbal-analyzer monitor --source tcp:127.0.0.1:2000
@@ -85,6 +87,52 @@ def add_fault_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--seed", type=int, help="seed of the fault generator (repeatable runs)")
 
 
+def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("disobedience (what `gimbal-analyzer analyze` finds)")
+    group.add_argument(
+        "--sluggish",
+        type=rate_value,
+        metavar="FACTOR",
+        help="move at this fraction of the asked speeds and slew rate (e.g. 0.4)",
+    )
+    group.add_argument(
+        "--fall-short",
+        type=rate_value,
+        metavar="FRACTION",
+        help="stop this fraction of the way to a target angle (e.g. 0.7)",
+    )
+    group.add_argument(
+        "--ignore",
+        action="append",
+        default=[],
+        metavar="COMMAND",
+        help="do not act on this command name (repeatable), e.g. tracking",
+    )
+    group.add_argument(
+        "--drift",
+        type=seconds_value,
+        default=0.0,
+        metavar="S",
+        help="keep turning S seconds after gimbal_control commands stop",
+    )
+
+
+def behaviour(args: argparse.Namespace) -> Behaviour:
+    from analyzer.protocol.command_table import COMMAND_NAMES
+
+    unknown = [name for name in args.ignore if name not in COMMAND_NAMES]
+    if unknown:
+        raise UsageError(
+            f"--ignore {unknown[0]}: not a command name (see 'gimbal-analyzer commands')"
+        )
+    return Behaviour(
+        speed=1.0 if args.sluggish is None else args.sluggish,
+        reach=1.0 if args.fall_short is None else args.fall_short,
+        ignore=frozenset(args.ignore),
+        drift_s=args.drift,
+    )
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--on",
@@ -106,6 +154,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--quiet", action="store_true", help="print only the start and the end, not each command"
     )
     add_fault_arguments(parser)
+    add_behaviour_arguments(parser)
 
 
 def fault_config(args: argparse.Namespace) -> FaultConfig:
@@ -148,7 +197,11 @@ def run(args: argparse.Namespace) -> int:
     start = time.monotonic()
     link = open_gimbal_link(spec, log=lambda text: say(f"[{time.monotonic() - start:7.2f}] {text}"))
     config = SimConfig(
-        gimbal_type=args.gimbal_type, ranging=args.ranging, uav=args.uav, faults=fault_config(args)
+        gimbal_type=args.gimbal_type,
+        ranging=args.ranging,
+        uav=args.uav,
+        faults=fault_config(args),
+        behaviour=behaviour(args),
     )
     gimbal = SimulatedGimbal(start, config)
     kind = GIMBAL_TYPES[args.gimbal_type]
@@ -178,6 +231,7 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     say(f"  faults: {config.faults.describe()}")
+    say(f"  behaviour: {config.behaviour.describe()}")
     say(f"  stops after {args.duration:g} s" if args.duration is not None else "  Ctrl-C to stop")
     runner = SimulatorRunner(gimbal, link, log=None if args.quiet else say)
     try:

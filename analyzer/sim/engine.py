@@ -17,6 +17,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_GPS,
     Event,
 )
+from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.faults import FaultConfig, FaultInjector
 from analyzer.sim.model import GimbalModel
 from analyzer.sim.uav import UavPlayer
@@ -38,6 +39,7 @@ class SimConfig:
     ranging_period: float = RANGING_PERIOD
     uav: bool = False
     faults: FaultConfig = field(default_factory=FaultConfig)
+    behaviour: Behaviour = field(default_factory=Behaviour)
 
 
 class SimulatedGimbal:
@@ -51,7 +53,9 @@ class SimulatedGimbal:
     def __init__(self, start: float, config: SimConfig | None = None) -> None:
         self.config = config or SimConfig()
         self.start = start
-        self.model = GimbalModel(start, gimbal_type=self.config.gimbal_type)
+        self.model = GimbalModel(
+            start, gimbal_type=self.config.gimbal_type, behaviour=self.config.behaviour
+        )
         self.faults = FaultInjector(self.config.faults)
         self.uav = UavPlayer(start) if self.config.uav else None
         self.sent: Counter[str] = Counter()

@@ -8,6 +8,7 @@ from typing import Any
 
 from analyzer.protocol.feedback import ATTITUDE, MOTOR_YAW_LIMIT, WIDE_MOTOR_YAW_TYPES
 from analyzer.protocol.fields import Field
+from analyzer.sim.behaviour import Behaviour
 
 
 def _limits(field: Field) -> tuple[float, float]:
@@ -61,7 +62,15 @@ class GimbalModel:
     produces them), so the simulator understands exactly what the analyzer decodes.
     """
 
-    def __init__(self, now: float = 0.0, *, gimbal_type: int = 1, max_zoom: float = MAX_ZOOM):
+    def __init__(
+        self,
+        now: float = 0.0,
+        *,
+        gimbal_type: int = 1,
+        max_zoom: float = MAX_ZOOM,
+        behaviour: Behaviour | None = None,
+    ):
+        self.behaviour = behaviour or Behaviour()
         self.gimbal_type = gimbal_type
         self.max_zoom = max_zoom
         self.motor_yaw_limit = (
@@ -142,17 +151,19 @@ class GimbalModel:
         if dt <= 0:
             return
         moving = max(0.0, min(now, self._speed_until) - self._time)
+        speed = self.behaviour.speed
         if moving > 0:
-            self._set_pitch(self.pitch_deg + self._tilt_dps * moving)
-            self._set_motor_yaw(self.motor_yaw_deg + self._pan_dps * moving)
+            self._set_pitch(self.pitch_deg + self._tilt_dps * speed * moving)
+            self._set_motor_yaw(self.motor_yaw_deg + self._pan_dps * speed * moving)
+        slew = SLEW_DPS * speed * dt
         if self._pitch_target is not None:
-            self._set_pitch(_toward(self.pitch_deg, self._pitch_target, SLEW_DPS * dt))
+            self._set_pitch(_toward(self.pitch_deg, self._pitch_target, slew))
             if self.pitch_deg == self._pitch_target:
                 self._pitch_target = None
         if self._yaw_geodetic is not None:
             self._yaw_target = self._clamp_yaw(wrap180(self._yaw_geodetic - self.uav.heading_deg))
         if self._yaw_target is not None:
-            self._set_motor_yaw(_toward(self.motor_yaw_deg, self._yaw_target, SLEW_DPS * dt))
+            self._set_motor_yaw(_toward(self.motor_yaw_deg, self._yaw_target, slew))
             if self.motor_yaw_deg == self._yaw_target:
                 self._yaw_target = None
         if self._zoom_target is not None:
@@ -177,8 +188,9 @@ class GimbalModel:
     def apply(self, fields: dict[str, Any], now: float) -> bool:
         """Act on a decoded command; False when the gimbal ignores it."""
         self.step(now)
-        handler = _HANDLERS.get(str(fields.get("name")))
-        if handler is None:
+        name = str(fields.get("name"))
+        handler = _HANDLERS.get(name)
+        if handler is None or name in self.behaviour.ignore:
             self.ignored += 1
             return False
         self.commands += 1
@@ -188,10 +200,13 @@ class GimbalModel:
     def _turn_to(self, pitch: float | None = None, motor_yaw: float | None = None) -> None:
         self._speed_until = self._time
         self.control_mode = LOCKING
+        reach = self.behaviour.reach
         if pitch is not None:
+            pitch = self.pitch_deg + reach * (pitch - self.pitch_deg)
             self._pitch_target = min(PITCH_MAX, max(PITCH_MIN, pitch))
         if motor_yaw is not None:
             self._yaw_geodetic = None
+            motor_yaw = self.motor_yaw_deg + reach * (motor_yaw - self.motor_yaw_deg)
             self._yaw_target = self._clamp_yaw(motor_yaw)
 
     def _zoom_to(self, ratio: float) -> None:
@@ -208,7 +223,7 @@ class GimbalModel:
     def _gimbal_control(self, f: dict[str, Any], now: float) -> None:
         self._pan_dps = float(f.get("pan_speed_dps", 0.0))
         self._tilt_dps = float(f.get("tilt_speed_dps", 0.0))
-        self._speed_until = now + HOLD_S
+        self._speed_until = now + HOLD_S + self.behaviour.drift_s
         self._pitch_target = self._yaw_target = self._yaw_geodetic = None
         self.control_mode = FULL_LOCK
 
@@ -220,7 +235,8 @@ class GimbalModel:
                 self._turn_to(motor_yaw=wrap180(yaw))
             else:  # geodetic: hold that heading however the aircraft turns
                 self._turn_to(motor_yaw=wrap180(yaw - self.uav.heading_deg))
-                self._yaw_geodetic = yaw
+                now_yaw = self.uav.heading_deg + self.motor_yaw_deg
+                self._yaw_geodetic = now_yaw + self.behaviour.reach * wrap180(yaw - now_yaw)
         elif axis == "pitch" and "pitch_deg" in f:
             self._turn_to(pitch=float(f["pitch_deg"]))
         elif axis == "zoom" and "zoom" in f:

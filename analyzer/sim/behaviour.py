@@ -1,0 +1,39 @@
+"""Faults of the gimbal's obedience: sluggish, falls short of targets, ignores commands, drifts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    """How far the simulated gimbal does what it is told (the defaults: exactly)."""
+
+    speed: float = 1.0  # fraction of commanded rates and of the slew speed (sluggish < 1)
+    reach: float = 1.0  # fraction of the way to a target it goes before stopping (short < 1)
+    ignore: frozenset[str] = frozenset()  # command names it does not act on
+    drift_s: float = 0.0  # keeps turning this much longer after gimbal_control stops
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.speed <= 10.0:
+            raise ValueError(f"speed factor {self.speed}: must be between 0 and 10")
+        if not 0.0 <= self.reach <= 1.0:
+            raise ValueError(f"reach {self.reach}: must be between 0 and 1")
+        if self.drift_s < 0:
+            raise ValueError(f"drift {self.drift_s} s: must not be negative")
+
+    @property
+    def active(self) -> bool:
+        return self != Behaviour()
+
+    def describe(self) -> str:
+        parts = []
+        if self.speed != 1.0:
+            parts.append(f"moves at {self.speed * 100:g}% of the asked speed")
+        if self.reach != 1.0:
+            parts.append(f"stops {self.reach * 100:g}% of the way to a target")
+        if self.ignore:
+            parts.append("ignores " + ", ".join(sorted(self.ignore)))
+        if self.drift_s:
+            parts.append(f"keeps turning {self.drift_s:g} s after gimbal_control stops")
+        return "; ".join(parts) or "obeys"
