@@ -21,8 +21,10 @@ from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
 from analyzer.mcapio.reader import read_items
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch
+from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.schema import topic_schemas
 from analyzer.protocol.types import BUS_ERROR, CanFrame, diagnostic
+from tests.mcap_doctor import examine
 from tests.test_mcap_support import T0, batches, decode_all, traffic, write_recording
 
 
@@ -239,7 +241,8 @@ def test_odd_times_do_not_break_the_file(tmp_path: Path) -> None:
     assert [m[2].log_time for m in _messages(path)] == [0, 0, 0, 12_500_000_000]
 
 
-def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path) -> None:
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path, compression: str) -> None:
     from mcap.records import DataEnd, SummaryOffset
     from mcap.stream_reader import StreamReader
     from mcap.writer import CompressionType, Writer
@@ -252,19 +255,17 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path) -> None:
         channels = [writer.register_channel(f"/t{i}", "json", schema, {"k": "v"}) for i in range(3)]
         writer.add_metadata("m", {"a": "b"})
         for n in range(5000):
-            # out-of-order times inside chunks on purpose
-            writer.add_message(
-                channels[n % 3], 10**18 + (n * 7919) % 5000 * 10**6, b'{"n":%d}' % n, 5, n
-            )
+            # channels interleaved, several messages per time stamp
+            writer.add_message(channels[n % 3], 10**18 + n // 4 * 10**6, b'{"n":%d}' % n, 5, n)
             if n % 1700 == 0:
                 writer.flush()
         writer.finish()
 
     ours, theirs = tmp_path / "ours.mcap", tmp_path / "theirs.mcap"
     with open(ours, "wb") as f:
-        fill(ChunkedWriter(f, chunk_size=4096))
+        fill(ChunkedWriter(f, chunk_size=4096, compression=compression))
     with open(theirs, "wb") as f:
-        fill(Writer(f, chunk_size=4096, compression=CompressionType.NONE))
+        fill(Writer(f, chunk_size=4096, compression=CompressionType[compression.upper()]))
 
     def content(path: Path) -> tuple[Any, ...]:
         with open(path, "rb") as f:
@@ -295,3 +296,54 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path) -> None:
     raw = ours.read_bytes()
     for offset in (r for r in records if isinstance(r, SummaryOffset)):
         assert raw[offset.group_start] == offset.group_opcode
+    diagnosis = examine(ours)
+    assert diagnosis.errors == [] and diagnosis.warnings == []
+    assert diagnosis.compressions == {"" if compression == "none" else compression}
+
+
+def test_chunked_writer_writes_in_log_time_order(tmp_path: Path) -> None:
+    """Out-of-order input: each chunk is sorted; a message older than a chunk on disk is
+    moved up to that chunk's end (its publish time keeps the original)."""
+    from analyzer.mcapio.chunked_writer import ChunkedWriter
+
+    path = tmp_path / "order.mcap"
+    with open(path, "wb") as f:
+        writer = ChunkedWriter(f, chunk_size=1 << 20)
+        writer.start("", "test")
+        schema = writer.register_schema("s", "jsonschema", b"{}")
+        a = writer.register_channel("/a", "json", schema, {})
+        for t in (30, 10, 20):
+            writer.add_message(a, t, b"{}", t, t)
+        b = writer.register_channel("/b", "json", schema, {})  # a channel in mid-chunk
+        writer.add_message(b, 15, b"{}", 15, 1)
+        writer.flush()
+        writer.add_message(a, 25, b"{}", 25, 99)  # older than the chunk on disk
+        writer.add_message(b, 40, b"{}", 40, 2)
+        writer.finish()
+    assert writer.retimed == 1
+    diagnosis = examine(path)
+    assert diagnosis.errors == [] and diagnosis.warnings == [] and diagnosis.chunks == 2
+    with open(path, "rb") as f:
+        got = [(c.topic, m.log_time, m.publish_time) for _, c, m in make_reader(f).iter_messages()]
+    assert got == [
+        ("/a", 10, 10), ("/b", 15, 15), ("/a", 20, 20), ("/a", 30, 30),
+        ("/a", 30, 25), ("/b", 40, 40),
+    ]  # fmt: skip
+
+
+def test_sink_writes_a_batch_in_time_order(tmp_path: Path) -> None:
+    """A batch holds its raw frames first and its events after: they are merged by time."""
+    path = tmp_path / "batch.mcap"
+    sink = McapSink(path, metadata={}, flush_interval=None, chunk_size=512)
+    decoder = Decoder()
+    for start in (0.0, 10.0):
+        batch = Batch()
+        for i in range(40):
+            frame = CanFrame(start + i / 10, 0x0F01, bytes.fromhex("0F04E803F4010000"))
+            batch.items.append(frame)
+            batch.events.extend(decoder.feed_can(frame))
+        sink.handle(batch)
+    sink.close()
+    diagnosis = examine(path)
+    assert diagnosis.errors == [] and diagnosis.warnings == [] and diagnosis.chunks > 4
+    assert diagnosis.messages == 160

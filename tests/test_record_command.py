@@ -17,6 +17,7 @@ from mcap.reader import make_reader
 from analyzer.mcapio.reader import Recording, read_events, read_items
 from analyzer.protocol.feedback import encode_attitude
 from analyzer.protocol.types import StreamChunk
+from tests.mcap_doctor import examine
 
 ROOT = Path(__file__).resolve().parent.parent
 SEND_INTERVAL = 0.01
@@ -127,6 +128,10 @@ def test_kill_9_keeps_everything_older_than_a_second(tmp_path: Path) -> None:
     yaws = _yaws_in_events(path)
     expected = {round(n / 100, 2) for n in range(len(old))}
     assert expected <= yaws
+    # What survived is compressed and in log-time order; only the end is missing.
+    diagnosis = examine(path)
+    assert diagnosis.warnings == [] and diagnosis.compressions == {"zstd"}
+    assert all("DataEnd" in e or "Footer" in e or "ends inside" in e for e in diagnosis.errors)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
@@ -143,6 +148,8 @@ def test_sigterm_and_ctrl_c_finish_the_file(tmp_path: Path, sig: int) -> None:
         assert summary.statistics.message_count > 0
         messages = list(reader.iter_messages())
     assert len(messages) == summary.statistics.message_count
+    diagnosis = examine(path)
+    assert diagnosis.errors == [] and diagnosis.warnings == []
     sent = [frame for t, frame in idu.sent if t < signalled - 0.3]
     stream = b"".join(i.data for i in read_items(path) if isinstance(i, StreamChunk))
     assert stream.startswith(b"".join(sent))

@@ -10,6 +10,7 @@ import time
 from typing import IO, Any
 
 from analyzer.errors import EXIT_INTERRUPTED, SourceError, UsageError
+from analyzer.mcapio.options import add_compression_argument
 from analyzer.stdio import interrupt_name
 
 HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
@@ -40,6 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--port", type=int, metavar="N", help="pcap inputs: TCP port of the IDU (default 2000)"
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
+    add_compression_argument(parser)
 
 
 class Progress:
@@ -103,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
-    sink = McapSink(partial, metadata=meta, flush_interval=None)
+    sink = McapSink(partial, metadata=meta, flush_interval=None, compression=args.compression)
     progress = Progress(sys.stderr, args.input, source)
     finished = False
     interrupted = ""

@@ -10,6 +10,7 @@ from typing import IO, Any
 
 from analyzer.commands.simulate import add_fault_arguments, fault_config, seconds_value
 from analyzer.errors import SourceError, UsageError
+from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
@@ -69,6 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--all", action="store_true", help="plain output: print every event (UAV status too)"
     )
     parser.add_argument("--clean", action="store_true", help="inject no faults")
+    add_compression_argument(parser)
     add_fault_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
 
@@ -167,6 +169,7 @@ def run(args: argparse.Namespace) -> int:
             metadata=recording_metadata(
                 f"demo: simulated gimbal and ground station on {spec}", command="demo"
             ),
+            compression=args.compression,
         )
     except SourceError:
         source.close()

@@ -11,6 +11,7 @@ import time
 from typing import IO, Any
 
 from analyzer.errors import SourceError, UsageError
+from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
@@ -58,6 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--print", action="store_true", help="also print every event as a JSON line on stdout"
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
+    add_compression_argument(parser)
     parser.add_argument(
         "-f", "--force", action="store_true", help="overwrite the output file if it exists"
     )
@@ -158,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
         sink = McapSink(
             path,
             metadata=recording_metadata(description, spec=args.source, command="record"),
+            compression=args.compression,
         )
     except SourceError:
         source.close()

@@ -1,18 +1,27 @@
 """A lean chunked MCAP writer: the per-message path is one struct.pack into the open chunk.
 
 It writes the same file layout as ``mcap.writer.Writer`` with chunking, all indexes,
-statistics, summary offsets and CRCs (chunk, summary and data section), uncompressed.
-The rarely written records (header, schema, channel, metadata, summary) are serialised by
-the mcap library's own record classes; only messages and message indexes, which are
-written for every frame, are packed here. Tests check every file with the mcap reader.
+statistics, summary offsets and CRCs (chunk, summary and data section); chunks are
+compressed with zstd (default), lz4 or not at all. The rarely written records (header,
+schema, channel, metadata, summary) are serialised by the mcap library's own record
+classes; only messages and message indexes, which are written for every frame, are packed
+here. Tests check every file with the mcap reader.
+
+Messages come out in log-time order, as readers that stream a file expect: a chunk whose
+messages arrived out of order is sorted before it is written, and a message older than a
+chunk already written takes that chunk's end as its log time (its publish time keeps its
+own; ``retimed`` counts them).
 """
 
 from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Callable
 from typing import IO
 
+import lz4.frame
+import zstandard
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
 from mcap.records import (
@@ -29,20 +38,45 @@ from mcap.records import (
     SummaryOffset,
 )
 
+from analyzer.mcapio.options import COMPRESSIONS, DEFAULT_COMPRESSION
+
 MAGIC = b"\x89MCAP0\r\n"
 # Message record: opcode, record length, channel id, sequence, log time, publish time.
 _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_FIXED = 2 + 4 + 8 + 8
 # Message index record head: opcode, record length, channel id, byte length of the pairs.
 _INDEX_HEAD = struct.Struct("<BQHI")
+_RECORD_HEAD = struct.Struct("<BQ")
+
+ZSTD_LEVEL = 3  # what the mcap library's writer uses
+
+
+def compressor(name: str) -> tuple[str, Callable[[bytes], bytes] | None]:
+    """``zstd`` / ``lz4`` / ``none`` -> (the chunk's compression field, the function)."""
+    if name == "zstd":
+        return "zstd", zstandard.ZstdCompressor(level=ZSTD_LEVEL).compress
+    if name == "lz4":
+        return "lz4", lz4.frame.compress
+    if name in ("none", ""):
+        return "", None
+    raise ValueError(f"unknown compression {name!r}; valid: {', '.join(COMPRESSIONS)}")
 
 
 class ChunkedWriter:
     """Writes an MCAP file to ``stream`` (binary, opened by the caller, not closed here)."""
 
-    def __init__(self, stream: IO[bytes], *, chunk_size: int = 128 * 1024) -> None:
+    def __init__(
+        self,
+        stream: IO[bytes],
+        *,
+        chunk_size: int = 128 * 1024,
+        compression: str = DEFAULT_COMPRESSION,
+    ) -> None:
         self._stream = stream
         self._chunk_size = chunk_size
+        self._compression, self._compress = compressor(compression)
+        self.retimed = 0  # messages whose log time was raised to keep the file in order
+        self._floor = 0  # end time of the last chunk written: no message may go below it
         self._pos = 0
         self._data_crc = 0
         self._schemas: dict[int, Schema] = {}
@@ -58,6 +92,9 @@ class ChunkedWriter:
         # the open chunk
         self._chunk = bytearray()
         self._index: dict[int, list[int]] = {}  # channel id -> [log_time, offset, ...]
+        self._chunk_last = 0  # highest log time in the open chunk
+        self._unsorted = False  # a message of the open chunk is older than one before it
+        self._records: list[bytes] = []  # schema / channel records of the open chunk
 
     # -- low level -------------------------------------------------------------------------------
 
@@ -82,7 +119,7 @@ class ChunkedWriter:
         schema_id = len(self._schemas) + 1
         schema = Schema(id=schema_id, name=name, encoding=encoding, data=data)
         self._schemas[schema_id] = schema
-        self._chunk += self._record(schema)
+        self._add_record(self._record(schema))
         return schema_id
 
     def register_channel(
@@ -102,12 +139,24 @@ class ChunkedWriter:
         )
         self._channels[channel_id] = channel
         self._channel_counts[channel_id] = 0
-        self._chunk += self._record(channel)
+        self._add_record(self._record(channel))
         return channel_id
+
+    def _add_record(self, record: bytes) -> None:
+        self._chunk += record
+        self._records.append(record)
 
     def add_message(
         self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0
     ) -> None:
+        if log_time < self._chunk_last:
+            if log_time < self._floor:
+                log_time = self._floor  # older than a chunk on disk already
+                self.retimed += 1
+            if log_time < self._chunk_last:
+                self._unsorted = True
+        else:
+            self._chunk_last = log_time
         chunk = self._chunk
         index = self._index.get(channel_id)
         if index is None:
@@ -192,6 +241,8 @@ class ChunkedWriter:
     def _finish_chunk(self) -> None:
         if not self._index:
             return
+        if self._unsorted:
+            self._sort_chunk()
         data = bytes(self._chunk)
         start = min(min(pairs[0::2]) for pairs in self._index.values())
         end = max(max(pairs[0::2]) for pairs in self._index.values())
@@ -199,9 +250,10 @@ class ChunkedWriter:
         for channel_id, pairs in self._index.items():
             self._channel_counts[channel_id] += len(pairs) // 2
             messages += len(pairs) // 2
+        stored = data if self._compress is None else self._compress(data)
         chunk = Chunk(
-            compression="",
-            data=data,
+            compression=self._compression,
+            data=stored,
             message_start_time=start,
             message_end_time=end,
             uncompressed_crc=zlib.crc32(data),
@@ -232,8 +284,8 @@ class ChunkedWriter:
                 chunk_length=len(chunk_record),
                 message_index_offsets=offsets,
                 message_index_length=len(indexes),
-                compression="",
-                compressed_size=len(data),
+                compression=self._compression,
+                compressed_size=len(stored),
                 uncompressed_size=len(data),
             )
         )
@@ -246,3 +298,27 @@ class ChunkedWriter:
         self._chunk_count += 1
         self._chunk = bytearray()
         self._index = {}
+        self._records = []
+        self._floor = max(self._floor, end)
+        self._chunk_last = self._floor
+        self._unsorted = False
+
+    def _sort_chunk(self) -> None:
+        """Rebuild the open chunk: its schema / channel records, then messages by log time."""
+        chunk = self._chunk
+        head = b"".join(self._records)
+        messages: list[tuple[int, int, int]] = []  # (log time, old offset, channel id)
+        for channel_id, pairs in self._index.items():
+            messages.extend(
+                zip(pairs[0::2], pairs[1::2], [channel_id] * (len(pairs) // 2), strict=True)
+            )
+        messages.sort()
+        rebuilt = bytearray(head)
+        index: dict[int, list[int]] = {}
+        for log_time, offset, channel_id in messages:
+            _, length = _RECORD_HEAD.unpack_from(chunk, offset)
+            record = chunk[offset : offset + 9 + length]
+            index.setdefault(channel_id, []).extend((log_time, len(rebuilt)))
+            rebuilt += record
+        self._chunk = rebuilt
+        self._index = index

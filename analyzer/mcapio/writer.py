@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
+import operator
 import os
 import threading
 import time
@@ -30,7 +32,9 @@ from analyzer.mcapio.channels import (
     stream_chunk_json,
     time_ns,
 )
+from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
+from analyzer.mcapio.options import DEFAULT_COMPRESSION
 from analyzer.mcapio.stats import EventStats
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import CanFrame, Event
@@ -66,6 +70,13 @@ _ENCODE = json.JSONEncoder(
 ).encode
 
 
+_time_of = operator.attrgetter("time")
+
+
+def _is_event(value: object) -> bool:
+    return isinstance(value, Event)
+
+
 def _describe(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
@@ -94,9 +105,9 @@ class McapSink:
         chunk_size: int = DEFAULT_CHUNK_SIZE,
         flush_interval: float | None = DEFAULT_FLUSH_INTERVAL,
         foxglove_views: bool = True,
+        compression: str = DEFAULT_COMPRESSION,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        from analyzer.mcapio.chunked_writer import ChunkedWriter
 
         self.path = str(path)
         self.error: str | None = None  # the full message after a write error
@@ -123,7 +134,7 @@ class McapSink:
             self._file = open(self.path, "wb")  # noqa: SIM115 (closed in close())
         except OSError as exc:
             raise SourceError(f"cannot create {self.path}: {_describe(exc)}") from None
-        self._writer = ChunkedWriter(self._file, chunk_size=chunk_size)
+        self._writer = ChunkedWriter(self._file, chunk_size=chunk_size, compression=compression)
         info = {
             "tool": "gimbal-analyzer",
             "tool_version": __version__,
@@ -149,8 +160,7 @@ class McapSink:
             if self._closed:
                 return
             try:
-                self._write_items(batch.items)
-                self._write_events(batch.events)
+                self._write_batch(batch.items, batch.events)
                 if (
                     self._flush_interval is not None
                     and self._clock() - self._last_flush >= self._flush_interval
@@ -234,6 +244,22 @@ class McapSink:
         self._channels[topic] = channel_id
         self._sequence[channel_id] = 0
         return channel_id
+
+    def _write_batch(self, items: list[RawItem], events: list[Event]) -> None:
+        """Items and events of one batch, merged in time order (an item before its events)."""
+        if not events or (items and items[-1].time <= events[0].time):
+            self._write_items(items)
+            self._write_events(events)
+            return
+        if not items:
+            self._write_events(events)
+            return
+        merged: list[RawItem | Event] = sorted([*items, *events], key=_time_of)
+        for is_event, run in itertools.groupby(merged, key=_is_event):
+            if is_event:
+                self._write_events(list(run))  # type: ignore[arg-type]
+            else:
+                self._write_items(list(run))  # type: ignore[arg-type]
 
     def _write_items(self, items: list[RawItem]) -> None:
         add = self._writer.add_message
