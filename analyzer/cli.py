@@ -20,6 +20,7 @@ from analyzer.errors import (
     exit_code_table,
 )
 from analyzer.stdio import guarded_stdout, interrupt_name, sigterm_as_interrupt, silence_stdout
+from analyzer.terminal_text import printable
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
 # run(args) -> int, and keeps heavy imports (textual, mcap, can) inside run().
@@ -98,7 +99,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             sys.stdout.flush()
             return result
         except OutputError as exc:
-            print(f"{name}: error: {exc}", file=sys.stderr)
+            print(f"{name}: error: {printable(str(exc))}", file=sys.stderr)
             silence_stdout()
             return EXIT_FAILED
         except BrokenPipeError:
@@ -119,8 +120,8 @@ def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -
         result: int = module.run(args)
         return result
     except UsageError as exc:
-        print(f"{name}: error: {exc}", file=sys.stderr)
+        print(f"{name}: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except SourceError as exc:
-        print(f"{name}: error: {exc}", file=sys.stderr)
+        print(f"{name}: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_FAILED

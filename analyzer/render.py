@@ -20,6 +20,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_TEXT,
     Event,
 )
+from analyzer.terminal_text import printable
 
 TIME_WIDTH = 12
 WHERE_WIDTH = 17
@@ -190,23 +191,26 @@ def describe(event: Event) -> str:
 def describe_event(event: Event) -> str:
     """Name and values in plain words, e.g. ``gimbal_control pan -5.00 deg/s tilt 0.00 deg/s``."""
     text = describe(event)
-    return f"{label(event)} {text}".rstrip()
+    return printable(f"{label(event)} {text}".rstrip())
 
 
 def render_event(event: Event, color: bool = False) -> str:
     """One aligned line: time, source (and direction), topic, name, values, warnings."""
     diagnostic = event.topic == TOPIC_DIAGNOSTICS
+    # Every part may hold text from the input (channel names, recorded topics, text
+    # messages): control characters are escaped before anything reaches the terminal.
     columns = [
         (format_time(event.time).rjust(TIME_WIDTH), "time"),
-        (where(event).ljust(WHERE_WIDTH), "where"),
-        (event.topic.ljust(TOPIC_WIDTH), "topic"),
-        (label(event).ljust(LABEL_WIDTH), "diagnostic" if diagnostic else "label"),
+        (printable(where(event)).ljust(WHERE_WIDTH), "where"),
+        (printable(event.topic).ljust(TOPIC_WIDTH), "topic"),
+        (printable(label(event)).ljust(LABEL_WIDTH), "diagnostic" if diagnostic else "label"),
     ]
     try:
         body = describe(event)
     except (TypeError, ValueError):  # fields of an unexpected type: show them as they are
         body = "  ".join(f"{k} {v}" for k, v in event.fields.items())
-    warnings = "; ".join(str(w) for w in event.warnings)
+    body = printable(body)
+    warnings = printable("; ".join(str(w) for w in event.warnings))
     if not color:
         line = " ".join(text for text, _ in columns) + " " + body
         if warnings:

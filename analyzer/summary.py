@@ -15,6 +15,7 @@ from analyzer.protocol.types import (
     TOPIC_GIMBAL_RANGING,
     Event,
 )
+from analyzer.terminal_text import printable
 
 EXPECTED_FEEDBACK_HZ = 2.0  # the gimbal answers with one message about every 500 ms
 FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
@@ -138,7 +139,9 @@ class Summary:
         """A short readable report."""
         bold = (lambda s: f"\033[1m{s}\033[0m") if color else (lambda s: s)
         alarm = (lambda s: f"\033[1;31m{s}\033[0m") if color else (lambda s: s)
+        # Names below come from the input (paths, recorded topics, channel names): escaped.
         title = f"Summary of {self.path}" + (f" ({self.format})" if self.format else "")
+        title = printable(title)
         lines = [bold(title)]
 
         def row(name: str, text: str) -> None:
@@ -161,19 +164,19 @@ class Summary:
         if self.topics:
             lines.append("  by topic")
             for topic, count in sorted(self.topics.items()):
-                lines.append(f"    {topic:<22}{count:>9,}")
+                lines.append(f"    {printable(topic):<22}{count:>9,}")
         if self.commands:
             lines.append("  commands")
             for name, count in self.commands.most_common():
-                lines.append(f"    {name:<22}{count:>9,}")
+                lines.append(f"    {printable(name):<22}{count:>9,}")
         if self.kinds:
             lines.append("  diagnostics by kind")
             for kind, count in sorted(self.kinds.items()):
-                lines.append(f"    {alarm(f'{kind:<22}')}{count:>9,}")
+                lines.append(f"    {alarm(f'{printable(kind):<22}')}{count:>9,}")
         if not self.feedback:
             row("feedback", alarm("none (the gimbal should answer at about 2 Hz)"))
         for key, track in sorted(self.feedback.items()):
-            name = "feedback" if len(self.feedback) == 1 else f"feedback {key}"
+            name = "feedback" if len(self.feedback) == 1 else f"feedback {printable(key)}"
             lines.append(f"  {name}")
             rate = track.rate_hz
             if rate is None:

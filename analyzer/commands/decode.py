@@ -12,6 +12,7 @@ from typing import IO, Any
 
 from analyzer.errors import UsageError
 from analyzer.protocol.ids import PROTOCOL_IDS
+from analyzer.terminal_text import printable
 
 HELP = "decode a capture file (candump, python-can logs, pcap, raw dumps, MCAP) into events"
 
@@ -179,19 +180,22 @@ def run(args: argparse.Namespace) -> int:
             f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
             f"from {args.file}\n"
         )
-    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder.stats)]:
-        sys.stderr.write(f"note: {note}\n")
+    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder.stats, args.raw)]:
+        sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0
 
 
-def _nothing_for_us(input_stats: dict[str, int], decoder_stats: dict[str, int]) -> list[str]:
+def _nothing_for_us(
+    input_stats: dict[str, int], decoder_stats: dict[str, int], raw: bool = False
+) -> list[str]:
     """A note when CAN frames were read but none of them belongs to the protocol."""
     frames = input_stats.get("frames", decoder_stats.get("frames", 0))
     if frames and not decoder_stats.get("protocol_frames") and not decoder_stats.get("chunks"):
         ids = ", ".join(f"0x{i:08X}" for i in sorted(PROTOCOL_IDS))
+        where = "they are the /can/other events" if raw else "--raw shows them"
         return [
             f"none of the {frames:,} CAN frames uses a protocol ID ({ids}); "
-            "is this the gimbal's bus? (--raw shows them)"
+            f"is this the gimbal's bus? ({where})"
         ]
     return []
 

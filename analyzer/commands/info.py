@@ -7,6 +7,8 @@ import json
 import time
 from typing import TYPE_CHECKING
 
+from analyzer.terminal_text import printable
+
 if TYPE_CHECKING:
     from analyzer.mcapio.info import RecordingInfo
 
@@ -106,7 +108,8 @@ def render(info: RecordingInfo) -> str:
             f"{stats.max_gap_s:.3f} s after {format_time(stats.max_gap_at)}; "
             f"{stats.gaps_over_threshold} gap(s) over 1 s"
         )
-    return "\n".join(lines)
+    # Paths, metadata, topics and kinds come from the file: no raw control characters.
+    return "\n".join(printable(line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
