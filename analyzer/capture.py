@@ -287,8 +287,10 @@ class Capture:
                 self._fail(str(exc), exc)
             except Exception as exc:
                 self._failed_sinks.add(index)
-                name = sink.__class__.__name__
-                self._fail(f"{name} failed: {_reason(exc)}", exc)
+                if isinstance(exc, SourceError):  # says what failed (disk full: cannot write...)
+                    self._fail(_reason(exc), exc)
+                else:
+                    self._fail(f"{sink.__class__.__name__} failed: {_reason(exc)}", exc)
 
     def _fail(self, message: str, exc: BaseException | None) -> None:
         """Keep the first failure, stop the loop, and note it in the last batch."""

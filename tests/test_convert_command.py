@@ -85,7 +85,7 @@ def test_convert_user_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "no such file" in capsys.readouterr().err
     assert main(["convert", str(log), "-o", str(log)]) == 2
     assert "overwrite the input" in capsys.readouterr().err
-    assert main(["convert", str(log), "-o", str(tmp_path / "no" / "x.mcap")]) == 1
+    assert main(["convert", str(log), "-o", str(tmp_path / "no" / "x.mcap")]) == 2
     assert "does not exist" in capsys.readouterr().err
 
 

@@ -58,7 +58,7 @@ def test_demo_output_directory_must_exist(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     code = main(["demo", "--no-tui", "-o", str(tmp_path / "missing" / "x.mcap")])
-    assert code == 1
+    assert code == 2  # a refused output, like an existing one
     assert "does not exist" in capsys.readouterr().err
 
 

@@ -13,12 +13,11 @@ import jsonschema
 import pytest
 from mcap.reader import NonSeekingReader, make_reader
 
-from analyzer import PROTOCOL_DOCUMENT, __version__
+from analyzer import PROTOCOL_DOCUMENT, __version__, output_file
 from analyzer.errors import SourceError
-from analyzer.mcapio import writer as writer_module
 from analyzer.mcapio.channels import time_ns
 from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
-from analyzer.mcapio.reader import read_items
+from analyzer.mcapio.reader import Recording, read_items
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.decoder import Decoder
@@ -189,13 +188,8 @@ def test_disk_full_stops_with_a_clear_message_and_a_readable_file(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     path = tmp_path / "full.mcap"
-
-    def small_disk(name: str, mode: str = "r") -> Any:
-        raw = _FullDisk(name, "w")
-        raw.room = 40_000
-        return io.BufferedWriter(raw)
-
-    monkeypatch.setattr(writer_module, "open", small_disk, raising=False)
+    monkeypatch.setattr(_FullDisk, "room", 40_000)
+    monkeypatch.setattr(output_file, "FileIO", _FullDisk)
     now = [0.0]
     sink = McapSink(
         path, metadata={"source": "t"}, flush_interval=0.5, chunk_size=4096, clock=lambda: now[0]
@@ -204,21 +198,24 @@ def test_disk_full_stops_with_a_clear_message_and_a_readable_file(
     with pytest.raises(SourceError, match="No space left on device"):
         for batch in batches(traffic(20.0), size=20):
             now[0] += 1.0
-            sink.handle(batch)
             written.extend(batch.items)
-    assert sink.error is not None and "No space left" in sink.error
+            sink.handle(batch)
+    assert sink.error is not None and sink.error.startswith("disk full: cannot write")
+    assert f"{sink.kept_messages} messages up to" in sink.error
     sink.handle(batches(traffic(0.2))[0])  # after the failure: ignored, no second error
     sink.close()
-    recovered = read_items(path)
-    got = list(recovered)
-    assert recovered.recovered
+    recording = read_items(path)
+    got = list(recording)
     assert 0 < len(got) <= len(written)
     assert got == written[: len(got)]
+    # every message of every chunk written completely is there (the summary did not fit)
+    assert recording.recovered
+    assert sum(1 for _ in Recording(path).messages()) == sink.kept_messages
     assert path.stat().st_size <= 40_000
 
 
 def test_cannot_create_the_file(tmp_path: Path) -> None:
-    with pytest.raises(SourceError, match="cannot create"):
+    with pytest.raises(output_file.OutputRefused, match="does not exist"):
         McapSink(tmp_path / "no" / "such" / "dir.mcap", metadata={})
 
 

@@ -9,7 +9,7 @@ import sys
 import time
 from typing import IO, Any
 
-from analyzer.errors import EXIT_INTERRUPTED, SourceError, UsageError
+from analyzer.errors import EXIT_INTERRUPTED, UsageError
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.stdio import interrupt_name
 
@@ -20,8 +20,10 @@ Decode a capture file and write an MCAP recording of it: the same channels as
 Any input `decode` accepts works; an MCAP input is decoded again from its raw
 channels, so an old recording gets the fixes of a newer decoder.
 
-The output is written under a temporary name and renamed when complete; Ctrl-C
-or SIGTERM stops the conversion and removes the unfinished output.
+The output is written under a temporary name in the same directory and
+renamed when complete: an existing file is replaced only with --force (never
+the input itself), and a failed conversion (a full disk, Ctrl-C, SIGTERM) leaves no
+partial file behind.
 
   gimbal-analyzer convert flight.log -o flight.mcap
   gimbal-analyzer convert capture.pcap -o capture.mcap --port 2000
@@ -42,6 +44,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
     add_compression_argument(parser)
+    parser.add_argument(
+        "-f",
+        "--force",
+        action="store_true",
+        help="replace an existing output file (never the input, never a symlink)",
+    )
 
 
 class Progress:
@@ -90,48 +98,46 @@ class Progress:
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
     from analyzer.mcapio.convert import convert_items
-    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.output_file import check_output
 
     if args.input != "-" and not os.path.exists(args.input):
         raise UsageError(f"no such file: {args.input}")
-    target = output_path(args.output)
-    with contextlib.suppress(OSError):
-        if args.input != "-" and target.exists() and os.path.samefile(args.input, target):
-            raise UsageError("the output would overwrite the input")
+    inputs = [] if args.input == "-" else [args.input]
+    target = check_output(args.output, force=args.force, inputs=inputs)
     from analyzer.protocol.ids import TCP_PORT
 
     source = open_input(args.input, args.format, TCP_PORT if args.port is None else args.port)
-    partial = f"{target}.partial"
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
-    sink = McapSink(partial, metadata=meta, flush_interval=None, compression=args.compression)
+    try:
+        sink = McapSink(
+            target,
+            metadata=meta,
+            flush_interval=None,
+            force=args.force,
+            inputs=inputs,
+            atomic=True,
+            compression=args.compression,
+        )
+    except BaseException:
+        _close(source)
+        raise
     progress = Progress(sys.stderr, args.input, source)
     finished = False
     interrupted = ""
     try:
         result = convert_items(source, sink, progress=None if args.quiet else progress)
         sink.close()
-        os.replace(partial, target)
         finished = True
-    except SourceError:
-        if sink.error_reason is not None:
-            raise SourceError(f"cannot write {target}: {sink.error_reason}") from None
-        raise
-    except OSError as exc:
-        raise SourceError(f"cannot write {target}: {exc.strerror or exc}") from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the finally removes the partial file
         interrupted = interrupt_name(exc)
     finally:
         progress.done()
-        closer = getattr(source, "close", None)
-        if callable(closer):
-            with contextlib.suppress(Exception):
-                closer()
+        _close(source)
         if not finished:
-            sink.close()
-            with contextlib.suppress(OSError):
-                os.remove(partial)
+            sink.abandon()
     if interrupted:
         print(
             f"gimbal-analyzer convert: interrupted ({interrupted}): {target} was not written "
@@ -150,3 +156,10 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     return 0
+
+
+def _close(source: Any) -> None:
+    closer = getattr(source, "close", None)
+    if callable(closer):
+        with contextlib.suppress(Exception):
+            closer()

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import IO, Any
 
 from analyzer.commands.simulate import add_fault_arguments, fault_config, seconds_value
@@ -51,10 +53,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--output",
         default=DEFAULT_OUTPUT,
         metavar="FILE",
-        help=f"recording (default {DEFAULT_OUTPUT}, replaced on every run)",
+        help=f"recording (default {DEFAULT_OUTPUT}); a recording an earlier demo wrote is "
+        "replaced, any other existing file only with --force",
     )
     parser.add_argument(
-        "-f", "--force", action="store_true", help="overwrite another existing output file"
+        "-f", "--force", action="store_true", help="replace an existing file demo did not write"
     )
     parser.add_argument(
         "--duration",
@@ -135,9 +138,21 @@ def _plain(event: Event) -> str:
     return f"{stamp} {event.topic:<17} {text}{warnings}"
 
 
+def written_by_demo(path: Path) -> bool:
+    """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
+    from analyzer.mcapio.channels import METADATA_NAME
+    from analyzer.mcapio.reader import Recording
+
+    try:
+        return Recording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
+    except Exception:  # not a recording, or unreadable: not ours
+        return False
+
+
 def run(args: argparse.Namespace) -> int:
     from analyzer.capture import OUTPUT_CLOSED, Capture
-    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
     from analyzer.sim.scene import Scene
@@ -154,9 +169,7 @@ def run(args: argparse.Namespace) -> int:
     duration = args.duration if args.duration is not None else (None if tui else PLAIN_DURATION)
     if duration is not None and duration <= 0:
         raise UsageError("--duration must be a positive number of seconds")
-    target = output_path(args.output)
-    if target.exists() and not args.force and args.output != DEFAULT_OUTPUT:
-        raise UsageError(f"{target} exists; choose another name or use --force to overwrite it")
+    target = check_output(args.output, force=args.force, replaceable=written_by_demo)
     path = str(target)
     spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
     faults = FaultConfig() if args.clean else fault_config(args)
@@ -170,6 +183,8 @@ def run(args: argparse.Namespace) -> int:
                 f"demo: simulated gimbal and ground station on {spec}", command="demo"
             ),
             compression=args.compression,
+            force=args.force,
+            replaceable=written_by_demo,
         )
     except SourceError:
         source.close()
@@ -229,7 +244,8 @@ def run(args: argparse.Namespace) -> int:
             capture.stop()
             capture.join()
         source.close()  # the capture closes it too; here for a failure before it started
-        sink.close()
+        with contextlib.suppress(SourceError):  # a write error is reported below
+            sink.close()
     if sink.error is not None:
         raise SourceError(sink.error)
     if capture.error is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -61,7 +62,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
     add_compression_argument(parser)
     parser.add_argument(
-        "-f", "--force", action="store_true", help="overwrite the output file if it exists"
+        "-f",
+        "--force",
+        action="store_true",
+        help="replace an existing output file (never the source's own file, never a symlink)",
     )
 
 
@@ -132,21 +136,35 @@ class StatusLine:
         self.stream.flush()
 
     def close(self) -> None:
+        error = getattr(self.capture, "error", None)
+        if error is not None:
+            self._show(f"{self.line()}  STOPPED: {error}")
         if self.tty and self._width:
             self.stream.write("\n")
             self.stream.flush()
 
 
+def _input_files(spec: str) -> list[str]:
+    """The file a ``file:`` source reads (the recording must never replace it)."""
+    from analyzer.sources.spec import FileSpec, parse_source
+
+    try:
+        parsed = parse_source(spec)
+    except Exception:  # open_source reports a bad spec with the full explanation
+        return []
+    return [parsed.path] if isinstance(parsed, FileSpec) else []
+
+
 def run(args: argparse.Namespace) -> int:
     from analyzer.capture import Capture, run_until_interrupted
-    from analyzer.mcapio.writer import McapSink, output_path, recording_metadata
+    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.output_file import check_output
     from analyzer.sources import open_source
 
     if args.duration is not None and not args.duration > 0:
         raise UsageError("--duration must be a positive number of seconds")
-    target = output_path(args.output)
-    if target.exists() and not args.force:
-        raise UsageError(f"{target} exists; choose another name or use --force to overwrite it")
+    inputs = _input_files(args.source)
+    target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
     run_app: Any = None
     if args.tui:
@@ -161,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
             path,
             metadata=recording_metadata(description, spec=args.source, command="record"),
             compression=args.compression,
+            force=args.force,
+            inputs=inputs,
         )
     except SourceError:
         source.close()
@@ -202,7 +222,8 @@ def run(args: argparse.Namespace) -> int:
         if capture.running:
             capture.stop()
             capture.join()
-        sink.close()  # normally done by the capture; makes sure the file is finished
+        with contextlib.suppress(SourceError):  # a write error is reported below
+            sink.close()  # normally done by the capture; makes sure the file is finished
     stats = capture.stats
     if sink.error is not None:
         raise SourceError(sink.error)

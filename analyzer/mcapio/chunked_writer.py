@@ -15,6 +15,7 @@ own; ``retimed`` counts them).
 
 from __future__ import annotations
 
+import errno
 import struct
 import zlib
 from collections.abc import Callable
@@ -98,10 +99,43 @@ class ChunkedWriter:
 
     # -- low level -------------------------------------------------------------------------------
 
+    def _write_all(self, data: bytes | bytearray | memoryview) -> None:
+        """Write every byte or raise (an unbuffered stream may take only part of a write)."""
+        view = memoryview(data)
+        while view:
+            written = self._stream.write(view)
+            if not written:
+                raise OSError(errno.EIO, "the file accepted no more data")
+            view = view[written:]
+
     def _write(self, data: bytes | bytearray | memoryview) -> None:
-        self._stream.write(data)
+        """Write a data-section record. ``position`` moves only once all of it is written."""
+        self._write_all(data)
         self._data_crc = zlib.crc32(data, self._data_crc)
         self._pos += len(data)
+
+    @property
+    def position(self) -> int:
+        """End of the last record written completely (a failed write leaves less on disk)."""
+        return self._pos
+
+    @property
+    def message_count(self) -> int:
+        """Messages in the chunks written completely."""
+        return self._message_count
+
+    @property
+    def end_time(self) -> int:
+        """Newest log time (ns) in the chunks written completely (0 before the first)."""
+        return self._end_time
+
+    def drop_open_chunk(self) -> None:
+        """Forget the chunk being built (after a write error it cannot be written)."""
+        self._chunk = bytearray()
+        self._index = {}
+        self._records = []
+        self._chunk_last = self._floor
+        self._unsorted = False
 
     @staticmethod
     def _record(record: object) -> bytes:
@@ -171,11 +205,10 @@ class ChunkedWriter:
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         record = self._record(Metadata(name=name, metadata=dict(data)))
-        self._metadata_indexes.append(
-            MetadataIndex(offset=self._pos, length=len(record), name=name)
-        )
-        self._metadata_count += 1
+        offset = self._pos
         self._write(record)
+        self._metadata_indexes.append(MetadataIndex(offset=offset, length=len(record), name=name))
+        self._metadata_count += 1
 
     def flush(self) -> None:
         """Close the open chunk (if it holds messages) and flush the stream."""
@@ -226,14 +259,13 @@ class ChunkedWriter:
             struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start, summary_offset_start),
             crc,
         )
-        self._stream.write(summary)
+        self._write_all(summary)
         footer = Footer(
             summary_start=summary_start,
             summary_offset_start=summary_offset_start,
             summary_crc=crc,
         )
-        self._stream.write(self._record(footer))
-        self._stream.write(MAGIC)
+        self._write_all(self._record(footer) + MAGIC)
         self._stream.flush()
 
     # -- chunks ----------------------------------------------------------------------------------
@@ -246,10 +278,6 @@ class ChunkedWriter:
         data = bytes(self._chunk)
         start = min(min(pairs[0::2]) for pairs in self._index.values())
         end = max(max(pairs[0::2]) for pairs in self._index.values())
-        messages = 0
-        for channel_id, pairs in self._index.items():
-            self._channel_counts[channel_id] += len(pairs) // 2
-            messages += len(pairs) // 2
         stored = data if self._compress is None else self._compress(data)
         chunk = Chunk(
             compression=self._compression,
@@ -274,8 +302,13 @@ class ChunkedWriter:
             index_parts.append(record)
             position += len(record)
         indexes = b"".join(index_parts)
-        # Everything of the chunk goes out in one write: a crash cuts at most this tail.
+        # Everything of the chunk goes out in one write: a crash cuts at most this tail, and
+        # nothing below is counted unless the whole chunk was written.
         self._write(chunk_record + indexes)
+        messages = 0
+        for channel_id, pairs in self._index.items():
+            self._channel_counts[channel_id] += len(pairs) // 2
+            messages += len(pairs) // 2
         self._chunk_indexes.append(
             ChunkIndex(
                 message_start_time=start,

@@ -9,7 +9,7 @@ import operator
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +36,7 @@ from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
 from analyzer.mcapio.options import DEFAULT_COMPRESSION
 from analyzer.mcapio.stats import EventStats
+from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import CanFrame, Event
 
@@ -77,10 +78,6 @@ def _is_event(value: object) -> bool:
     return isinstance(value, Event)
 
 
-def _describe(exc: OSError) -> str:
-    return exc.strerror or str(exc)
-
-
 class McapSink:
     """Sink (see analyzer.pipeline) writing one MCAP recording.
 
@@ -92,8 +89,14 @@ class McapSink:
     With ``flush_interval`` set (live recording) the open chunk is closed and the file flushed
     at that interval by a background thread (and by ``handle``), and fsync'ed, so a killed
     recorder leaves a file whose older messages the reader recovers. A write error (disk full,
-    device gone) stops the recording: the file is cut back to the last complete flush, so it
-    stays readable, ``error`` says what happened and a ``SourceError`` is raised once.
+    device gone), in the caller's thread or the flush thread, stops the recording: every
+    chunk written completely stays in the file (finished with a summary when there is room),
+    ``error`` says what happened and how much was kept, and a ``SourceError`` is raised once,
+    by the next ``handle`` / ``flush`` / ``close``.
+
+    The file is created through ``OutputFile`` (``force``, ``inputs``, ``replaceable``,
+    ``atomic`` as there): directly at its name by default, so a killed recorder leaves it
+    there; ``atomic=True`` writes a temporary file renamed by ``close``.
     """
 
     def __init__(
@@ -107,11 +110,17 @@ class McapSink:
         foxglove_views: bool = True,
         compression: str = DEFAULT_COMPRESSION,
         clock: Callable[[], float] = time.monotonic,
+        force: bool = True,
+        inputs: Iterable[str | os.PathLike[str]] = (),
+        replaceable: Callable[[Path], bool] | None = None,
+        atomic: bool = False,
     ) -> None:
 
         self.path = str(path)
         self.error: str | None = None  # the full message after a write error
         self.error_reason: str | None = None  # just the reason ("No space left on device")
+        self.kept_messages = 0  # after a write error: messages the file still holds
+        self.kept_until: float | None = None  # ... and the newest log time among them
         self.stats = EventStats()
         self.items_written = 0
         self.events_written = 0
@@ -123,17 +132,18 @@ class McapSink:
         self._flush_interval = flush_interval
         self._lock = threading.Lock()
         self._closed = False
+        self._reported = False  # the write error was raised to a caller once
         self._channels: dict[str, int] = {}
         self._schema_ids: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
         self._dirty = False
-        self._good_offset = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        try:
-            self._file = open(self.path, "wb")  # noqa: SIM115 (closed in close())
-        except OSError as exc:
-            raise SourceError(f"cannot create {self.path}: {_describe(exc)}") from None
+        # Unbuffered: every chunk is one write, so a failed write leaves whole chunks before it.
+        self._output = OutputFile(
+            path, force=force, inputs=inputs, replaceable=replaceable, atomic=atomic, buffered=False
+        )
+        self._file = self._output.binary
         self._writer = ChunkedWriter(self._file, chunk_size=chunk_size, compression=compression)
         info = {
             "tool": "gimbal-analyzer",
@@ -144,10 +154,10 @@ class McapSink:
         try:
             self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
             self._writer.add_metadata(METADATA_NAME, info)
-            self._file.flush()
-            self._good_offset = self._file.tell()
         except OSError as exc:
-            self._fail(exc)
+            self._stop_after(exc)
+            self._reported = True
+            raise SourceError(self.error) from None
         self._last_flush = clock()
         if flush_interval is not None:
             self._thread = threading.Thread(target=self._flush_loop, name="mcap-flush", daemon=True)
@@ -158,6 +168,7 @@ class McapSink:
     def handle(self, batch: Batch) -> None:
         with self._lock:
             if self._closed:
+                self._raise_pending()
                 return
             try:
                 self._write_batch(batch.items, batch.events)
@@ -167,7 +178,8 @@ class McapSink:
                 ):
                     self._flush_locked()
             except OSError as exc:
-                self._fail(exc)
+                self._stop_after(exc)
+                self._raise_pending()
 
     def write_item(self, item: RawItem) -> None:
         """Write one raw CAN frame / stream chunk to its lossless channel."""
@@ -177,7 +189,8 @@ class McapSink:
             try:
                 self._write_items([item])
             except OSError as exc:
-                self._fail(exc)
+                self._stop_after(exc)
+                self._raise_pending()
 
     def write_event(self, event: Event) -> None:
         """Write one decoded event (and its Foxglove views)."""
@@ -187,7 +200,8 @@ class McapSink:
             try:
                 self._write_events([event])
             except OSError as exc:
-                self._fail(exc)
+                self._stop_after(exc)
+                self._raise_pending()
 
     def flush(self) -> None:
         """Close the open chunk and push everything to the operating system."""
@@ -197,25 +211,50 @@ class McapSink:
             try:
                 self._flush_locked()
             except OSError as exc:
-                self._fail(exc)
+                self._stop_after(exc)
+                self._raise_pending()
 
     def close(self) -> None:
-        """Finish the file (summary, indexes, statistics). Safe to call twice."""
+        """Finish the file (summary, indexes, statistics). Safe to call twice.
+
+        Raises SourceError once if a write error stopped the recording and no call to
+        ``handle`` has reported it yet."""
         self._stop.set()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join()
         with self._lock:
             if self._closed:
+                self._raise_pending()
                 return
             try:
                 self._writer.add_metadata(STATS_METADATA_NAME, self.stats.to_metadata())
                 self._writer.finish()
-                self._file.flush()
                 os.fsync(self._file.fileno())
             except OSError as exc:
-                self._fail(exc)
+                self._stop_after(exc)
+                self._raise_pending()
+                return
             self._closed = True
-            self._file.close()
+            try:
+                self._output.commit() if self._output.atomic else self._output.close_keep()
+            except SourceError as exc:
+                self.error = self.error_reason = str(exc)
+                self._reported = True
+                raise
+
+    def abandon(self) -> None:
+        """Stop after a failure elsewhere (bad input, Ctrl-C): an atomic output's temporary
+        file is removed, a direct one is finished like ``close`` does."""
+        if not self._output.atomic:
+            with contextlib.suppress(SourceError):
+                self.close()
+            return
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+        with self._lock:
+            self._closed = True
+            self._output.discard()
 
     @property
     def closed(self) -> bool:
@@ -316,7 +355,6 @@ class McapSink:
         if not self._dirty:
             return
         self._writer.flush()
-        self._good_offset = self._file.tell()
         self._dirty = False
 
     def _flush_loop(self) -> None:
@@ -331,31 +369,74 @@ class McapSink:
                         flushed = self._dirty
                         self._flush_locked()
                     except OSError as exc:
-                        try:
-                            self._fail(exc)
-                        except SourceError:
-                            return
+                        self._stop_after(exc)  # the next handle() raises it to the capture
+                        return
                 fd = self._file.fileno() if flushed else -1
             if fd >= 0:
-                with contextlib.suppress(OSError):
+                try:
                     os.fsync(fd)  # outside the lock: slow media must not stall capture
+                except OSError as exc:
+                    with self._lock:
+                        if not self._closed:
+                            self._stop_after(exc)
+                    return
 
-    def _fail(self, exc: OSError) -> None:
-        """Stop for good after a write error, leaving a file the reader can recover."""
-        reason = _describe(exc)
+    def _raise_pending(self) -> None:
+        if self.error is not None and not self._reported:
+            self._reported = True
+            raise SourceError(self.error)
+
+    def _stop_after(self, exc: OSError) -> None:
+        """Stop for good after a write error, keeping every chunk written completely.
+
+        The half-written tail is cut off and, if the space it freed allows, the file is
+        finished (summary and statistics of what it holds), so it opens like any other
+        recording; otherwise it is left as an unfinished recording the reader recovers.
+        A file that keeps no message at all is removed, so it cannot block a rerun."""
+        writer = self._writer
+        reason = describe_os_error(exc)
         self.error_reason = reason
-        good = self._good_offset
         self._closed = True
         self._stop.set()
-        with contextlib.suppress(OSError):
-            self._file.close()
-        with contextlib.suppress(OSError):
-            os.truncate(self.path, good)  # drop the half-written tail
-        self.error = (
-            f"recording stopped, cannot write {self.path}: {reason}; the file keeps what was "
-            f"written up to then ({good} bytes, readable: gimbal-analyzer info {self.path})"
-        )
-        raise SourceError(self.error) from None
+        good = writer.position
+        writer.drop_open_chunk()
+        fd = self._file.fileno()
+        try:
+            os.ftruncate(fd, good)
+            os.lseek(fd, good, os.SEEK_SET)
+            if writer.message_count:
+                writer.add_metadata(STATS_METADATA_NAME, self.stats.to_metadata())
+                writer.finish()
+            os.fsync(fd)
+        except OSError:
+            with contextlib.suppress(OSError):
+                os.ftruncate(fd, good)
+                os.fsync(fd)
+        self.kept_messages = writer.message_count
+        self.kept_until = writer.end_time / 1e9 if writer.message_count else None
+        what = "disk full: cannot write" if is_disk_full(exc) else "cannot write"
+        if self.kept_messages:
+            self._output.close_keep()
+            if self._output.atomic:
+                self._output.discard()
+                kept = "the unfinished output was removed"
+            else:
+                until = format_clock(self.kept_until)
+                kept = f"{self.kept_messages} messages up to {until} kept in {self.path}"
+        else:
+            self._output.discard()
+            kept = f"nothing was kept ({self.path} removed)"
+        self.error = f"{what} {self.path} ({reason}); {kept}"
+
+
+def format_clock(seconds: float | None) -> str:
+    """HH:MM:SS.mmmZ (UTC) of a Unix time; seconds for small (relative) times."""
+    if seconds is None:
+        return "-"
+    if seconds < 946_684_800:  # before 2000: a relative time, not a date
+        return f"{seconds:.3f} s"
+    stamp = time.strftime("%H:%M:%S", time.gmtime(seconds))
+    return f"{stamp}.{int(seconds % 1 * 1000):03d}Z"
 
 
 def recording_metadata(source: str, **extra: str) -> dict[str, str]:
@@ -363,14 +444,3 @@ def recording_metadata(source: str, **extra: str) -> dict[str, str]:
     out = {"source": source, "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     out.update(extra)
     return out
-
-
-def output_path(path: str) -> Path:
-    """Check an output path before a long capture starts (directory exists, not a directory)."""
-    target = Path(path)
-    if target.is_dir():
-        raise SourceError(f"{path} is a directory")
-    parent = target.parent if str(target.parent) else Path(".")
-    if not parent.is_dir():
-        raise SourceError(f"directory {parent} does not exist")
-    return target
