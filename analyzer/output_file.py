@@ -151,8 +151,14 @@ class OutputFile:
             ) from None
         except OSError as exc:
             raise OutputWriteError(f"cannot create {self.name}: {describe_os_error(exc)}") from None
-        self._stat = os.fstat(fd)
-        raw = FileIO(fd, "wb", closefd=True)
+        try:
+            self._stat = os.fstat(fd)
+            raw = FileIO(fd, "wb", closefd=True)
+        except BaseException:  # Ctrl-C / SIGTERM right after creating it: remove it again
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.unlink(self.temp_path or self.path)
+            raise
         self.binary: IO[bytes] = io.BufferedWriter(raw) if buffered or encoding else raw
         self.file: IO[bytes] | IO[str] = (
             io.TextIOWrapper(self.binary, encoding=encoding, newline="")

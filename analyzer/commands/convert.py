@@ -111,6 +111,10 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
+    progress = Progress(sys.stderr, args.input, source)
+    sink: McapSink | None = None
+    finished = False
+    interrupted = ""
     try:
         sink = McapSink(
             target,
@@ -121,13 +125,6 @@ def run(args: argparse.Namespace) -> int:
             atomic=True,
             compression=args.compression,
         )
-    except BaseException:
-        _close(source)
-        raise
-    progress = Progress(sys.stderr, args.input, source)
-    finished = False
-    interrupted = ""
-    try:
         result = convert_items(source, sink, progress=None if args.quiet else progress)
         sink.close()
         finished = True
@@ -136,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.done()
         _close(source)
-        if not finished:
+        if not finished and sink is not None:
             sink.abandon()
     if interrupted:
         print(

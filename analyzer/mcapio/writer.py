@@ -158,6 +158,9 @@ class McapSink:
             self._stop_after(exc)
             self._reported = True
             raise SourceError(self.error) from None
+        except BaseException:  # Ctrl-C / SIGTERM while starting: leave nothing behind
+            self._output.discard()
+            raise
         self._last_flush = clock()
         if flush_interval is not None:
             self._thread = threading.Thread(target=self._flush_loop, name="mcap-flush", daemon=True)
