@@ -144,7 +144,6 @@ class McapSink:
             path, force=force, inputs=inputs, replaceable=replaceable, atomic=atomic, buffered=False
         )
         self._file = self._output.binary
-        self._writer = ChunkedWriter(self._file, chunk_size=chunk_size, compression=compression)
         info = {
             "tool": "gimbal-analyzer",
             "tool_version": __version__,
@@ -152,13 +151,14 @@ class McapSink:
             **{str(k): str(v) for k, v in metadata.items()},
         }
         try:
+            self._writer = ChunkedWriter(self._file, chunk_size=chunk_size, compression=compression)
             self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
             self._writer.add_metadata(METADATA_NAME, info)
         except OSError as exc:
             self._stop_after(exc)
             self._reported = True
             raise SourceError(self.error) from None
-        except BaseException:  # Ctrl-C / SIGTERM while starting: leave nothing behind
+        except BaseException:  # Ctrl-C / SIGTERM, a bad option: leave nothing behind
             self._output.discard()
             raise
         self._last_flush = clock()
