@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import datetime
-import gzip
 from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
-from typing import IO
 
 from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, open_lines, split_blocks
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
 CAN_ERR_FLAG = 0x20000000
 CAN_EFF_MASK = 0x1FFFFFFF
-BLOCK_SIZE = 1 << 20  # bytes read at a time
-MAX_LINE = 1 << 16  # longer runs without a line end are cut (and reported as bad lines)
 RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
 MAX_CLASSIC_HEX = 16  # 8 data bytes
 MAX_FD_HEX = 128  # 64 data bytes
@@ -248,6 +245,8 @@ class CandumpParser:
         if line[:1] == b"\t" and self._after_error:
             self.note_lines += 1  # ``candump -e`` explains an error frame on extra lines
             return None
+        if len(line) > MAX_LINE:
+            return self._bad(line, lineno, f"line longer than {MAX_LINE:,} bytes")
         if stripped[:1] == b"#":
             return self._bad(line, lineno, "comment line")
         try:
@@ -432,27 +431,6 @@ def _log_payload(data: bytes) -> tuple[bytes, bool, bool]:
     return _hex(data, MAX_CLASSIC_HEX, "CAN frame"), False, False
 
 
-def split_blocks(handle: IO[bytes], block_size: int = BLOCK_SIZE) -> Iterator[list[bytes]]:
-    """Read a file in large blocks and give its lines (line ends removed) a block at a time."""
-    tail = b""
-    while True:
-        block = handle.read(block_size)
-        if not block:
-            break
-        if tail:
-            block = tail + block
-        if b"\r" in block:  # CRLF line ends
-            block = block.replace(b"\r\n", b"\n")
-        lines = block.split(b"\n")
-        tail = lines.pop()
-        if len(tail) > MAX_LINE:  # no line end in sight: hand it on rather than hoard it
-            lines.append(tail)
-            tail = b""
-        yield lines
-    if tail:
-        yield [tail.rstrip(b"\r")]
-
-
 class CandumpReader(InputReader):
     """A candump text file (``-L`` or default output), plain or gzip-compressed."""
 
@@ -468,33 +446,37 @@ class CandumpReader(InputReader):
         super().__init__(path)
         self.block_size = block_size
         self._raw = self._open_binary()
-        self._handle: IO[bytes] = self._raw
-        if self._raw.read(2) == b"\x1f\x8b":
-            self._raw.seek(0)
-            self._handle = gzip.GzipFile(fileobj=self._raw, mode="rb")  # type: ignore[assignment]
-            self._closers.append(self._handle)
-        else:
-            self._raw.seek(0)
+        self._blocks, self.problems = open_lines(self._raw, block_size)
         self.parser = CandumpParser(self.source, wanted_ids=wanted_ids)
 
     def __iter__(self) -> Iterator[InputItem]:
         parser = self.parser
         raw = self._raw
-        try:
-            for lines in split_blocks(self._handle, self.block_size):
-                items = parser.parse_lines(lines)
-                self.position_bytes = raw.tell()
-                self.first_time, self.last_time = parser.first_time, parser.last_time
-                yield from items
-        except (OSError, EOFError, gzip.BadGzipFile) as exc:
-            yield diagnostic(
-                parser.last_time or 0.0,
-                self.source,
-                BAD_LINE,
-                f"reading stopped after line {parser.lines}: {exc}",
-                line=parser.lines,
-            )
+        problems = self.problems
+        reported = 0
+        for lines in split_blocks(self._blocks, self.block_size):
+            items = parser.parse_lines(lines)
+            self.position_bytes = raw.tell()
+            self.first_time, self.last_time = parser.first_time, parser.last_time
+            yield from items
+            while reported < len(problems):
+                yield self._damage(problems[reported])
+                reported += 1
+        while reported < len(problems):
+            yield self._damage(problems[reported])
+            reported += 1
         self.position_bytes = raw.tell()
+
+    def _damage(self, problem: str) -> Event:
+        """A damaged stretch of a compressed file (the lines around it are read)."""
+        parser = self.parser
+        return diagnostic(
+            parser.last_time or 0.0,
+            self.source,
+            BAD_LINE,
+            f"after line {parser.lines}: {problem}",
+            line=parser.lines,
+        )
 
     @property
     def stats(self) -> dict[str, int]:

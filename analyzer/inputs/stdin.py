@@ -9,6 +9,7 @@ from typing import IO
 
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.candump import CandumpParser
+from analyzer.inputs.textlines import MAX_LINE
 from analyzer.protocol.types import StreamChunk
 
 STREAM_READ_SIZE = 4096
@@ -33,10 +34,18 @@ class StdinCandumpReader(InputReader):
         parser = self.parser
         readline = self._stream.readline
         while True:
-            line = readline()
+            line = readline(MAX_LINE + 1)
             if not line:
                 break
             self.position_bytes += len(line)
+            if len(line) > MAX_LINE and not line.endswith(b"\n"):
+                # Too long to be a frame: keep its start for the diagnostic, skip the rest
+                # up to the line end without holding it (``split_blocks`` does the same).
+                while True:
+                    rest = readline(MAX_LINE)
+                    self.position_bytes += len(rest)
+                    if not rest or rest.endswith(b"\n"):
+                        break
             items = parser.parse_lines([line.rstrip(b"\r\n")])
             self.first_time, self.last_time = parser.first_time, parser.last_time
             yield from items
