@@ -59,7 +59,7 @@ def test_formats_read_and_decode(tmp_path: Path, name: str) -> None:
     assert [f.can_id for f in frames] == [m.arbitration_id for m in messages()]
     assert [f.data for f in frames] == [bytes(m.data) for m in messages()]
     assert frames[1].extended is False
-    assert reader.stats == {"frames": 6}
+    assert reader.stats["frames"] == 6
     assert reader.position_bytes == reader.size_bytes
     decoder = Decoder()
     topics = [e.topic for f in frames for e in decoder.feed(f)]
@@ -79,15 +79,16 @@ def test_explicit_format_overrides_the_extension(tmp_path: Path) -> None:
     assert len(list(open_input(str(renamed), "asc"))) == 6
 
 
-def test_damaged_csv_stops_with_a_diagnostic(tmp_path: Path) -> None:
+def test_damaged_csv_line_is_reported_and_reading_goes_on(tmp_path: Path) -> None:
     path = write(tmp_path / "x.csv", messages())
     lines = path.read_text().splitlines()
     lines.insert(3, "this,is,not,a,frame")
     path.write_text("\n".join(lines) + "\n")
     items: list[Any] = list(open_input(str(path)))
-    assert [type(i) for i in items] == [CanFrame, CanFrame, Event]
-    assert items[-1].topic == TOPIC_DIAGNOSTICS and items[-1].fields["kind"] == BAD_LINE
-    assert "after frame 2" in items[-1].fields["detail"]
+    assert [type(i) for i in items] == [CanFrame, CanFrame, Event] + [CanFrame] * 4
+    assert items[2].topic == TOPIC_DIAGNOSTICS and items[2].fields["kind"] == BAD_LINE
+    assert items[2].fields["line"] == 4
+    assert "line 4" in items[2].fields["detail"]
 
 
 def test_mf4_without_its_package_is_a_usage_error(
