@@ -40,6 +40,7 @@ exits 1 when FILE differs from what the table gives (a stale export).
 # format -> (module, function returning the file text, what it is)
 FORMATS: dict[str, tuple[str, str, str]] = {
     "dbc": ("analyzer.export.dbc", "dbc_text", "DBC file"),
+    "wireshark": ("analyzer.export.wireshark", "lua_text", "Wireshark Lua dissector"),
 }
 
 

@@ -1,0 +1,447 @@
+-- Wireshark dissector for the gimbal protocol on the IDU's TCP link (port 2000).
+-- Generated from the protocol tables by `gimbal-analyzer export wireshark`:
+-- do not edit; regenerate it instead.
+--
+-- Use: wireshark -X lua_script:gimbal.lua capture.pcap
+--   or copy it into the personal Lua plugins folder (Help > About > Folders).
+-- The port is a preference: Edit > Preferences > Protocols > GIMBAL.
+
+local DEFAULT_PORT = 2000
+local FRAME_CONTROL = 0x0A
+local FRAME_CAN = 0x0B
+local CONTROL_ID = 0x00000F01
+local TEXT_ID = 0x02008201
+local TEXT_END_ID = 0x02008202
+local FEEDBACK_SIZE = 32
+local MIN_FEEDBACK_FRAME = 27
+local FRAME_SIZES = {[0x0A]=24, [0x0B]=24, [0x0C]=27, [0x10]=31}
+local FRAME_TYPE_NAMES = {[0x0A]="control command", [0x0B]="forwarded CAN frame", [0x0C]="attitude feedback", [0x10]="laser ranging feedback"}
+local CAN_ID_NAMES = {[0x00000F01]="command", [0x030F0001]="gimbal feedback segment", [0x0000FF15]="UAV gps", [0x0000FF16]="UAV altitude", [0x0000FF13]="UAV attitude", [0x02008201]="UAV text (start/middle)", [0x02008202]="UAV text (end)"}
+local COMPONENT_NAMES = {[0x0F]="gimbal", [0x1F]="dual_sensor"}
+
+local FIELD_SPECS = {}
+local function F(spec) FIELD_SPECS[#FIELD_SPECS + 1] = spec; return spec end
+
+local COMMANDS = {}
+COMMANDS[0x0F01] = {name="tap_zoom", title="TapZoom", params={F{abbr="gimbal.tap_zoom.x_pct", name="x_pct", desc="horizontal distance of the target from the image centre (-100 % top/left, 100 % bottom/right) [%]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" %", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}, F{abbr="gimbal.tap_zoom.y_pct", name="y_pct", desc="vertical distance of the target from the image centre (-100 % top/left, 100 % bottom/right) [%]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" %", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}}}
+COMMANDS[0x0F02] = {name="forward", title="Forward", params={}}
+COMMANDS[0x0F03] = {name="zoom_1x", title="One Key to 1x Image", params={}}
+COMMANDS[0x0F04] = {name="gimbal_control", title="Gimbal Control", params={F{abbr="gimbal.gimbal_control.pan_speed_dps", name="pan_speed_dps", desc="pan speed, positive = right [deg/s]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg/s", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}, F{abbr="gimbal.gimbal_control.tilt_speed_dps", name="tilt_speed_dps", desc="tilt speed, positive = up [deg/s]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg/s", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}}}
+COMMANDS[0x0F05] = {name="tracking", title="Tracking", params={F{abbr="gimbal.tracking.x", name="x", desc="horizontal coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=2, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tracking.y", name="y", desc="vertical coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=4, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tracking.width", name="width", desc="horizontal length of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=6, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px"}, F{abbr="gimbal.tracking.height", name="height", desc="vertical width of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=7, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px"}}}
+COMMANDS[0x0F06] = {name="tracking_stop", title="Tracking stop", params={}}
+COMMANDS[0x0F07] = {name="look_down", title="One key to down", params={}}
+COMMANDS[0x0F08] = {name="specified_angle", title="Specified Angle", params={F{abbr="gimbal.specified_angle.coordinate_system", name="coordinate_system", desc="DATA4: 1 = airframe coordinate system, anything else geodetic", off=5, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="airframe"}, other_label="geodetic"}}, selector=F{abbr="gimbal.specified_angle.axis", name="axis", desc="control type", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="yaw", [2]="pitch", [3]="zoom"}}, variants={[1]={F{abbr="gimbal.specified_angle.yaw_deg", name="yaw_deg", desc="yaw angle [deg]", off=3, size=2, signed=true, div=10, mul=1, decimals=1, unit_suffix=" deg", min=0, max=3600, min_text="0.0", max_text="360.0"}}, [2]={F{abbr="gimbal.specified_angle.pitch_deg", name="pitch_deg", desc="pitch angle [deg]", off=3, size=2, signed=true, div=10, mul=1, decimals=1, unit_suffix=" deg", min=-1000, max=600, min_text="-100.0", max_text="60.0"}}, [3]={F{abbr="gimbal.specified_angle.zoom", name="zoom", desc="zoom ratio [x]", off=3, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" x", min=100, max=3500, min_text="1.00", max_text="35.00", soft_max=3000, soft_note="above 30x: only 35x models reach it"}}}}
+COMMANDS[0x0F10] = {name="snapshot", title="Snapshot", params={}, selector=F{abbr="gimbal.snapshot.mode", name="mode", desc="snapshot mode", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="single", [2]="continuous", [3]="time_lapse", [4]="timed", [5]="stop"}}, variants={[1]={}, [2]={F{abbr="gimbal.snapshot.shots", name="shots", desc="number of continuous shots", off=3, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix=""}}, [3]={F{abbr="gimbal.snapshot.delay_s", name="delay_s", desc="time-lapse delay [s]", off=3, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix=" s"}}, [4]={F{abbr="gimbal.snapshot.timer_s", name="timer_s", desc="timed-shot timer [s]", off=3, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix=" s"}}, [5]={}}}
+COMMANDS[0x0F11] = {name="recording", title="Recording", params={F{abbr="gimbal.recording.action", name="action", desc="start or stop", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="start", [2]="stop"}}}}
+COMMANDS[0x0F12] = {name="zoom", title="Zoom", params={F{abbr="gimbal.zoom.action", name="action", desc="zoom action", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="zoom_in", [2]="zoom_out", [3]="stop", [4]="zoom_1x", [5]="zoom_in_2x", [6]="zoom_out_2x"}}}}
+COMMANDS[0x0F13] = {name="focus", title="Focus", params={F{abbr="gimbal.focus.action", name="action", desc="focus action", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="focus_plus", [2]="focus_minus", [3]="stop", [4]="auto_focus"}}}}
+COMMANDS[0x0F14] = {name="tap_focus", title="TapFocus", params={F{abbr="gimbal.tap_focus.x", name="x", desc="horizontal coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=2, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tap_focus.y", name="y", desc="vertical coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=4, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tap_focus.width", name="width", desc="horizontal length of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=6, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px", expected=25}, F{abbr="gimbal.tap_focus.height", name="height", desc="vertical width of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=7, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px", expected=25}}}
+COMMANDS[0x0FF0] = {name="quick_calibration", title="Quick Calibration", params={}}
+COMMANDS[0x1F01] = {name="tap_zoom", title="TapZoom (Dual-Sensor)", params={F{abbr="gimbal.tap_zoom.x_pct", name="x_pct", desc="horizontal distance of the target from the image centre (-100 % top/left, 100 % bottom/right) [%]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" %", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}, F{abbr="gimbal.tap_zoom.y_pct", name="y_pct", desc="vertical distance of the target from the image centre (-100 % top/left, 100 % bottom/right) [%]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" %", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}}}
+COMMANDS[0x1F02] = {name="palette", title="Color Palettes (Dual-Sensor)", params={F{abbr="gimbal.palette.palette", name="palette", desc="thermal colour palette", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[0]="black_hot", [1]="white_hot", [2]="iron_red", [3]="rainbow", [4]="lava", [5]="rainbow_enhanced", [6]="molten_metal", [7]="blue_red", [8]="amber", [9]="amber_reversed", [10]="ice_blue", [11]="high_contrast", [12]="grayscale_reversed", [13]="high_temperature_red", [14]="cryogenic_blue"}}}}
+COMMANDS[0x1F03] = {name="pip_cycle", title="Picture-in-picture mode cycle switching", params={}}
+COMMANDS[0x1F04] = {name="gimbal_control", title="Gimbal Control (Dual-Sensor)", params={F{abbr="gimbal.gimbal_control.pan_speed_dps", name="pan_speed_dps", desc="yaw (pan) speed, positive = right [deg/s]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg/s", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}, F{abbr="gimbal.gimbal_control.tilt_speed_dps", name="tilt_speed_dps", desc="pitch (tilt) speed, positive = up [deg/s]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg/s", min=-10000, max=10000, min_text="-100.00", max_text="100.00"}}}
+COMMANDS[0x1F05] = {name="tracking", title="Tracking (Dual-Sensor)", params={F{abbr="gimbal.tracking.x", name="x", desc="horizontal coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=2, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tracking.y", name="y", desc="vertical coordinate of the box centre (0,0 top left, 8191,8191 bottom right)", off=4, size=2, signed=false, div=1, mul=1, decimals=0, unit_suffix="", min=0, max=8191, min_text="0", max_text="8191"}, F{abbr="gimbal.tracking.width", name="width", desc="horizontal length of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=6, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px"}, F{abbr="gimbal.tracking.height", name="height", desc="vertical width of the box, sent divided by 16 (0..8191 image coordinates) [px]", off=7, size=1, signed=false, div=1, mul=16, decimals=0, unit_suffix=" px"}}}
+COMMANDS[0x1F07] = {name="tracking_stop", title="Stop Tracking (Dual-Sensor)", params={}}
+COMMANDS[0x1F12] = {name="digital_zoom", title="Digital Zoom (Dual-Sensor)", params={F{abbr="gimbal.digital_zoom.action", name="action", desc="zoom action", off=2, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="zoom_in", [2]="zoom_out", [3]="stop"}}}}
+local FEEDBACK = {}
+FEEDBACK[0x0C] = {name="attitude", size=27, fields={F{abbr="gimbal.attitude.gimbal_type", name="gimbal_type", desc="gimbal type (Note 1)", off=16, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="35x zoom 2MP / 30x zoom 4K", [2]="30x zoom 5MP", [3]="3.5x zoom", [4]="3.5x zoom dual-sensor", [5]="laser distance measurement", [7]="30x zoom dual-sensor"}}, F{abbr="gimbal.attitude.tracking", name="tracking", desc="trace_flag: target tracking is on", off=17, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", boolean=true}, F{abbr="gimbal.attitude.control_mode", name="control_mode", desc="control mode (Note 2)", off=18, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="full_lock", [2]="course_following", [3]="locking"}}, F{abbr="gimbal.attitude.pitch_deg", name="pitch_deg", desc="pitch angle theta [deg]", off=19, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg", min=-11000, max=6000, min_text="-110.00", max_text="60.00"}, F{abbr="gimbal.attitude.yaw_deg", name="yaw_deg", desc="yaw angle psi (geomagnetic) [deg]", off=21, size=2, signed=false, div=100, mul=1, decimals=2, unit_suffix=" deg", min=0, max=36000, min_text="0.00", max_text="360.00"}, F{abbr="gimbal.attitude.motor_yaw_deg", name="motor_yaw_deg", desc="yaw motor angle; +-170 deg, +-325 deg on 3.5x zoom models [deg]", off=23, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg", min=-32500, max=32500, min_text="-325.00", max_text="325.00"}}}
+FEEDBACK[0x10] = {name="ranging", size=31, fields={F{abbr="gimbal.ranging.success", name="success", desc="distance measuring success marker", off=16, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", boolean=true}, F{abbr="gimbal.ranging.distance_m", name="distance_m", desc="target distance [m]", off=17, size=2, signed=false, div=10, mul=1, decimals=1, unit_suffix=" m"}, F{abbr="gimbal.ranging.height_m", name="height_m", desc="target height [m]", off=19, size=2, signed=true, div=10, mul=1, decimals=1, unit_suffix=" m"}, F{abbr="gimbal.ranging.longitude_deg", name="longitude_deg", desc="target longitude [deg]", off=21, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-1800000000, max=1800000000, min_text="-180.0000000", max_text="180.0000000"}, F{abbr="gimbal.ranging.latitude_deg", name="latitude_deg", desc="target latitude [deg]", off=25, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-900000000, max=900000000, min_text="-90.0000000", max_text="90.0000000"}}}
+local STATUS = {}
+STATUS[0x0000FF15] = {name="uav_gps", fields={F{abbr="gimbal.uav_gps.latitude_deg", name="latitude_deg", desc="latitude [deg]", off=0, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-900000000, max=900000000, min_text="-90.0000000", max_text="90.0000000"}, F{abbr="gimbal.uav_gps.longitude_deg", name="longitude_deg", desc="fusion longitude [deg]", off=4, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-1800000000, max=1800000000, min_text="-180.0000000", max_text="180.0000000"}}}
+STATUS[0x0000FF16] = {name="uav_altitude", fields={F{abbr="gimbal.uav_altitude.altitude_m", name="altitude_m", desc="altitude [m]", off=0, size=4, signed=true, div=100, mul=1, decimals=2, unit_suffix=" m"}}}
+STATUS[0x0000FF13] = {name="uav_attitude", fields={F{abbr="gimbal.uav_attitude.pitch_deg", name="pitch_deg", desc="pitch angle [deg]", off=0, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.roll_deg", name="roll_deg", desc="roll angle [deg]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.yaw_deg", name="yaw_deg", desc="yaw angle [deg]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}}}
+
+-- The dissector body; the tables above it are generated from the protocol tables.
+
+local bit = bit32 or bit
+
+local gimbal = Proto("gimbal", "Gimbal IDU protocol")
+gimbal.prefs.port = Pref.uint("TCP port", DEFAULT_PORT, "TCP port of the IDU board (2000 by default)")
+
+local pf = {
+    header = ProtoField.uint16("gimbal.header", "Header", base.HEX),
+    frame_type = ProtoField.uint8("gimbal.type", "Frame type", base.HEX, FRAME_TYPE_NAMES),
+    reserved = ProtoField.bytes("gimbal.reserved", "Reserved"),
+    can_id = ProtoField.uint32("gimbal.can_id", "CAN ID", base.HEX, CAN_ID_NAMES),
+    marker = ProtoField.uint16("gimbal.marker", "Marker", base.HEX),
+    can_data = ProtoField.bytes("gimbal.can_data", "CAN data"),
+    s_id = ProtoField.uint8("gimbal.s_id", "S_ID", base.HEX, COMPONENT_NAMES),
+    cmd = ProtoField.uint8("gimbal.cmd", "CMD", base.HEX),
+    command = ProtoField.string("gimbal.command", "Command"),
+    message = ProtoField.string("gimbal.message", "Message"),
+    text = ProtoField.string("gimbal.text", "Text"),
+    id_bytes = ProtoField.bytes("gimbal.feedback_id", "CMD+DID, C_ID, Data_id"),
+    crc = ProtoField.uint16("gimbal.crc", "CRC", base.HEX),
+    crc_status = ProtoField.uint8("gimbal.crc.status", "CRC status", base.DEC,
+        {[0] = "Bad", [1] = "Good", [2] = "Not set (00 00)"}),
+    crc_computed = ProtoField.uint16("gimbal.crc.computed", "CRC computed", base.HEX),
+    padding = ProtoField.bytes("gimbal.padding", "Padding"),
+    garbage = ProtoField.bytes("gimbal.garbage", "Bytes outside any frame"),
+    direction = ProtoField.string("gimbal.direction", "Direction"),
+}
+
+local ex = {
+    crc_bad = ProtoExpert.new("gimbal.crc.bad", "CRC mismatch", expert.group.CHECKSUM,
+        expert.severity.ERROR),
+    cut_short = ProtoExpert.new("gimbal.incomplete", "Frame cut short", expert.group.MALFORMED,
+        expert.severity.ERROR),
+    garbage = ProtoExpert.new("gimbal.garbage.expert", "Bytes outside any frame",
+        expert.group.MALFORMED, expert.severity.WARN),
+    range = ProtoExpert.new("gimbal.value.warning", "Value outside the document",
+        expert.group.PROTOCOL, expert.severity.WARN),
+    unknown = ProtoExpert.new("gimbal.unknown", "Unknown command or value",
+        expert.group.UNDECODED, expert.severity.WARN),
+}
+
+-- One ProtoField per generated field spec (shared when several commands have the same).
+local registered = {}
+for _, spec in ipairs(FIELD_SPECS) do
+    local abbr = spec.abbr
+    if registered[abbr] == nil then
+        local title = spec.name
+        if spec.labels ~= nil then
+            registered[abbr] = ProtoField.uint32(abbr, title, base.DEC, nil, nil, spec.desc)
+        elseif spec.boolean then
+            registered[abbr] = ProtoField.bool(abbr, title, base.NONE, nil, nil, spec.desc)
+        elseif spec.div == 1 then
+            if spec.signed then
+                registered[abbr] = ProtoField.int32(abbr, title, base.DEC, nil, nil, spec.desc)
+            else
+                registered[abbr] = ProtoField.uint32(abbr, title, base.DEC, nil, nil, spec.desc)
+            end
+        else
+            registered[abbr] = ProtoField.double(abbr, title, spec.desc)
+        end
+        pf[abbr] = registered[abbr]
+    end
+    spec.pf = registered[abbr]
+end
+
+local fields = {}
+for _, field in pairs(pf) do
+    fields[#fields + 1] = field
+end
+gimbal.fields = fields
+gimbal.experts = {ex.crc_bad, ex.cut_short, ex.garbage, ex.range, ex.unknown}
+
+-- CRC-16/MODBUS (the document's crc_fly16): reflected 0xA001, init 0xFFFF, low byte first.
+local CRC_TABLE = {}
+for i = 0, 255 do
+    local crc = i
+    for _ = 1, 8 do
+        if bit.band(crc, 1) == 1 then
+            crc = bit.bxor(bit.rshift(crc, 1), 0xA001)
+        else
+            crc = bit.rshift(crc, 1)
+        end
+    end
+    CRC_TABLE[i] = crc
+end
+
+local function crc16(tvb, offset, length)
+    local crc = 0xFFFF
+    for i = offset, offset + length - 1 do
+        local index = bit.band(bit.bxor(crc, tvb(i, 1):uint()), 0xFF)
+        crc = bit.bxor(bit.rshift(crc, 8), CRC_TABLE[index])
+    end
+    return crc
+end
+
+local function fmt_number(spec, value)
+    if spec.div == 1 then
+        return string.format("%d", value)
+    end
+    return string.format("%." .. spec.decimals .. "f", value)
+end
+
+-- Add one field at tvb[base + spec.off]; returns its raw value and its text.
+local function add_field(tree, tvb, base, spec)
+    local range = tvb(base + spec.off, spec.size)
+    local raw
+    if spec.signed then raw = range:le_int() else raw = range:le_uint() end
+    local text
+    local item
+    if spec.labels ~= nil then
+        local label = spec.labels[raw] or spec.other_label
+        if label == nil then
+            label = string.format("unknown_0x%0" .. (2 * spec.size) .. "x", raw)
+        end
+        text = label
+        item = tree:add(spec.pf, range, raw, string.format("%s: %s (%d)", spec.name, label, raw))
+        if spec.labels[raw] == nil and spec.other_label == nil then
+            item:add_proto_expert_info(ex.unknown,
+                string.format("%s: unknown value %d (0x%02X)", spec.name, raw, raw))
+        end
+        return raw, text
+    end
+    if spec.boolean then
+        text = tostring(raw ~= 0)
+        tree:add(spec.pf, range, raw ~= 0, string.format("%s: %s", spec.name, text))
+        return raw, text
+    end
+    local value = raw * spec.mul / spec.div
+    if spec.div == 1 then value = raw * spec.mul end
+    text = fmt_number(spec, value) .. spec.unit_suffix
+    item = tree:add(spec.pf, range, value,
+        string.format("%s: %s (raw %d)", spec.name, text, raw))
+    if (spec.min ~= nil and raw < spec.min) or (spec.max ~= nil and raw > spec.max) then
+        item:add_proto_expert_info(ex.range, string.format("%s: %s out of range [%s, %s]%s",
+            spec.name, fmt_number(spec, value), spec.min_text, spec.max_text, spec.unit_suffix))
+    elseif spec.soft_max ~= nil and raw > spec.soft_max then
+        item:add_proto_expert_info(ex.range,
+            string.format("%s: %s %s", spec.name, fmt_number(spec, value), spec.soft_note))
+    elseif spec.expected ~= nil and raw ~= spec.expected then
+        item:add_proto_expert_info(ex.range, string.format(
+            "%s: raw value %d, the document prescribes %d", spec.name, raw, spec.expected))
+    end
+    return raw, text
+end
+
+local function add_fields(tree, tvb, base, specs, summary)
+    for _, spec in ipairs(specs) do
+        local _, text = add_field(tree, tvb, base, spec)
+        summary[#summary + 1] = spec.name .. "=" .. text
+    end
+end
+
+-- The 8 CAN data bytes of a command at tvb[base]; returns a one-line summary.
+local function dissect_command(tree, tvb, base)
+    local s_id = tvb(base, 1):uint()
+    local cmd = tvb(base + 1, 1):uint()
+    local row = COMMANDS[s_id * 256 + cmd]
+    local name = "unknown"
+    if row ~= nil then name = row.name end
+    local sub = tree:add(pf.command, tvb(base, 8), name)
+    sub:add(pf.s_id, tvb(base, 1))
+    sub:add(pf.cmd, tvb(base + 1, 1))
+    if row == nil then
+        sub:add_proto_expert_info(ex.unknown,
+            string.format("unknown command S_ID 0x%02X CMD 0x%02X", s_id, cmd))
+        return string.format("unknown command %02X %02X", s_id, cmd)
+    end
+    sub:append_text(" (" .. row.title .. ")")
+    local summary = {}
+    add_fields(sub, tvb, base, row.params, summary)
+    if row.selector ~= nil then
+        local key = add_field(sub, tvb, base, row.selector)
+        summary[#summary + 1] = row.selector.name .. "=" ..
+            (row.selector.labels[key] or tostring(key))
+        local variant = row.variants[key]
+        if variant ~= nil then add_fields(sub, tvb, base, variant, summary) end
+    end
+    if COMPONENT_NAMES[s_id] ~= "gimbal" then name = COMPONENT_NAMES[s_id] .. " " .. name end
+    return name .. " " .. table.concat(summary, " ")
+end
+
+local function dissect_can_frame(tree, tvb, offset)
+    local can_id = tvb(offset + 3, 4):uint()
+    tree:add(pf.can_id, tvb(offset + 3, 4))
+    tree:add(pf.reserved, tvb(offset + 7, 5))
+    tree:add(pf.marker, tvb(offset + 12, 2))
+    local data = offset + 14
+    if can_id == CONTROL_ID then
+        return dissect_command(tree, tvb, data)
+    end
+    local status = STATUS[can_id]
+    if status ~= nil then
+        local sub = tree:add(pf.message, tvb(data, 8), status.name)
+        local summary = {}
+        add_fields(sub, tvb, data, status.fields, summary)
+        return status.name .. " " .. table.concat(summary, " ")
+    end
+    tree:add(pf.can_data, tvb(data, 8))
+    if can_id == TEXT_ID or can_id == TEXT_END_ID then
+        local text = tvb(data, 8):stringz()
+        tree:add(pf.text, tvb(data, 8), text)
+        return "text \"" .. text .. "\""
+    end
+    return string.format("CAN 0x%08X", can_id)
+end
+
+local function dissect_feedback(tree, tvb, offset, layout)
+    tree:add(pf.reserved, tvb(offset + 3, 9))
+    tree:add(pf.id_bytes, tvb(offset + 12, 4))
+    local sub = tree:add(pf.message, tvb(offset + 16, layout.size - 18), layout.name)
+    local summary = {}
+    add_fields(sub, tvb, offset, layout.fields, summary)
+    return layout.name .. " " .. table.concat(summary, " ")
+end
+
+-- One frame of `size` bytes at `offset`, CRC already known; returns its summary.
+local function dissect_frame(root, tvb, pinfo, offset, size, crc_state)
+    local frame_type = tvb(offset + 2, 1):uint()
+    local tree = root:add(gimbal, tvb(offset, size))
+    tree:add(pf.header, tvb(offset, 2))
+    tree:add(pf.frame_type, tvb(offset + 2, 1))
+    if pinfo.dst_port == gimbal.prefs.port then
+        tree:add(pf.direction, "gs_to_idu"):set_generated()
+    else
+        tree:add(pf.direction, "idu_to_gs"):set_generated()
+    end
+    local summary
+    if frame_type == FRAME_CONTROL then
+        tree:add(pf.reserved, tvb(offset + 3, 9))
+        tree:add(pf.marker, tvb(offset + 12, 2))
+        summary = dissect_command(tree, tvb, offset + 14)
+    elseif frame_type == FRAME_CAN then
+        summary = dissect_can_frame(tree, tvb, offset)
+    else
+        summary = dissect_feedback(tree, tvb, offset, FEEDBACK[frame_type])
+    end
+    local crc_range = tvb(offset + size - 2, 2)
+    local wire = crc_range:le_uint()
+    local crc_item = tree:add_le(pf.crc, crc_range)
+    local computed = crc16(tvb, offset, size - 2)
+    tree:add(pf.crc_status, crc_range, crc_state):set_generated()
+    if crc_state == 0 then
+        tree:add(pf.crc_computed, crc_range, computed):set_generated()
+        crc_item:add_proto_expert_info(ex.crc_bad, string.format(
+            "type 0x%02X frame: CRC %02X %02X on the wire, %02X %02X computed", frame_type,
+            bit.band(wire, 0xFF), bit.rshift(wire, 8), bit.band(computed, 0xFF),
+            bit.rshift(computed, 8)))
+        summary = "[CRC mismatch] " .. summary
+    end
+    tree:append_text(", " .. summary)
+    return summary
+end
+
+local function find_header(tvb, from, to)
+    for i = from, to - 2 do
+        if tvb(i, 1):uint() == 0xEB and tvb(i + 1, 1):uint() == 0x90 then return i end
+    end
+    return nil
+end
+
+local function add_skipped(root, tvb, offset, count, infos)
+    local item = root:add(gimbal, tvb(offset, count))
+    item:add(pf.garbage, tvb(offset, count))
+    item:append_text(string.format(", %d byte(s) outside any frame", count))
+    item:add_proto_expert_info(ex.garbage,
+        string.format("%d byte(s) outside any frame skipped", count))
+    infos[#infos + 1] = string.format("[%d bytes skipped]", count)
+end
+
+-- Zero bytes after a feedback frame (up to 32 in all) are its padding.
+local function zero_run(tvb, offset, limit)
+    local n = 0
+    while n < limit and offset + n < tvb:len() and tvb(offset + n, 1):uint() == 0 do
+        n = n + 1
+    end
+    return n
+end
+
+function gimbal.dissector(tvb, pinfo, root)
+    local length = tvb:len()
+    local offset = 0
+    local infos = {}
+    -- Leading zeros: the padding of a feedback frame that ended in the previous segment.
+    local pad = zero_run(tvb, 0, FEEDBACK_SIZE - MIN_FEEDBACK_FRAME)
+    if pad > 0 and (pad == length or find_header(tvb, pad, length) == pad) then
+        root:add(gimbal, tvb(0, pad)):add(pf.padding, tvb(0, pad))
+        offset = pad
+    end
+    while offset < length do
+        local start = find_header(tvb, offset, length)
+        if start == nil then
+            -- keep a last 0xEB: it may begin the next header
+            local keep = 0
+            if tvb(length - 1, 1):uint() == 0xEB then keep = 1 end
+            if length - keep > offset then
+                add_skipped(root, tvb, offset, length - keep - offset, infos)
+            end
+            if keep == 1 then
+                pinfo.desegment_offset = length - 1
+                pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
+            end
+            break
+        end
+        if start > offset then add_skipped(root, tvb, offset, start - offset, infos) end
+        offset = start
+        if length - offset < 3 then
+            pinfo.desegment_offset = offset
+            pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
+            break
+        end
+        local frame_type = tvb(offset + 2, 1):uint()
+        local size = FRAME_SIZES[frame_type]
+        if size == nil then
+            add_skipped(root, tvb, offset, 2, infos)
+            offset = offset + 2
+        elseif length - offset < size then
+            pinfo.desegment_offset = offset
+            pinfo.desegment_len = size - (length - offset)
+            break
+        else
+            local wire = tvb(offset + size - 2, 2):le_uint()
+            local crc_state = 0
+            if crc16(tvb, offset, size - 2) == wire then
+                crc_state = 1
+            elseif frame_type == FRAME_CAN and wire == 0
+                and tvb(offset + 12, 2):uint() == 0x4088 then
+                crc_state = 2
+            end
+            local restart = nil
+            if crc_state == 0 then restart = find_header(tvb, offset + 1, offset + size) end
+            local need = nil
+            if restart ~= nil then
+                -- TCP cannot start a new PDU inside bytes it already joined: when the frame
+                -- that follows is not complete yet, wait and show both together.
+                local rest = length - restart
+                if rest < 3 then
+                    need = DESEGMENT_ONE_MORE_SEGMENT
+                elseif FRAME_SIZES[tvb(restart + 2, 1):uint()] ~= nil
+                    and rest < FRAME_SIZES[tvb(restart + 2, 1):uint()] then
+                    need = FRAME_SIZES[tvb(restart + 2, 1):uint()] - rest
+                end
+            end
+            if need ~= nil then
+                pinfo.desegment_offset = offset
+                pinfo.desegment_len = need
+                break
+            elseif restart ~= nil then
+                local cut = root:add(gimbal, tvb(offset, restart - offset))
+                cut:append_text(string.format(", type 0x%02X frame cut short", frame_type))
+                cut:add_proto_expert_info(ex.cut_short, string.format(
+                    "type 0x%02X frame cut short after %d of %d bytes (a new header follows)",
+                    frame_type, restart - offset, size))
+                infos[#infos + 1] = "[frame cut short]"
+                offset = restart
+            else
+                infos[#infos + 1] = dissect_frame(root, tvb, pinfo, offset, size, crc_state)
+                offset = offset + size
+                if FEEDBACK[frame_type] ~= nil then
+                    local n = zero_run(tvb, offset, FEEDBACK_SIZE - size)
+                    if n > 0 then
+                        root:add(gimbal, tvb(offset, n)):add(pf.padding, tvb(offset, n))
+                        offset = offset + n
+                    end
+                end
+            end
+        end
+    end
+    if #infos > 0 then
+        -- a later PDU of the same packet: TCP fenced the column after the earlier one
+        if tostring(pinfo.cols.protocol) == "GIMBAL" then
+            pinfo.cols.info:append("; " .. table.concat(infos, "; "))
+        else
+            pinfo.cols.protocol = "GIMBAL"
+            pinfo.cols.info = table.concat(infos, "; ")
+        end
+    end
+    return length
+end
+
+local registered_port = nil
+local function register_port()
+    local tcp = DissectorTable.get("tcp.port")
+    if registered_port ~= nil then tcp:remove(registered_port, gimbal) end
+    registered_port = gimbal.prefs.port
+    tcp:add(registered_port, gimbal)
+end
+
+function gimbal.prefs_changed()
+    if registered_port ~= gimbal.prefs.port then register_port() end
+end
+
+register_port()
