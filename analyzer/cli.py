@@ -27,6 +27,7 @@ from analyzer.terminal_text import printable
 COMMANDS: dict[str, str] = {
     "demo": "analyzer.commands.demo",
     "decode": "analyzer.commands.decode",
+    "analyze": "analyzer.commands.analyze",
     "record": "analyzer.commands.record",
     "convert": "analyzer.commands.convert",
     "info": "analyzer.commands.info",

@@ -96,3 +96,8 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
     "crc_errors": ("integer", "CRC errors and incomplete feedback messages in the window"),
     "window_s": ("number", "length of the health window"),
 }
+
+
+def verdict_line(counts: dict[str, int]) -> str:
+    """'3 obeyed, 1 partial, 2 not obeyed, 0 unknown' in a fixed order."""
+    return ", ".join(f"{counts.get(v, 0)} {v.replace('_', ' ')}" for v in VERDICTS)

@@ -208,7 +208,7 @@ class ResponseAnalyzer:
             self._targets.append(_TargetCheck(name, t, goals, t + allowed))
         if name in ("tracking", "tracking_stop"):
             for old in self._tracking:
-                why = f"{name} came {t - old.time:.1f} s later"
+                why = f"{name} came {t - old.time:.1f} s later" if t < old.deadline else ""
                 out.append(self._judge_tracking(old, None, why))
             self._tracking = [_TrackingCheck(name, t, name == "tracking", t + allowed)]
         return out
@@ -237,7 +237,7 @@ class ResponseAnalyzer:
         keep: list[_TargetCheck] = []
         for check in self._targets:
             if {PITCH if g.axis == PITCH else YAW for g in check.goals} & axes:
-                why = f"{name} came {t - check.time:.1f} s later"
+                why = f"{name} came {t - check.time:.1f} s later" if t < check.deadline else ""
                 out.append(self._judge_target(check, why, t))
             else:
                 keep.append(check)
@@ -342,7 +342,7 @@ class ResponseAnalyzer:
             extra["final_deg"] = results[0].final_deg
         if samples:
             extra["observed_at"] = samples[-1].time
-        return Finding(check.command, check.time, CHECK_TARGET, verdict, detail + ".", extra)
+        return Finding(check.command, check.time, CHECK_TARGET, verdict, detail, extra)
 
     def _judge_tracking(
         self, check: _TrackingCheck, sample: Sample | None, cut_short: str
@@ -352,14 +352,14 @@ class ResponseAnalyzer:
         if sample is not None:
             extra["response_s"] = sample.time - check.time
             extra["observed_at"] = sample.time
-            text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.1f} s"
-            return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text + ".", extra)
+            text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
+            return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
         seen = self._between(check.time, check.deadline)
         if not seen:
             allowed = self.settings.time_allowed_s
             why = f"before {cut_short}" if cut_short else f"within {allowed:g} s"
             text = f"no attitude feedback came {why}: the tracking flag could not be checked"
-            return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text + ".", extra)
+            return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
         extra["observed_at"] = seen[-1].time
         span = seen[-1].time - check.time
         verdict = UNKNOWN if cut_short else NOT_OBEYED
@@ -367,7 +367,7 @@ class ResponseAnalyzer:
         text = f"the feedback's tracking flag stayed {other} for {span:.1f} s"
         if cut_short:
             text += f", until {cut_short}"
-        return Finding(check.command, check.time, CHECK_TRACKING, verdict, text + ".", extra)
+        return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
 
     def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:
         burst = pending.burst
@@ -393,7 +393,7 @@ class ResponseAnalyzer:
                 word = "pitch" if axis == PITCH else "yaw motor"
                 text = (
                     f"the gimbal is at its {word} limit {limit:.1f} deg "
-                    f"{sample.time - t:.1f} s after {name}: it cannot turn further that way."
+                    f"{sample.time - t:.1f} s after {name}: it cannot turn further that way"
                 )
                 extra = {"axis": axis, "limit_deg": limit, "observed_at": sample.time}
                 out.append(Finding(name, t, CHECK_LIMIT, verdict, text, extra))

@@ -1,0 +1,242 @@
+"""``gimbal-analyzer analyze``: did the gimbal do what it was told? One finding per command."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Callable, Iterator
+from typing import IO, Any
+
+from analyzer.errors import UsageError
+
+HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
+
+DESCRIPTION = """\
+The protocol has no acknowledgements: the only way to know whether the gimbal
+did what the ground station asked is to compare each command with the attitude
+feedback that follows (every 500 ms). For every command with a visible effect
+this prints a finding: obeyed, partial, not_obeyed, or unknown when the
+feedback does not allow a judgement.
+
+  specified_angle, look_down, forward   time to reach the target within the
+        tolerance, overshoot, final error, or what happened instead (never moved,
+        moved the other way, stopped short, still on its way). Yaw is compared
+        modulo 360, from north when the flight controller's attitude (0x0000FF13)
+        is present, else from the airframe's nose (the document's note on 0x08).
+  gimbal_control   measured pan/tilt rate against the commanded speed (ratio,
+        lag), still moving after the commands stopped, and commands repeated more
+        slowly than the 50 ms the document recommends.
+  tracking, tracking_stop   the feedback's tracking flag.
+  limits           pitch -110 / +60, yaw motor +-170 (+-325 on 3.5x models).
+  feedback         messages per second, silences, CRC errors, per minute.
+
+It reads every input `decode` reads (candump, python-can logs, pcap, raw
+TCP/UART dumps, MCAP recordings).
+
+examples:
+  gimbal-analyzer analyze samples/flight-candump.log
+  gimbal-analyzer analyze demo.mcap --problems
+  gimbal-analyzer analyze flight.log --tolerance 2 --time-allowed 8
+  gimbal-analyzer analyze flight.log --json | jq 'select(.verdict != "obeyed")'
+
+Times are UTC. With --json each finding is one JSON object (schema:
+schemas/analysis.response.schema.json), 'time' being the command's time.
+"""
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0 or value != value or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a number above 0")
+    return value
+
+
+def add_input_arguments(parser: argparse.ArgumentParser) -> None:
+    """The input options analyze and report share with decode."""
+    from analyzer.inputs import FORMATS
+
+    parser.add_argument("file", help="capture file or MCAP recording; '-' reads candump text")
+    parser.add_argument(
+        "-f",
+        "--format",
+        metavar="FORMAT",
+        help="file format instead of guessing it: " + ", ".join(FORMATS),
+    )
+    parser.add_argument(
+        "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
+    )
+
+
+def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
+    from analyzer.analysis.response import DEFAULT_TIME_ALLOWED_S, DEFAULT_TOLERANCE_DEG
+
+    parser.add_argument(
+        "--tolerance",
+        type=_positive,
+        default=DEFAULT_TOLERANCE_DEG,
+        metavar="DEG",
+        help="an angle this close to the target counts as reached "
+        f"(default {DEFAULT_TOLERANCE_DEG:g} deg)",
+    )
+    parser.add_argument(
+        "--time-allowed",
+        type=_positive,
+        default=DEFAULT_TIME_ALLOWED_S,
+        metavar="S",
+        help="seconds a target command, tracking start or stop has to show its effect "
+        f"(default {DEFAULT_TIME_ALLOWED_S:g} s)",
+    )
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_input_arguments(parser)
+    add_settings_arguments(parser)
+    parser.add_argument(
+        "--json", action="store_true", help="one JSON object per finding (JSON lines)"
+    )
+    parser.add_argument(
+        "--problems", action="store_true", help="only findings that are not 'obeyed'"
+    )
+
+
+def decoded_events(args: argparse.Namespace, reader: Any) -> Iterator[Any]:
+    """Every event the decoder makes of the input (diagnostics of the reader too)."""
+    from analyzer.protocol.decoder import Decoder
+    from analyzer.protocol.types import CanFrame, StreamChunk
+
+    decoder = Decoder()
+    for item in reader:
+        kind = type(item)
+        if kind is CanFrame:
+            yield from decoder.feed_can(item)
+        elif kind is StreamChunk:
+            yield from decoder.feed_stream(item)
+        else:
+            yield item
+    yield from decoder.close()
+
+
+def open_reader(args: argparse.Namespace) -> Any:
+    from analyzer.inputs import open_input
+    from analyzer.protocol.ids import PROTOCOL_IDS
+
+    if not 0 < args.port < 65536:
+        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    return open_input(args.file, args.format, args.port, wanted_ids=PROTOCOL_IDS)
+
+
+def settings_from(args: argparse.Namespace) -> Any:
+    from analyzer.analysis.response import Settings
+
+    return Settings(tolerance_deg=args.tolerance, time_allowed_s=args.time_allowed)
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.analysis.findings import verdict_line
+    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+
+    settings = settings_from(args)
+    reader = open_reader(args)
+    analyzer = ResponseAnalyzer(settings)
+    findings: list[Any] = []
+    commands = 0
+    times: set[float] = set()
+    try:
+        for event in decoded_events(args, reader):
+            if event.topic == TOPIC_ANALYSIS_RESPONSE:
+                continue  # findings stored in a recording: judged afresh here
+            if event.topic == "/gimbal/command":
+                commands += 1
+            if len(times) < 2:
+                times.add(event.time)
+            findings += analyzer.feed(event)
+        findings += analyzer.close()
+    finally:
+        reader.close()
+    notes = list(reader.notes)
+    if len(times) < 2 and findings:
+        # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
+        findings = []
+        analyzer.verdicts.clear()
+        notes.append(
+            f"{args.file} carries no timestamps (a raw TCP/UART byte dump?), so responses "
+            "cannot be timed; record with `gimbal-analyzer record` to get times"
+        )
+    findings.sort(key=lambda e: e.time)
+    shown = [f for f in findings if not args.problems or f.fields["verdict"] != "obeyed"]
+    out = sys.stdout
+    if args.json:
+        for finding in shown:
+            out.write(json.dumps(finding.to_dict()) + "\n")
+    else:
+        header = (
+            f"response analysis of {args.file} ({reader.format_name}): {commands:,} commands; "
+            f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s"
+        )
+        out.write(render_findings(header, shown, verdict_line(analyzer.verdicts)) + "\n")
+    out.flush()
+    for note in notes:
+        sys.stderr.write(f"note: {note}\n")
+    return 0
+
+
+VERDICT_WORDS = {
+    "obeyed": "obeyed",
+    "partial": "PARTIAL",
+    "not_obeyed": "NOT OBEYED",
+    "unknown": "unknown",
+}
+
+
+def clock(t: float) -> str:
+    """UTC time of day with milliseconds and a Z; seconds from the start for relative times."""
+    if t < 1e8:
+        return f"{t:10.3f} s"
+    whole = int(t)
+    millis = min(999, round((t - whole) * 1000))
+    return time.strftime("%H:%M:%S", time.gmtime(whole)) + f".{millis:03d}Z"
+
+
+def render_findings(header: str, findings: list[Any], verdicts: str) -> str:
+    """The text report: a header, one block per finding, the verdict counts."""
+    lines = [header]
+    if findings and findings[0].time >= 1e8:
+        lines.append("times are UTC, " + time.strftime("%Y-%m-%d", time.gmtime(findings[0].time)))
+    lines.append("")
+    for event in findings:
+        f = event.fields
+        numbers = _numbers(f)
+        lines.append(
+            f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
+            f"{VERDICT_WORDS.get(f['verdict'], f['verdict']):<10}  {f['detail']}"
+            + (f"  [{numbers}]" if numbers else "")
+        )
+    if not findings:
+        lines.append("no findings")
+    lines += ["", f"verdicts: {verdicts}"]
+    return "\n".join(lines)
+
+
+_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
+    ("target_deg", "target", lambda v: f"{v:g} deg"),
+    ("response_s", "response", lambda v: f"{v:.2f} s"),
+    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
+    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
+    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
+)
+
+
+def _numbers(fields: dict[str, Any]) -> str:
+    return ", ".join(
+        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
+    )
+
+
+def write_lines(out: IO[str], lines: list[str]) -> None:
+    out.write("\n".join(lines) + "\n")
