@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from analyzer.cli import main
-from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE
+from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE, UsageError
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -85,3 +85,72 @@ def test_sigterm_during_convert_removes_the_partial_output_and_says_so(tmp_path:
     assert "Traceback" not in err
     assert "interrupted (SIGTERM)" in err and "was not written" in err
     assert list(tmp_path.iterdir()) == []  # neither the output nor a partial file
+
+
+@pytest.mark.parametrize(
+    ("text", "host", "port"),
+    [
+        ("tcp:2000", "127.0.0.1", 2000),
+        ("tcp:5555", "127.0.0.1", 5555),
+        ("tcp:127.0.0.1:2001", "127.0.0.1", 2001),
+        ("tcp:idu.local", "idu.local", 2000),
+        ("tcp:[::1]:2002", "::1", 2002),
+    ],
+)
+def test_one_tcp_grammar_for_source_to_and_on(text: str, host: str, port: int) -> None:
+    from analyzer.sim.transports import parse_link
+    from analyzer.sources.spec import TcpSpec, parse_source
+
+    assert parse_source(text) == TcpSpec(host, port)  # --source
+    link = parse_link(text)  # --to (send) and --on (simulate)
+    assert (link.host, link.port) == (host, port)
+
+
+def test_tcp_alone_is_the_idu_for_sources_and_refused_for_sending() -> None:
+    from analyzer.sim.transports import parse_link
+    from analyzer.sources.spec import TcpSpec, parse_source
+
+    assert parse_source("tcp:") == TcpSpec("192.168.42.200", 2000)
+    with pytest.raises(UsageError):
+        parse_link("tcp:")
+
+
+def test_the_idu_side_of_a_proxy_follows_the_tcp_grammar() -> None:
+    from analyzer.sources.spec import ProxySpec, parse_source
+
+    assert parse_source("proxy:127.0.0.1:9000->2000") == ProxySpec(
+        "127.0.0.1", 9000, "127.0.0.1", 2000
+    )
+    assert parse_source("proxy:9000->idu.local") == ProxySpec("0.0.0.0", 9000, "idu.local", 2000)
+
+
+def _record_a_proxy(spec: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> str:
+    out = tmp_path / "proxy.mcap"
+    main(["record", "--source", spec, "-o", str(out), "--duration", "0.3", "-q"])
+    return capsys.readouterr().err
+
+
+def test_a_proxy_on_all_interfaces_says_so_with_its_address(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Listens only (port 0: any free port); nothing is sent anywhere.
+    err = _record_a_proxy("proxy:0->127.0.0.1:9", tmp_path, capsys)
+    match = re.search(r"listening on all interfaces \(0\.0\.0\.0:(\d+)\)", err)
+    assert match and int(match.group(1)) > 0, err
+    assert "reachable from other machines" in err
+    assert f"proxy:127.0.0.1:{match.group(1)}->127.0.0.1:9 keeps it on this one" in err
+
+
+def test_a_loopback_proxy_says_where_it_listens(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    err = _record_a_proxy("proxy:127.0.0.1:0->127.0.0.1:9", tmp_path, capsys)
+    assert re.search(r"listening on 127\.0\.0\.1:\d+ for the ground station", err), err
+    assert "all interfaces" not in err
+
+
+def test_send_help_says_the_repeat_unit_is_required(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["send", "gimbal_control", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "the unit is required: 50ms or 0.5s" in out

@@ -11,6 +11,7 @@ import pytest
 
 from analyzer.cli import main
 from analyzer.commands import send
+from analyzer.errors import UsageError
 from analyzer.protocol.command_table import BY_NAME, COMMANDS
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, StreamChunk
@@ -144,10 +145,23 @@ def test_list_and_help_come_from_the_table(capsys: pytest.CaptureFixture[str]) -
 
 
 @pytest.mark.parametrize(
-    ("text", "seconds"), [("50ms", 0.05), ("0.5s", 0.5), ("2", 2.0), (".25", 0.25)]
+    ("text", "seconds"),
+    [("50ms", 0.05), ("0.5s", 0.5), ("2s", 2.0), (".25s", 0.25), ("1 ms", 0.001)],
 )
 def test_intervals(text: str, seconds: float) -> None:
     assert send.parse_interval(text) == pytest.approx(seconds)
+
+
+@pytest.mark.parametrize("text", ["50", "0.5", ".25"])
+def test_an_interval_without_a_unit_is_refused(text: str) -> None:
+    with pytest.raises(UsageError, match=f"give the unit, {text}ms or {text}s"):
+        send.parse_interval(text)
+
+
+def test_repeat_without_a_unit_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_send(capsys, "gimbal_control", "--repeat", "50", "--to", "can:virtual:x")
+    assert code == 2
+    assert "give the unit, 50ms or 50s" in err
 
 
 def test_transmits_on_a_can_bus_only_with_to(capsys: pytest.CaptureFixture[str]) -> None:

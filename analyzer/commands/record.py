@@ -29,7 +29,9 @@ Ctrl-C or SIGTERM finishes the file properly.
 Sources:
   can:socketcan:can0            a CAN interface (received passively, never transmits)
   tcp:192.168.42.200:2000       the IDU's TCP port (reconnects when the link drops)
+  tcp:2000                      a port alone is on this machine, 127.0.0.1:2000 (simulate)
   proxy:2000->192.168.42.200:2000   between ground station and IDU, both directions
+                                (listens on all interfaces; proxy:127.0.0.1:2000->... does not)
   serial:/dev/ttyUSB0@115200    the UART pins
   file:flight.log               replay a capture file (--speed 1 = recorded speed)
 
@@ -174,6 +176,9 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"the monitor UI is not available ({exc})") from None
     source = open_source(args.source, replay_speed=args.speed)
     description = str(getattr(source, "description", args.source))
+    note = getattr(source, "listen_note", None)
+    if note and not args.tui:  # where a proxy listens: said at start, whatever --quiet
+        print(f"{description}: {note}", file=sys.stderr, flush=True)
     try:
         sink = McapSink(
             path,

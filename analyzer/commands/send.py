@@ -109,7 +109,9 @@ def _add_common(parser: argparse.ArgumentParser) -> None:
         help="transmit to can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT or serial:PORT[@BAUD]",
     )
     group.add_argument(
-        "--repeat", metavar="INTERVAL", help="send again every INTERVAL (e.g. 50ms) until Ctrl-C"
+        "--repeat",
+        metavar="INTERVAL",
+        help="send again every INTERVAL until Ctrl-C; the unit is required: 50ms or 0.5s",
     )
     group.add_argument("--count", type=int, metavar="N", help="send N times (with --repeat)")
     group.add_argument(
@@ -175,10 +177,14 @@ def list_commands() -> str:
 
 
 def parse_interval(text: str) -> float:
-    """``50ms``, ``0.05s`` or ``0.05`` -> seconds."""
+    """``50ms`` or ``0.05s`` -> seconds. The unit is required: a bare ``50`` is refused
+    rather than guessed (50 ms and 50 s are both plausible for a repeated command)."""
     match = re.fullmatch(r"\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s)?\s*", text)
     if not match:
         raise UsageError(f"--repeat {text!r}: expected an interval such as 50ms or 0.5s")
+    if match.group(2) is None:
+        number = match.group(1)
+        raise UsageError(f"--repeat {text!r}: give the unit, {number}ms or {number}s")
     value = float(match.group(1)) / (1000.0 if match.group(2) == "ms" else 1.0)
     if value < 0.001:
         raise UsageError(f"--repeat {text!r}: the interval must be at least 1 ms")

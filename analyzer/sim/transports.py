@@ -64,10 +64,10 @@ class LinkSpec:
 
 
 def parse_link(spec: str) -> LinkSpec:
-    """Parse a link with the ``--source`` grammar; ``tcp:PORT`` alone means loopback here.
+    """Parse a link with the ``--source`` grammar (``tcp:PORT`` alone is loopback there too).
 
     Raises UsageError naming the accepted forms. There is no default address: a link
-    that sends or listens is always named in full.
+    that sends or listens is always named (``tcp:`` alone is refused).
     """
     from analyzer.sources.spec import CanSpec, SerialSpec, SpecError, TcpSpec, parse_source
 
@@ -76,8 +76,6 @@ def parse_link(spec: str) -> LinkSpec:
     kind, _, rest = spec.partition(":")
     if kind not in ("can", "tcp", "serial") or (kind == "tcp" and not rest):
         raise UsageError(f"{spec!r}: {forms}")
-    if kind == "tcp" and rest.isdigit():
-        spec = f"tcp:{LOOPBACK}:{rest}"
     try:
         parsed = parse_source(spec)
     except SpecError as exc:

@@ -11,11 +11,13 @@ DEFAULT_IDU_PORT = 2000
 DEFAULT_CAN_BITRATE = 1_000_000
 DEFAULT_SERIAL_BAUDRATE = 115_200
 DEFAULT_PROXY_LISTEN_HOST = "0.0.0.0"
+LOOPBACK_HOST = "127.0.0.1"
 
 SOURCE_FORMS = (
     "can:INTERFACE:CHANNEL[@BITRATE] (e.g. can:socketcan:can0, can:virtual:demo), "
-    "tcp:HOST:PORT (default 192.168.42.200:2000), "
-    "proxy:[LISTEN_HOST:]PORT->IDU_HOST:PORT, "
+    "tcp:HOST:PORT (tcp:HOST uses port 2000, tcp:PORT means 127.0.0.1:PORT, "
+    "tcp: alone the IDU at 192.168.42.200:2000), "
+    "proxy:[LISTEN_HOST:]PORT->IDU_HOST:PORT (a LISTEN port alone listens on all interfaces), "
     "serial:DEVICE[@BAUD] (e.g. serial:/dev/ttyUSB0@115200), "
     "file:PATH"
 )
@@ -103,6 +105,15 @@ def split_host_port(text: str, spec: str, *, default_port: int | None = None) ->
     return host, _port(port, spec)
 
 
+def tcp_address(text: str, spec: str) -> tuple[str, int]:
+    """The one grammar of a TCP address in every option (``--source``, ``--to``, ``--on``
+    and the IDU side of a proxy): ``HOST:PORT``; ``HOST`` (port 2000); ``PORT`` alone
+    (digits) is that port on loopback, 127.0.0.1, never a host named by a number."""
+    if text.isdigit():
+        return LOOPBACK_HOST, _port(text, spec)
+    return split_host_port(text, spec, default_port=DEFAULT_IDU_PORT)
+
+
 def _split_rate(text: str) -> tuple[str, int | None]:
     """``NAME@123`` -> (NAME, 123); a trailing ``@`` part that is not digits stays in the name."""
     name, sep, rate = text.rpartition("@")
@@ -132,7 +143,7 @@ def parse_source(spec: str) -> SourceSpec:
     if kind == "tcp":
         if not rest:
             return TcpSpec(DEFAULT_IDU_HOST, DEFAULT_IDU_PORT)
-        host, port = split_host_port(rest, spec, default_port=DEFAULT_IDU_PORT)
+        host, port = tcp_address(rest, spec)
         return TcpSpec(host, port)
     if kind == "proxy":
         listen, sep, idu = rest.partition("->")
@@ -142,7 +153,7 @@ def parse_source(spec: str) -> SourceSpec:
             listen_host, listen_port = DEFAULT_PROXY_LISTEN_HOST, _port(listen, spec)
         else:
             listen_host, listen_port = split_host_port(listen, spec)
-        idu_host, idu_port = split_host_port(idu, spec, default_port=DEFAULT_IDU_PORT)
+        idu_host, idu_port = tcp_address(idu, spec)
         return ProxySpec(listen_host, listen_port, idu_host, idu_port)
     if kind == "serial":
         url, baudrate = _split_rate(rest)

@@ -18,6 +18,20 @@ RECV_SIZE = 65536
 SEND_TIMEOUT = 5.0
 
 
+WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
+
+
+def listen_note(host: str, port: int, idu: str) -> str:
+    """Where the proxy listens, in words: all interfaces is said so, with the address."""
+    where = address(host, port)
+    if host in WILDCARD_HOSTS:
+        return (
+            f"listening on all interfaces ({where}) for the ground station: reachable from "
+            f"other machines; proxy:127.0.0.1:{port}->{idu} keeps it on this one"
+        )
+    return f"listening on {where} for the ground station"
+
+
 class TcpProxySource(QueuedSource):
     """Listens for the ground station, connects to the IDU for it, relays both ways.
 
@@ -54,6 +68,7 @@ class TcpProxySource(QueuedSource):
         host, port = listener.getsockname()[:2]
         self.listen_address: tuple[str, int] = (host, port)
         self.description = f"proxy:{address(host, port)}->{self.idu_address}"
+        self.listen_note = listen_note(host, port, self.idu_address)
         self.sessions = 0
         self._gs: socket.socket | None = None
         self._idu: socket.socket | None = None
@@ -65,8 +80,7 @@ class TcpProxySource(QueuedSource):
     def _run(self) -> None:
         selector = selectors.DefaultSelector()
         selector.register(self._listener, selectors.EVENT_READ, "listen")
-        listen = address(*self.listen_address)
-        self._link(f"listening on {listen} for the ground station", "listening")
+        self._link(self.listen_note, "listening")
         try:
             while not self._stopping.is_set():
                 for key, _ in selector.select(timeout=0.25):
