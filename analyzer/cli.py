@@ -36,6 +36,7 @@ COMMANDS: dict[str, str] = {
     "send": "analyzer.commands.send",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",
+    "layout": "analyzer.commands.layout",
     "export": "analyzer.commands.export",
 }
 

@@ -1,0 +1,135 @@
+"""A ready Foxglove Studio layout for gimbal-analyzer recordings (import it once)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
+from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+
+# Panel ids are "<panel type>!<name>"; the types are those of Foxglove Studio 1.48.
+MAP = "map!gimbal-map"
+LOG = "RosOut!gimbal-diagnostics-log"
+PLOT = "Plot!gimbal-attitude-and-speeds"
+INDICATOR = "Indicator!gimbal-tracking"
+STATES = "StateTransitions!gimbal-modes"
+RAW = "RawMessages!gimbal-command"
+TABLE = "Table!gimbal-diagnostics"
+
+# Message paths the layout shows: (topic, field) pairs, checked against the schemas by tests.
+PLOT_SERIES = (
+    (TOPIC_GIMBAL_ATTITUDE, "pitch_deg"),
+    (TOPIC_GIMBAL_ATTITUDE, "yaw_deg"),
+    (TOPIC_COMMAND, "pan_speed_dps"),
+    (TOPIC_COMMAND, "tilt_speed_dps"),
+)
+STATE_SERIES = (
+    (TOPIC_GIMBAL_ATTITUDE, "control_mode"),
+    (TOPIC_GIMBAL_ATTITUDE, "tracking"),
+    (TOPIC_COMMAND, "name"),
+)
+TRACKING = (TOPIC_GIMBAL_ATTITUDE, "tracking")
+
+_COLOURS = ("#4e98e2", "#f5774d", "#61cbff", "#f7df71")
+
+
+def message_path(topic: str, field: str) -> str:
+    return f"{topic}.{field}"
+
+
+def layout() -> dict[str, Any]:
+    """The layout as Foxglove Studio exports and imports it (Layouts -> Import layout)."""
+    config_by_id: dict[str, Any] = {
+        MAP: {
+            "layer": "map",
+            "zoomLevel": 16,
+            "disabledTopics": [],
+            "topicColors": {TOPIC_UAV_FIX: "#4e98e2", TOPIC_TARGET_FIX: "#f5774d"},
+            "customTileUrl": "",
+            "followTopic": TOPIC_UAV_FIX,
+        },
+        LOG: {"searchTerms": [], "minLogLevel": 1, "topicToRender": TOPIC_DIAGNOSTICS_LOG},
+        PLOT: {
+            "title": "Plot",
+            "paths": [
+                {
+                    "value": message_path(topic, field),
+                    "enabled": True,
+                    "timestampMethod": "receiveTime",
+                    "color": colour,
+                }
+                for (topic, field), colour in zip(PLOT_SERIES, _COLOURS, strict=True)
+            ],
+            "showXAxisLabels": True,
+            "showYAxisLabels": True,
+            "showLegend": True,
+            "legendDisplay": "floating",
+            "showPlotValuesInLegend": True,
+            "isSynced": True,
+            "xAxisVal": "timestamp",
+            "sidebarDimension": 240,
+        },
+        INDICATOR: {
+            "path": message_path(*TRACKING),
+            "style": "bulb",
+            "rules": [
+                {"operator": "=", "rawValue": "true", "color": "#68e24a", "label": "tracking"}
+            ],
+            "fallbackColor": "#a0a0a0",
+            "fallbackLabel": "not tracking",
+        },
+        STATES: {
+            "paths": [
+                {"value": message_path(topic, field), "timestampMethod": "receiveTime"}
+                for topic, field in STATE_SERIES
+            ],
+            "isSynced": True,
+        },
+        RAW: {
+            "topicPath": TOPIC_COMMAND,
+            "diffTopicPath": "",
+            "diffMethod": "custom",
+            "diffEnabled": False,
+            "showFullMessageForDiff": False,
+        },
+        TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+    }
+    mosaic = {
+        "direction": "row",
+        "splitPercentage": 38,
+        "first": {
+            "direction": "column",
+            "splitPercentage": 55,
+            "first": MAP,
+            "second": {
+                "direction": "column",
+                "splitPercentage": 22,
+                "first": INDICATOR,
+                "second": LOG,
+            },
+        },
+        "second": {
+            "direction": "column",
+            "splitPercentage": 40,
+            "first": PLOT,
+            "second": {
+                "direction": "column",
+                "splitPercentage": 42,
+                "first": STATES,
+                "second": {
+                    "direction": "row",
+                    "splitPercentage": 50,
+                    "first": RAW,
+                    "second": TABLE,
+                },
+            },
+        },
+    }
+    return {
+        "configById": config_by_id,
+        "globalVariables": {},
+        "userNodes": {},
+        "linkedGlobalVariables": [],
+        "playbackConfig": {"speed": 1},
+        "layout": mosaic,
+    }

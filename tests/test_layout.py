@@ -1,0 +1,103 @@
+"""The Foxglove layout: valid Foxglove Studio 1.48 layout data whose paths exist in recordings."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from analyzer.cli import main
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS
+from analyzer.mcapio.layout import layout
+from analyzer.protocol.schema import topic_schemas
+
+# Panel types of Foxglove Studio 1.48 (panels/index of @foxglove/studio-base) used here, and
+# the config keys each panel reads.
+PANEL_KEYS = {
+    "map": {"layer", "zoomLevel", "disabledTopics", "topicColors", "customTileUrl", "followTopic"},
+    "RosOut": {"searchTerms", "minLogLevel", "topicToRender"},
+    "Plot": {"paths", "isSynced", "xAxisVal", "showLegend"},
+    "Indicator": {"path", "style", "rules", "fallbackColor", "fallbackLabel"},
+    "StateTransitions": {"paths", "isSynced"},
+    "RawMessages": {"topicPath", "diffTopicPath", "diffMethod", "diffEnabled"},
+    "Table": {"topicPath"},
+}
+
+
+def leaves(node: Any) -> list[str]:
+    if isinstance(node, str):
+        return [node]
+    assert set(node) == {"direction", "splitPercentage", "first", "second"}, node
+    assert node["direction"] in ("row", "column") and 0 < node["splitPercentage"] < 100
+    return leaves(node["first"]) + leaves(node["second"])
+
+
+def field_exists(path: str) -> bool:
+    """'/gimbal/attitude.pitch_deg' names a property of that topic's schema."""
+    topic, _, field = path.partition(".")
+    schemas = {**topic_schemas(), **{t: s for t, (_, s) in VIEW_SCHEMAS.items()}}
+    return topic in schemas and (not field or field in schemas[topic]["properties"])
+
+
+def test_layout_is_foxglove_layout_data() -> None:
+    data = json.loads(json.dumps(layout()))
+    assert set(data) == {
+        "configById",
+        "globalVariables",
+        "userNodes",
+        "linkedGlobalVariables",
+        "playbackConfig",
+        "layout",
+    }
+    panels = leaves(data["layout"])
+    assert sorted(panels) == sorted(data["configById"])
+    assert len(set(panels)) == len(panels)
+    for panel_id, config in data["configById"].items():
+        kind, _, name = panel_id.partition("!")
+        assert name and kind in PANEL_KEYS, panel_id
+        assert PANEL_KEYS[kind] <= set(config), (panel_id, PANEL_KEYS[kind] - set(config))
+    assert {p.partition("!")[0] for p in panels} == set(PANEL_KEYS)  # every panel the issue names
+
+
+def test_every_message_path_exists_in_the_schemas() -> None:
+    config = layout()["configById"]
+    paths: list[str] = []
+    for panel_id, panel in config.items():
+        kind = panel_id.partition("!")[0]
+        if kind in ("Plot", "StateTransitions"):
+            paths += [p["value"] for p in panel["paths"]]
+        elif kind == "Indicator":
+            paths.append(panel["path"])
+        elif kind in ("RawMessages", "Table"):
+            paths.append(panel["topicPath"])
+        elif kind == "RosOut":
+            paths.append(panel["topicToRender"])
+        elif kind == "map":
+            paths += [*panel["topicColors"], panel["followTopic"]]
+    assert "/gimbal/command.pan_speed_dps" in paths and "/gimbal/attitude.pitch_deg" in paths
+    assert "/gimbal/attitude.control_mode" in paths and "/gimbal/attitude.tracking" in paths
+    for path in paths:
+        assert field_exists(path), path
+
+
+def test_layout_command_writes_and_refuses_to_overwrite(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["layout"]) == 0
+    written = tmp_path / "gimbal-layout.json"
+    assert json.loads(written.read_text()) == json.loads(json.dumps(layout()))
+    assert "Import layout" in capsys.readouterr().err
+    written.write_text("mine")
+    assert main(["layout"]) == 2
+    assert "exists; add --force" in capsys.readouterr().err
+    assert written.read_text() == "mine"
+    assert main(["layout", "--force"]) == 0
+    assert json.loads(written.read_text())["configById"]
+    capsys.readouterr()
+    assert main(["layout", "-o", "-"]) == 0
+    assert json.loads(capsys.readouterr().out) == json.loads(written.read_text())
+    assert main(["layout", "-o", str(tmp_path / "missing" / "x.json")]) == 2
+    assert list(tmp_path.iterdir()) == [written]  # no temporary file left behind
