@@ -1,4 +1,4 @@
-"""The capture engine: a reader thread reads a source, decodes it and hands batches to sinks."""
+"""The capture engine: a reader thread reads a live source and runs the pipeline on it."""
 
 from __future__ import annotations
 
@@ -13,15 +13,11 @@ from types import FrameType
 from typing import Any
 
 from analyzer.errors import OutputError, SourceError
-from analyzer.pipeline import Batch, Sink
-from analyzer.protocol.types import TOPIC_DIAGNOSTICS, CanFrame, Event, StreamChunk
+from analyzer.pipeline import Decoding, Pipeline, Sink, Stage
+from analyzer.protocol.types import Event
 from analyzer.sources.base import link_event
+from analyzer.tally import Tally
 
-# Bits of a CAN 2.0 frame without stuffing: SOF, arbitration, control, data, CRC, ACK, EOF
-# and the 3-bit intermission. An extended frame with 8 data bytes is 131 bits, so a
-# 1 Mbit/s bus is saturated at about 7,600 such frames per second.
-CAN_BITS_EXTENDED = 67
-CAN_BITS_STANDARD = 47
 DEFAULT_BITRATE = 1_000_000
 
 TICK_INTERVAL_S = 0.25  # how often the decoder is asked about stale partial messages
@@ -38,9 +34,12 @@ class CaptureError(SourceError):
 class CaptureStats:
     """Counters of a running capture (a snapshot is returned by ``Capture.stats``).
 
-    ``bytes`` counts raw input bytes: stream bytes plus CAN data bytes. ``events`` counts
-    decoded events, ``diagnostics`` the /diagnostics events among them (link changes
-    included), by kind in ``diagnostic_kinds``. Rates are averaged over the last second.
+    The counts are those of the pipeline's tally (``analyzer.tally``), the same figures
+    every command reports: ``bytes`` counts raw input bytes (stream bytes plus CAN data
+    bytes), ``events`` every event (diagnostics included), ``diagnostics`` the
+    /diagnostics events among them (link changes included), by kind in
+    ``diagnostic_kinds``; ``tally`` is a copy of all of it. Rates are averaged over the
+    last second.
     ``bus_load_pct`` estimates the load of the CAN bus (frame bit counts without stuffing,
     131 bits for an extended 8-byte frame) at the source's bitrate (1 Mbit/s by default).
     """
@@ -56,15 +55,12 @@ class CaptureStats:
     bus_load_pct: float = 0.0
     elapsed_s: float = 0.0
     diagnostic_kinds: dict[str, int] = field(default_factory=dict)
+    tally: Tally = field(default_factory=Tally)
 
     def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-
-def _default_decoder() -> Any:
-    from analyzer.protocol.decoder import Decoder
-
-    return Decoder()
+        out = asdict(self)
+        out.pop("tally", None)
+        return out
 
 
 def _reason(exc: BaseException) -> str:
@@ -76,17 +72,20 @@ def _reason(exc: BaseException) -> str:
 
 
 class Capture:
-    """Reads ``source`` in a thread, decodes, and hands one Batch per ``batch_interval``
-    to every sink's ``handle()`` (possibly empty, so sinks can flush on time).
+    """Reads ``source`` in a thread and runs the pipeline (``analyzer.pipeline``) on it:
+    one Batch per ``batch_interval`` goes to every sink's ``handle()`` (possibly empty,
+    so sinks can flush on time).
 
-    The decoder (a default ``Decoder()`` when None) gets every CAN frame / stream chunk;
-    ``Event`` items of a source (link changes, pre-decoded file events) go straight into
-    the batch. ``decoder.tick`` runs every 0.25 s on the source's clock, ``decoder.close``
-    at the end. When the source ends, fails, ``stop()`` is called or a sink raises, the
-    thread delivers a last batch to the sinks that still work, closes the source and
-    closes every sink. Failures are kept in ``error`` (a CaptureError, one clear line);
-    ``stop_reason`` says why it ended: "end of input", "stopped", "error", or "output
-    closed" when a sink's reader went away (BrokenPipeError: a quiet stop, not an error).
+    The pipeline's decoder (a default ``Decoder()`` when None) gets every CAN frame /
+    stream chunk; ``Event`` items of a source (link changes, pre-decoded file events) go
+    straight into the batch; ``stages`` run on every batch. For live sources
+    ``decoder.tick`` runs every 0.25 s on the source's clock (a file replay is decoded
+    exactly as ``decode`` does it); ``decoder.close`` runs at the end. When the source
+    ends, fails, ``stop()`` is called or a sink raises, the thread delivers a last batch
+    to the sinks that still work, closes the source and closes every sink. Failures are
+    kept in ``error`` (a CaptureError, one clear line); ``stop_reason`` says why it
+    ended: "end of input", "stopped", "error", or "output closed" when a sink's reader
+    went away (BrokenPipeError: a quiet stop, not an error).
     """
 
     def __init__(
@@ -94,31 +93,39 @@ class Capture:
         source: Any,
         sinks: Sequence[Sink],
         *,
-        decoder: Any = None,
+        decoder: Decoding | None = None,
+        stages: Sequence[Stage] = (),
         batch_interval: float = 0.05,
     ) -> None:
         if batch_interval <= 0:
             raise ValueError("batch_interval must be positive")
         self.source = source
-        self.sinks: list[Sink] = list(sinks)
-        self.decoder = decoder if decoder is not None else _default_decoder()
+        self.pipeline = Pipeline(sinks, decoder=decoder, stages=stages)
         self.batch_interval = batch_interval
         self.bitrate: int = int(getattr(source, "bitrate", 0) or DEFAULT_BITRATE)
+        self.live = bool(getattr(source, "live", True))
         self.error: CaptureError | None = None
         self.stop_reason: str = ""
-        self._stats = CaptureStats()
-        self._stats_lock = threading.Lock()  # snapshots copy the kinds dict while it grows
-        self._bits = 0
+        self._rates = (0.0, 0.0, 0.0)  # frames/s, bytes/s, bus load %
         self._window: deque[tuple[float, int, int, int]] = deque()
         self._stop = threading.Event()
         self._done = threading.Event()
-        self._failed_sinks: set[int] = set()
+        self._reported = 0  # sink failures already turned into ``error``
+        self._batches = 0
         self._notes: list[Event] = []
         self._thread: threading.Thread | None = None
         self._started_at = 0.0
         self._ended_at = 0.0  # when the reader stopped: elapsed time stops there
         self._last_item = (0.0, 0.0)  # (source time, monotonic time) of the newest item
         self._source_name = str(getattr(source, "source_name", "capture"))
+
+    @property
+    def sinks(self) -> list[Sink]:
+        return self.pipeline.sinks
+
+    @property
+    def decoder(self) -> Decoding:
+        return self.pipeline.decoder
 
     # -- control ---------------------------------------------------------------------------------
 
@@ -132,7 +139,7 @@ class Capture:
 
     def add_sink(self, sink: Sink) -> None:
         """Attach one more sink, before ``start()`` or while running (from the next batch on)."""
-        self.sinks.append(sink)
+        self.pipeline.sinks.append(sink)
 
     def stop(self) -> None:
         """Ask the reader thread to finish (returns at once; use join/wait to wait)."""
@@ -159,8 +166,21 @@ class Capture:
 
     @property
     def stats(self) -> CaptureStats:
-        with self._stats_lock:
-            snapshot = CaptureStats(**self._stats.as_dict())
+        tally = self.pipeline.snapshot()
+        frames_per_s, bytes_per_s, load = self._rates
+        snapshot = CaptureStats(
+            frames=tally.frames,
+            chunks=tally.chunks,
+            bytes=tally.bytes,
+            events=tally.events,
+            diagnostics=tally.diagnostics,
+            batches=self._batches,
+            frames_per_s=frames_per_s,
+            bytes_per_s=bytes_per_s,
+            bus_load_pct=load,
+            diagnostic_kinds=dict(tally.kinds),
+            tally=tally,
+        )
         if self._started_at:
             end = self._ended_at or time.monotonic()
             snapshot.elapsed_s = end - self._started_at
@@ -169,15 +189,15 @@ class Capture:
     # -- the reader thread ------------------------------------------------------------------------
 
     def _run(self) -> None:
-        batch = Batch()
         try:
-            batch = self._loop(batch)
+            self._loop()
         except Exception as exc:  # a bug in a decoder or source: end cleanly, keep the reason
             self._fail(f"capture failed: {exc.__class__.__name__}: {exc}", exc)
         finally:
-            self._finish(batch)
+            self._finish()
 
-    def _loop(self, batch: Batch) -> Batch:
+    def _loop(self) -> None:
+        pipeline = self.pipeline
         interval = self.batch_interval
         now = time.monotonic()
         next_flush = now + interval
@@ -188,109 +208,76 @@ class Capture:
                 items = self.source.read(wait)
             except EOFError:
                 self.stop_reason = "end of input"
-                return batch
+                return
             except SourceError as exc:  # sources name themselves in their messages
                 self._fail(_reason(exc), exc)
-                return batch
+                return
             except Exception as exc:
                 self._fail(f"{self._describe_source()} failed: {_reason(exc)}", exc)
-                return batch
+                return
             if items:
-                self._absorb(items, batch)
+                pipeline.feed(items)
+                last = items[-1]
+                if not isinstance(last, Event):
+                    self._last_item = (last.time, time.monotonic())
             now = time.monotonic()
             if now >= next_tick:
                 next_tick = now + TICK_INTERVAL_S
-                self._tick(batch, now)
-            if now >= next_flush or len(batch.items) >= MAX_BATCH_ITEMS:
-                self._deliver(batch)
-                batch = Batch()
+                self._tick(now)
+            if now >= next_flush or pipeline.pending_items >= MAX_BATCH_ITEMS:
+                self._deliver()
                 next_flush = max(next_flush + interval, now)
         if not self.stop_reason:
             self.stop_reason = "stopped"
-        return batch
 
     def _describe_source(self) -> str:
         return str(getattr(self.source, "description", "source"))
 
-    def _absorb(self, items: list[Any], batch: Batch) -> None:
-        stats = self._stats
-        decoder = self.decoder
-        raw = batch.items
-        events = batch.events
-        last: Any = None
-        for item in items:
-            if isinstance(item, CanFrame):
-                raw.append(item)
-                stats.frames += 1
-                size = len(item.data)
-                stats.bytes += size
-                self._bits += (CAN_BITS_EXTENDED if item.extended else CAN_BITS_STANDARD) + 8 * size
-                events.extend(decoder.feed_can(item))
-                last = item
-            elif isinstance(item, StreamChunk):
-                raw.append(item)
-                stats.chunks += 1
-                stats.bytes += len(item.data)
-                events.extend(decoder.feed_stream(item))
-                last = item
-            elif isinstance(item, Event):
-                events.append(item)
-        if last is not None:
-            self._last_item = (last.time, time.monotonic())
-
-    def _tick(self, batch: Batch, now: float) -> None:
+    def _tick(self, now: float) -> None:
         source_time, seen_at = self._last_item
-        if seen_at:
-            batch.events.extend(self.decoder.tick(source_time + (now - seen_at)))
+        if seen_at and self.live:
+            self.pipeline.tick(source_time + (now - seen_at))
 
-    def _count(self, batch: Batch) -> None:
-        with self._stats_lock:
-            self._count_locked(batch)
-
-    def _count_locked(self, batch: Batch) -> None:
-        stats = self._stats
-        for event in batch.events:
-            if event.topic == TOPIC_DIAGNOSTICS:
-                stats.diagnostics += 1
-                kind = str(event.fields.get("kind", ""))
-                stats.diagnostic_kinds[kind] = stats.diagnostic_kinds.get(kind, 0) + 1
-            else:
-                stats.events += 1
-        stats.batches += 1
+    def _rate(self) -> None:
+        tally = self.pipeline.tally
         now = time.monotonic()
         window = self._window
-        window.append((now, stats.frames, self._bits, stats.bytes))
+        window.append((now, tally.frames, tally.bits, tally.bytes))
         while len(window) > 2 and now - window[1][0] >= RATE_WINDOW_S:
             window.popleft()
         t0, frames0, bits0, bytes0 = window[0]
         span = now - t0
         if span > 0:
-            stats.frames_per_s = (stats.frames - frames0) / span
-            stats.bytes_per_s = (stats.bytes - bytes0) / span
-            stats.bus_load_pct = 100.0 * (self._bits - bits0) / span / self.bitrate
+            self._rates = (
+                (tally.frames - frames0) / span,
+                (tally.bytes - bytes0) / span,
+                100.0 * (tally.bits - bits0) / span / self.bitrate,
+            )
 
-    def _deliver(self, batch: Batch) -> None:
-        batch.wall_time = time.time()
-        self._count(batch)
-        for index, sink in enumerate(self.sinks):
-            if index in self._failed_sinks:
-                continue
-            try:
-                sink.handle(batch)
-            except BrokenPipeError:
+    def _deliver(self) -> None:
+        self.pipeline.deliver(time.time())
+        self._batches += 1
+        self._rate()
+        self._report_sink_failures()
+
+    def _report_sink_failures(self) -> None:
+        failures = self.pipeline.failures
+        while self._reported < len(failures):
+            failure = failures[self._reported]
+            self._reported += 1
+            exc = failure.error
+            if isinstance(exc, BrokenPipeError):
                 # The reader of a printed output went away (| head): stop as asked.
-                self._failed_sinks.add(index)
                 self.stop_reason = OUTPUT_CLOSED
                 self._stop.set()
-            except OutputError as exc:  # says itself what could not be written
-                self._failed_sinks.add(index)
+            elif isinstance(exc, OutputError):  # says itself what could not be written
                 self._fail(str(exc), exc)
-            except Exception as exc:
-                self._failed_sinks.add(index)
-                if isinstance(exc, SourceError):  # says what failed (disk full: cannot write...)
-                    self._fail(_reason(exc), exc)
-                else:
-                    self._fail(f"{sink.__class__.__name__} failed: {_reason(exc)}", exc)
+            elif isinstance(exc, SourceError):  # says what failed (disk full: cannot write...)
+                self._fail(_reason(exc), exc)
+            else:
+                name = failure.sink.__class__.__name__
+                verb = "failed while closing" if failure.closing else "failed"
+                self._fail(f"{name} {verb}: {_reason(exc)}", exc)
 
     def _fail(self, message: str, exc: BaseException | None) -> None:
         """Keep the first failure, stop the loop, and note it in the last batch."""
@@ -302,25 +289,20 @@ class Capture:
         self._stop.set()
         self._notes.append(link_event(self._source_name, message, "failed"))
 
-    def _finish(self, batch: Batch) -> None:
+    def _finish(self) -> None:
         self._ended_at = time.monotonic()
         try:
             with contextlib.suppress(Exception):
                 self.source.close()
             try:
-                batch.events.extend(self.decoder.close())
+                notes, self._notes = self._notes, []
+                self.pipeline.finish(time.time(), notes)
             except Exception as exc:
                 self._fail(f"decoder failed at the end: {_reason(exc)}", exc)
-            batch.events.extend(self._notes)
-            self._notes.clear()
-            self._deliver(batch)
-            for index, sink in enumerate(self.sinks):
-                try:
-                    sink.close()
-                except Exception as exc:
-                    if index not in self._failed_sinks:
-                        name = sink.__class__.__name__
-                        self._fail(f"{name} failed while closing: {_reason(exc)}", exc)
+                self.pipeline.finished = True
+            self._batches += 1
+            self._rate()
+            self._report_sink_failures()
         finally:
             self._done.set()
 

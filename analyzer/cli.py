@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from analyzer import __version__
+from analyzer import __version__, timefmt
 from analyzer.errors import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--local-time", action="store_true", help=timefmt.FLAG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         module = _load(name)
@@ -79,6 +80,10 @@ def build_parser() -> argparse.ArgumentParser:
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         module.add_arguments(p)
+        # Also after the command name; SUPPRESS keeps a value given before it.
+        p.add_argument(
+            "--local-time", action="store_true", default=argparse.SUPPRESS, help=timefmt.FLAG_HELP
+        )
         p.set_defaults(_module=module)
     return parser
 
@@ -115,6 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -> int:
     module = getattr(args, "_module", None)
+    timefmt.use_local_time(bool(getattr(args, "local_time", False)))
     if module is None:
         parser.print_help()
         return EXIT_USAGE

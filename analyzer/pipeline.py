@@ -1,21 +1,39 @@
-"""The hand-over between capture and sinks: batches of raw items with their decoded events."""
+"""The one path of every command: raw items -> decoder -> stages -> counters -> sinks.
+
+``decode``, ``convert``, ``record``, ``monitor`` and ``demo`` all run a :class:`Pipeline`:
+file commands drive it with :func:`run_items`, live ones through the capture engine
+(``analyzer.capture``), which feeds it from a reader thread. The pipeline itself never
+reads a file, a socket or a clock.
+
+An extra analysis plugs in once for every command as a :class:`Stage`: it sees every
+batch of events after the decoder and may add events of its own (findings), which the
+counters and sinks then see like any other event.
+"""
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from itertools import islice
+from typing import Any, Protocol
 
 from analyzer.protocol.types import CanFrame, Event, StreamChunk
+from analyzer.tally import Tally
 
 RawItem = CanFrame | StreamChunk
+Item = CanFrame | StreamChunk | Event  # what readers and sources deliver
+
+BATCH_ITEMS = 2000  # file commands hand a batch to the sinks after this many items
 
 
 @dataclass(slots=True)
 class Batch:
-    """Everything one capture step produced, in arrival order.
+    """Everything one step produced, in arrival order.
 
     ``items`` are the raw frames / stream chunks as read (lossless), ``events`` the
-    decoded events and diagnostics they gave (link-state diagnostics included).
+    decoded events and diagnostics they gave (link-state diagnostics and events of the
+    stages included).
     """
 
     items: list[RawItem] = field(default_factory=list)
@@ -29,3 +47,196 @@ class Sink(Protocol):
     def handle(self, batch: Batch) -> None: ...
 
     def close(self) -> None: ...
+
+
+class Stage(Protocol):
+    """An analysis between decoder and sinks: events in, extra events out.
+
+    ``process`` gets the events of each batch in order and returns the events it adds
+    (often none); ``close`` returns what it still has to say at the end of the input.
+    """
+
+    def process(self, events: list[Event]) -> list[Event]: ...
+
+    def close(self) -> list[Event]: ...
+
+
+class Decoding(Protocol):
+    """What the pipeline needs of a decoder (``analyzer.protocol.decoder.Decoder``)."""
+
+    def feed_can(self, frame: CanFrame) -> list[Event]: ...
+
+    def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
+
+    def tick(self, now: float) -> list[Event]: ...
+
+    def close(self, now: float | None = None) -> list[Event]: ...
+
+
+@dataclass(slots=True)
+class SinkFailure:
+    """A sink that raised: it gets no more batches; ``error`` is what it raised."""
+
+    sink: Sink
+    error: BaseException
+    closing: bool = False
+
+
+def default_decoder(*, emit_other: bool = False) -> Decoding:
+    from analyzer.protocol.decoder import Decoder
+
+    return Decoder(emit_other=emit_other)
+
+
+class Pipeline:
+    """Decodes raw items, runs the stages, counts everything once and feeds the sinks.
+
+    ``feed`` decodes items into the open batch, ``deliver`` hands it over (stages,
+    then the counters in ``tally``, then every sink that has not failed), ``finish``
+    flushes the decoder and the stages, delivers the last batch and closes every sink.
+    A sink that raises is set aside (``failures``) and the others go on; the driver
+    decides whether to stop. ``lock`` guards ``tally`` for readers in other threads.
+    """
+
+    def __init__(
+        self,
+        sinks: Sequence[Sink] = (),
+        *,
+        decoder: Decoding | None = None,
+        stages: Sequence[Stage] = (),
+    ) -> None:
+        self.decoder: Decoding = decoder if decoder is not None else default_decoder()
+        self.sinks: list[Sink] = list(sinks)
+        self.stages: list[Stage] = list(stages)
+        self.tally = Tally()
+        self.lock = threading.Lock()
+        self.failures: list[SinkFailure] = []
+        self.batch = Batch()
+        self.finished = False
+
+    # -- input -------------------------------------------------------------------------------
+
+    def feed(self, items: Iterable[Item]) -> None:
+        """Decode items into the open batch; ready-made events go in as they are."""
+        batch = self.batch
+        raw = batch.items
+        events = batch.events
+        decoder = self.decoder
+        feed_can = decoder.feed_can
+        feed_stream = decoder.feed_stream
+        for item in items:
+            kind = type(item)
+            if kind is CanFrame:
+                raw.append(item)  # type: ignore[arg-type]
+                out = feed_can(item)  # type: ignore[arg-type]
+            elif kind is StreamChunk:
+                raw.append(item)  # type: ignore[arg-type]
+                out = feed_stream(item)  # type: ignore[arg-type]
+            elif isinstance(item, Event):
+                events.append(item)
+                continue
+            else:
+                continue
+            if out:
+                events.extend(out)
+
+    def add_events(self, events: Iterable[Event]) -> None:
+        """Events from outside the decoder (link changes, notes) into the open batch."""
+        self.batch.events.extend(events)
+
+    def tick(self, now: float) -> None:
+        """Live input: let the decoder report partial messages older than its limits."""
+        self.batch.events.extend(self.decoder.tick(now))
+
+    @property
+    def pending_items(self) -> int:
+        return len(self.batch.items)
+
+    # -- output ------------------------------------------------------------------------------
+
+    def deliver(self, wall_time: float = 0.0) -> Batch:
+        """Hand the open batch (possibly empty) to stages, counters and sinks; open a new one."""
+        batch = self.batch
+        self.batch = Batch()
+        batch.wall_time = wall_time
+        events = batch.events
+        for stage in self.stages:
+            extra = stage.process(events)
+            if extra:
+                events.extend(extra)
+        with self.lock:
+            self.tally.add_items(batch.items)
+            self.tally.add_events(events)
+        failed = {id(f.sink) for f in self.failures}
+        for sink in self.sinks:
+            if id(sink) in failed:
+                continue
+            try:
+                sink.handle(batch)
+            except Exception as exc:
+                self.failures.append(SinkFailure(sink, exc))
+        return batch
+
+    def finish(self, wall_time: float = 0.0, extra: Iterable[Event] = ()) -> Batch:
+        """End of input: flush decoder and stages, deliver the last batch, close every sink.
+
+        Safe to call twice (the second call does nothing). ``extra`` events (a note on
+        why the input ended) go into the last batch.
+        """
+        if self.finished:
+            return Batch()
+        self.finished = True
+        events = self.batch.events
+        try:
+            events.extend(self.decoder.close())
+            for stage in self.stages:
+                events.extend(stage.close())
+        finally:
+            events.extend(extra)
+            batch = self.deliver(wall_time)
+            failed = {id(f.sink) for f in self.failures}
+            for sink in self.sinks:
+                try:
+                    sink.close()
+                except Exception as exc:
+                    if id(sink) not in failed:
+                        self.failures.append(SinkFailure(sink, exc, closing=True))
+        return batch
+
+    @property
+    def failed(self) -> bool:
+        return bool(self.failures)
+
+    def snapshot(self) -> Tally:
+        """A copy of the counters, safe to read while another thread feeds the pipeline."""
+        with self.lock:
+            return self.tally.copy()
+
+
+def run_items(
+    items: Iterable[Any],
+    pipeline: Pipeline,
+    *,
+    batch_items: int = BATCH_ITEMS,
+    after_batch: Callable[[Batch], None] | None = None,
+) -> None:
+    """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
+
+    A batch goes to the sinks every ``batch_items`` items (1 for live input such as
+    standard input, so each line shows at once); ``after_batch`` runs after each. Stops
+    early when a sink fails. An exception of the reader (Ctrl-C, unreadable input)
+    propagates without ``finish``: the caller decides whether what was read counts
+    (``decode`` of live input finishes, ``convert`` throws its output away).
+    """
+    iterator = iter(items)
+    while True:
+        chunk = list(islice(iterator, batch_items))
+        if not chunk:
+            break
+        pipeline.feed(chunk)
+        batch = pipeline.deliver()
+        if pipeline.failed:
+            break
+        if after_batch is not None:
+            after_batch(batch)
+    pipeline.finish()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time as _time
 from typing import Any
 
 from analyzer.protocol.fields import CODE_SUFFIX
@@ -21,13 +20,12 @@ from analyzer.protocol.types import (
     Event,
 )
 from analyzer.terminal_text import printable
+from analyzer.timefmt import clock_width, format_clock
 
-TIME_WIDTH = 12
 WHERE_WIDTH = 17
 TOPIC_WIDTH = 17
 LABEL_WIDTH = 16
 RAW_SHOWN = 24  # bytes of a diagnostic's raw data shown on its line
-EPOCH_THRESHOLD = 1e8  # times above this are Unix times; below, seconds from some start
 
 DIRECTION_WORDS = {TO_IDU: "gs->idu", FROM_IDU: "idu->gs"}
 
@@ -89,12 +87,9 @@ _STYLES = {
 
 
 def format_time(t: float) -> str:
-    """Local wall-clock ``HH:MM:SS.mmm`` for Unix times, else seconds with milliseconds."""
-    if t >= EPOCH_THRESHOLD:
-        whole = int(t)
-        millis = min(round((t - whole) * 1000), 999)
-        return _time.strftime("%H:%M:%S", _time.localtime(whole)) + f".{millis:03d}"
-    return f"{t:.3f}"
+    """``HH:MM:SS.mmm`` in UTC with ``Z`` (or local time with its offset, see
+    ``analyzer.timefmt``) for Unix times, else seconds with milliseconds."""
+    return format_clock(t)
 
 
 def short_source(source: str) -> str:
@@ -200,7 +195,7 @@ def render_event(event: Event, color: bool = False) -> str:
     # Every part may hold text from the input (channel names, recorded topics, text
     # messages): control characters are escaped before anything reaches the terminal.
     columns = [
-        (format_time(event.time).rjust(TIME_WIDTH), "time"),
+        (format_time(event.time).rjust(clock_width()), "time"),
         (printable(where(event)).ljust(WHERE_WIDTH), "where"),
         (printable(event.topic).ljust(TOPIC_WIDTH), "topic"),
         (printable(label(event)).ljust(LABEL_WIDTH), "diagnostic" if diagnostic else "label"),

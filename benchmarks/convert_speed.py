@@ -18,6 +18,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -88,8 +89,8 @@ def write_candump(frames: list[CanFrame], path: Path) -> None:
 
 
 def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[float, Any, str]:
-    from analyzer.mcapio.convert import convert_items
     from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.pipeline import Pipeline, run_items
 
     open_input: Any = None
     try:
@@ -106,8 +107,12 @@ def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[f
         items = frames
         how = "in-memory frames (analyzer.inputs not available: input parsing not measured)"
     sink = McapSink(out, metadata=recording_metadata("bench"), flush_interval=None)
-    result = convert_items(items, sink)
-    sink.close()
+    pipeline = Pipeline([sink])
+    run_items(items, pipeline)  # closes the sink
+    tally = pipeline.tally
+    result = SimpleNamespace(
+        messages=sink.messages_written, frames=tally.frames, events=tally.events
+    )
     return time.perf_counter() - started, result, how
 
 

@@ -13,7 +13,7 @@ from typing import Any
 import can
 import pytest
 
-from analyzer.capture import CAN_BITS_EXTENDED, Capture, CaptureError, run_until_interrupted
+from analyzer.capture import Capture, CaptureError, run_until_interrupted
 from analyzer.errors import SourceError
 from analyzer.pipeline import Batch
 from analyzer.protocol.codec import encode_command
@@ -31,6 +31,7 @@ from analyzer.protocol.types import (
     StreamChunk,
 )
 from analyzer.sources import open_source
+from analyzer.tally import CAN_BITS_EXTENDED
 
 DEADLINE_S = 5.0
 
@@ -144,7 +145,9 @@ def test_virtual_bus_command_is_decoded_and_handed_over_in_batches() -> None:
     assert commands[0].fields["name"] == "gimbal_control"
     assert commands[0].fields["pan_speed_dps"] == -5.0
     stats = capture.stats
-    assert stats.frames == 500 and stats.events == 500 and stats.bytes == 4000
+    # events count every event: the 500 commands and the link diagnostic
+    assert stats.frames == 500 and stats.events == 501 and stats.bytes == 4000
+    assert stats.diagnostics == 1
     assert stats.diagnostic_kinds.get(LINK) == 1  # the "opened" notice
     assert all(b.wall_time > 0 for b in sink.batches)
 

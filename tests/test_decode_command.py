@@ -94,7 +94,8 @@ def test_summary_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     (obj,) = [json.loads(line) for line in out.splitlines()]
     assert obj["summary"] is True
     assert obj["topics"] == {"/diagnostics": 1, "/gimbal/attitude": 1, "/gimbal/command": 2}
-    assert obj["diagnostics"] == {"bad_line": 1}
+    assert obj["diagnostics"] == 1
+    assert obj["diagnostics_by_kind"] == {"bad_line": 1}
     assert obj["input"]["frames_skipped"] == 1
     assert obj["first_time"] == T0
 

@@ -32,17 +32,18 @@ def test_finished_file_is_summarised_without_scanning(tmp_path: Path) -> None:
     assert info.duration_s == pytest.approx(items[-1].time - T0, abs=1e-6)
     rates = {t.topic: t.rate_hz for t in info.topics}
     assert rates["/gimbal/command"] == pytest.approx(counts["/gimbal/command"] / info.duration_s)
-    assert info.stats.diagnostics == Counter({"crc_mismatch": 2, "garbage": 1})
-    # Attitude every 0.5 s, none for 2 s after t=2: the longest gap is 2.5 s.
-    assert info.stats.max_gap_s == pytest.approx(2.5, abs=0.01)
-    assert info.stats.max_gap_at == pytest.approx(T0 + 1.5 + 0.013, abs=0.01)
-    assert info.stats.gaps_over_threshold == 1
-    # A scan of the two channels gives the same answer.
+    assert info.tally.kinds == Counter({"crc_mismatch": 2, "garbage": 1})
+    # Feedback every 0.25 s (attitude and ranging), none for 2 s after t=2: the longest
+    # gap is 2.25 s, from the ranging message at 1.75 s to the attitude at 4.0 s.
+    (track,) = info.tally.feedback.values()
+    assert track.longest_gap == pytest.approx(2.25, abs=0.01)
+    assert track.gap_start == pytest.approx(T0 + 1.75 + 0.013, abs=0.01)
+    assert track.gaps_over_threshold == 1
+    # A scan of the recorded frames and events gives the same figures.
     scanned = recording_info(path, scan=True)
     assert scanned.scanned_messages > 0
-    assert scanned.stats.diagnostics == info.stats.diagnostics
-    assert scanned.stats.max_gap_s == pytest.approx(info.stats.max_gap_s, abs=1e-6)
-    assert scanned.stats.attitude_count == info.stats.attitude_count
+    assert scanned.tally.figures() == info.tally.figures()
+    assert scanned.tally.items() == info.tally.items()
 
 
 def test_recovered_file_is_scanned_and_says_so(
@@ -58,7 +59,8 @@ def test_recovered_file_is_scanned_and_says_so(
     assert info.recovered
     assert "recovered" in info.recovery_note
     assert info.message_count > 0
-    assert info.stats.attitude_count == 6
+    (track,) = info.tally.feedback.values()
+    assert track.count == 12  # attitude and ranging, each every 0.5 s
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
     assert "RECOVERED" in out
@@ -75,12 +77,13 @@ def test_info_command_text_and_json(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert "/gimbal/command" in out and "foxglove.LocationFix" in out
     assert "crc_mismatch" in out
     assert "longest gap" in out
-    assert "2023-11-14 22:13:20.000 UTC" in out
+    assert "2023-11-14 22:13:20.000Z" in out
     assert main(["info", str(path), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["recovered"] is False
     assert data["diagnostics_by_kind"] == {"crc_mismatch": 2, "garbage": 1}
-    assert data["feedback"]["attitude_count"] == 8
+    assert data["feedback"]["can0"]["messages"] == 16  # attitude and ranging in 4 s
+    assert data["topics"]["/gimbal/attitude"] == 8
 
 
 def test_info_on_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

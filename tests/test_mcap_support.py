@@ -38,12 +38,14 @@ def feedback_frames(t: float, message: bytes, *, channel: str = "can0") -> list[
 def traffic(seconds: float = 4.0, *, gap_after: float | None = None) -> list[RawItem]:
     """Mixed CAN and TCP traffic: commands, feedback every 0.5 s, UAV status, faults.
 
-    ``gap_after``: attitude feedback stops for 2 s after this many seconds.
+    ``gap_after``: the gimbal's feedback (attitude and ranging) stops for 2 s after this
+    many seconds.
     """
     items: list[RawItem] = []
     steps = int(seconds / 0.05)
     for i in range(steps):
         t = T0 + i * 0.05
+        silent = gap_after is not None and gap_after <= i * 0.05 < gap_after + 2.0
         items.append(
             CanFrame(
                 t,
@@ -52,12 +54,10 @@ def traffic(seconds: float = 4.0, *, gap_after: float | None = None) -> list[Raw
                 channel="can0",
             )
         )
-        if i % 10 == 0:
-            skip = gap_after is not None and gap_after <= i * 0.05 < gap_after + 2.0
-            if not skip:
-                att = encode_attitude(pitch_deg=-10.0, yaw_deg=i * 0.5 % 360, motor_yaw_deg=3.0)
-                items.extend(feedback_frames(t + 0.01, att))
-        if i % 10 == 5:
+        if i % 10 == 0 and not silent:
+            att = encode_attitude(pitch_deg=-10.0, yaw_deg=i * 0.5 % 360, motor_yaw_deg=3.0)
+            items.extend(feedback_frames(t + 0.01, att))
+        if i % 10 == 5 and not silent:
             rng = encode_ranging(
                 distance_m=120.5, height_m=30.0, latitude_deg=31.12, longitude_deg=118.12
             )

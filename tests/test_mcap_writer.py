@@ -148,7 +148,8 @@ def test_metadata_record(tmp_path: Path) -> None:
     assert info["tool_version"] == __version__
     assert info["protocol_document"] == PROTOCOL_DOCUMENT
     stats = metadata["gimbal-analyzer.stats"]
-    assert json.loads(stats["diagnostics_by_kind"]) == {"crc_mismatch": 2, "garbage": 1}
+    figures = json.loads(stats["figures"])
+    assert figures["diagnostics_by_kind"] == {"crc_mismatch": 2, "garbage": 1}
 
 
 def test_timed_flush_puts_older_messages_on_disk(tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""Chapter 3: TCP / UART framing, the NOTES.md erratum, splits, glue and garbage."""
+"""Chapter 3: TCP / UART framing, the erratum of docs/protocol-notes.md, splits, glue and garbage."""
 
 from __future__ import annotations
 

@@ -17,6 +17,7 @@ from analyzer.protocol.ids import ALTITUDE_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE
 from analyzer.protocol.types import CRC_MISMATCH, CanFrame, Event, StreamChunk, diagnostic
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
 from analyzer.render import describe_event, format_time, render_event
+from analyzer.timefmt import clock_width, format_datetime, use_local_time
 
 T = 1_700_000_000.25
 
@@ -33,14 +34,14 @@ def command(name: str, **params: Any) -> Event:
 
 def body(line: str) -> str:
     """The line after the fixed columns."""
-    return line[12 + 1 + 17 + 1 + 17 + 1 + 16 + 1 :]
+    return line[clock_width() + 1 + 17 + 1 + 17 + 1 + 16 + 1 :]
 
 
 def test_command_line_has_aligned_columns_and_units_in_words() -> None:
     line = render_event(command("gimbal_control", pan_speed_dps=-5.0, tilt_speed_dps=0))
     assert line.startswith(format_time(T).rjust(12) + " can0 ")
-    assert line[31:48] == "/gimbal/command  "
-    assert line[49:65] == "gimbal_control  "
+    assert line[32:49] == "/gimbal/command  "
+    assert line[50:66] == "gimbal_control  "
     assert body(line) == "pan -5.00 deg/s  tilt 0.00 deg/s"
 
 
@@ -104,7 +105,7 @@ def test_stream_events_show_the_direction_and_the_client_port() -> None:
     flow = "tcp:10.0.0.5:50211-192.168.42.200:2000"
     (event,) = decode(StreamChunk(T, wrap_control(encode_command("look_down")), flow, "idu_to_gs"))
     line = render_event(event)
-    assert " tcp:50211 idu->gs " in line and line.index("/gimbal/command") == 31
+    assert " tcp:50211 idu->gs " in line and line.index("/gimbal/command") == 32
     (event,) = decode(StreamChunk(T, wrap_control(encode_command("forward")), flow + "#2", "x"))
     assert " tcp:50211#2 x " in render_event(event)
 
@@ -133,7 +134,24 @@ def test_colour_only_when_asked() -> None:
 
 def test_relative_times() -> None:
     assert format_time(12.3456) == "12.346"
-    assert format_time(T) == time.strftime("%H:%M:%S", time.localtime(int(T))) + ".250"
+    assert format_time(T) == time.strftime("%H:%M:%S", time.gmtime(int(T))) + ".250Z"
+
+
+def test_local_time_shows_its_offset(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("TZ", "Europe/Berlin")
+    time.tzset()
+    try:
+        use_local_time(True)
+        assert format_time(1_715_680_801.253) == "12:00:01.253+02:00"
+        assert len(format_time(1_715_680_801.253)) == clock_width()
+        assert format_datetime(1_715_680_801.253) == "2024-05-14 12:00:01.253+02:00"
+        assert format_time(12.3456) == "12.346"
+    finally:
+        use_local_time(False)
+        monkeypatch.delenv("TZ")
+        time.tzset()
+    assert format_datetime(1_715_680_801.253) == "2024-05-14 10:00:01.253Z"
+    assert format_datetime(1_715_680_801.9996) == "2024-05-14 10:00:02.000Z"
 
 
 @given(

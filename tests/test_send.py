@@ -59,7 +59,7 @@ def test_cansend_and_tcp_forms(capsys: pytest.CaptureFixture[str]) -> None:
     assert "cansend    00000F01#0F040CFE00000000" in out
     assert "gimbal_control pan_speed_dps=-5 tilt_speed_dps=0" in out
     assert "--repeat 50ms" in out  # the hint that gimbal_control must be repeated
-    _, out, _ = run_send(capsys, "look_down")  # the corrected frame of NOTES.md
+    _, out, _ = run_send(capsys, "look_down")  # the corrected frame of docs/protocol-notes.md
     assert (
         "TCP frame  EB 90 0A 00 00 00 00 00 00 00 00 00 40 88 0F 07 00 00 00 00 00 00 68 5E" in out
     )

@@ -11,6 +11,7 @@ from typing import IO, Any
 
 from analyzer.errors import EXIT_INTERRUPTED, UsageError
 from analyzer.mcapio.options import add_compression_argument
+from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.stdio import interrupt_name
 
 HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
@@ -71,20 +72,20 @@ class Progress:
             return max(0.0, min(1.0, position / size))
         return None
 
-    def __call__(self, result: Any) -> None:
+    def __call__(self, items: int, seconds: float) -> None:
         if not self.enabled:
             return
         now = time.monotonic()
         if now < self._next:
             return
         self._next = now + PROGRESS_INTERVAL
-        rate = result.items / result.seconds if result.seconds > 0 else 0.0
+        rate = items / seconds if seconds > 0 else 0.0
         share = self.fraction()
         bar = ""
         if share is not None:
             filled = int(share * 30)
             bar = f"{share * 100:5.1f}% [{'#' * filled}{'.' * (30 - filled)}] "
-        text = f"converting {self.name} {bar}{result.items} items ({rate:,.0f}/s)"
+        text = f"converting {self.name} {bar}{items} items ({rate:,.0f}/s)"
         self.stream.write("\r" + text + " " * max(0, self._width - len(text)))
         self._width = len(text)
         self.stream.flush()
@@ -97,7 +98,6 @@ class Progress:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
-    from analyzer.mcapio.convert import convert_items
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
 
@@ -111,7 +111,15 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
+    pipeline = Pipeline()  # before the output exists: the decoder's import takes a while
     progress = Progress(sys.stderr, args.input, source)
+    started = time.perf_counter()
+
+    def after_batch(batch: Batch) -> None:
+        if not args.quiet:
+            tally = pipeline.tally
+            progress(tally.frames + tally.chunks, time.perf_counter() - started)
+
     sink: McapSink | None = None
     finished = False
     interrupted = ""
@@ -125,8 +133,10 @@ def run(args: argparse.Namespace) -> int:
             atomic=True,
             compression=args.compression,
         )
-        result = convert_items(source, sink, progress=None if args.quiet else progress)
-        sink.close()
+        pipeline.sinks.append(sink)
+        run_items(source, pipeline, after_batch=after_batch)  # closes (commits) the sink
+        for failure in pipeline.failures:
+            raise failure.error
         finished = True
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the finally removes the partial file
         interrupted = interrupt_name(exc)
@@ -145,11 +155,14 @@ def run(args: argparse.Namespace) -> int:
     for note in getattr(source, "notes", ()):
         print(f"note: {note}", file=sys.stderr)
     if not args.quiet:
-        rate = result.items / result.seconds if result.seconds > 0 else 0.0
+        tally = pipeline.tally
+        seconds = time.perf_counter() - started
+        items = tally.frames + tally.chunks
+        rate = items / seconds if seconds > 0 else 0.0
         print(
-            f"converted {result.frames} CAN frames and {result.chunks} stream chunks "
-            f"({result.events} events, {result.diagnostics} diagnostics) to {target} "
-            f"in {result.seconds:.1f} s ({rate:,.0f} items/s)",
+            f"converted {tally.frames} CAN frames and {tally.chunks} stream chunks "
+            f"({tally.events} events, {tally.diagnostics} diagnostics) to {target} "
+            f"in {seconds:.1f} s ({rate:,.0f} items/s)",
             file=sys.stderr,
         )
     return 0

@@ -41,7 +41,6 @@ event, whatever the filters.
 """
 
 PROGRESS_INTERVAL_S = 0.2
-PROGRESS_EVERY_ITEMS = 2048
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -92,11 +91,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+class LinePrinter:
+    """Sink writing the events of each batch that pass the filter, as lines or JSON lines."""
+
+    def __init__(
+        self,
+        out: IO[str],
+        render: Callable[[Any], str],
+        wanted: Callable[[Any], bool] | None,
+        *,
+        flush_each: bool,
+    ) -> None:
+        self.out = out
+        self.render = render
+        self.wanted = wanted
+        self.flush_each = flush_each  # live input: every batch is shown at once
+
+    def handle(self, batch: Any) -> None:
+        render, wanted = self.render, self.wanted
+        if wanted is None:
+            lines = [render(event) for event in batch.events]
+        else:
+            lines = [render(event) for event in batch.events if wanted(event)]
+        _write(self.out, lines, flush=self.flush_each)
+
+    def close(self) -> None:
+        self.out.flush()
+
+
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
-    from analyzer.protocol.decoder import Decoder
+    from analyzer.pipeline import Batch, Pipeline, default_decoder, run_items
     from analyzer.protocol.ids import PROTOCOL_IDS
-    from analyzer.protocol.types import CanFrame, StreamChunk
     from analyzer.summary import Summary
 
     if not 0 < args.port < 65536:
@@ -112,61 +138,40 @@ def run(args: argparse.Namespace) -> int:
         stored=args.stored,
     )
     live = args.file == "-"
-    decoder = Decoder(emit_other=args.raw)
-    summary = Summary(args.file, reader.format_name) if args.summary else None
     # With --summary only the summary is printed (as one JSON object with --json).
-    printer = None if args.summary else make_printer(args.json, color)
+    sinks = []
+    if not args.summary:
+        printer = make_printer(args.json, color)
+        sinks.append(LinePrinter(out, printer, wanted, flush_each=live))
+    pipeline = Pipeline(sinks, decoder=default_decoder(emit_other=args.raw))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
 
-    counts = {"events": 0, "diagnostics": 0}
-    lines: list[str] = []
+    def after_batch(batch: Batch) -> None:
+        if progress is not None:
+            progress.update()
 
-    def handle(events: list[Any]) -> None:
-        for event in events:
-            counts["events"] += 1
-            if event.topic == "/diagnostics":
-                counts["diagnostics"] += 1
-            if summary is not None:
-                summary.add(event)
-            if printer is not None and (wanted is None or wanted(event)):
-                lines.append(printer(event))
-
-    feed_can = decoder.feed_can
-    feed_stream = decoder.feed_stream
-    seen = 0
     interrupted = False
-    items: Any = reader  # CanFrame | StreamChunk | Event, dispatched on the exact type
     try:
         try:
-            for item in items:
-                kind = type(item)
-                if kind is CanFrame:
-                    events = feed_can(item)
-                elif kind is StreamChunk:
-                    events = feed_stream(item)
-                else:
-                    events = [item]
-                if events:
-                    handle(events)
-                    if lines and (live or len(lines) >= 512):
-                        _write(out, lines, flush=live)
-                seen += 1
-                if progress is not None and not seen % PROGRESS_EVERY_ITEMS:
-                    progress.update()
+            run_items(reader, pipeline, batch_items=1 if live else 2048, after_batch=after_batch)
         except KeyboardInterrupt:
             if not live:
                 raise
             interrupted = True  # Ctrl-C ends live input: finish as at its end
-        handle(decoder.close())
-        _write(out, lines, flush=True)
+            pipeline.finish()
     finally:
         if progress is not None:
             progress.clear()
         reader.close()
-    if summary is not None:
+    for failure in pipeline.failures:
+        raise failure.error
+    decoder_stats: dict[str, int] = getattr(pipeline.decoder, "stats", {})
+    tally = pipeline.tally
+    if args.summary:
+        summary = Summary(args.file, reader.format_name, tally)
         summary.finish(
             input_stats=reader.stats,
-            decoder_stats=decoder.stats,
+            decoder_stats=decoder_stats,
             first_time=reader.first_time,
             last_time=reader.last_time,
         )
@@ -177,10 +182,9 @@ def run(args: argparse.Namespace) -> int:
         out.flush()
     elif sys.stderr.isatty() and not live:
         sys.stderr.write(
-            f"{counts['events']:,} events ({counts['diagnostics']:,} diagnostics) "
-            f"from {args.file}\n"
+            f"{tally.events:,} events ({tally.diagnostics:,} diagnostics) from {args.file}\n"
         )
-    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder.stats, args.raw)]:
+    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw)]:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0
 

@@ -6,7 +6,6 @@ import argparse
 import contextlib
 import sys
 import threading
-import time
 from pathlib import Path
 from typing import IO, Any
 
@@ -127,9 +126,9 @@ def _renderer() -> Any:
 
 def _plain(event: Event) -> str:
     from analyzer.sim.engine import describe_command, format_fields
+    from analyzer.timefmt import format_clock
 
-    clock = time.strftime("%H:%M:%S", time.localtime(event.time))
-    stamp = f"{clock}.{int(event.time % 1 * 1000):03d}"
+    stamp = format_clock(event.time)
     if event.topic == TOPIC_COMMAND:
         text = describe_command(event.fields)
     else:

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from typing import TYPE_CHECKING
 
+from analyzer.summary import crc_line, event_lines, feedback_lines
 from analyzer.terminal_text import printable
+from analyzer.timefmt import format_datetime
 
 if TYPE_CHECKING:
     from analyzer.mcapio.info import RecordingInfo
@@ -15,8 +16,10 @@ if TYPE_CHECKING:
 HELP = "summarise an MCAP recording: duration, counts and rates per topic, diagnostics, gaps"
 DESCRIPTION = """\
 Show what an MCAP recording holds: time range and duration, messages and rate
-per topic, diagnostics by kind and the longest gap in the gimbal's attitude
-feedback (sent every 500 ms, so gaps over 1 s mean lost messages).
+per topic, and the figures `decode --summary` gives for the same input: events,
+diagnostics by kind, the gimbal's feedback rate and longest gap (it answers
+every 500 ms, so gaps over 1 s mean lost messages) and the CRC error rate.
+Times are UTC (Z); --local-time shows local time with its offset.
 
 A finished recording is summarised from its MCAP summary and the stats record
 written at the end, without reading the messages. A recording whose recorder
@@ -28,8 +31,6 @@ the file was recovered.
   gimbal-analyzer info flight.mcap --scan     recount diagnostics and gaps from the messages
 """
 
-_EPOCH_2000 = 946_684_800.0
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recording", help="MCAP file")
@@ -37,19 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--scan",
         action="store_true",
-        help="scan /diagnostics and /gimbal/attitude even when the stats record exists",
+        help="count the recorded frames and events again even when the stats record exists",
     )
-
-
-def format_time(seconds: float) -> str:
-    """Unix times as UTC date and time; small values (relative logs) as seconds."""
-    if seconds < _EPOCH_2000:
-        return f"{seconds:.3f} s"
-    whole = int(seconds)
-    millis = round((seconds - whole) * 1000)
-    if millis == 1000:
-        whole, millis = whole + 1, 0
-    return time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(whole)) + f".{millis:03d} UTC"
 
 
 def _size(n: int) -> str:
@@ -79,7 +69,8 @@ def render(info: RecordingInfo) -> str:
         lines.append("time range  (no messages)")
     else:
         lines.append(
-            f"time range  {format_time(info.start_ns / 1e9)} .. {format_time(info.end_ns / 1e9)}"
+            f"time range  {format_datetime(info.start_ns / 1e9)} .. "
+            f"{format_datetime(info.end_ns / 1e9)}"
         )
         lines.append(f"duration    {info.duration_s:.3f} s")
     lines.append(f"messages    {info.message_count}, counts from {info.counts_from}")
@@ -91,23 +82,10 @@ def render(info: RecordingInfo) -> str:
             rate = "-" if t.rate_hz is None else f"{t.rate_hz:.2f}"
             lines.append(f"  {t.topic:<{width}}  {t.count:>9}  {rate:>9}  {t.schema}")
     lines.append("")
-    stats = info.stats
-    lines.append(f"diagnostics by kind, from {info.stats_from}:")
-    if stats.diagnostics:
-        for kind, n in sorted(stats.diagnostics.items(), key=lambda kv: (-kv[1], kv[0])):
-            lines.append(f"  {kind:<20} {n:>9}")
-    else:
-        lines.append("  none")
-    if stats.attitude_count == 0:
-        lines.append("feedback    no /gimbal/attitude messages")
-    elif stats.attitude_count == 1 or stats.max_gap_at is None:
-        lines.append("feedback    1 /gimbal/attitude message (no gap to measure)")
-    else:
-        lines.append(
-            f"feedback    {stats.attitude_count} /gimbal/attitude messages; longest gap "
-            f"{stats.max_gap_s:.3f} s after {format_time(stats.max_gap_at)}; "
-            f"{stats.gaps_over_threshold} gap(s) over 1 s"
-        )
+    lines.append(f"figures of the run, from {info.stats_from}:")
+    lines.extend(event_lines(info.tally))
+    lines.extend(feedback_lines(info.tally))
+    lines.append(crc_line(info.tally))
     # Paths, metadata, topics and kinds come from the file: no raw control characters.
     return "\n".join(printable(line) for line in lines)
 

@@ -1,4 +1,4 @@
-"""Summary of a recording: time range, counts and rates per topic, diagnostics, feedback gaps."""
+"""What a recording holds: time range, counts and rates per topic, and the run's figures."""
 
 from __future__ import annotations
 
@@ -9,13 +9,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.feedback_track import GAP_THRESHOLD_S
-from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME
-from analyzer.mcapio.reader import RawMessage, Recording, channel_role
-from analyzer.mcapio.stats import EventStats
-from analyzer.protocol.types import TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+from analyzer.mcapio.channels import METADATA_NAME, ROLE_EVENT, ROLE_RAW, STATS_METADATA_NAME
+from analyzer.mcapio.reader import RawMessage, Recording, channel_role, raw_item
+from analyzer.protocol.types import Event
+from analyzer.tally import Tally
 
-SCANNED_TOPICS = (TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE)
+SCANNED_ROLES = {ROLE_RAW, ROLE_EVENT}  # everything but the Foxglove views
 
 
 @dataclass
@@ -38,7 +37,7 @@ class RecordingInfo:
     message_count: int
     topics: list[TopicInfo]
     metadata: dict[str, str]
-    stats: EventStats
+    tally: Tally  # the figures of the run that made the recording (analyzer.tally)
     # Where counts and stats came from: "summary", or which messages had to be scanned.
     counts_from: str
     stats_from: str
@@ -52,7 +51,6 @@ class RecordingInfo:
         return (self.end_ns - self.start_ns) / 1e9
 
     def to_dict(self) -> dict[str, Any]:
-        stats = self.stats
         return {
             "path": self.path,
             "size_bytes": self.size_bytes,
@@ -64,34 +62,44 @@ class RecordingInfo:
             "message_count": self.message_count,
             "topics": [vars(t) for t in self.topics],
             "metadata": self.metadata,
-            "diagnostics_by_kind": dict(sorted(stats.diagnostics.items())),
-            "feedback": {
-                "attitude_count": stats.attitude_count,
-                "max_gap_s": stats.max_gap_s if stats.attitude_count > 1 else None,
-                "max_gap_at": stats.max_gap_at,
-                "gap_threshold_s": GAP_THRESHOLD_S,
-                "gaps_over_threshold": stats.gaps_over_threshold,
-            },
+            **self.tally.figures(),
+            "input": self.tally.items(),
             "counts_from": self.counts_from,
             "stats_from": self.stats_from,
             "scanned_messages": self.scanned_messages,
         }
 
 
-def _kind(data: bytes) -> str:
+def _fold(tally: Tally, message: RawMessage) -> None:
+    """Count one recorded message: a raw frame / chunk, or an event (as recorded)."""
     try:
-        obj = json.loads(data)
-        return str(obj.get("kind", "unknown")) if isinstance(obj, dict) else "unknown"
+        obj = json.loads(message.data)
     except ValueError:
-        return "unknown"
+        return
+    if message.role == ROLE_RAW:
+        try:
+            item = raw_item(message.topic, obj)
+        except (KeyError, TypeError, ValueError):
+            return  # not one of ours
+        if item is not None:
+            tally.add_items((item,))
+        return
+    if not isinstance(obj, dict):
+        return
+    obj.setdefault("topic", message.topic)
+    obj.setdefault("time", message.log_time / 1e9)
+    try:
+        tally.add_events((Event.from_dict(obj),))
+    except (KeyError, TypeError, ValueError):
+        return
 
 
 def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> RecordingInfo:
     """Summarise a recording.
 
     A finished file is summarised from its MCAP summary (statistics, channels) and the stats
-    record the writer adds at the end: no message is read. Without that record, or with
-    ``scan``, only the /diagnostics and /gimbal/attitude channels are scanned. A recovered
+    record the writer adds at the end (the run's tally): no message is read. Without that
+    record, or with ``scan``, the raw and event channels are read and counted again. A recovered
     (unfinished) file has no summary: its readable part is scanned once, sequentially.
     """
     recording = Recording(path)
@@ -129,29 +137,26 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
         message_count=statistics.message_count,
         topics=topics,
         metadata=base,
-        stats=EventStats(),
+        tally=Tally(),
         counts_from="summary",
         stats_from="",
     )
     stored = metadata.get(STATS_METADATA_NAME)
     if stored is not None and not scan:
         try:
-            info.stats = EventStats.from_metadata(stored)
+            info.tally = Tally.from_metadata(stored)
             info.stats_from = "the stats record written at the end, no scan"
             return info
         except (ValueError, KeyError, TypeError):
             pass
-    stats = EventStats()
+    tally = Tally()
     scanned = 0
-    for message in recording.messages(topics=set(SCANNED_TOPICS)):
+    for message in recording.messages(roles=SCANNED_ROLES):
         scanned += 1
-        if message.topic == TOPIC_DIAGNOSTICS:
-            stats.diagnostics[_kind(message.data)] += 1
-        else:
-            stats.feedback.add(message.log_time / 1e9)
-    info.stats = stats
+        _fold(tally, message)
+    info.tally = tally
     info.scanned_messages = scanned
-    info.stats_from = f"a scan of {' and '.join(SCANNED_TOPICS)} only, {scanned} messages"
+    info.stats_from = f"a scan of the recorded frames and events, {scanned} messages"
     return info
 
 
@@ -171,17 +176,15 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         elif log_time > span[1]:
             span[1] = log_time
 
-    stats = EventStats()
-    content = set(SCANNED_TOPICS)
+    figures = Tally()
     if recording.recovered:
-        messages = recording.messages(topics=content, tally=tally)
+        messages = recording.messages(roles=SCANNED_ROLES, tally=tally)
     else:  # a finished file without statistics: count while reading everything
-        messages = (m for m in recording.messages() if _tallied(tally, m) and m.topic in content)
+        messages = (
+            m for m in recording.messages() if _tallied(tally, m) and m.role in SCANNED_ROLES
+        )
     for message in messages:
-        if message.topic == TOPIC_DIAGNOSTICS:
-            stats.diagnostics[_kind(message.data)] += 1
-        else:
-            stats.feedback.add(message.log_time / 1e9)
+        _fold(figures, message)
     scanned = sum(counts.values())
     start = min((span[0] for span in times.values()), default=None)
     end = max((span[1] for span in times.values()), default=None)
@@ -207,7 +210,7 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         message_count=scanned,
         topics=topics,
         metadata=base,
-        stats=stats,
+        tally=figures,
         counts_from=f"a full sequential scan: {why}",
         stats_from=f"the same scan: {why}",
         scanned_messages=scanned,

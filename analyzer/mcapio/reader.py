@@ -416,7 +416,7 @@ class Recording:
         """Raw CAN frames and stream chunks, for decoding again."""
         for message in self.messages(topics=set(RAW_TOPICS), roles={ROLE_RAW}):
             try:
-                item = _raw_item(message.topic, json.loads(message.data))
+                item = raw_item(message.topic, json.loads(message.data))
             except (ValueError, KeyError, TypeError):
                 continue  # not one of ours: nothing to decode
             if item is not None:
@@ -429,7 +429,7 @@ class Recording:
         for message in self.messages(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
             try:
                 obj = json.loads(message.data)
-                item = _raw_item(message.topic, obj)
+                item = raw_item(message.topic, obj)
                 if item is not None:
                     yield item
                 elif isinstance(obj, dict) and obj.get("kind") in SOURCE_KINDS:
@@ -507,7 +507,7 @@ class RecordingIterator(Generic[T]):
         return self.recording.recovery_note
 
 
-def _raw_item(topic: str, obj: Any) -> RawItem | None:
+def raw_item(topic: str, obj: Any) -> RawItem | None:
     """The frame or chunk of a raw-channel message (None for other topics)."""
     if topic == TOPIC_CAN_FRAMES:
         return can_frame_from_dict(obj)

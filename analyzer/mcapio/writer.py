@@ -35,10 +35,10 @@ from analyzer.mcapio.channels import (
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
 from analyzer.mcapio.options import DEFAULT_COMPRESSION
-from analyzer.mcapio.stats import EventStats
 from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import CanFrame, Event
+from analyzer.tally import Tally
 
 # Small chunks: a crash loses at most the chunk being built, and the time-based flush
 # closes chunks long before they fill up in live use.
@@ -121,7 +121,7 @@ class McapSink:
         self.error_reason: str | None = None  # just the reason ("No space left on device")
         self.kept_messages = 0  # after a write error: messages the file still holds
         self.kept_until: float | None = None  # ... and the newest log time among them
-        self.stats = EventStats()
+        self.tally = Tally()  # the run's figures, written as a metadata record at the end
         self.items_written = 0
         self.events_written = 0
         self.messages_written = 0
@@ -230,7 +230,7 @@ class McapSink:
                 self._raise_pending()
                 return
             try:
-                self._writer.add_metadata(STATS_METADATA_NAME, self.stats.to_metadata())
+                self._writer.add_metadata(STATS_METADATA_NAME, self.tally.to_metadata())
                 self._writer.finish()
                 os.fsync(self._file.fileno())
             except OSError as exc:
@@ -323,6 +323,7 @@ class McapSink:
             add(channel_id, log_time, data, log_time, number)
             self.messages_written += 1
             self.items_written += 1
+        self.tally.add_items(items)
         if items:
             self._dirty = True
             self.last_time = items[-1].time
@@ -341,7 +342,6 @@ class McapSink:
             add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
             self.messages_written += 1
             self.events_written += 1
-            self.stats.add(topic, event.time, str(event.fields.get("kind", "unknown")))
             if views is not None and topic in VIEW_INPUT_TOPICS:
                 for view_topic, message in views.views(event):
                     view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
@@ -349,6 +349,7 @@ class McapSink:
                     sequence[view_id] = number
                     add(view_id, log_time, _ENCODE(message).encode(), log_time, number)
                     self.messages_written += 1
+        self.tally.add_events(events)
         if events:
             self._dirty = True
             self.last_time = events[-1].time
@@ -408,7 +409,7 @@ class McapSink:
             os.ftruncate(fd, good)
             os.lseek(fd, good, os.SEEK_SET)
             if writer.message_count:
-                writer.add_metadata(STATS_METADATA_NAME, self.stats.to_metadata())
+                writer.add_metadata(STATS_METADATA_NAME, self.tally.to_metadata())
                 writer.finish()
             os.fsync(fd)
         except OSError:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analyzer import render
+from analyzer import render, timefmt
 from analyzer.protocol.types import (
     TO_IDU,
     Event,
@@ -10,8 +10,9 @@ from analyzer.protocol.types import (
 
 
 def format_time(t: float) -> str:
-    """Wall-clock HH:MM:SS.mmm for Unix times, seconds for relative times, 12 cells wide."""
-    return render.format_time(t).rjust(12)
+    """Wall-clock HH:MM:SS.mmm (UTC with Z, or local time with its offset; the one time
+    rule of ``analyzer.timefmt``) for Unix times, seconds for relative times."""
+    return render.format_time(t).rjust(timefmt.clock_width())
 
 
 def _age(age: float, units: tuple[str, str, str]) -> str:

@@ -1,0 +1,293 @@
+"""The one set of counters of a run: what every command reports about the same input.
+
+Raw items (frames, chunks, bytes) and events (per topic, diagnostic kind, command),
+the gimbal's feedback timing (rate, longest gap, gaps over a limit) and the CRC
+error rate are defined here once. ``decode --summary``, ``convert``, ``record``,
+``demo``, the monitor and ``info`` (from the record an MCAP sink writes at the end,
+or from a scan of the recorded events) all read these figures.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from analyzer.protocol.types import (
+    CRC_MISMATCH,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+    TOPIC_GIMBAL_RANGING,
+    CanFrame,
+    Event,
+    StreamChunk,
+)
+
+# The gimbal answers with one feedback message (attitude or ranging) about every 500 ms.
+EXPECTED_FEEDBACK_HZ = 2.0
+FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
+FEEDBACK_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING})
+# A silence longer than this means feedback messages were lost.
+GAP_THRESHOLD_S = 1.0
+# Bits of a CAN 2.0 frame without stuffing, besides the data: SOF, arbitration, control,
+# CRC, ACK, EOF and the 3-bit intermission (131 bits for an extended 8-byte frame).
+CAN_BITS_EXTENDED = 67
+CAN_BITS_STANDARD = 47
+
+_US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie exactly
+
+
+@dataclass
+class FeedbackTrack:
+    """The feedback messages of one stream (source and direction), one time at a time.
+
+    The longest gap is the first of the longest silences between two messages; times are
+    compared in whole microseconds, so a recording (nanosecond times) and the file it was
+    made from name the same gap.
+    """
+
+    count: int = 0
+    first: float | None = None
+    last: float | None = None
+    longest_gap: float = 0.0
+    gap_start: float | None = None  # the message before the longest gap
+    gap_end: float | None = None  # the message that ended it
+    gaps_over_threshold: int = 0
+    _longest_us: int = field(default=0, repr=False)
+
+    def add(self, t: float) -> None:
+        last = self.last
+        if last is None:
+            self.first = t
+        else:
+            gap_us = round(t * _US) - round(last * _US)
+            if gap_us > self._longest_us:
+                self._longest_us = gap_us
+                self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
+            if gap_us > GAP_THRESHOLD_S * _US:
+                self.gaps_over_threshold += 1
+        self.count += 1
+        self.last = t
+
+    @property
+    def rate_hz(self) -> float | None:
+        if self.count < 2 or self.first is None or self.last is None:
+            return None
+        span = self.last - self.first
+        return (self.count - 1) / span if span > 0 else None
+
+    def figures(self) -> dict[str, Any]:
+        """JSON-ready figures (rounded to microseconds)."""
+        gap = self.count > 1
+        return {
+            "messages": self.count,
+            "first": self.first,
+            "last": self.last,
+            "rate_hz": _round(self.rate_hz),
+            "expected_hz": EXPECTED_FEEDBACK_HZ,
+            "longest_gap_s": round(self.longest_gap, 6) if gap else None,
+            "longest_gap_start": self.gap_start if gap else None,
+            "longest_gap_end": self.gap_end if gap else None,
+            "gap_threshold_s": GAP_THRESHOLD_S,
+            "gaps_over_threshold": self.gaps_over_threshold,
+        }
+
+    @classmethod
+    def from_figures(cls, data: dict[str, Any]) -> FeedbackTrack:
+        gap = data.get("longest_gap_s")
+        track = cls(
+            count=int(data["messages"]),
+            first=_opt_float(data.get("first")),
+            last=_opt_float(data.get("last")),
+            longest_gap=float(gap or 0.0),
+            gap_start=_opt_float(data.get("longest_gap_start")),
+            gap_end=_opt_float(data.get("longest_gap_end")),
+            gaps_over_threshold=int(data.get("gaps_over_threshold", 0)),
+        )
+        track._longest_us = round(track.longest_gap * _US)
+        return track
+
+
+@dataclass
+class Tally:
+    """Counters of raw items and events, folded one batch at a time."""
+
+    frames: int = 0
+    chunks: int = 0
+    bytes: int = 0
+    bits: int = 0  # CAN bits on the wire without stuffing (for the bus load)
+    events: int = 0  # every event, diagnostics included
+    diagnostics: int = 0
+    with_warnings: int = 0
+    topics: Counter[str] = field(default_factory=Counter)
+    kinds: Counter[str] = field(default_factory=Counter)
+    commands: Counter[str] = field(default_factory=Counter)
+    feedback: dict[str, FeedbackTrack] = field(default_factory=dict)
+    crc_checked: int = 0  # messages whose CRC was checked and matched
+    crc_errors: int = 0
+    first_time: float | None = None
+    last_time: float | None = None
+
+    # -- folding -----------------------------------------------------------------------------
+
+    def add_items(self, items: Iterable[CanFrame | StreamChunk]) -> None:
+        """Count raw CAN frames / stream chunks (and widen the time span)."""
+        frames = chunks = size = bits = 0
+        first = last = None
+        for item in items:
+            n = len(item.data)
+            size += n
+            if type(item) is CanFrame:
+                frames += 1
+                bits += (CAN_BITS_EXTENDED if item.extended else CAN_BITS_STANDARD) + 8 * n
+            else:
+                chunks += 1
+            if first is None:
+                first = item.time
+            last = item.time
+        self.frames += frames
+        self.chunks += chunks
+        self.bytes += size
+        self.bits += bits
+        if first is not None and last is not None:
+            self.widen(min(first, last), max(first, last))
+
+    def add_events(self, events: Iterable[Event]) -> None:
+        """Count events: per topic, diagnostic kind and command; feedback timing; CRCs."""
+        topics = self.topics
+        first, last = self.first_time, self.last_time
+        for event in events:
+            self.events += 1
+            topic = event.topic
+            topics[topic] += 1
+            t = event.time
+            if first is None or t < first:
+                first = t
+            if last is None or t > last:
+                last = t
+            if event.warnings:
+                self.with_warnings += 1
+            fields = event.fields
+            if topic == TOPIC_DIAGNOSTICS:
+                self.diagnostics += 1
+                kind = str(fields.get("kind", "unknown"))
+                self.kinds[kind] += 1
+                if kind == CRC_MISMATCH:
+                    self.crc_errors += 1
+                continue
+            if topic == TOPIC_COMMAND:
+                self.commands[str(fields.get("name", "unknown"))] += 1
+            if topic in FEEDBACK_TOPICS:
+                key = event.source
+                direction = fields.get("direction")
+                if direction:
+                    key = f"{key} {direction}"
+                track = self.feedback.get(key)
+                if track is None:
+                    track = self.feedback[key] = FeedbackTrack()
+                track.add(t)
+                self.crc_checked += 1
+            elif fields.get("transport") == "stream" and fields.get("crc_set", True):
+                self.crc_checked += 1
+        self.first_time, self.last_time = first, last
+
+    def widen(self, first: float | None, last: float | None) -> None:
+        """Take a time span the input saw (frames the reader skipped, for instance) into account."""
+        if first is not None and (self.first_time is None or first < self.first_time):
+            self.first_time = first
+        if last is not None and (self.last_time is None or last > self.last_time):
+            self.last_time = last
+
+    # -- figures -----------------------------------------------------------------------------
+
+    @property
+    def span(self) -> float:
+        if self.first_time is None or self.last_time is None:
+            return 0.0
+        return self.last_time - self.first_time
+
+    @property
+    def crc_error_rate(self) -> float | None:
+        total = self.crc_checked + self.crc_errors
+        return self.crc_errors / total if total else None
+
+    def figures(self) -> dict[str, Any]:
+        """The figures every command reports, JSON-ready, under the same keys everywhere."""
+        return {
+            "events": self.events,
+            "diagnostics": self.diagnostics,
+            "events_with_warnings": self.with_warnings,
+            "topics": dict(sorted(self.topics.items())),
+            "diagnostics_by_kind": dict(sorted(self.kinds.items())),
+            "commands": dict(sorted(self.commands.items())),
+            "feedback": {k: t.figures() for k, t in sorted(self.feedback.items())},
+            "crc_checked": self.crc_checked,
+            "crc_errors": self.crc_errors,
+            "crc_error_rate": _round(self.crc_error_rate),
+        }
+
+    def items(self) -> dict[str, int]:
+        """Raw item counters."""
+        return {"frames": self.frames, "chunks": self.chunks, "bytes": self.bytes}
+
+    def copy(self) -> Tally:
+        """An independent snapshot."""
+        twin = Tally(**{k: v for k, v in asdict(self).items() if k != "feedback"})
+        twin.topics, twin.kinds = Counter(self.topics), Counter(self.kinds)
+        twin.commands = Counter(self.commands)
+        twin.feedback = {
+            k: FeedbackTrack.from_figures(t.figures()) for k, t in self.feedback.items()
+        }
+        return twin
+
+    # -- as an MCAP metadata record ----------------------------------------------------------
+
+    def to_metadata(self) -> dict[str, str]:
+        """String values only, as MCAP metadata wants them."""
+        return {
+            "format": "tally/1",
+            "figures": json.dumps(self.figures(), sort_keys=True),
+            "items": json.dumps(self.items()),
+            "first_time": "" if self.first_time is None else repr(self.first_time),
+            "last_time": "" if self.last_time is None else repr(self.last_time),
+        }
+
+    @classmethod
+    def from_metadata(cls, data: dict[str, str]) -> Tally:
+        """Inverse of to_metadata; ValueError / KeyError / TypeError on a malformed record."""
+        if data.get("format") != "tally/1":
+            raise ValueError("not a tally record")
+        figures = json.loads(data["figures"])
+        items = json.loads(data["items"])
+        tally = cls(
+            frames=int(items["frames"]),
+            chunks=int(items["chunks"]),
+            bytes=int(items["bytes"]),
+            events=int(figures["events"]),
+            diagnostics=int(figures["diagnostics"]),
+            with_warnings=int(figures["events_with_warnings"]),
+            topics=Counter({str(k): int(v) for k, v in figures["topics"].items()}),
+            kinds=Counter({str(k): int(v) for k, v in figures["diagnostics_by_kind"].items()}),
+            commands=Counter({str(k): int(v) for k, v in figures["commands"].items()}),
+            feedback={
+                str(k): FeedbackTrack.from_figures(v) for k, v in figures["feedback"].items()
+            },
+            crc_checked=int(figures["crc_checked"]),
+            crc_errors=int(figures["crc_errors"]),
+            first_time=_opt_float(data.get("first_time")),
+            last_time=_opt_float(data.get("last_time")),
+        )
+        return tally
+
+
+def _round(value: float | None) -> float | None:
+    return None if value is None else round(value, 6)
+
+
+def _opt_float(value: Any) -> float | None:
+    if value is None or value == "":
+        return None
+    return float(value)

@@ -1,0 +1,127 @@
+"""The pipeline every command runs: decode, stages, one tally, sinks; and its file driver."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from analyzer.mcapio.reader import read_events, read_items
+from analyzer.mcapio.writer import McapSink
+from analyzer.pipeline import Batch, Pipeline, run_items
+from analyzer.protocol.types import BAD_LINE, TOPIC_COMMAND, Event, diagnostic
+from tests.test_mcap_support import decode_all, event_dicts, traffic
+
+
+class Collect:
+    def __init__(self) -> None:
+        self.batches: list[Batch] = []
+        self.closed = False
+
+    def handle(self, batch: Batch) -> None:
+        self.batches.append(batch)
+
+    def close(self) -> None:
+        self.closed = True
+
+
+class CountCommands:
+    """A stage: one finding per batch that held commands, one more at the end."""
+
+    def __init__(self) -> None:
+        self.seen = 0
+
+    def process(self, events: list[Event]) -> list[Event]:
+        commands = [e for e in events if e.topic == TOPIC_COMMAND]
+        self.seen += len(commands)
+        if not commands:
+            return []
+        return [Event("/analysis/finding", commands[-1].time, "test", {"n": len(commands)})]
+
+    def close(self) -> list[Event]:
+        return [Event("/analysis/finding", 0.0, "test", {"total": self.seen})]
+
+
+class Broken:
+    def handle(self, batch: Batch) -> None:
+        raise OSError(28, "No space left on device")
+
+    def close(self) -> None:
+        pass
+
+
+def test_items_and_passed_through_events_are_written(tmp_path: Path) -> None:
+    path = tmp_path / "out.mcap"
+    items = traffic(30.0)
+    bad = diagnostic(items[3].time, "log", BAD_LINE, "line 4: not a candump line", b"??")
+    stream = [*items[:3], bad, *items[3:]]
+    seen: list[int] = []
+    sink = McapSink(path, metadata={"source": "t"}, flush_interval=None)
+    pipeline = Pipeline([sink])
+    run_items(
+        stream,
+        pipeline,
+        batch_items=100,
+        after_batch=lambda b: seen.append(pipeline.tally.frames + pipeline.tally.chunks),
+    )
+    assert sink.closed
+    tally = pipeline.tally
+    assert tally.frames + tally.chunks == len(items)
+    assert seen and seen[-1] == len(items) and seen == sorted(seen)
+    assert list(read_items(path)) == items
+    stored = event_dicts(list(read_events(path)))
+    # in time order: a diagnostic found late (end of input) comes back in its place
+    expected = event_dicts(sorted(decode_all(items), key=lambda e: e.time))
+    assert [e for e in stored if e.get("kind") != BAD_LINE] == expected
+    assert [e["detail"] for e in stored if e.get("kind") == BAD_LINE] == [bad.fields["detail"]]
+    assert tally.events == len(stored)
+    # The sink counted what it wrote with the same tally as the pipeline.
+    assert sink.tally.figures() == tally.figures()
+
+
+def test_a_stage_adds_events_that_sinks_and_tally_see() -> None:
+    items = traffic(10.0)
+    sink = Collect()
+    stage = CountCommands()
+    pipeline = Pipeline([sink], stages=[stage])
+    run_items(items, pipeline, batch_items=50)
+    events = [e for b in sink.batches for e in b.events]
+    findings = [e for e in events if e.topic == "/analysis/finding"]
+    commands = sum(1 for e in events if e.topic == TOPIC_COMMAND)
+    assert commands and stage.seen == commands
+    assert findings[-1].fields == {"total": commands}
+    assert sum(f.fields.get("n", 0) for f in findings) == commands
+    assert pipeline.tally.topics["/analysis/finding"] == len(findings)
+    assert pipeline.tally.events == len(events)
+    assert sink.closed
+
+
+def test_a_failing_sink_stops_the_file_run_and_the_others_are_closed() -> None:
+    good = Collect()
+    broken = Broken()
+    pipeline = Pipeline([broken, good])
+    run_items(traffic(30.0), pipeline, batch_items=10)
+    assert len(pipeline.failures) == 1
+    assert pipeline.failures[0].sink is broken
+    assert isinstance(pipeline.failures[0].error, OSError)
+    assert good.closed and len(good.batches) == 2  # the first batch and the last one
+
+
+def test_an_interrupt_leaves_finishing_to_the_caller_and_finish_runs_once() -> None:
+    sink = Collect()
+    pipeline = Pipeline([sink])
+
+    def items() -> Iterator[Any]:
+        yield from traffic(2.0)[:5]
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_items(items(), pipeline, batch_items=1)
+    assert not sink.closed and not pipeline.finished
+    pipeline.finish()
+    assert sink.closed and pipeline.finished
+    assert pipeline.tally.frames + pipeline.tally.chunks == 5
+    pipeline.finish()
+    assert pipeline.tally.frames + pipeline.tally.chunks == 5
