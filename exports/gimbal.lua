@@ -252,7 +252,10 @@ local function dissect_can_frame(tree, tvb, offset)
     end
     tree:add(pf.can_data, tvb(data, 8))
     if can_id == TEXT_ID or can_id == TEXT_END_ID then
-        local text = tvb(data, 8):stringz()
+        -- ASCII without the zero padding; anything else shown as \xHH
+        local text = tvb(data, 8):raw():gsub("%z", ""):gsub("[^%g ]", function(c)
+            return string.format("\\x%02X", c:byte())
+        end)
         tree:add(pf.text, tvb(data, 8), text)
         return "text \"" .. text .. "\""
     end
@@ -268,17 +271,21 @@ local function dissect_feedback(tree, tvb, offset, layout)
     return layout.name .. " " .. table.concat(summary, " ")
 end
 
+local function add_direction(tree, pinfo)
+    if pinfo.dst_port == gimbal.prefs.port then
+        tree:add(pf.direction, "gs_to_idu"):set_generated()
+    else
+        tree:add(pf.direction, "idu_to_gs"):set_generated()
+    end
+end
+
 -- One frame of `size` bytes at `offset`, CRC already known; returns its summary.
 local function dissect_frame(root, tvb, pinfo, offset, size, crc_state)
     local frame_type = tvb(offset + 2, 1):uint()
     local tree = root:add(gimbal, tvb(offset, size))
     tree:add(pf.header, tvb(offset, 2))
     tree:add(pf.frame_type, tvb(offset + 2, 1))
-    if pinfo.dst_port == gimbal.prefs.port then
-        tree:add(pf.direction, "gs_to_idu"):set_generated()
-    else
-        tree:add(pf.direction, "idu_to_gs"):set_generated()
-    end
+    add_direction(tree, pinfo)
     local summary
     if frame_type == FRAME_CONTROL then
         tree:add(pf.reserved, tvb(offset + 3, 9))
@@ -331,14 +338,22 @@ local function zero_run(tvb, offset, limit)
     return n
 end
 
-function gimbal.dissector(tvb, pinfo, root)
+-- Cut the bytes of one call into steps (frames, padding, skipped bytes, cut-short frames)
+-- without showing anything yet; returns the steps and, when the last frame is not
+-- complete, the offset and length to ask TCP for.
+local function plan(tvb)
     local length = tvb:len()
     local offset = 0
-    local infos = {}
+    local steps = {}
+    local function step(kind, at, count, extra)
+        extra = extra or {}
+        extra.kind, extra.at, extra.count = kind, at, count
+        steps[#steps + 1] = extra
+    end
     -- Leading zeros: the padding of a feedback frame that ended in the previous segment.
     local pad = zero_run(tvb, 0, FEEDBACK_SIZE - MIN_FEEDBACK_FRAME)
     if pad > 0 and (pad == length or find_header(tvb, pad, length) == pad) then
-        root:add(gimbal, tvb(0, pad)):add(pf.padding, tvb(0, pad))
+        step("padding", 0, pad)
         offset = pad
     end
     while offset < length do
@@ -347,31 +362,20 @@ function gimbal.dissector(tvb, pinfo, root)
             -- keep a last 0xEB: it may begin the next header
             local keep = 0
             if tvb(length - 1, 1):uint() == 0xEB then keep = 1 end
-            if length - keep > offset then
-                add_skipped(root, tvb, offset, length - keep - offset, infos)
-            end
-            if keep == 1 then
-                pinfo.desegment_offset = length - 1
-                pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
-            end
-            break
+            if length - keep > offset then step("garbage", offset, length - keep - offset) end
+            if keep == 1 then return steps, length - 1, DESEGMENT_ONE_MORE_SEGMENT end
+            return steps
         end
-        if start > offset then add_skipped(root, tvb, offset, start - offset, infos) end
+        if start > offset then step("garbage", offset, start - offset) end
         offset = start
-        if length - offset < 3 then
-            pinfo.desegment_offset = offset
-            pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
-            break
-        end
+        if length - offset < 3 then return steps, offset, DESEGMENT_ONE_MORE_SEGMENT end
         local frame_type = tvb(offset + 2, 1):uint()
         local size = FRAME_SIZES[frame_type]
         if size == nil then
-            add_skipped(root, tvb, offset, 2, infos)
+            step("garbage", offset, 2)
             offset = offset + 2
         elseif length - offset < size then
-            pinfo.desegment_offset = offset
-            pinfo.desegment_len = size - (length - offset)
-            break
+            return steps, offset, size - (length - offset)
         else
             local wire = tvb(offset + size - 2, 2):le_uint()
             local crc_state = 0
@@ -383,41 +387,57 @@ function gimbal.dissector(tvb, pinfo, root)
             end
             local restart = nil
             if crc_state == 0 then restart = find_header(tvb, offset + 1, offset + size) end
-            local need = nil
             if restart ~= nil then
-                -- TCP cannot start a new PDU inside bytes it already joined: when the frame
-                -- that follows is not complete yet, wait and show both together.
-                local rest = length - restart
-                if rest < 3 then
-                    need = DESEGMENT_ONE_MORE_SEGMENT
-                elseif FRAME_SIZES[tvb(restart + 2, 1):uint()] ~= nil
-                    and rest < FRAME_SIZES[tvb(restart + 2, 1):uint()] then
-                    need = FRAME_SIZES[tvb(restart + 2, 1):uint()] - rest
-                end
-            end
-            if need ~= nil then
-                pinfo.desegment_offset = offset
-                pinfo.desegment_len = need
-                break
-            elseif restart ~= nil then
-                local cut = root:add(gimbal, tvb(offset, restart - offset))
-                cut:append_text(string.format(", type 0x%02X frame cut short", frame_type))
-                cut:add_proto_expert_info(ex.cut_short, string.format(
-                    "type 0x%02X frame cut short after %d of %d bytes (a new header follows)",
-                    frame_type, restart - offset, size))
-                infos[#infos + 1] = "[frame cut short]"
+                step("cut", offset, restart - offset, {frame_type = frame_type, size = size})
                 offset = restart
             else
-                infos[#infos + 1] = dissect_frame(root, tvb, pinfo, offset, size, crc_state)
+                step("frame", offset, size, {crc_state = crc_state})
                 offset = offset + size
                 if FEEDBACK[frame_type] ~= nil then
                     local n = zero_run(tvb, offset, FEEDBACK_SIZE - size)
                     if n > 0 then
-                        root:add(gimbal, tvb(offset, n)):add(pf.padding, tvb(offset, n))
+                        step("padding", offset, n)
                         offset = offset + n
                     end
                 end
             end
+        end
+    end
+    return steps
+end
+
+function gimbal.dissector(tvb, pinfo, root)
+    local steps, wait_at, wait_for = plan(tvb)
+    if wait_at ~= nil then
+        -- After a frame cut short the next frame may start inside bytes TCP has already
+        -- joined, where it cannot start a new PDU: wait and show it all with the next data.
+        for i, step in ipairs(steps) do
+            if step.kind == "cut" then
+                for j = #steps, i, -1 do steps[j] = nil end
+                wait_at, wait_for = step.at, DESEGMENT_ONE_MORE_SEGMENT
+                break
+            end
+        end
+        pinfo.desegment_offset = wait_at
+        pinfo.desegment_len = wait_for
+    end
+    local infos = {}
+    for _, step in ipairs(steps) do
+        if step.kind == "padding" then
+            root:add(gimbal, tvb(step.at, step.count)):add(pf.padding, tvb(step.at, step.count))
+        elseif step.kind == "garbage" then
+            add_skipped(root, tvb, step.at, step.count, infos)
+        elseif step.kind == "cut" then
+            local cut = root:add(gimbal, tvb(step.at, step.count))
+            cut:append_text(string.format(", type 0x%02X frame cut short", step.frame_type))
+            add_direction(cut, pinfo)
+            cut:add_proto_expert_info(ex.cut_short, string.format(
+                "type 0x%02X frame cut short after %d of %d bytes (a new header follows)",
+                step.frame_type, step.count, step.size))
+            infos[#infos + 1] = "[frame cut short]"
+        else
+            infos[#infos + 1] = dissect_frame(root, tvb, pinfo, step.at, step.count,
+                step.crc_state)
         end
     end
     if #infos > 0 then
@@ -429,7 +449,7 @@ function gimbal.dissector(tvb, pinfo, root)
             pinfo.cols.info = table.concat(infos, "; ")
         end
     end
-    return length
+    return tvb:len()
 end
 
 local registered_port = nil

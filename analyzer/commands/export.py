@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import sys
-import tempfile
 from pathlib import Path
 
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import UsageError
 
 HELP = "export the protocol as a DBC file (cantools, SavvyCAN) or a Wireshark Lua dissector"
 DESCRIPTION = """\
@@ -82,29 +80,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.output or args.output == "-":
         sys.stdout.write(text)
         return 0
-    _write(Path(args.output), text, force=args.force)
+    from analyzer.output_file import write_output
+
+    write_output(args.output, text, force=args.force)
     print(f"wrote {what} {args.output}", file=sys.stderr)
     return 0
-
-
-def _write(path: Path, text: str, *, force: bool) -> None:
-    """Write through a temporary file and an atomic rename; never replace without force."""
-    if path.is_symlink():
-        raise UsageError(f"{path} is a symbolic link; give the real path")
-    if path.exists() and not force:
-        raise UsageError(f"{path} exists; add --force to replace it")
-    if path.is_dir():
-        raise UsageError(f"{path} is a directory")
-    directory = path.parent
-    try:
-        fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    except OSError as exc:
-        raise UsageError(f"cannot write {path}: {exc.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as out:
-            out.write(text)
-        os.chmod(temp, 0o644)
-        os.replace(temp, path)
-    except OSError as exc:
-        os.unlink(temp)
-        raise SourceError(f"cannot write {path}: {exc.strerror}") from None
