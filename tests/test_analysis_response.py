@@ -356,3 +356,17 @@ def test_simulate_options_make_the_behaviour() -> None:
     assert behaviour(parse(["simulate"])) == Behaviour()
     with pytest.raises(UsageError, match="not a command name"):
         behaviour(parse(["simulate", "--ignore", "dance"]))
+
+
+def test_a_settled_answer_is_judged_even_when_the_next_command_comes_early() -> None:
+    steps = (*YAW_45, Step(4.0, "specified_angle", {"yaw_deg": 90}))
+    found = session(steps, 12.0, behaviour=Behaviour(reach=0.5))
+    first = next(f for f in found if f["check"] == "target")
+    assert first["verdict"] == "partial" and "stopped short" in first["detail"]
+    assert "not reached before specified_angle came 3.0 s later" in first["detail"]
+
+
+def test_a_burst_shorter_than_two_feedback_messages_is_not_measured() -> None:
+    steps = (Step(1.0, "gimbal_control", {"pan_speed_dps": 20}, until=1.3),)
+    rate = only(session(steps, 6.0), "gimbal_control", "rate")
+    assert rate["verdict"] == "unknown" and "fewer than two feedback messages" in rate["detail"]

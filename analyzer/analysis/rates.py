@@ -24,6 +24,7 @@ SLOW_REPEAT_S = 2 * RECOMMENDED_REPEAT_S  # mean interval above this is "too slo
 BURST_GAP_S = 1.0  # commands further apart than this are separate bursts
 RATE_OK = (0.75, 1.33)  # measured / commanded within this range: obeyed
 RATE_NONE = 0.1  # below this (or negative): it did not follow
+MIN_SPAN_S = 0.4  # the feedback used to measure a rate must span at least this long
 SAME_SPEED = 0.005  # deg/s: speeds that differ less are the same command repeated
 
 
@@ -79,12 +80,11 @@ def _measure(
         usable.append(s)
     if not usable:
         return None, None, limit
-    if len(usable) >= 2:
-        rate = _slope(usable, axis)
-    elif before is not None:
-        rate = (usable[0].value(axis) - before.value(axis)) / (usable[0].time - burst.start)
-    else:
+    if len(usable) < 2 or usable[-1].time - usable[0].time < MIN_SPAN_S:
+        # One message cannot tell movement from lag; two close together (a late segment)
+        # make the slope meaningless.
         return None, None, limit
+    rate = _slope(usable, axis)
     lag = None
     if before is not None and abs(rate) > 1e-6 and len(usable) >= 2:
         moved = usable[-1].value(axis) - before.value(axis)
@@ -118,7 +118,10 @@ def judge_rate(burst: Burst, before: Sample | None, inside: list[Sample]) -> Fin
                 texts.append(f"{word} turned until its limit {limit:.1f}")
             else:
                 verdicts.append(UNKNOWN)
-                texts.append(f"{word} not measurable: no feedback while the commands lasted")
+                texts.append(
+                    f"{word} not measurable: fewer than two feedback messages "
+                    f"{MIN_SPAN_S:g} s apart while the commands lasted"
+                )
             continue
         extra[key] = rate
         ratio = rate / commanded

@@ -9,6 +9,7 @@ from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN
 from analyzer.analysis.samples import Sample, difference
 
 STILL_DEG = 0.2  # two samples closer than this: the gimbal has stopped
+SETTLED_S = 1.0  # still this long before another command: its answer is final
 
 
 @dataclass(frozen=True)
@@ -86,14 +87,15 @@ def judge_axis(
         return result
     moved = difference(axis, last.value(axis), start_value)
     where = f"{_fmt(last.value(axis))}, {_fmt(abs(final_error))} deg from the target"
-    if cut_short:
+    if cut_short and not _settled(axis, samples):
         result.verdict = UNKNOWN
         result.text = (
             f"{goal.label} not at {_fmt(target)} yet when {cut_short} "
             f"(at {where}, moved {_fmt(moved)} deg)"
         )
         return result
-    head = f"{goal.label} {_fmt(target)} not reached within {allowed_s:g} s: "
+    within = f"before {cut_short}" if cut_short else f"within {allowed_s:g} s"
+    head = f"{goal.label} {_fmt(target)} not reached {within}: "
     if abs(moved) < tolerance:
         result.verdict = NOT_OBEYED
         text = f"never moved (stayed at {_fmt(start_value)})"
@@ -119,6 +121,17 @@ def judge_axis(
         text += f"; the target is outside the {axis} range {_fmt(limits[0])}..{_fmt(limits[1])}"
     result.text = head + text
     return result
+
+
+def _settled(axis: str, samples: list[Sample]) -> bool:
+    """The last samples span SETTLED_S or more without the angle changing."""
+    last = samples[-1]
+    for s in reversed(samples):
+        if abs(difference(axis, s.value(axis), last.value(axis))) >= STILL_DEG:
+            return False
+        if last.time - s.time >= SETTLED_S:
+            return True
+    return False
 
 
 def _after(why: str) -> str:
