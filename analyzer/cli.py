@@ -28,6 +28,7 @@ COMMANDS: dict[str, str] = {
     "demo": "analyzer.commands.demo",
     "decode": "analyzer.commands.decode",
     "analyze": "analyzer.commands.analyze",
+    "report": "analyzer.commands.report",
     "record": "analyzer.commands.record",
     "convert": "analyzer.commands.convert",
     "info": "analyzer.commands.info",

@@ -9,7 +9,13 @@ import threading
 from pathlib import Path
 from typing import IO, Any
 
-from analyzer.commands.simulate import add_fault_arguments, fault_config, seconds_value
+from analyzer.commands.simulate import (
+    add_behaviour_arguments,
+    add_fault_arguments,
+    behaviour,
+    fault_config,
+    seconds_value,
+)
 from analyzer.errors import SourceError, UsageError
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
@@ -31,7 +37,8 @@ UI on a terminal (q quits), plain decoded lines otherwise or with --no-tui
 
 The simulator injects a few faults by default (dropped, corrupted, repeated and
 late feedback segments) so the diagnostics have something to show; --clean
-turns them off. Afterwards:
+turns them off. --sluggish, --fall-short, --ignore and --drift make a gimbal
+that does not always obey, for `gimbal-analyzer analyze` and `report` to find. Afterwards:
 
   gimbal-analyzer info demo.mcap       what was recorded
   foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
@@ -74,6 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--clean", action="store_true", help="inject no faults")
     add_compression_argument(parser)
     add_fault_arguments(parser)
+    add_behaviour_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
 
 
@@ -172,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
     path = str(target)
     spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
     faults = FaultConfig() if args.clean else fault_config(args)
-    config = SimConfig(ranging=True, uav=True, faults=faults)
+    config = SimConfig(ranging=True, uav=True, faults=faults, behaviour=behaviour(args))
 
     source = open_source(str(spec))
     try:

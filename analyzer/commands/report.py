@@ -1,0 +1,93 @@
+"""``gimbal-analyzer report``: a flight report as one self-contained HTML file."""
+
+from __future__ import annotations
+
+import argparse
+from typing import IO, Any, cast
+
+HELP = "write a flight report: one offline HTML file with plots, findings and diagnostics"
+
+DESCRIPTION = """\
+Writes one self-contained HTML file (no network needed to open it, fit to attach
+to a support ticket) from any input `decode` reads, recordings included:
+
+  overview       source, time range, counts, verdicts per command
+  plots          gimbal pitch / yaw over time with command markers and targets,
+                 commanded against measured rates, feedback rate and diagnostics
+                 over time, UAV altitude and track (in metres, no map tiles)
+  tables         the responses of `gimbal-analyzer analyze` and the diagnostics
+
+  gimbal-analyzer report flight.log -o report.html
+  gimbal-analyzer report demo.mcap -o demo-report.html --tolerance 2
+
+The plots are drawn by Chart.js (MIT), inlined into the file. An existing output
+file is replaced only with --force, and never one of the inputs.
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from analyzer.commands.analyze import add_input_arguments, add_settings_arguments
+
+    add_input_arguments(parser)
+    parser.add_argument(
+        "-o",
+        "--output",
+        default="report.html",
+        metavar="FILE",
+        help="the HTML file to write (default report.html)",
+    )
+    parser.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    add_settings_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+
+    from analyzer.analysis.findings import verdict_line
+    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.commands.analyze import decoded_events, open_reader, settings_from
+    from analyzer.output_file import OutputFile, check_output
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+    from analyzer.report.collect import ReportData
+    from analyzer.report.page import render
+
+    inputs = [] if args.file == "-" else [args.file]
+    check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
+    settings = settings_from(args)
+    reader = open_reader(args)
+    analyzer = ResponseAnalyzer(settings)
+    data = ReportData(source=reader.source, format_name=reader.format_name)
+    add = data.add
+
+    def take(findings: list[Any]) -> None:
+        for finding in findings:
+            add(finding)
+
+    try:
+        for event in decoded_events(args, reader):
+            if event.topic == TOPIC_ANALYSIS_RESPONSE:
+                continue  # findings stored in a recording: judged afresh
+            add(event)
+            take(analyzer.feed(event))
+        take(analyzer.close())
+    finally:
+        reader.close()
+    data.notes.extend(reader.notes)
+    if data.first is not None and data.first == data.last and data.findings:
+        data.findings.clear()
+        data.notes.append("the input carries no timestamps: responses cannot be timed")
+    text = render(
+        data,
+        f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
+    )
+    page = text.encode("utf-8")
+    with OutputFile(args.output, force=args.force, inputs=inputs) as out:
+        cast("IO[bytes]", out.file).write(page)
+    size = len(page)
+    print(
+        f"wrote {args.output} ({size / 1024:,.0f} KiB): {len(data.findings)} findings "
+        f"({verdict_line(data.verdicts())})"
+    )
+    for note in reader.notes:
+        sys.stderr.write(f"note: {note}\n")
+    return 0

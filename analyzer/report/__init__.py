@@ -1,0 +1,1 @@
+"""The flight report: one self-contained HTML file with plots, findings and diagnostics."""
