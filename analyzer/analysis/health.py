@@ -16,7 +16,7 @@ from analyzer.analysis.findings import (
     UNKNOWN,
     Finding,
 )
-from analyzer.feedback_track import GAP_THRESHOLD_S
+from analyzer.tally import GAP_THRESHOLD_S
 
 EXPECTED_HZ = 2.0  # chapter 2.2: one message every 500 ms
 RATE_TOLERANCE = 0.25  # a window further off than this fraction is "partial"

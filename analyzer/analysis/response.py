@@ -22,7 +22,6 @@ from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from, wrap180
 from analyzer.analysis.targets import AxisGoal, judge_axis
-from analyzer.feedback_track import GAP_THRESHOLD_S
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -33,6 +32,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
+from analyzer.tally import GAP_THRESHOLD_S
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
