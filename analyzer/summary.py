@@ -169,6 +169,7 @@ class Summary:
             "last_time": tally.last_time,
             "span_s": round(tally.span, 6),
             **tally.figures(),
+            "figures": tally.figures(),  # as `info --json` has them
             "input": self.input_stats,
             "decoder": self.decoder_stats,
         }

@@ -82,8 +82,8 @@ def test_info_command_text_and_json(tmp_path: Path, capsys: pytest.CaptureFixtur
     data = json.loads(capsys.readouterr().out)
     assert data["recovered"] is False
     assert data["diagnostics_by_kind"] == {"crc_mismatch": 2, "garbage": 1}
-    assert data["feedback"]["can0"]["messages"] == 16  # attitude and ranging in 4 s
-    assert data["topics"]["/gimbal/attitude"] == 8
+    assert data["figures"]["feedback"]["can0"]["messages"] == 16  # attitude and ranging in 4 s
+    assert data["figures"]["topics"]["/gimbal/attitude"] == 8
 
 
 def test_info_on_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -62,7 +62,9 @@ class RecordingInfo:
             "message_count": self.message_count,
             "topics": [vars(t) for t in self.topics],
             "metadata": self.metadata,
-            **self.tally.figures(),
+            # The figures decode --summary gives for the same input, under the same keys.
+            "figures": self.tally.figures(),
+            "diagnostics_by_kind": dict(sorted(self.tally.kinds.items())),
             "input": self.tally.items(),
             "counts_from": self.counts_from,
             "stats_from": self.stats_from,
