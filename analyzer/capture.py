@@ -42,6 +42,8 @@ class CaptureStats:
     last second.
     ``bus_load_pct`` estimates the load of the CAN bus (frame bit counts without stuffing,
     131 bits for an extended 8-byte frame) at the source's bitrate (1 Mbit/s by default).
+    ``dropped`` / ``dropped_bytes`` count frames / chunks the source had to drop because
+    the capture fell behind (its queue was full); each drop is also a link diagnostic.
     """
 
     frames: int = 0
@@ -54,6 +56,8 @@ class CaptureStats:
     bytes_per_s: float = 0.0
     bus_load_pct: float = 0.0
     elapsed_s: float = 0.0
+    dropped: int = 0
+    dropped_bytes: int = 0
     diagnostic_kinds: dict[str, int] = field(default_factory=dict)
     tally: Tally = field(default_factory=Tally)
 
@@ -184,6 +188,8 @@ class Capture:
         if self._started_at:
             end = self._ended_at or time.monotonic()
             snapshot.elapsed_s = end - self._started_at
+        snapshot.dropped = int(getattr(self.source, "dropped_items", 0))
+        snapshot.dropped_bytes = int(getattr(self.source, "dropped_bytes", 0))
         return snapshot
 
     # -- the reader thread ------------------------------------------------------------------------

@@ -5,11 +5,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import Event
 from analyzer.tally import (
     EXPECTED_FEEDBACK_HZ,
     FEEDBACK_TOLERANCE,
     GAP_THRESHOLD_S,
+    MAX_FEEDBACK_SOURCES,
     FeedbackTrack,
     Tally,
 )
@@ -50,6 +52,11 @@ def feedback_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
             if track.longest_gap > 2 / EXPECTED_FEEDBACK_HZ:
                 gap = alarm(gap)
             lines.append(f"    {gap}")
+    if tally.feedback_untracked:
+        lines.append(
+            f"    {tally.feedback_untracked:,} more feedback messages from streams beyond the "
+            f"first {MAX_FEEDBACK_SOURCES:,} (counted; rate and gaps not timed)"
+        )
     return lines
 
 
@@ -219,6 +226,11 @@ class Summary:
             parts.append(f"{s['recorded_events']:,} events as recorded (not decoded again)")
         if d.get("chunks"):
             parts.append(f"{d['chunks']:,} stream chunks")
+        if d.get("sources_given_up"):
+            parts.append(
+                f"{d['sources_given_up']:,} sources' decoder state given up early "
+                f"(over {MAX_SOURCES:,} at once)"
+            )
         if s.get("bad_lines"):
             parts.append(f"{s['bad_lines']:,} bad lines")
         if s.get("blank_lines"):

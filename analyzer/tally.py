@@ -15,6 +15,7 @@ from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     TOPIC_COMMAND,
@@ -32,6 +33,9 @@ FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
 FEEDBACK_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING})
 # A silence longer than this means feedback messages were lost.
 GAP_THRESHOLD_S = 1.0
+# Streams whose feedback is timed one by one; a file naming millions of channels must not
+# grow the tally (nor the stats record written into a recording) without limit.
+MAX_FEEDBACK_SOURCES = MAX_SOURCES
 # Bits of a CAN 2.0 frame without stuffing, besides the data: SOF, arbitration, control,
 # CRC, ACK, EOF and the 3-bit intermission (131 bits for an extended 8-byte frame).
 CAN_BITS_EXTENDED = 67
@@ -126,6 +130,8 @@ class Tally:
     kinds: Counter[str] = field(default_factory=Counter)
     commands: Counter[str] = field(default_factory=Counter)
     feedback: dict[str, FeedbackTrack] = field(default_factory=dict)
+    # Feedback of streams beyond the first MAX_FEEDBACK_SOURCES: counted, not timed.
+    feedback_untracked: int = 0
     crc_checked: int = 0  # messages whose CRC was checked and matched
     crc_errors: int = 0
     first_time: float | None = None
@@ -187,6 +193,10 @@ class Tally:
                     key = f"{key} {direction}"
                 track = self.feedback.get(key)
                 if track is None:
+                    if len(self.feedback) >= MAX_FEEDBACK_SOURCES:
+                        self.feedback_untracked += 1
+                        self.crc_checked += 1
+                        continue
                     track = self.feedback[key] = FeedbackTrack()
                 track.add(t)
                 self.crc_checked += 1
@@ -227,6 +237,7 @@ class Tally:
             "crc_checked": self.crc_checked,
             "crc_errors": self.crc_errors,
             "crc_error_rate": _round(self.crc_error_rate),
+            **({"feedback_untracked": self.feedback_untracked} if self.feedback_untracked else {}),
         }
 
     def items(self) -> dict[str, int]:
@@ -275,6 +286,7 @@ class Tally:
             feedback={
                 str(k): FeedbackTrack.from_figures(v) for k, v in figures["feedback"].items()
             },
+            feedback_untracked=int(figures.get("feedback_untracked", 0)),
             crc_checked=int(figures["crc_checked"]),
             crc_errors=int(figures["crc_errors"]),
             first_time=_opt_float(data.get("first_time")),

@@ -118,6 +118,8 @@ class StatusLine:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
         parts.append(f"{stats.events} events")
         parts.append(f"{stats.diagnostics} diagnostics")
+        if stats.dropped:  # the capture fell behind: say so where the user looks
+            parts.append(f"{stats.dropped} DROPPED")
         parts.append(_megabytes(self.path))
         return "  ".join(parts)
 
@@ -245,6 +247,13 @@ def run(args: argparse.Namespace) -> int:
             f"recorded {stats.frames} frames, {stats.chunks} stream chunks, "
             f"{stats.events} events, {stats.diagnostics} diagnostics in {stats.elapsed_s:.1f} s "
             f"to {path} ({_megabytes(path)}); ended: {reason}",
+            file=sys.stderr,
+        )
+    if stats.dropped:  # even with --quiet: the recording is missing data
+        print(
+            f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "
+            f"({stats.dropped_bytes} bytes) dropped because the capture fell behind the "
+            "source; link diagnostics of state 'overflow' in the recording mark where",
             file=sys.stderr,
         )
     return result

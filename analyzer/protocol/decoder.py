@@ -16,12 +16,14 @@ from analyzer.protocol.ids import (
     TEXT_END_ID,
     TEXT_ID,
 )
+from analyzer.protocol.lru import MAX_SOURCES, LruTable
 from analyzer.protocol.reassembly import FeedbackReassembler, Message
 from analyzer.protocol.types import (
     BAD_FRAME,
     BUS_ERROR,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
     CanFrame,
     Event,
     StreamChunk,
@@ -37,17 +39,29 @@ class Decoder:
     """Decodes everything of the protocol from any mix of CAN frames and stream chunks.
 
     State (feedback reassembly, text messages, stream framing) is kept per CAN channel
-    and per stream source + direction. The decoder never raises on any input and never
-    reads a clock: times come with the input, ``tick(now)`` reports stale partial
-    messages in live use, ``close()`` flushes everything at the end of input.
+    and per stream source + direction, for at most ``max_sources`` of each at once: a
+    new one beyond that closes the least recently used, whose partial messages become
+    diagnostics that say why (``sources_given_up`` counts them). The decoder never raises
+    on any input and never reads a clock: times come with the input, ``tick(now)``
+    reports stale partial messages in live use, ``close()`` flushes everything at the
+    end of input.
     """
 
-    def __init__(self, *, emit_other: bool = False, text_limit: int = 256) -> None:
+    def __init__(
+        self, *, emit_other: bool = False, text_limit: int = 256, max_sources: int = MAX_SOURCES
+    ) -> None:
         self.emit_other = emit_other
         self.text_limit = text_limit
-        self._reassemblers: dict[str, FeedbackReassembler] = {}
-        self._texts: dict[str, TextAssembler] = {}
-        self._framers: dict[tuple[str, str], StreamFramer] = {}
+        self.max_sources = max_sources
+        self._reassemblers: LruTable[str, FeedbackReassembler] = LruTable(
+            self._evict_reassembler, max_sources
+        )
+        self._texts: LruTable[str, TextAssembler] = LruTable(self._evict_text, max_sources)
+        self._framers: LruTable[tuple[str, str], StreamFramer] = LruTable(
+            self._evict_framer, max_sources
+        )
+        self._given_up: list[Event] = []  # diagnostics of evicted state, for the caller
+        self._retired = {"bytes_fed": 0, "bytes_framed": 0, "bytes_discarded": 0}
         self.frames = 0
         self.protocol_frames = 0
         self.other_frames = 0
@@ -74,7 +88,11 @@ class Decoder:
         key = (chunk.source, chunk.direction)
         framer = self._framers.get(key)
         if framer is None:
-            framer = self._framers[key] = StreamFramer(chunk.source, chunk.direction)
+            framer = self._framers.add(key, StreamFramer(chunk.source, chunk.direction))
+            if self._given_up:
+                return self._take_given_up() + self._framed(
+                    framer, framer.feed(chunk.data, chunk.time)
+                )
         return self._framed(framer, framer.feed(chunk.data, chunk.time))
 
     def tick(self, now: float) -> list[Event]:
@@ -103,16 +121,55 @@ class Decoder:
     @property
     def stats(self) -> dict[str, int]:
         parts: list[Any] = [*self._framers.values(), *self._reassemblers.values()]
-        return {
+        retired = self._retired
+        stats = {
             "frames": self.frames,
             "protocol_frames": self.protocol_frames,
             "other_frames": self.other_frames,
             "chunks": self.chunks,
-            "bytes_fed": sum(p.bytes_fed for p in parts),
-            "bytes_framed": sum(p.bytes_framed for p in parts),
-            "bytes_discarded": sum(p.bytes_discarded for p in parts),
+            "bytes_fed": retired["bytes_fed"] + sum(p.bytes_fed for p in parts),
+            "bytes_framed": retired["bytes_framed"] + sum(p.bytes_framed for p in parts),
+            "bytes_discarded": retired["bytes_discarded"] + sum(p.bytes_discarded for p in parts),
             "bytes_pending": sum(p.pending for p in parts),
         }
+        given_up = self._reassemblers.evicted + self._texts.evicted + self._framers.evicted
+        if given_up:
+            stats["sources_given_up"] = given_up
+        return stats
+
+    # -- bounded per-source state ----------------------------------------------------------------
+
+    def _take_given_up(self) -> list[Event]:
+        events, self._given_up = self._given_up, []
+        return events
+
+    def _give_up(self, events: list[Event]) -> None:
+        why = (
+            f"given up early: more than {self.max_sources} sources at once, "
+            "this one was the least recently used"
+        )
+        for event in events:
+            detail = str(event.fields.get("detail", ""))
+            if event.topic == TOPIC_DIAGNOSTICS and why not in detail:
+                event.fields["detail"] = f"{detail} ({why})"
+        self._given_up.extend(events)
+
+    def _retire(self, part: FeedbackReassembler | StreamFramer) -> None:
+        retired = self._retired
+        retired["bytes_fed"] += part.bytes_fed
+        retired["bytes_framed"] += part.bytes_framed
+        retired["bytes_discarded"] += part.bytes_discarded
+
+    def _evict_reassembler(self, source: str, reassembler: FeedbackReassembler) -> None:
+        self._give_up(self._feedback(source, reassembler.close(self.last_time), {}))
+        self._retire(reassembler)
+
+    def _evict_text(self, source: str, text: TextAssembler) -> None:
+        self._give_up(text.close(self.last_time))
+
+    def _evict_framer(self, key: tuple[str, str], framer: StreamFramer) -> None:
+        self._give_up(self._framed(framer, framer.close(self.last_time)))
+        self._retire(framer)
 
     # -- CAN -------------------------------------------------------------------------------------
 
@@ -175,17 +232,23 @@ class Decoder:
         if can_id == FEEDBACK_ID:
             reassembler = self._reassemblers.get(source)
             if reassembler is None:
-                reassembler = self._reassemblers[source] = FeedbackReassembler(source)
+                reassembler = self._reassemblers.add(source, FeedbackReassembler(source))
+                if self._given_up:
+                    return self._take_given_up() + self._feedback(
+                        source, reassembler.feed(frame.data, frame.time), extra, warnings
+                    )
             return self._feedback(source, reassembler.feed(frame.data, frame.time), extra, warnings)
         if can_id in (TEXT_ID, TEXT_END_ID):
             text = self._texts.get(source)
+            given_up: list[Event] = []
             if text is None:
-                text = self._texts[source] = TextAssembler(source, self.text_limit)
+                text = self._texts.add(source, TextAssembler(source, self.text_limit))
+                given_up = self._take_given_up()
             events = text.feed(can_id, frame.data, frame.time)
             for event in events:
                 event.warnings[:0] = warnings
                 event.fields.update(extra)
-            return events
+            return given_up + events if given_up else events
         status = STATUS_FRAMES[can_id]
         fields, more = decode_status(can_id, frame.data)
         fields["raw"] = hexstr(frame.data)

@@ -211,6 +211,8 @@ class MonitorApp(App[int]):
         info = self.info
         if info.recording:
             info.recording_size = self.file_size(info.recording)
+        source = getattr(self.capture, "source", None)
+        info.dropped = int(getattr(source, "dropped_items", 0) or 0)
         info.paused = self.paused
         info.paused_new = state.seq - self._paused_seq if self.paused else 0
         info.filter_text = self.filter.text

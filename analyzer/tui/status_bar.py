@@ -23,6 +23,7 @@ class StatusInfo:
     filter_text: str = ""
     view: str = "commands"
     raw: bool = False
+    dropped: int = 0  # frames / chunks the source dropped because the capture fell behind
 
 
 _GOOD_STATES = frozenset({"open", "connected", "gs_connected"})
@@ -70,6 +71,9 @@ def render_status(state: MonitorState, info: StatusInfo) -> Text:
         text.append(" frames/s  bus ", "dim")
         load = state.bus_load * 100
         text.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
+    if info.dropped:
+        text.append(" │ ", "dim")
+        text.append(f" {info.dropped:,} DROPPED ", "bold white on red")
     text.append(" │ ", "dim")
     text.append(f"view {info.view}", "dim")
     if info.raw:
