@@ -24,6 +24,11 @@ _DIGITS = b"0123456789"
 IdInfo = tuple[int, bool, bool, bool]
 
 
+# ID texts kept in the caches; beyond that (a log of random IDs) an ID is classified anew
+# each time, which is still the fast path, and memory stays flat.
+MAX_CACHED_IDS = 20_000
+
+
 class LineError(ValueError):
     """Why a line is not a CAN frame (becomes the detail of a bad_line diagnostic)."""
 
@@ -89,7 +94,7 @@ class CandumpParser:
             if value <= CAN_EFF_MASK or error:
                 wanted = error or self.wanted_ids is None or can_id in self.wanted_ids
                 info = (can_id, extended, error, wanted)
-        if len(self._ids) < 100_000:  # a file of random IDs must not grow the caches forever
+        if len(self._ids) < MAX_CACHED_IDS:  # a file of random IDs must not grow the caches
             self._ids[text] = info
             if info is not None:
                 if info[3]:
@@ -97,6 +102,11 @@ class CandumpParser:
                 else:
                     self._skip.add(text)
         return info
+
+    def _unwanted(self, text: bytes) -> bool:
+        """An ID text not seen before (or no longer cached): a valid ID that is not wanted?"""
+        info = self._id_info(text)
+        return info is not None and not info[3]
 
     def _channel(self, text: bytes) -> str:
         name = self._channels.get(text)
@@ -114,6 +124,7 @@ class CandumpParser:
         append = out.append
         skip = self._skip
         want = self._want
+        ids = self._ids
         directions = _DIRECTIONS
         digits = _DIGITS
         lineno = self.lines
@@ -136,7 +147,12 @@ class CandumpParser:
                 stamp = b""
             if stamp:
                 id_text, sharp, data = frame.partition(b"#")
-                if id_text in skip:
+                if id_text in skip or (
+                    sharp
+                    and id_text not in want
+                    and id_text not in ids
+                    and self._unwanted(id_text)
+                ):
                     if (
                         sharp
                         and len(data) <= MAX_CLASSIC_HEX

@@ -125,7 +125,10 @@ class Field:
 
     def decode_into(self, data: bytes, out: dict[str, Any], warnings: list[str]) -> None:
         """Decode this field of ``data`` into ``out``; doubts go to ``warnings``."""
-        raw = self.read_raw(data)
+        self.decode_raw(self.read_raw(data), out, warnings)
+
+    def decode_raw(self, raw: int, out: dict[str, Any], warnings: list[str]) -> None:
+        """Put the value of the raw number ``raw`` into ``out``; doubts go to ``warnings``."""
         if self.labels is not None:
             label = self.labels.get(raw, self.other_label)
             if label is None:
@@ -252,8 +255,17 @@ class Layout:
     size: int
     extra: Mapping[str, Any] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_struct", _layout_struct(self.fields))
+
     def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
         out: dict[str, Any] = {}
+        whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
+        if whole is not None and len(data) >= whole.size:
+            # All fields with one precompiled struct.Struct, in table order.
+            for f, raw in zip(self.fields, whole.unpack_from(data), strict=True):
+                f.decode_raw(raw, out, warnings)
+            return out
         for f in self.fields:
             f.decode_into(data, out, warnings)
         return out
@@ -264,6 +276,22 @@ class Layout:
             value = values.get(f.name, f.default if f.default is not None else 0)
             f.write(buffer, value, check_range=check_range)
         return buffer
+
+
+def layout_struct(fields: tuple[Field, ...]) -> struct.Struct | None:
+    """One little-endian struct.Struct reading every field (in the given order), skipping the
+    bytes between them; None when fields overlap or are not in offset order."""
+    fmt = "<"
+    position = 0
+    for f in fields:
+        if f.offset < position:
+            return None
+        fmt += "x" * (f.offset - position) + _KINDS[f.kind][0][1:]
+        position = f.offset + f.size
+    return struct.Struct(fmt)
+
+
+_layout_struct = layout_struct
 
 
 def pad(data: bytes, size: int, what: str, warnings: list[str]) -> bytes:

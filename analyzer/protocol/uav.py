@@ -92,6 +92,19 @@ USED_BYTES = {cid: max(f.end for f in s.layout.fields) for cid, s in STATUS_FRAM
 def decode_status(can_id: int, data: bytes) -> tuple[dict[str, Any], list[str]]:
     """Data of a GPS / altitude / attitude frame -> fields, warnings. Never raises."""
     status = STATUS_FRAMES[can_id]
+    if len(data) == 8:  # the usual case, through the layout's precompiled struct
+        warnings: list[str] = []
+        fields = status.layout.decode(data, warnings)
+        used = USED_BYTES[can_id]
+        if used < 8 and any(data[used:]):
+            warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
+        return fields, warnings
+    return _decode_odd_status(status, can_id, data)
+
+
+def _decode_odd_status(
+    status: StatusFrame, can_id: int, data: bytes
+) -> tuple[dict[str, Any], list[str]]:
     warnings: list[str] = []
     if len(data) != 8:
         warnings.append(f"{status.name} frame: {len(data)} data bytes, expected 8")
