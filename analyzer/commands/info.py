@@ -21,15 +21,19 @@ diagnostics by kind, the gimbal's feedback rate and longest gap (it answers
 every 500 ms, so gaps over 1 s mean lost messages) and the CRC error rate.
 Times are UTC (Z); --local-time shows local time with its offset.
 
-A finished recording is summarised from its MCAP summary and the stats record
-written at the end, without reading the messages. A recording whose recorder
-was killed has no summary: its readable part is scanned and `info` says that
-the file was recovered.
+A finished recording is summarised from its MCAP summary (checked against its
+CRC) and the stats record written at the end; the data section is checked
+against its CRC in one pass, and where that fails every chunk is checked and
+each damaged one is listed. A recording whose recorder was killed has no
+summary (and one whose summary fails its CRC check is not believed): its
+readable part is scanned and `info` says that the file was recovered.
 
   gimbal-analyzer info flight.mcap
   gimbal-analyzer info flight.mcap --json
   gimbal-analyzer info flight.mcap --scan     recount diagnostics and gaps from the messages
 """
+
+MAX_DAMAGE_LINES = 20
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -54,10 +58,27 @@ def _size(n: int) -> str:
 def render(info: RecordingInfo) -> str:
     """Human-readable report."""
     lines = []
-    state = "RECOVERED (recording was not finished)" if info.recovered else "finished"
+    if info.summary_damaged:
+        state = "DAMAGED (its summary failed its checks; read sequentially)"
+    elif info.recovered:
+        state = "RECOVERED (recording was not finished)"
+    elif info.damage:
+        state = f"finished, DAMAGED ({len(info.damage)} unreadable part(s))"
+    else:
+        state = "finished"
     lines.append(f"file        {info.path} ({_size(info.size_bytes)}, {state})")
     if info.recovered:
         lines.append(f"recovery    {info.recovery_note}")
+    for detail in info.damage[:MAX_DAMAGE_LINES]:
+        lines.append(f"damage      {detail}")
+    if len(info.damage) > MAX_DAMAGE_LINES:
+        lines.append(
+            f"damage      ... and {len(info.damage) - MAX_DAMAGE_LINES} more (--json lists all)"
+        )
+    if info.damage and not info.recovered:
+        lines.append(
+            "            (the counts below come from the summary and include what was lost)"
+        )
     meta = info.metadata
     if meta.get("source"):
         lines.append(f"source      {meta['source']}")

@@ -46,6 +46,11 @@ class McapReader(InputReader):
         note = getattr(self._items, "note", "")
         if getattr(self._items, "recovered", False) and note:
             yield diagnostic(self.last_time or 0.0, self.source, INCOMPLETE, note)
+        # every damaged part already came as an `incomplete` diagnostic where it was
+        for damage in getattr(self._items, "damage", ()):
+            self.notes.append(f"{self.path}: damaged recording: {damage.detail}")
+        if note and not getattr(self._items, "recovered", False):
+            self.notes.append(f"{self.path}: {note}")
 
     @property
     def stats(self) -> dict[str, int]:

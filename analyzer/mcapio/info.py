@@ -43,6 +43,8 @@ class RecordingInfo:
     stats_from: str
     scanned_messages: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
+    damage: list[str] = field(default_factory=list)  # parts of the file that cannot be read
+    summary_damaged: bool = False  # a finished file whose summary failed its checks
 
     @property
     def duration_s(self) -> float:
@@ -69,6 +71,8 @@ class RecordingInfo:
             "counts_from": self.counts_from,
             "stats_from": self.stats_from,
             "scanned_messages": self.scanned_messages,
+            "summary_damaged": self.summary_damaged,
+            "damage": self.damage,
         }
 
 
@@ -113,6 +117,7 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     statistics = getattr(summary, "statistics", None)
     if summary is None or statistics is None:
         return _scan_everything(recording, base)
+    damage = [d.detail for d in recording.verify()]
     topics = []
     counts = statistics.channel_message_counts
     duration = (statistics.message_end_time - statistics.message_start_time) / 1e9
@@ -142,15 +147,17 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
         tally=Tally(),
         counts_from="summary",
         stats_from="",
+        damage=damage,
     )
     stored = metadata.get(STATS_METADATA_NAME)
+    malformed = ""
     if stored is not None and not scan:
         try:
             info.tally = Tally.from_metadata(stored)
             info.stats_from = "the stats record written at the end, no scan"
             return info
-        except (ValueError, KeyError, TypeError):
-            pass
+        except (ValueError, KeyError, TypeError, AttributeError, OverflowError):
+            malformed = " (the stats record written at the end is malformed)"
     tally = Tally()
     scanned = 0
     for message in recording.messages(roles=SCANNED_ROLES):
@@ -158,7 +165,8 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
         _fold(tally, message)
     info.tally = tally
     info.scanned_messages = scanned
-    info.stats_from = f"a scan of the recorded frames and events, {scanned} messages"
+    info.stats_from = f"a scan of the recorded frames and events, {scanned} messages{malformed}"
+    info.damage = [d.detail for d in recording.damage]
     return info
 
 
@@ -216,6 +224,8 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         counts_from=f"a full sequential scan: {why}",
         stats_from=f"the same scan: {why}",
         scanned_messages=scanned,
+        damage=[d.detail for d in recording.damage],
+        summary_damaged=recording.summary_damaged,
     )
 
 

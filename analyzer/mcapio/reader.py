@@ -1,4 +1,4 @@
-"""Reading recordings back: raw items for re-decoding, events, metadata; recovers crashed files."""
+"""Reading recordings back: raw items for re-decoding, events, metadata; damaged files too."""
 
 from __future__ import annotations
 
@@ -23,21 +23,35 @@ from analyzer.mcapio.channels import (
     can_frame_from_dict,
     stream_chunk_from_dict,
 )
+from analyzer.mcapio.chunks import (
+    MAX_RECORD,
+    MESSAGE_FIXED,
+    OPCODE_CHUNK,
+    OPCODE_DATA_END,
+    OPCODE_MESSAGE,
+    OPCODE_METADATA,
+    RECORD_HEAD,
+    ChunkDamage,
+    chunk_payload,
+    walk,
+)
 from analyzer.mcapio.foxglove import VIEW_SCHEMAS
+from analyzer.mcapio.recover import Damage, Recovery, Scan, metadata_before_data, scan_records
 from analyzer.pipeline import RawItem
-from analyzer.protocol.types import BAD_LINE, LINK, TOPIC_DIAGNOSTICS, Event
+from analyzer.protocol.types import (
+    BAD_LINE,
+    INCOMPLETE,
+    LINK,
+    TOPIC_DIAGNOSTICS,
+    Event,
+    diagnostic,
+)
 
 MAGIC = b"\x89MCAP0\r\n"
-OPCODE_SCHEMA = 0x03
-OPCODE_CHANNEL = 0x04
-OPCODE_MESSAGE = 0x05
-OPCODE_CHUNK = 0x06
-_RECORD_HEAD = struct.Struct("<BQ")
 _MESSAGE_HEAD = struct.Struct("<HIQ")  # channel id, sequence, log time
 FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary start, offset start, crc
+_FOOTER = struct.Struct("<BQQQI")
 OPCODE_FOOTER = 0x02
-# A record longer than this in a damaged tail is garbage, not data.
-RECORD_SIZE_LIMIT = 1 << 30
 
 T = TypeVar("T")
 Tally = Callable[[str, str, int], None]
@@ -61,33 +75,6 @@ class RawMessage:
     data: bytes
 
 
-@dataclass
-class Recovery:
-    """What the recover path of a crashed (unfinished) file could read."""
-
-    messages: int = 0
-    good_bytes: int = 0  # bytes up to the end of the last complete record
-    total_bytes: int = 0
-    damaged_chunks: int = 0
-    data_complete: bool = False  # the data section ended properly; only the summary is bad
-    reason: str = ""
-
-    def describe(self) -> str:
-        lost = self.total_bytes - self.good_bytes
-        text = (
-            f"recovered {self.messages} messages from an unfinished recording "
-            f"({self.good_bytes} of {self.total_bytes} bytes readable"
-        )
-        if lost > 0 and not self.data_complete:
-            text += f", {lost} bytes of unfinished data at the end"
-        text += ")"
-        if self.damaged_chunks:
-            text += f"; {self.damaged_chunks} damaged chunk(s) skipped"
-        if self.reason:
-            text += f"; {self.reason}"
-        return text
-
-
 def channel_role(topic: str, metadata: dict[str, str]) -> str:
     """Role of a channel: from its metadata, else guessed from the topic (other writers)."""
     role = metadata.get(ROLE_KEY)
@@ -103,14 +90,19 @@ def channel_role(topic: str, metadata: dict[str, str]) -> str:
 class Recording:
     """An MCAP file opened for reading.
 
-    A finished file is read through its summary with CRC validation. A file without a
-    valid footer/summary (the recorder was killed, the disk filled up) is *recovered*:
-    its data section is read sequentially up to the last complete chunk; ``recovered`` is
-    True and, after a scan, ``recovery`` says how much was readable.
+    A finished file is read through its summary, once the summary passes its CRC check;
+    every chunk read is decompressed within its declared size and checked against its CRC.
+    A file without a valid footer / summary (the recorder was killed, the disk filled up,
+    the summary is damaged) is read sequentially: ``recovered`` is True and, after a scan,
+    ``recovery`` says how much was readable. Parts that cannot be read are skipped and
+    listed in ``damage`` (and given to the typed views as ``Damage`` entries).
     """
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = str(path)
+        self._summary_start = 0
+        self._summary_crc = 0
+        self._summary: Any = None
         try:
             self.size = os.path.getsize(self.path)
             with open(self.path, "rb") as f:
@@ -119,17 +111,17 @@ class Recording:
                     what = "an empty file" if not head else "not an MCAP file"
                     raise RecordingError(f"{self.path}: {what}")
                 self.problem = self._check_end(f)
+                if not self.problem:
+                    self.problem = self._load_summary(f)
         except OSError as exc:
             raise RecordingError(f"cannot read {self.path}: {exc.strerror or exc}") from None
         self.recovered = bool(self.problem)
+        self.summary_damaged = self.recovered and self._summary_start > 0
         self.recovery: Recovery | None = None
-        self._summary: Any = None
         # topic -> schema name of channels met by the recover path
         self.recovered_schemas: dict[str, str] = {}
-        # damaged chunks of a finished file that reading skipped
-        self.damage: list[str] = []
-        if not self.recovered:
-            self._load_summary()
+        # parts of the file that reading skipped
+        self.damage: list[Damage] = []
 
     # -- opening ---------------------------------------------------------------------------------
 
@@ -142,20 +134,35 @@ class Recording:
             return "the file has no footer (recording not finished)"
         f.seek(-(len(MAGIC) + FOOTER_RECORD_SIZE), os.SEEK_END)
         footer = f.read(FOOTER_RECORD_SIZE)
-        if footer[0] != OPCODE_FOOTER or struct.unpack_from("<Q", footer, 1)[0] != 20:
+        opcode, length, start, _, crc = _FOOTER.unpack(footer)
+        if opcode != OPCODE_FOOTER or length != 20:
             return "the file has no valid footer"
+        footer_at = self.size - len(MAGIC) - FOOTER_RECORD_SIZE
+        if start and not len(MAGIC) < start <= footer_at:
+            self._summary_start = 0
+            return "the footer points outside the file"
+        self._summary_start, self._summary_crc = start, crc
         return ""
 
-    def _load_summary(self) -> None:
-        from mcap.reader import make_reader
-
-        try:
-            with open(self.path, "rb") as f:
-                self._summary = make_reader(f, validate_crcs=True).get_summary()
-        except Exception as exc:  # any parse failure of the summary means: recover
-            self.problem = f"the summary is unreadable ({exc})"
-            self.recovered = True
+    def _load_summary(self, f: IO[bytes]) -> str:
+        """Read and check the summary section; '' when it can be believed, else why not."""
+        if not self._summary_start:
             self._summary = None
+            return ""
+        footer_at = self.size - len(MAGIC) - FOOTER_RECORD_SIZE
+        f.seek(self._summary_start)
+        section = f.read(footer_at - self._summary_start)
+        f.seek(footer_at)
+        footer = f.read(FOOTER_RECORD_SIZE)
+        if self._summary_crc and zlib.crc32(footer[:-4], zlib.crc32(section)) != self._summary_crc:
+            return (
+                "the summary section fails its CRC check, so its statistics and index are not used"
+            )
+        try:
+            self._summary = _parse_summary(section + footer + MAGIC)
+        except Exception as exc:  # any parse failure of the summary means: read sequentially
+            return f"the summary is unreadable ({_why(exc)})"
+        return ""
 
     @property
     def recovery_note(self) -> str:
@@ -163,40 +170,44 @@ class Recording:
         if not self.recovered:
             if not self.damage:
                 return ""
-            return f"{len(self.damage)} damaged chunk(s) skipped; first: {self.damage[0]}"
+            first = self.damage[0].detail
+            return f"{len(self.damage)} damaged part(s) skipped; first: {first}"
         if self.recovery is None:
             return f"unfinished recording, read through the recover path: {self.problem}"
         return self.recovery.describe()
 
     def summary(self) -> Any:
         """The mcap Summary of a finished file (None when recovered or written without one)."""
-        return self._summary
+        return None if self.recovered else self._summary
 
     # -- metadata --------------------------------------------------------------------------------
 
     def metadata(self) -> dict[str, dict[str, str]]:
         """Metadata records by name. A recovered file gives the ones before its first chunk."""
-        from mcap.records import Chunk, Metadata
-        from mcap.stream_reader import StreamReader
+        from mcap.data_stream import ReadDataStream
+        from mcap.records import Metadata
 
         out: dict[str, dict[str, str]] = {}
         try:
             with open(self.path, "rb") as f:
-                if not self.recovered:
-                    from mcap.reader import make_reader
-
-                    for found in make_reader(f).iter_metadata():
-                        out[found.name] = dict(found.metadata)
-                    return out
-                reader = StreamReader(f, emit_chunks=True, record_size_limit=RECORD_SIZE_LIMIT)
-                for record in reader.records:
-                    if isinstance(record, Metadata):
-                        out[record.name] = dict(record.metadata)
-                    elif isinstance(record, Chunk):
-                        break
-        except Exception:  # a damaged tail ends the search; keep what was found
+                summary = self.summary()
+                if summary is None:
+                    return metadata_before_data(f, self.size)
+                for index in summary.metadata_indexes:
+                    if not 0 < index.offset <= index.offset + index.length <= self._data_end():
+                        continue  # an index pointing outside the data: ignore it
+                    f.seek(index.offset)
+                    raw = f.read(index.length)
+                    if len(raw) < 9 or raw[0] != OPCODE_METADATA:
+                        continue
+                    found = Metadata.read(ReadDataStream(io.BytesIO(raw[9:])))
+                    out[found.name] = dict(found.metadata)
+        except Exception:  # a damaged record ends the search; keep what was found
             pass
         return out
+
+    def _data_end(self) -> int:
+        return self._summary_start or self.size
 
     # -- messages --------------------------------------------------------------------------------
 
@@ -211,23 +222,43 @@ class Recording:
 
         Recovered files only: ``tally(topic, role, log_time)`` is called for every message
         read, wanted or not, so one pass can count everything and yield only a few topics.
+        Damaged parts are skipped and listed in ``damage``.
         """
+        for entry in self.entries(topics, roles, tally=tally):
+            if isinstance(entry, RawMessage):
+                yield entry
+
+    def entries(
+        self,
+        topics: set[str] | None = None,
+        roles: set[str] | None = None,
+        *,
+        tally: Tally | None = None,
+    ) -> Iterator[RawMessage | Damage]:
+        """Like ``messages``, with a ``Damage`` entry where a part of the file was lost."""
 
         def wanted(topic: str, role: str) -> bool:
             return (topics is None or topic in topics) and (roles is None or role in roles)
 
-        if self.recovered:
-            yield from self._recover(wanted, tally)
-        else:
-            yield from self._read_finished(wanted)
+        source = self._recover(wanted, tally) if self.recovered else self._read_finished(wanted)
+        for entry in source:
+            if isinstance(entry, Damage):
+                self.damage.append(entry)
+            yield entry
 
-    def _read_finished(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage]:
-        """Through the summary's chunk index, reading only chunks that hold wanted channels.
+    def _unique_chunk_indexes(self) -> list[Any]:
+        """The summary's chunk indexes, each chunk once, in file order."""
+        seen: set[int] = set()
+        out = []
+        indexes = [] if self._summary is None else self._summary.chunk_indexes
+        for index in sorted(indexes, key=lambda i: i.chunk_start_offset):
+            if index.chunk_start_offset not in seen:
+                seen.add(index.chunk_start_offset)
+                out.append(index)
+        return out
 
-        Every chunk read is checked against its CRC. Uncompressed chunks (ours) are walked
-        record by record without building an object per message; anything else goes
-        through the mcap library.
-        """
+    def _read_finished(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage | Damage]:
+        """Through the summary's chunk index, reading only chunks that hold wanted channels."""
         summary = self._summary
         if summary is None or not summary.chunk_indexes:
             yield from self._read_with_library(wanted)
@@ -239,176 +270,146 @@ class Recording:
         }
         if not chosen:
             return
-        indexes = sorted(
-            (
-                index
-                for index in summary.chunk_indexes
-                if not index.message_index_offsets or chosen.keys() & index.message_index_offsets
-            ),
-            key=lambda index: index.chunk_start_offset,
-        )
+        indexes = [
+            index
+            for index in self._unique_chunk_indexes()
+            if not index.message_index_offsets or chosen.keys() & index.message_index_offsets
+        ]
         with open(self.path, "rb") as f:
             for index in indexes:
                 try:
-                    yield from self._finished_chunk(f, index, chosen)
-                except RecordingError as exc:  # skip it, keep reading, tell the caller
-                    self.damage.append(str(exc))
+                    records = self._chunk_records(f, index)
+                    found = [
+                        RawMessage(*chosen[channel_id], log_time, data)
+                        for channel_id, log_time, data in _messages_in(records)
+                        if channel_id in chosen
+                    ]
+                except ChunkDamage as exc:  # skip it, keep reading, tell the caller
+                    yield Damage(
+                        index.message_start_time,
+                        f"damaged chunk at byte {index.chunk_start_offset} skipped: {exc}",
+                    )
+                    continue
+                yield from found
 
-    def _finished_chunk(
-        self, f: IO[bytes], index: Any, chosen: dict[int, tuple[str, str]]
-    ) -> Iterator[RawMessage]:
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Chunk, Message
-        from mcap.stream_reader import breakup_chunk
+    def _chunk_records(self, f: IO[bytes], index: Any) -> bytes:
+        """The records of the chunk an index entry points to (ChunkDamage when unusable)."""
+        offset, length = index.chunk_start_offset, index.chunk_length
+        if not len(MAGIC) <= offset < offset + length <= self._data_end() or length > MAX_RECORD:
+            raise ChunkDamage("its index entry points outside the data section")
+        f.seek(offset)
+        raw = f.read(length)
+        if len(raw) < 9 or raw[0] != OPCODE_CHUNK:
+            raise ChunkDamage("no chunk where its index entry points")
+        if RECORD_HEAD.unpack_from(raw)[1] != length - 9:
+            raise ChunkDamage("its record length does not match its index entry")
+        return chunk_payload(memoryview(raw)[9:])
 
-        where = f"{self.path}: damaged recording: chunk at byte {index.chunk_start_offset}"
-        f.seek(index.chunk_start_offset)
-        raw = f.read(index.chunk_length)
-        if len(raw) < index.chunk_length or raw[0] != OPCODE_CHUNK:
-            raise RecordingError(f"{where} is missing")
-        try:
-            chunk = Chunk.read(ReadDataStream(io.BytesIO(raw[9:])))
-        except Exception as exc:  # a record that does not parse
-            raise RecordingError(f"{where} does not parse ({exc})") from None
-        if not _intact(chunk):
-            try:
-                records = breakup_chunk(chunk, validate_crc=True)
-            except Exception as exc:  # CRC mismatch or an unreadable compression
-                raise RecordingError(f"{where}: {exc}") from None
-            for record in records:
-                if isinstance(record, Message) and record.channel_id in chosen:
-                    topic, role = chosen[record.channel_id]
-                    yield RawMessage(topic, role, record.log_time, record.data)
-            return
-        data = chunk.data
-        pos, size = 0, len(data)
-        unpack_record, unpack_message = _RECORD_HEAD.unpack_from, _MESSAGE_HEAD.unpack_from
-        while pos + 9 <= size:
-            opcode, length = unpack_record(data, pos)
-            body, end = pos + 9, pos + 9 + length
-            if end > size:
-                raise RecordingError(f"{where} has a record running past its end")
-            if opcode == OPCODE_MESSAGE and length >= 22:
-                channel_id, _, log_time = unpack_message(data, body)
-                known = chosen.get(channel_id)
-                if known is not None:
-                    yield RawMessage(known[0], known[1], log_time, data[body + 22 : end])
-            pos = end
+    def verify(self) -> list[Damage]:
+        """Check every chunk of a finished file (the data section CRC first: when it matches,
+        nothing else is read). Returns the damaged parts, also added to ``damage``."""
+        if self.recovered or self._summary is None:
+            return []
+        found: list[Damage] = []
+        with open(self.path, "rb") as f:
+            stored = self._data_section_crc(f)
+            if stored is not None and stored[0] and stored[0] == stored[1]:
+                return []
+            for index in self._unique_chunk_indexes():
+                try:
+                    self._chunk_records(f, index)
+                except ChunkDamage as exc:
+                    found.append(
+                        Damage(
+                            index.message_start_time,
+                            f"damaged chunk at byte {index.chunk_start_offset}: {exc}",
+                        )
+                    )
+        if not found and stored is not None and stored[0]:
+            found.append(
+                Damage(
+                    0,
+                    "the data section fails its CRC check outside the chunks (an index "
+                    "or metadata record is damaged; the messages are intact)",
+                )
+            )
+        self.damage.extend(found)
+        return found
 
-    def _read_with_library(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage]:
-        """Files without a chunk index (other writers): the mcap library reads them."""
-        from mcap.exceptions import McapError
-        from mcap.reader import make_reader
-        from mcap.stream_reader import CRCValidationError
+    def _data_section_crc(self, f: IO[bytes]) -> tuple[int, int] | None:
+        """(stored, computed) CRC of the data section, None when there is no DataEnd."""
+        end = self._summary_start - (9 + 4)
+        if end < len(MAGIC):
+            return None
+        f.seek(end)
+        record = f.read(13)
+        opcode, length = RECORD_HEAD.unpack_from(record)
+        if opcode != OPCODE_DATA_END or length != 4:
+            return None
+        stored = int.from_bytes(record[9:13], "little")
+        crc, f_pos = 0, 0
+        f.seek(0)
+        while f_pos < end:
+            block = f.read(min(1 << 20, end - f_pos))
+            if not block:
+                break
+            crc = zlib.crc32(block, crc)
+            f_pos += len(block)
+        return stored, crc
 
-        roles: dict[int, str] = {}
-        try:
-            with open(self.path, "rb") as f:
-                reader = make_reader(f, validate_crcs=True)
-                for _, channel, message in reader.iter_messages(log_time_order=False):
-                    role = roles.get(channel.id)
-                    if role is None:
-                        role = roles[channel.id] = channel_role(channel.topic, channel.metadata)
-                    if wanted(channel.topic, role):
-                        yield RawMessage(channel.topic, role, message.log_time, message.data)
-        except (CRCValidationError, McapError, struct.error, ValueError) as exc:
-            raise RecordingError(f"{self.path}: damaged recording: {exc}") from None
+    def _read_with_library(
+        self, wanted: Callable[[str, str], bool]
+    ) -> Iterator[RawMessage | Damage]:
+        """Files without a chunk index (other writers): read sequentially."""
+        summary = self._summary
+        channels = {} if summary is None else dict(summary.channels)
+        yield from self._scan(wanted, None, channels, Recovery(total_bytes=self.size))
 
     def _recover(
         self, wanted: Callable[[str, str], bool], tally: Tally | None
-    ) -> Iterator[RawMessage]:
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Schema
-        from mcap.stream_reader import StreamReader, breakup_chunk
-
-        report = Recovery(total_bytes=self.size, good_bytes=len(MAGIC))
+    ) -> Iterator[RawMessage | Damage]:
+        report = Recovery(total_bytes=self.size)
+        if self.summary_damaged:
+            report.summary_problem = self.problem
         self.recovery = report
-        channels: dict[int, tuple[str, str]] = {}
-        schemas: dict[int, str] = {}
+        yield from self._scan(wanted, tally, {}, report)
 
-        def handle(record: Any) -> Iterator[RawMessage]:
-            if isinstance(record, Schema):
-                schemas[record.id] = record.name
-            elif isinstance(record, Channel):
-                channels[record.id] = (
-                    record.topic,
-                    channel_role(record.topic, dict(record.metadata)),
-                )
-                self.recovered_schemas[record.topic] = schemas.get(record.schema_id, "")
-            elif isinstance(record, Message):
-                known = channels.get(record.channel_id)
-                if known is not None:
-                    report.messages += 1
-                    if tally is not None:
-                        tally(known[0], known[1], record.log_time)
-                    if wanted(*known):
-                        yield RawMessage(known[0], known[1], record.log_time, record.data)
-
-        def walk(data: bytes) -> Iterator[RawMessage]:
-            """The records of an uncompressed chunk, without an object per message."""
-            pos, size = 0, len(data)
-            chosen: dict[int, bool] = {}
-            while pos + 9 <= size:
-                opcode, length = _RECORD_HEAD.unpack_from(data, pos)
-                body, end = pos + 9, pos + 9 + length
-                if end > size:
-                    break
-                if opcode == OPCODE_MESSAGE and length >= 22:
-                    channel_id, _, log_time = _MESSAGE_HEAD.unpack_from(data, body)
-                    known = channels.get(channel_id)
-                    if known is not None:
-                        report.messages += 1
-                        if tally is not None:
-                            tally(known[0], known[1], log_time)
-                        take = chosen.get(channel_id)
-                        if take is None:
-                            take = chosen[channel_id] = wanted(*known)
-                        if take:
-                            yield RawMessage(known[0], known[1], log_time, data[body + 22 : end])
-                elif opcode == OPCODE_SCHEMA:
-                    yield from handle(Schema.read(ReadDataStream(io.BytesIO(data[body:end]))))
-                elif opcode == OPCODE_CHANNEL:
-                    yield from handle(Channel.read(ReadDataStream(io.BytesIO(data[body:end]))))
-                    chosen.clear()
-                pos = end
-
+    def _scan(
+        self,
+        wanted: Callable[[str, str], bool],
+        tally: Tally | None,
+        channels: dict[int, Any],
+        report: Recovery,
+    ) -> Iterator[RawMessage | Damage]:
+        scan = Scan(self.size, report, channels=channels)
+        roles: dict[int, tuple[str, str, bool]] = {}  # channel id -> topic, role, wanted
         with open(self.path, "rb") as f:
-            reader = StreamReader(f, emit_chunks=True, record_size_limit=RECORD_SIZE_LIMIT)
-            records = reader.records
-            while True:
-                try:
-                    record = next(records)
-                except StopIteration:
-                    break
-                except Exception as exc:  # the unfinished tail: any parse error ends the data
-                    if report.good_bytes < self.size:
-                        report.reason = f"stopped at byte {report.good_bytes}: {_why(exc)}"
-                    break
-                if isinstance(record, Chunk):
-                    if _intact(record):
-                        report.good_bytes = f.tell()
-                        try:
-                            yield from walk(record.data)
-                        except (struct.error, ValueError, UnicodeDecodeError):
-                            report.damaged_chunks += 1
-                        continue
-                    inner = _chunk_records(record, breakup_chunk)
-                    if inner is None:
-                        if f.tell() >= self.size:  # the last, half-written chunk
-                            break
-                        report.damaged_chunks += 1
-                        report.good_bytes = f.tell()
-                        continue
-                    report.good_bytes = f.tell()
-                    for item in inner:
-                        yield from handle(item)
+            for entry in scan_records(f, scan):
+                if isinstance(entry, Damage):
+                    yield entry
                     continue
-                report.good_bytes = f.tell()
-                if isinstance(record, (DataEnd, Footer)):
-                    report.data_complete = True
-                    report.reason = "data section complete, summary missing or damaged"
-                    break
-                yield from handle(record)
+                known = roles.get(entry.channel_id)
+                if known is None:
+                    channel = scan.channels.get(entry.channel_id)
+                    if channel is None:
+                        report.unknown_channel += 1
+                        continue
+                    topic = channel.topic
+                    role = channel_role(topic, dict(channel.metadata))
+                    schema = scan.schemas.get(channel.schema_id)
+                    self.recovered_schemas[topic] = schema.name if schema is not None else ""
+                    known = roles[entry.channel_id] = (topic, role, wanted(topic, role))
+                report.messages += 1
+                if tally is not None:
+                    tally(known[0], known[1], entry.log_time)
+                if known[2]:
+                    yield RawMessage(known[0], known[1], entry.log_time, entry.data)
+        if report.unknown_channel and not any("definition" in d.detail for d in self.damage):
+            yield Damage(
+                0,
+                f"{report.unknown_channel} messages skipped: the record defining their "
+                "channel was lost",
+            )
 
     # -- typed views -----------------------------------------------------------------------------
 
@@ -424,33 +425,91 @@ class Recording:
 
     def replay(self) -> Iterator[RawItem | Event]:
         """Raw items plus the stored diagnostics a decoder cannot re-create (link changes,
-        unreadable input lines), in file order: what to feed a Decoder to decode again."""
+        unreadable input lines), in file order: what to feed a Decoder to decode again.
+        A lost part of the file becomes an ``incomplete`` diagnostic where it was."""
         wanted = {*RAW_TOPICS, TOPIC_DIAGNOSTICS}
-        for message in self.messages(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
+        last = 0
+        for entry in self.entries(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
+            if isinstance(entry, Damage):
+                yield self._damage_event(entry, last)
+                continue
+            last = entry.log_time
             try:
-                obj = json.loads(message.data)
-                item = raw_item(message.topic, obj)
+                obj = json.loads(entry.data)
+                item = raw_item(entry.topic, obj)
                 if item is not None:
                     yield item
                 elif isinstance(obj, dict) and obj.get("kind") in SOURCE_KINDS:
-                    obj.setdefault("topic", message.topic)
-                    obj.setdefault("time", message.log_time / 1e9)
+                    obj.setdefault("topic", entry.topic)
+                    obj.setdefault("time", entry.log_time / 1e9)
                     yield Event.from_dict(obj)
             except (ValueError, KeyError, TypeError):
                 continue
 
     def events(self) -> Iterator[Event]:
-        """The decoded events as recorded."""
-        for message in self.messages(roles={ROLE_EVENT}):
+        """The decoded events as recorded, with an ``incomplete`` diagnostic for a lost part."""
+        last = 0
+        for entry in self.entries(roles={ROLE_EVENT}):
+            if isinstance(entry, Damage):
+                yield self._damage_event(entry, last)
+                continue
+            last = entry.log_time
             try:
-                obj = json.loads(message.data)
+                obj = json.loads(entry.data)
                 if not isinstance(obj, dict):
                     continue
-                obj.setdefault("topic", message.topic)
-                obj.setdefault("time", message.log_time / 1e9)
+                obj.setdefault("topic", entry.topic)
+                obj.setdefault("time", entry.log_time / 1e9)
                 yield Event.from_dict(obj)
             except (ValueError, KeyError, TypeError):
                 continue
+
+    def _damage_event(self, damage: Damage, last: int) -> Event:
+        when = (damage.log_time or last) / 1e9
+        return diagnostic(when, self.path, INCOMPLETE, f"damaged recording: {damage.detail}")
+
+
+def _parse_summary(section: bytes) -> Any:
+    """The records of a summary section (already CRC-checked, followed by the footer and
+    the closing magic) as an mcap Summary."""
+    from mcap.records import (
+        AttachmentIndex,
+        Channel,
+        ChunkIndex,
+        MetadataIndex,
+        Schema,
+        Statistics,
+    )
+    from mcap.stream_reader import StreamReader
+    from mcap.summary import Summary
+
+    summary = Summary()
+    reader = StreamReader(io.BytesIO(section), skip_magic=True, record_size_limit=len(section))
+    for record in reader.records:
+        if isinstance(record, Statistics):
+            summary.statistics = record
+        elif isinstance(record, Schema):
+            summary.schemas[record.id] = record
+        elif isinstance(record, Channel):
+            summary.channels[record.id] = record
+        elif isinstance(record, ChunkIndex):
+            summary.chunk_indexes.append(record)
+        elif isinstance(record, MetadataIndex):
+            summary.metadata_indexes.append(record)
+        elif isinstance(record, AttachmentIndex):
+            summary.attachment_indexes.append(record)
+    return summary
+
+
+def _messages_in(records: bytes) -> Iterator[tuple[int, int, bytes]]:
+    """(channel id, log time, data) of every message in a chunk's records."""
+    unpack = _MESSAGE_HEAD.unpack_from
+    for opcode, body, end in walk(records):
+        if opcode == OPCODE_MESSAGE:
+            if end - body < MESSAGE_FIXED:
+                raise ChunkDamage("a message record is too short")
+            channel_id, _, log_time = unpack(records, body)
+            yield channel_id, log_time, records[body + MESSAGE_FIXED : end]
 
 
 def _why(exc: BaseException) -> str:
@@ -459,29 +518,6 @@ def _why(exc: BaseException) -> str:
     if name == "EndOfFile" or not text:
         return "end of file inside a record (recording not finished)"
     return f"{name}: {text}"
-
-
-def _intact(chunk: Any) -> bool:
-    """An uncompressed chunk that is complete and passes its CRC (walked directly)."""
-    if chunk.compression != "" or len(chunk.data) != chunk.uncompressed_size:
-        return False
-    return not chunk.uncompressed_crc or zlib.crc32(chunk.data) == chunk.uncompressed_crc
-
-
-def _chunk_records(chunk: Any, breakup: Callable[..., list[Any]]) -> list[Any] | None:
-    """Records of a complete, intact chunk; None when it is cut short or fails its CRC."""
-    if chunk.compression == "" and len(chunk.data) != chunk.uncompressed_size:
-        return None
-    if (
-        chunk.compression == ""
-        and chunk.uncompressed_crc
-        and zlib.crc32(chunk.data) != chunk.uncompressed_crc
-    ):
-        return None
-    try:
-        return breakup(chunk, validate_crc=True)
-    except Exception:  # damaged content or a compression we cannot read
-        return None
 
 
 class RecordingIterator(Generic[T]):
@@ -500,6 +536,11 @@ class RecordingIterator(Generic[T]):
     @property
     def recovered(self) -> bool:
         return self.recording.recovered
+
+    @property
+    def damage(self) -> list[Damage]:
+        """The parts of the file reading skipped so far."""
+        return self.recording.damage
 
     @property
     def note(self) -> str:
