@@ -62,10 +62,13 @@ class ChunkHead:
     compression: str
     data_offset: int
     data_length: int
+    refused: str = ""  # well framed, but not to be decompressed: why
 
 
 def parse_chunk(body: bytes | memoryview) -> ChunkHead:
-    """The head of a chunk record body; ChunkDamage unless every length is consistent."""
+    """The head of a chunk record body; ChunkDamage unless every length is consistent.
+    A well-framed chunk that must not be decompressed (too large, unknown compression)
+    says why in ``refused``."""
     if len(body) < _CHUNK_FIXED.size + 8:
         raise ChunkDamage("the chunk record is too short")
     start, end, size, crc, name_length = _CHUNK_FIXED.unpack_from(body, 0)
@@ -83,14 +86,15 @@ def parse_chunk(body: bytes | memoryview) -> ChunkHead:
     at += 8
     if at + data_length != len(body):
         raise ChunkDamage("the chunk's data length does not match its record length")
+    refused = ""
     if compression not in COMPRESSIONS:
-        raise ChunkDamage(f"unknown compression {compression!r}")
-    if size > MAX_CHUNK_UNCOMPRESSED:
-        raise ChunkDamage(
+        refused = f"unknown compression {compression!r}"
+    elif size > MAX_CHUNK_UNCOMPRESSED:
+        refused = (
             f"the chunk claims {size} bytes uncompressed, more than the limit of "
             f"{MAX_CHUNK_UNCOMPRESSED} (refused)"
         )
-    return ChunkHead(start, end, size, crc, compression, at, data_length)
+    return ChunkHead(start, end, size, crc, compression, at, data_length, refused)
 
 
 def decompress(data: bytes | memoryview, compression: str, size: int) -> bytes:
@@ -123,6 +127,8 @@ def decompress(data: bytes | memoryview, compression: str, size: int) -> bytes:
 def chunk_payload(body: bytes | memoryview, head: ChunkHead | None = None) -> bytes:
     """The records of a chunk, decompressed and CRC-checked (ChunkDamage otherwise)."""
     head = parse_chunk(body) if head is None else head
+    if head.refused:
+        raise ChunkDamage(head.refused)
     data = memoryview(body)[head.data_offset : head.data_offset + head.data_length]
     out = decompress(data, head.compression, head.uncompressed_size)
     if head.crc and zlib.crc32(out) != head.crc:

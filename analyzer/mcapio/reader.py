@@ -107,7 +107,8 @@ class Recording:
             self.size = os.path.getsize(self.path)
             with open(self.path, "rb") as f:
                 head = f.read(len(MAGIC))
-                if head != MAGIC:
+                damaged_magic = head != MAGIC and self._ends_with_magic(f)
+                if head != MAGIC and not damaged_magic:
                     what = "an empty file" if not head else "not an MCAP file"
                     raise RecordingError(f"{self.path}: {what}")
                 self.problem = self._check_end(f)
@@ -122,8 +123,18 @@ class Recording:
         self.recovered_schemas: dict[str, str] = {}
         # parts of the file that reading skipped
         self.damage: list[Damage] = []
+        if damaged_magic:
+            self.damage.append(Damage(0, "the file's leading magic bytes are damaged"))
+        self._damaged_chunks: set[int] = set()  # offsets of chunks already in ``damage``
+        self._verified = False
 
     # -- opening ---------------------------------------------------------------------------------
+
+    def _ends_with_magic(self, f: IO[bytes]) -> bool:
+        if self.size < 2 * len(MAGIC) + FOOTER_RECORD_SIZE:
+            return False
+        f.seek(-len(MAGIC), os.SEEK_END)
+        return f.read(len(MAGIC)) == MAGIC
 
     def _check_end(self, f: IO[bytes]) -> str:
         """'' when the file ends with a footer and magic, else what is missing."""
@@ -285,6 +296,7 @@ class Recording:
                         if channel_id in chosen
                     ]
                 except ChunkDamage as exc:  # skip it, keep reading, tell the caller
+                    self._damaged_chunks.add(index.chunk_start_offset)
                     yield Damage(
                         index.message_start_time,
                         f"damaged chunk at byte {index.chunk_start_offset} skipped: {exc}",
@@ -307,25 +319,30 @@ class Recording:
 
     def verify(self) -> list[Damage]:
         """Check every chunk of a finished file (the data section CRC first: when it matches,
-        nothing else is read). Returns the damaged parts, also added to ``damage``."""
-        if self.recovered or self._summary is None:
+        nothing else is read). Returns the damaged parts not reported before, also added to
+        ``damage``."""
+        if self.recovered or self._summary is None or self._verified:
             return []
+        self._verified = True
         found: list[Damage] = []
         with open(self.path, "rb") as f:
             stored = self._data_section_crc(f)
             if stored is not None and stored[0] and stored[0] == stored[1]:
                 return []
             for index in self._unique_chunk_indexes():
+                if index.chunk_start_offset in self._damaged_chunks:
+                    continue
                 try:
                     self._chunk_records(f, index)
                 except ChunkDamage as exc:
+                    self._damaged_chunks.add(index.chunk_start_offset)
                     found.append(
                         Damage(
                             index.message_start_time,
                             f"damaged chunk at byte {index.chunk_start_offset}: {exc}",
                         )
                     )
-        if not found and stored is not None and stored[0]:
+        if not found and not self._damaged_chunks and stored is not None and stored[0]:
             found.append(
                 Damage(
                     0,
@@ -445,6 +462,12 @@ class Recording:
                     yield Event.from_dict(obj)
             except (ValueError, KeyError, TypeError):
                 continue
+        yield from self._unread_damage(last)
+
+    def _unread_damage(self, last: int) -> Iterator[Event]:
+        """Damaged chunks the read did not need (other channels): reported all the same."""
+        for damage in self.verify():
+            yield self._damage_event(damage, last)
 
     def events(self) -> Iterator[Event]:
         """The decoded events as recorded, with an ``incomplete`` diagnostic for a lost part."""
@@ -463,6 +486,7 @@ class Recording:
                 yield Event.from_dict(obj)
             except (ValueError, KeyError, TypeError):
                 continue
+        yield from self._unread_damage(last)
 
     def _damage_event(self, damage: Damage, last: int) -> Event:
         when = (damage.log_time or last) / 1e9
