@@ -20,8 +20,8 @@ from analyzer.cli import main
 from analyzer.mcapio.chunks import MAX_CHUNK_UNCOMPRESSED, RECORD_HEAD
 from analyzer.mcapio.info import recording_info
 from analyzer.mcapio.reader import Recording, RecordingError, read_replay
-from analyzer.mcapio.stats import EventStats
 from analyzer.protocol.types import INCOMPLETE, TOPIC_DIAGNOSTICS, Event
+from analyzer.tally import Tally
 from tests.test_mcap_support import traffic, write_recording
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -147,9 +147,10 @@ def test_altered_statistics_are_not_believed(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "bad",
     [
-        {"diagnostics_by_kind": "[1, 2]"},
-        {"diagnostics_by_kind": '{"crc_mismatch": [1]}', "attitude_count": "2"},
-        {"diagnostics_by_kind": "{}", "attitude_count": "many"},
+        {"format": "tally/1", "figures": "[1, 2]", "items": "{}"},
+        {"format": "tally/1", "figures": '{"topics": [1]}', "items": '{"frames": "x"}'},
+        {"format": "tally/1", "figures": "{}", "items": "[]"},
+        {"format": "tally/1"},
         {},
     ],
 )
@@ -160,12 +161,12 @@ def test_malformed_stats_metadata_falls_back_to_a_scan(
     bad: dict[str, str],
 ) -> None:
     good = recording_info(_recording(tmp_path))
-    monkeypatch.setattr(EventStats, "to_metadata", lambda self: bad)
+    monkeypatch.setattr(Tally, "to_metadata", lambda self: bad)
     path = _recording(tmp_path)
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
     assert "the stats record written at the end is malformed" in out
-    assert recording_info(path).stats.diagnostics == good.stats.diagnostics
+    assert recording_info(path).tally.kinds == good.tally.kinds
 
 
 # -- crafted summaries ------------------------------------------------------------------------------
@@ -334,7 +335,9 @@ def _mutate(data: bytes, plan: list[tuple[str, int, int]]) -> tuple[bytes, set[i
     out = bytearray(data)
     touched: set[int] = set()
     for kind, position, value in plan:
-        position %= max(1, len(out))
+        if not out:
+            break
+        position %= len(out)
         if kind == "flip":
             out[position] ^= 1 << (value % 8)
             touched.add(position)
