@@ -148,10 +148,7 @@ class CandumpParser:
             if stamp:
                 id_text, sharp, data = frame.partition(b"#")
                 if id_text in skip or (
-                    sharp
-                    and id_text not in want
-                    and id_text not in ids
-                    and self._unwanted(id_text)
+                    sharp and id_text not in want and id_text not in ids and self._unwanted(id_text)
                 ):
                     if (
                         sharp
