@@ -16,6 +16,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import DataTable, Footer
+from textual.widgets._footer import FooterKey
 
 from analyzer.pipeline import Sink
 from analyzer.tui.bridge import TuiBridge
@@ -32,6 +33,39 @@ from analyzer.tui.status_bar import StatusBar, StatusInfo
 from analyzer.tui.uav_panel import UavPanel
 
 REFRESH_HZ = 8.0  # screen updates per second, whatever the input rate
+
+# The all-in-one screen needs this much room; smaller terminals show one page at a time.
+WIDE_WIDTH = 120
+WIDE_HEIGHT = 36
+SIDE_BY_SIDE_WIDTH = 110  # gimbal and UAV panels next to each other on the first page
+ROOMY_HEIGHT = 30  # the first page also shows the log
+
+# number key -> (page, name in the footer)
+PAGES: dict[str, tuple[str, str]] = {
+    "1": ("state", "Gimbal+UAV"),
+    "2": ("log", "Log"),
+    "3": ("ids", "IDs"),
+    "4": ("diagnostics", "Diag"),
+}
+# keys left out of the footer when it has to make room for the page keys (they still work)
+PAGED_FOOTER_HIDES = frozenset({"toggle_pause", "clear_counters", "toggle_raw", "toggle_view"})
+
+
+class MonitorFooter(Footer):
+    """The footer, leaving out the less used keys when the screen is paged (see ? for all)."""
+
+    def compose(self) -> ComposeResult:
+        app = self.app
+        hidden = PAGED_FOOTER_HIDES if isinstance(app, MonitorApp) and app.paged else frozenset()
+        for widget in super().compose():
+            if isinstance(widget, FooterKey) and widget.action in hidden:
+                continue
+            yield widget
+
+
+def is_paged(width: int, height: int) -> bool:
+    """Whether a terminal of this size shows one page at a time."""
+    return width < WIDE_WIDTH or height < WIDE_HEIGHT
 
 
 class CaptureControl(Protocol):
@@ -71,16 +105,43 @@ class MonitorApp(App[int]):
     TITLE = "gimbal-analyzer monitor"
     ENABLE_COMMAND_PALETTE = False
 
+    # Textual sets these classes on the screen from its size; the CSS below uses them
+    HORIZONTAL_BREAKPOINTS = [  # noqa: RUF012 (declared by Textual without ClassVar)
+        (0, "-narrow"),
+        (SIDE_BY_SIDE_WIDTH, "-medium"),
+        (WIDE_WIDTH, "-wide"),
+    ]
+    VERTICAL_BREAKPOINTS = [  # noqa: RUF012
+        (0, "-short"),
+        (ROOMY_HEIGHT, "-roomy"),
+        (WIDE_HEIGHT, "-tall"),
+    ]
+
     CSS = """
-    #top { height: 10; }
-    #top GimbalPanel { width: 66; }
+    #top { height: auto; }
+    #top GimbalPanel { width: 1fr; }
     #top UavPanel { width: 1fr; }
     #middle { height: 1fr; }
     #middle CommandLog { width: 1fr; }
     #middle IdTable { width: 62; }
+
+    /* one page at a time: 1 gimbal + UAV (+ log when there is room), 2 log, 3 IDs, 4 diagnostics */
+    Screen.-paged #diagnostics { display: none; layout: vertical; height: 1fr; }
+    Screen.-paged #diagnostics #diag-graphs { width: 1fr; }
+    Screen.-paged #ids { display: none; width: 1fr; }
+    Screen.-paged.-narrow #top { layout: vertical; }
+    Screen.-paged.-short.-page-state #middle { display: none; }
+    Screen.-paged.-page-log #top { display: none; }
+    Screen.-paged.-page-ids #top { display: none; }
+    Screen.-paged.-page-ids #log { display: none; }
+    Screen.-paged.-page-ids #ids { display: block; }
+    Screen.-paged.-page-diagnostics #top { display: none; }
+    Screen.-paged.-page-diagnostics #middle { display: none; }
+    Screen.-paged.-page-diagnostics #diagnostics { display: block; }
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [
+        *(Binding(key, f"page('{page}')", name) for key, (page, name) in PAGES.items()),
         Binding("q", "quit", "Quit"),
         Binding("ctrl+c", "quit", "Quit", show=False, priority=True),
         Binding("p", "toggle_pause", "Pause"),
@@ -129,6 +190,7 @@ class MonitorApp(App[int]):
         self._handle_sigterm = handle_sigterm
         self.exit_when_done = exit_when_done  # quit once the source has ended and is shown
         self._mounted = False
+        self.page = "state"
 
     # -- layout --------------------------------------------------------------------------------
 
@@ -142,7 +204,7 @@ class MonitorApp(App[int]):
             yield IdTable(id="ids")
         yield DiagnosticsPanel(id="diagnostics")
         yield PromptBar(id="prompt")
-        yield Footer()
+        yield MonitorFooter()
 
     def on_mount(self) -> None:
         if self._handle_sigterm:
@@ -159,11 +221,45 @@ class MonitorApp(App[int]):
         self._ids = self.query_one(IdTable)
         self._diagnostics = self.query_one(DiagnosticsPanel)
         self._prompt = self.query_one(PromptBar)
+        self._main_screen = self.screen
         self._mounted = True
+        self.apply_layout()
         self.bridge.connect(self._wake)
         self.set_interval(1.0 / self.refresh_hz, self.refresh_view)
         self._log_view.focus()
         self.refresh_view()
+
+    @property
+    def paged(self) -> bool:
+        return is_paged(*self.size)
+
+    def apply_layout(self) -> None:
+        """All-in-one or one page at a time, for the terminal's current size."""
+        screen = self.screen if self.screen is self._main_screen else self._main_screen
+        screen.set_class(self.paged, "-paged")
+        for page, _ in PAGES.values():
+            screen.set_class(page == self.page, f"-page-{page}")
+        self.refresh_bindings()
+
+    def on_resize(self) -> None:
+        if self._mounted:
+            self.apply_layout()
+
+    def action_page(self, page: str) -> None:
+        """Show one page (on a small terminal); the state behind it is shared by all pages."""
+        self.page = page
+        self.apply_layout()
+        if page == "ids":
+            self._ids.focus()
+        elif page in ("state", "log"):
+            self._log_view.focus()
+        self._force_redraw()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "page":
+            # the keys (and their footer entries) exist only when there are pages
+            return self.paged
+        return True
 
     def on_unmount(self) -> None:
         self._mounted = False
@@ -216,18 +312,26 @@ class MonitorApp(App[int]):
         info.paused = self.paused
         info.paused_new = state.seq - self._paused_seq if self.paused else 0
         info.filter_text = self.filter.text
-        self._status.show(state, info)
+        self._status.show_status(state, info)
         if self.paused:
             return
         self.stats.refreshes += 1
         if self.stats.last_batch_wall:
             self.stats.lag = max(now - self.stats.last_batch_wall, 0.0)
             self.stats.max_lag = max(self.stats.max_lag, self.stats.lag)
-        self._gimbal.show(state)
-        self._uav.show(state)
+        self._show_top(state)
         self._show_log()
         self._ids.show(state, self.filter)
         self._diagnostics.show(state)
+
+    def _show_top(self, state: MonitorState) -> None:
+        """Gimbal and UAV panels; side by side they are made equally tall."""
+        gimbal, uav = self._gimbal, self._uav
+        side_by_side = gimbal.region.y == uav.region.y
+        rows = max(gimbal.rows_at(gimbal.size.width), uav.rows_at(uav.size.width))
+        gimbal.min_rows = uav.min_rows = rows if side_by_side else 0
+        gimbal.show(state)
+        uav.show(state)
 
     def _show_log(self) -> None:
         log = self._log_view
@@ -325,7 +429,7 @@ class MonitorApp(App[int]):
             self.paused = False
             self.refresh_view()
             self.paused = True
-            self._status.show(self.state, self.info)
+            self._status.show_status(self.state, self.info)
         else:
             self.refresh_view()
 

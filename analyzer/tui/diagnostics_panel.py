@@ -8,45 +8,71 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Sparkline, Static
 
 from analyzer.protocol.types import DIAGNOSTIC_KINDS
+from analyzer.tui.fit import grid, join_lines, pack
+from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import format_time
 from analyzer.tui.state import MonitorState
 
 
-def render_counters(state: MonitorState) -> Text:
-    """Counters by kind since the last clear, totals since start (never reset)."""
+def counter_lines(state: MonitorState, width: int) -> list[Text]:
+    """Counters by kind since the last clear (as many columns as fit), totals since start."""
     c = state.counters
-    text = Text()
-    for i, kind in enumerate((*DIAGNOSTIC_KINDS, "warnings")):
-        n = c.warnings if kind == "warnings" else c.kinds.get(kind, 0)
-        if i and i % 3 == 0:
-            text.append("\n")
-        style = "dim" if n == 0 else ("bold yellow" if kind in ("link", "warnings") else "bold red")
-        text.append(f"{kind:>17} ", "dim")
-        text.append(f"{n:<7,}", style)
-    others = sorted(set(c.kinds) - set(DIAGNOSTIC_KINDS))
-    for kind in others:
-        text.append(f"\n{kind:>17} ", "dim")
-        text.append(f"{c.kinds[kind]:<7,}", "bold red")
+    cells: list[Text] = []
+    kinds = (*DIAGNOSTIC_KINDS, "warnings", *sorted(set(c.kinds) - set(DIAGNOSTIC_KINDS)))
+    name_width = max(len(k) for k in kinds)
+    counts = [c.warnings if kind == "warnings" else c.kinds.get(kind, 0) for kind in kinds]
+    count_width = max(len(f"{n:,}") for n in counts)
+    for kind, n in zip(kinds, counts, strict=True):
+        if kind not in DIAGNOSTIC_KINDS and kind != "warnings":
+            style = "bold red"
+        elif n == 0:
+            style = "dim"
+        else:
+            style = "bold yellow" if kind in ("link", "warnings") else "bold red"
+        cells.append(
+            Text.assemble((f"{kind:>{name_width}} ", "dim"), (f"{n:<{count_width},}", style))
+        )
+    lines = grid(cells, width, gap=3)
     t = state.total
-    text.append("\n")
-    text.append("since start ", "dim")
-    text.append(f"{t.frames:,} frames  {t.chunks:,} chunks  {t.events:,} events  ")
-    text.append(f"{t.errors:,} errors", "bold red" if t.errors else "")
+    totals = [
+        Text("since start", "dim"),
+        Text(f"{t.frames:,} frames"),
+        Text(f"{t.chunks:,} chunks"),
+        Text(f"{t.events:,} events"),
+        Text(f"{t.errors:,} errors", "bold red" if t.errors else ""),
+    ]
     if state.cleared_at is not None:
-        when = format_time(state.cleared_at)
-        text.append(f"  (cleared {state.clear_count}x, last {when})", "dim")
+        when = format_time(state.cleared_at).strip()
+        totals.append(Text(f"(cleared {state.clear_count}x, last {when})", "dim"))
+    lines += pack(totals, width, indent=2)
     if state.dropped_batches:
-        text.append(f"\ndisplay skipped {state.dropped_batches} batches", "bold yellow")
-    return text
+        lines.append(Text(f"display skipped {state.dropped_batches} batches", "bold yellow"))
+    return lines
+
+
+def render_counters(state: MonitorState, width: int = 76) -> Text:
+    """The counters' text at ``width`` cells (also used by tests)."""
+    return join_lines(counter_lines(state, width))
+
+
+class CountersView(FittedPanel):
+    """The counters part of the panel (no border of its own)."""
+
+    DEFAULT_CSS = """
+    CountersView { border: none; padding: 0 1 0 0; }
+    """
+
+    def lines(self, state: MonitorState, width: int) -> list[Text]:
+        return counter_lines(state, width)
 
 
 class DiagnosticsPanel(Horizontal):
     """Counters on the left, two sparklines on the right."""
 
     DEFAULT_CSS = """
-    DiagnosticsPanel { border: round $primary; height: 8; }
+    DiagnosticsPanel { border: round $primary; height: auto; }
     DiagnosticsPanel #diag-counters { width: 1fr; }
-    DiagnosticsPanel #diag-graphs { width: 40; padding: 0 1; }
+    DiagnosticsPanel #diag-graphs { width: 40; height: 6; padding: 0 1; }
     DiagnosticsPanel Sparkline { height: 2; margin: 0 0 0 0; }
     DiagnosticsPanel #errors-spark > .sparkline--max-color { color: $error; }
     DiagnosticsPanel #errors-spark > .sparkline--min-color { color: $error 30%; }
@@ -54,7 +80,7 @@ class DiagnosticsPanel(Horizontal):
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)
-        self._counters = Static(id="diag-counters")
+        self._counters = CountersView(id="diag-counters")
         self._frames_label = Static(id="frames-label")
         self._frames = Sparkline([0.0], id="frames-spark")
         self._errors_label = Static(id="errors-label")
@@ -72,7 +98,7 @@ class DiagnosticsPanel(Horizontal):
         self.border_title = "Diagnostics"
 
     def show(self, state: MonitorState) -> None:
-        self._counters.update(render_counters(state))
+        self._counters.show(state)
         frames = list(state.frames_history)
         errors = list(state.errors_history)
         n = len(frames)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from analyzer import render, timefmt
 from analyzer.protocol.types import (
     TO_IDU,
@@ -98,3 +100,22 @@ _COMPASS = ("N", "NE", "E", "SE", "S", "SW", "W", "NW")
 def compass(yaw_deg: float) -> str:
     """Compass point of a heading: 'N', 'NE', ..."""
     return _COMPASS[int(((yaw_deg % 360) + 22.5) // 45) % 8]
+
+
+def labelled(fields: Mapping[str, object], name: str) -> tuple[str, int | None]:
+    """(label, raw code) of a labelled field.
+
+    Reads both forms: ``X`` = label string with ``X_code`` = raw integer, and the older
+    ``X`` = raw integer with ``X_name`` = label.
+    """
+    value = fields.get(name)
+    code = fields.get(f"{name}_code")
+    if code is None and isinstance(value, int) and not isinstance(value, bool):
+        code = value
+    label = fields.get(f"{name}_name")
+    if label is None:
+        label = value if isinstance(value, str) else None
+    raw = code if isinstance(code, int) and not isinstance(code, bool) else None
+    if label is None:
+        return ("?" if raw is None else f"unknown_0x{raw:02x}"), raw
+    return str(label), raw

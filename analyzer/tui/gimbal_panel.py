@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 from rich.text import Text
-from textual.widgets import Static
 
 from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, Event
-from analyzer.tui.formatting import compass, describe_params, format_age, short_age, value_bar
+from analyzer.tui.fit import grid, join_lines, pack
+from analyzer.tui.fitted_panel import FittedPanel
+from analyzer.tui.formatting import (
+    compass,
+    describe_params,
+    format_age,
+    labelled,
+    short_age,
+    value_bar,
+)
 from analyzer.tui.state import MonitorState
 
 PITCH_RANGE = (-110.0, 60.0)
@@ -15,104 +23,114 @@ MOTOR_YAW_RANGE = (-170.0, 170.0)
 WIDE_MOTOR_YAW_RANGE = (-325.0, 325.0)  # 3.5x zoom gimbals
 WIDE_MOTOR_YAW_TYPES = (3, 4)
 BAR_WIDTH = 22
+MIN_BAR_WIDTH = 8
 
 
-def _axis(label: str, value: float | None, low: float, high: float, note: str = "") -> Text:
+def _axis(
+    label: str, value: float | None, low: float, high: float, width: int, note: str = ""
+) -> Text:
+    """'pitch  -37.25°  [---o--|---] -110..60': the gauge shrinks (or goes) on narrow panels."""
     line = Text(f"{label:<10}")
     line.append("     —  " if value is None else f"{value:8.2f}°", style="bold")
-    line.append("  ")
-    line.append(value_bar(value, low, high, BAR_WIDTH), style="cyan")
-    line.append(f" {low:g}..{high:g}", style="dim")
     if note:
-        line.append(f" {note}", style="bold")
+        line.append(f" {note:<2}", style="bold")
+    limits = f" {low:g}..{high:g}"
+    bar = min(BAR_WIDTH, width - line.cell_len - 2 - len(limits))
+    if bar >= MIN_BAR_WIDTH:
+        line.append("  ")
+        line.append(value_bar(value, low, high, bar), style="cyan")
+        line.append(limits, style="dim")
     return line
 
 
-def _command_line(state: MonitorState, label: str, event: Event | None, width: int = 27) -> Text:
-    """'zoom  zoom_in       0.25s': label, what was asked, how long ago, in ``width`` cells."""
-    line = Text(f"{label:<6}", style="dim")
-    room = width - 6 - 7
+def _command_cell(state: MonitorState, label: str, event: Event | None) -> Text:
+    """'zoom  zoom_in  0.25s': label, what was asked (in full), how long ago."""
+    cell = Text(f"{label:<6}", style="dim")
     if event is None:
-        line.append(f"{'—':<{room + 7}}")
-        return line
+        cell.append("—")
+        return cell
     name = str(event.fields.get("name", ""))
     params = describe_params(event)
     summary = f"{name} {params}".strip() if label == "move" else params or name
-    if len(summary) > room:
-        summary = summary[: room - 1] + "…"
-    line.append(f"{summary:<{room}}", style="bold")
-    line.append(f"{short_age(state.age(event)):>7}", style="dim")
-    return line
+    cell.append(summary, style="bold")
+    cell.append(f"  {short_age(state.age(event))}", style="dim")
+    return cell
 
 
-def render_gimbal(state: MonitorState) -> Text:
-    """The panel's text (also used by tests)."""
+def gimbal_lines(state: MonitorState, width: int) -> list[Text]:
+    """The panel's lines at ``width`` cells: every value in full, more lines when narrow."""
     att = state.attitude
     f = att.fields if att is not None else {}
     pitch = f.get("pitch_deg")
     yaw = f.get("yaw_deg")
     motor = f.get("motor_yaw_deg")
-    gimbal_type = f.get("gimbal_type_code")
-    motor_range = WIDE_MOTOR_YAW_RANGE if gimbal_type in WIDE_MOTOR_YAW_TYPES else MOTOR_YAW_RANGE
+    type_label, type_code = labelled(f, "gimbal_type")
+    motor_range = WIDE_MOTOR_YAW_RANGE if type_code in WIDE_MOTOR_YAW_TYPES else MOTOR_YAW_RANGE
     lines = [
-        _axis("pitch", pitch, *PITCH_RANGE),
-        _axis("yaw", yaw, *YAW_RANGE, note=compass(yaw) if yaw is not None else ""),
-        _axis("motor yaw", motor, *motor_range),
+        _axis("pitch", pitch, *PITCH_RANGE, width),
+        _axis("yaw", yaw, *YAW_RANGE, width, note=compass(yaw) if yaw is not None else ""),
+        _axis("motor yaw", motor, *motor_range, width),
     ]
-    info = Text("type ", style="dim")
     if att is None:
-        info.append("—")
+        lines.append(Text("mode —  tracking —  type —", style="dim"))
     else:
-        info.append(str(f.get("gimbal_type") or "?"), style="bold")
-        info.append(f" ({f.get('gimbal_type_code', '?')})  mode ", style="dim")
-        info.append(str(f.get("control_mode") or "?"), style="bold")
-        info.append("  tracking ", style="dim")
         tracking = bool(f.get("tracking"))
-        info.append("YES" if tracking else "no", style="bold green" if tracking else "bold")
-    lines.append(info)
+        mode = Text.assemble(("mode ", "dim"), (labelled(f, "control_mode")[0], "bold"))
+        track = Text.assemble(
+            ("tracking ", "dim"),
+            ("YES" if tracking else "no", "bold green" if tracking else "bold"),
+        )
+        kind = Text.assemble(("type ", "dim"), (type_label, "bold"))
+        if type_code is not None:
+            kind.append(f" ({type_code})", style="dim")
+        lines += pack([mode, track, kind], width, indent=2)
     cmds = state.last_commands
-    row = _command_line(state, "zoom", cmds.get("zoom"))
-    row.append("  ")
-    row.append_text(_command_line(state, "focus", cmds.get("focus")))
-    lines.append(row)
-    row = _command_line(state, "rec", cmds.get("recording"))
-    row.append("  ")
-    row.append_text(_command_line(state, "snap", cmds.get("snapshot")))
-    lines.append(row)
-    lines.append(_command_line(state, "move", cmds.get("motion"), 60))
-    feedback = Text("feedback ", style="dim")
+    cells = [
+        _command_cell(state, label, cmds.get(group))
+        for label, group in (
+            ("zoom", "zoom"),
+            ("focus", "focus"),
+            ("rec", "recording"),
+            ("snap", "snapshot"),
+            ("move", "motion"),
+        )
+    ]
+    lines += grid(cells, width)
     age = state.feedback_age
     stale = state.feedback_stale
+    feedback = Text("feedback ", style="dim")
     feedback.append(
         f"{format_age(age)} ago" if age is not None else "none yet",
         style="bold white on red" if stale else "bold green",
     )
     rate = state.topic_rates.get(TOPIC_GIMBAL_ATTITUDE, 0.0)
-    feedback.append(f"  {rate:.1f}/s  {state.feedback_count:,} messages", style="dim")
+    cells = [
+        feedback,
+        Text(f"{rate:.1f}/s", style="bold"),
+        Text(f"{state.feedback_count:,} messages", style="dim"),
+    ]
     if state.ranging is not None:
         rf = state.ranging.fields
-        feedback.append("  ranging ", style="dim")
+        ranging = Text("ranging ", style="dim")
         if rf.get("success", True):
-            feedback.append(f"{rf.get('distance_m', 0):.1f} m")
+            ranging.append(f"{rf.get('distance_m', 0):.1f} m")
         else:
-            feedback.append("no target")
-    lines.append(feedback)
-    text = Text("\n").join(lines)
-    text.no_wrap = True
-    text.overflow = "ellipsis"
-    return text
+            ranging.append("no target")
+        cells.append(ranging)
+    lines += pack(cells, width, indent=2)
+    return lines
 
 
-class GimbalPanel(Static):
-    """Redrawn from the state at the app's refresh rate, only when something changed."""
+def render_gimbal(state: MonitorState, width: int = 76) -> Text:
+    """The panel's text at ``width`` cells (also used by tests)."""
+    return join_lines(gimbal_lines(state, width))
 
-    DEFAULT_CSS = """
-    GimbalPanel { border: round $primary; padding: 0 1; height: 10;
-        text-wrap: nowrap; text-overflow: ellipsis; }
-    """
+
+class GimbalPanel(FittedPanel):
+    """Redrawn from the state at the app's refresh rate."""
 
     def on_mount(self) -> None:
         self.border_title = "Gimbal"
 
-    def show(self, state: MonitorState) -> None:
-        self.update(render_gimbal(state))
+    def lines(self, state: MonitorState, width: int) -> list[Text]:
+        return gimbal_lines(state, width)

@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rich.text import Text
-from textual.widgets import Static
 
+from analyzer.tui.fit import join_lines, pack
+from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import format_size
 from analyzer.tui.state import MonitorState
 
@@ -50,49 +51,64 @@ def link_text(state: MonitorState) -> tuple[str, str]:
     return "waiting for data", "yellow"
 
 
-def render_status(state: MonitorState, info: StatusInfo) -> Text:
-    text = Text(no_wrap=True, overflow="ellipsis")
-    text.append(" ● ", "bold green" if not state.source_ended else "yellow")
-    text.append(info.source or "?", "bold")
+def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
+    """The status line's parts: source and link, recording, rates, view, filter, pause."""
+    source = Text.assemble(
+        (" ● ", "bold green" if not state.source_ended else "yellow"), (info.source or "?", "bold")
+    )
     words, style = link_text(state)
-    text.append("  ")
-    text.append(f" {words} ", style)
-    text.append("  │ ", "dim")
+    cells = [source, Text(f" {words} ", style)]
     if info.recording:
-        text.append("REC ", "bold red")
-        text.append(f"{info.recording} {format_size(info.recording_size)}")
+        rec = Text("REC ", "bold red")
+        rec.append(f"{info.recording} {format_size(info.recording_size)}")
+        cells.append(rec)
     else:
-        text.append("not recording", "dim")
-    text.append(" │ ", "dim")
-    text.append(f"{state.frames_per_s:,.0f}", "bold")
+        cells.append(Text("not recording", "dim"))
+    rates = Text(f"{state.frames_per_s:,.0f}", "bold")
     if state.total.chunks and not state.total.frames:
-        text.append(" chunks/s", "dim")  # a TCP / UART stream: no CAN bus to load
+        rates.append(" chunks/s", "dim")  # a TCP / UART stream: no CAN bus to load
     else:
-        text.append(" frames/s  bus ", "dim")
+        rates.append(" frames/s  bus ", "dim")
         load = state.bus_load * 100
-        text.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
+        rates.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
+    cells.append(rates)
     if info.dropped:
-        text.append(" │ ", "dim")
-        text.append(f" {info.dropped:,} DROPPED ", "bold white on red")
-    text.append(" │ ", "dim")
-    text.append(f"view {info.view}", "dim")
-    if info.raw:
-        text.append(" raw", "dim")
+        cells.append(Text(f" {info.dropped:,} DROPPED ", "bold white on red"))
+    if info.view != "commands" or info.raw:  # the default view goes without saying
+        view = Text(f"view {info.view}", "dim")
+        if info.raw:
+            view.append(" raw", "dim")
+        cells.append(view)
     if info.filter_text:
-        text.append(" │ ", "dim")
-        text.append(f"filter {info.filter_text}", "bold magenta")
+        cells.append(Text(f"filter {info.filter_text}", "bold magenta"))
     if info.paused:
-        text.append(" │ ", "dim")
-        text.append(f" PAUSED +{info.paused_new} ", "bold black on yellow")
-    return text
+        cells.append(Text(f" PAUSED +{info.paused_new} ", "bold black on yellow"))
+    return cells
 
 
-class StatusBar(Static):
-    """One line at the top of the screen."""
+def status_lines(state: MonitorState, info: StatusInfo, width: int) -> list[Text]:
+    """The status at ``width`` cells: one line when it fits, more when the terminal is narrow."""
+    return pack(status_cells(state, info), width, joiner=Text(" │ ", "dim"), indent=3)
+
+
+def render_status(state: MonitorState, info: StatusInfo, width: int = 200) -> Text:
+    return join_lines(status_lines(state, info, width))
+
+
+class StatusBar(FittedPanel):
+    """The line(s) at the top of the screen."""
 
     DEFAULT_CSS = """
-    StatusBar { height: 1; background: $panel; }
+    StatusBar { border: none; padding: 0; background: $panel; }
     """
 
-    def show(self, state: MonitorState, info: StatusInfo) -> None:
-        self.update(render_status(state, info))
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self.info = StatusInfo()
+
+    def show_status(self, state: MonitorState, info: StatusInfo) -> None:
+        self.info = info
+        self.show(state)
+
+    def lines(self, state: MonitorState, width: int) -> list[Text]:
+        return status_lines(state, self.info, width)

@@ -3,92 +3,106 @@
 from __future__ import annotations
 
 from rich.text import Text
-from textual.widgets import Static
 
 from analyzer.protocol.types import TOPIC_UAV_ALTITUDE, TOPIC_UAV_ATTITUDE, TOPIC_UAV_GPS, Event
+from analyzer.tui.fit import join_lines, pack
+from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import short_age
 from analyzer.tui.state import MonitorState
 
-
-def _line(state: MonitorState, label: str, event: Event | None, body: str) -> Text:
-    line = Text(f"{label:<9}", style="dim")
-    if event is None:
-        line.append("—")
-        return line
-    line.append(f"{body:<34}", style="bold")
-    line.append(f"{short_age(state.age(event)):>7}", style="dim")
-    if event.warnings:
-        line.append("  ⚠ " + event.warnings[0], style="yellow")
-    return line
+LABEL_WIDTH = 9
 
 
 def _hemisphere(value: float, positive: str, negative: str) -> str:
     return f"{abs(value):.7f}° {positive if value >= 0 else negative}"
 
 
-def render_uav(state: MonitorState) -> Text:
-    """The panel's text (also used by tests)."""
-    lines: list[Text] = []
+def _rows(state: MonitorState) -> list[tuple[str, Event | None, str]]:
+    """(label, event, value in words) per line of the panel."""
     gps = state.gps
-    body = ""
+    position = ""
     if gps is not None:
         lat = float(gps.fields.get("latitude_deg", 0.0))
         lon = float(gps.fields.get("longitude_deg", 0.0))
-        body = f"{_hemisphere(lat, 'N', 'S')}  {_hemisphere(lon, 'E', 'W')}"
-    lines.append(_line(state, "GPS", gps, body))
+        position = f"{_hemisphere(lat, 'N', 'S')}  {_hemisphere(lon, 'E', 'W')}"
     alt = state.altitude
-    body = f"{float(alt.fields.get('altitude_m', 0.0)):.2f} m" if alt is not None else ""
-    lines.append(_line(state, "altitude", alt, body))
+    altitude = f"{float(alt.fields.get('altitude_m', 0.0)):.2f} m" if alt is not None else ""
     att = state.uav_attitude
-    body = ""
+    attitude = ""
     if att is not None:
         f = att.fields
-        body = (
+        attitude = (
             f"pitch {f.get('pitch_deg', 0.0):.2f} roll {f.get('roll_deg', 0.0):.2f} "
             f"yaw {f.get('yaw_deg', 0.0):.2f}°"
         )
-    lines.append(_line(state, "attitude", att, body))
     message = state.text
-    body = repr(str(message.fields.get("text", ""))) if message is not None else ""
-    lines.append(_line(state, "text", message, body))
+    text = repr(str(message.fields.get("text", ""))) if message is not None else ""
     rng = state.ranging
-    body = ""
+    laser = ""
     if rng is not None:
         f = rng.fields
-        body = (
+        laser = (
             f"{f.get('distance_m', 0.0):.1f} m  to {f.get('latitude_deg', 0.0):.6f} "
             f"{f.get('longitude_deg', 0.0):.6f}"
             if f.get("success", True)
             else "no target (ranging failed)"
         )
-    lines.append(_line(state, "laser", rng, body))
-    rates = Text(f"{'rates':<9}", style="dim")
+    return [
+        ("GPS", gps, position),
+        ("altitude", alt, altitude),
+        ("attitude", att, attitude),
+        ("text", message, text),
+        ("laser", rng, laser),
+    ]
+
+
+def uav_lines(state: MonitorState, width: int) -> list[Text]:
+    """The panel's lines at ``width`` cells: ages in a column when they fit, values never cut."""
+    rows = _rows(state)
+    # ages line up in a column after the values that leave room for it
+    room = width - LABEL_WIDTH - 2 - 6
+    body_width = max((len(b) for _, e, b in rows if e is not None and len(b) <= room), default=0)
+    lines: list[Text] = []
+    for label, event, body in rows:
+        head = Text(f"{label:<{LABEL_WIDTH}}", style="dim")
+        if event is None:
+            lines.append(head + Text("—"))
+            continue
+        age = Text(short_age(state.age(event)), style="dim")
+        value = Text(body, style="bold")
+        if len(body) <= body_width:
+            value.pad_right(body_width - len(body))
+            age.pad_left(6 - age.cell_len)
+        cells = [head + value, age]
+        if event.warnings:
+            cells.append(Text("⚠ " + event.warnings[0], style="yellow"))
+        lines += pack(cells, width, indent=LABEL_WIDTH)
+    rates = [Text(f"{'rates':<{LABEL_WIDTH - 2}}", style="dim")]
     for label, topic in (
         ("gps", TOPIC_UAV_GPS),
         ("alt", TOPIC_UAV_ALTITUDE),
         ("att", TOPIC_UAV_ATTITUDE),
     ):
-        rates.append(f"{label} ", style="dim")
-        rates.append(f"{state.topic_rates.get(topic, 0.0):5.1f}", style="bold")
-        rates.append("  ")
-    rates.append("Hz", style="dim")
-    lines.append(rates)
-    text = Text("\n").join(lines)
-    text.no_wrap = True
-    text.overflow = "ellipsis"
-    return text
+        rates.append(
+            Text.assemble(
+                (f"{label} ", "dim"), (f"{state.topic_rates.get(topic, 0.0):.1f}", "bold")
+            )
+        )
+    rates.append(Text("Hz", style="dim"))
+    lines += pack(rates, width, indent=LABEL_WIDTH)
+    return lines
 
 
-class UavPanel(Static):
+def render_uav(state: MonitorState, width: int = 76) -> Text:
+    """The panel's text at ``width`` cells (also used by tests)."""
+    return join_lines(uav_lines(state, width))
+
+
+class UavPanel(FittedPanel):
     """Redrawn from the state at the app's refresh rate."""
-
-    DEFAULT_CSS = """
-    UavPanel { border: round $primary; padding: 0 1; height: 10;
-        text-wrap: nowrap; text-overflow: ellipsis; }
-    """
 
     def on_mount(self) -> None:
         self.border_title = "UAV"
 
-    def show(self, state: MonitorState) -> None:
-        self.update(render_uav(state))
+    def lines(self, state: MonitorState, width: int) -> list[Text]:
+        return uav_lines(state, width)
