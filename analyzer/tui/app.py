@@ -11,10 +11,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar, Protocol
 
+from textual import events
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
+from textual.geometry import Size
 from textual.message import Message
+from textual.screen import Screen
 from textual.widgets import DataTable, Footer
 from textual.widgets._footer import FooterKey
 
@@ -221,7 +224,7 @@ class MonitorApp(App[int]):
         self._ids = self.query_one(IdTable)
         self._diagnostics = self.query_one(DiagnosticsPanel)
         self._prompt = self.query_one(PromptBar)
-        self._main_screen = self.screen
+        self._main_screen: Screen[object] = self.screen
         self._mounted = True
         self.apply_layout()
         self.bridge.connect(self._wake)
@@ -231,19 +234,26 @@ class MonitorApp(App[int]):
 
     @property
     def paged(self) -> bool:
-        return is_paged(*self.size)
+        """Whether the screen shows one page at a time (the terminal is too small for all)."""
+        return self.main_screen.has_class("-paged")
 
-    def apply_layout(self) -> None:
-        """All-in-one or one page at a time, for the terminal's current size."""
-        screen = self.screen if self.screen is self._main_screen else self._main_screen
-        screen.set_class(self.paged, "-paged")
+    @property
+    def main_screen(self) -> Screen[object]:
+        return self._main_screen if self._mounted else self.screen
+
+    def apply_layout(self, size: Size | None = None) -> None:
+        """All-in-one or one page at a time, for the terminal's size."""
+        width, height = size or self.size
+        screen = self.main_screen
+        screen.set_class(is_paged(width, height), "-paged")
         for page, _ in PAGES.values():
             screen.set_class(page == self.page, f"-page-{page}")
         self.refresh_bindings()
 
-    def on_resize(self) -> None:
+    def on_resize(self, event: events.Resize) -> None:
+        # the new size, already known here while the screen is still being resized
         if self._mounted:
-            self.apply_layout()
+            self.apply_layout(event.size)
 
     def action_page(self, page: str) -> None:
         """Show one page (on a small terminal); the state behind it is shared by all pages."""

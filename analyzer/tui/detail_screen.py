@@ -44,7 +44,8 @@ class DetailScreen(ModalScreen[None]):
     DEFAULT_CSS = """
     DetailScreen { align: center middle; }
     DetailScreen > VerticalScroll {
-        width: 90; max-height: 30; border: thick $accent; background: $surface; padding: 0 1;
+        width: 100%; max-width: 90; max-height: 100%;
+        border: thick $accent; background: $surface; padding: 0 1;
     }
     """
 

@@ -13,6 +13,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Static
 
 KEYS: tuple[tuple[str, str], ...] = (
+    ("1 2 3 4", "small terminals: show gimbal + UAV, log, CAN IDs or diagnostics"),
     ("q", "quit: stop the capture, finalise the recording"),
     ("p / space", "pause the display (capture and recording go on); again: resume and catch up"),
     ("f", "filter the log and the ID table (see below); empty: show all"),
@@ -53,7 +54,8 @@ class HelpScreen(ModalScreen[None]):
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
     HelpScreen > VerticalScroll {
-        width: 100; max-height: 32; border: thick $accent; background: $surface; padding: 0 1;
+        width: 100%; max-width: 100; height: auto; max-height: 100%;
+        border: thick $accent; background: $surface; padding: 0 1;
     }
     """
 
