@@ -103,19 +103,10 @@ def compass(yaw_deg: float) -> str:
 
 
 def labelled(fields: Mapping[str, object], name: str) -> tuple[str, int | None]:
-    """(label, raw code) of a labelled field.
-
-    Reads both forms: ``X`` = label string with ``X_code`` = raw integer, and the older
-    ``X`` = raw integer with ``X_name`` = label.
-    """
-    value = fields.get(name)
+    """(label, raw code) of a labelled field: ``X`` holds the label, ``X_code`` the raw integer."""
+    label = fields.get(name)
     code = fields.get(f"{name}_code")
-    if code is None and isinstance(value, int) and not isinstance(value, bool):
-        code = value
-    label = fields.get(f"{name}_name")
-    if label is None:
-        label = value if isinstance(value, str) else None
     raw = code if isinstance(code, int) and not isinstance(code, bool) else None
-    if label is None:
-        return ("?" if raw is None else f"unknown_0x{raw:02x}"), raw
-    return str(label), raw
+    if isinstance(label, str) and label:
+        return label, raw
+    return ("?" if raw is None else f"unknown_0x{raw:02x}"), raw
