@@ -54,7 +54,7 @@ STATUS[0x0000FF13] = {name="uav_attitude", fields={F{abbr="gimbal.uav_attitude.p
 
 -- The dissector body; the tables above it are generated from the protocol tables.
 
-local bit = bit32 or bit
+local bit = bit or bit32  -- Wireshark ships LuaBitOp as `bit` with every Lua version
 
 local gimbal = Proto("gimbal", "Gimbal IDU protocol")
 gimbal.prefs.port = Pref.uint("TCP port", DEFAULT_PORT, "TCP port of the IDU board (2000 by default)")
@@ -253,7 +253,7 @@ local function dissect_can_frame(tree, tvb, offset)
     tree:add(pf.can_data, tvb(data, 8))
     if can_id == TEXT_ID or can_id == TEXT_END_ID then
         -- ASCII without the zero padding; anything else shown as \xHH
-        local text = tvb(data, 8):raw():gsub("%z", ""):gsub("[^%g ]", function(c)
+        local text = tvb(data, 8):raw():gsub("\0", ""):gsub("[^%g ]", function(c)
             return string.format("\\x%02X", c:byte())
         end)
         tree:add(pf.text, tvb(data, 8), text)

@@ -41,12 +41,8 @@ SPEC_STATUS = [
 
 
 def _our_label_and_code(f: Field, ours: dict[str, Any]) -> tuple[Any, int]:
-    """A labelled field of our events: (label, raw code), in any of its representations."""
-    for key in (f"{f.name}_code", f"{f.name}_raw"):
-        if key in ours:
-            return ours[f.name], int(ours[key])
-    assert f.label_as is not None, f.name
-    return ours[f.label_as], int(ours[f.name])
+    """A labelled field of our events: the label in ``X``, the raw number in ``X_code``."""
+    return ours[f.name], int(ours[f.code_name])
 
 
 def _same_field(f: Field, name: str, ours: dict[str, Any], labelled: Any, raw: Any) -> None:
