@@ -94,6 +94,29 @@ def sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+@contextlib.contextmanager
+def interrupts_deferred() -> Iterator[None]:
+    """Ctrl-C and SIGTERM inside the block take effect when it ends, so a short step such
+    as creating an output file and keeping a handle on it is never cut in the middle."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+
+    def hold(signum: int, frame: FrameType | None) -> None:
+        pending.append(signum)
+
+    signals = (signal.SIGINT, signal.SIGTERM)
+    previous = {signum: signal.signal(signum, hold) for signum in signals}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    if pending:
+        raise Terminated if pending[0] == signal.SIGTERM else KeyboardInterrupt
+
+
 def interrupt_name(exc: BaseException) -> str:
     """``SIGTERM`` for a Terminated, ``Ctrl-C`` for any other KeyboardInterrupt."""
     return exc.signal_name if isinstance(exc, Terminated) else "Ctrl-C"

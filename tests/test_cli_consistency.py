@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -84,7 +85,8 @@ def test_sigterm_during_convert_removes_the_partial_output_and_says_so(tmp_path:
     assert code == EXIT_INTERRUPTED, err
     assert "Traceback" not in err
     assert "interrupted (SIGTERM)" in err and "was not written" in err
-    assert list(tmp_path.iterdir()) == []  # neither the output nor a partial file
+    left = list(tmp_path.iterdir())
+    assert left == [], (left, err)  # neither the output nor a partial file
 
 
 @pytest.mark.parametrize(
@@ -154,3 +156,30 @@ def test_send_help_says_the_repeat_unit_is_required(capsys: pytest.CaptureFixtur
         main(["send", "gimbal_control", "--help"])
     out = " ".join(capsys.readouterr().out.split())
     assert "the unit is required: 50ms or 0.5s" in out
+
+
+def test_a_live_record_that_received_nothing_is_exit_1(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.mcapio.reader import Recording
+
+    probe = socket.create_server(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()  # nothing listens there: the client keeps retrying
+    out = tmp_path / "empty.mcap"
+    code = main(["record", "--source", f"tcp:{port}", "-o", str(out), "--duration", "0.3", "-q"])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert f"nothing was received from tcp:127.0.0.1:{port}" in err
+    assert not Recording(out).recovered  # finished all the same, with its link diagnostics
+
+
+def test_a_signal_during_a_critical_step_takes_effect_after_it() -> None:
+    from analyzer.errors import Terminated
+    from analyzer.stdio import interrupts_deferred
+
+    done: list[str] = []
+    with pytest.raises(Terminated), interrupts_deferred():
+        os.kill(os.getpid(), signal.SIGTERM)
+        done.append("the step finished")
+    assert done == ["the step finished"]

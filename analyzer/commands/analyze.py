@@ -10,6 +10,7 @@ from collections.abc import Callable, Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
+from analyzer.terminal_text import printable, printable_lines
 
 HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
 
@@ -179,10 +180,11 @@ def run(args: argparse.Namespace) -> int:
             f"response analysis of {args.file} ({reader.format_name}): {commands:,} commands; "
             f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s"
         )
-        out.write(render_findings(header, shown, verdict_line(analyzer.verdicts)) + "\n")
+        report = render_findings(header, shown, verdict_line(analyzer.verdicts))
+        out.write(printable_lines(report) + "\n")  # names and paths may come from the input
     out.flush()
     for note in notes:
-        sys.stderr.write(f"note: {note}\n")
+        sys.stderr.write(f"note: {printable(note)}\n")
     return 0
 
 

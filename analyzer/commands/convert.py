@@ -12,7 +12,7 @@ from typing import IO, Any
 from analyzer.errors import EXIT_INTERRUPTED, UsageError
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch, Pipeline, run_items
-from analyzer.stdio import interrupt_name
+from analyzer.stdio import interrupt_name, interrupts_deferred
 
 HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
 DESCRIPTION = """\
@@ -124,15 +124,16 @@ def run(args: argparse.Namespace) -> int:
     finished = False
     interrupted = ""
     try:
-        sink = McapSink(
-            target,
-            metadata=meta,
-            flush_interval=None,
-            force=args.force,
-            inputs=inputs,
-            atomic=True,
-            compression=args.compression,
-        )
+        with interrupts_deferred():  # a signal now would leave a file nobody removes
+            sink = McapSink(
+                target,
+                metadata=meta,
+                flush_interval=None,
+                force=args.force,
+                inputs=inputs,
+                atomic=True,
+                compression=args.compression,
+            )
         pipeline.sinks.append(sink)
         run_items(source, pipeline, after_batch=after_batch)  # closes (commits) the sink
         for failure in pipeline.failures:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from analyzer.errors import UsageError
+from analyzer.errors import SourceError, UsageError
 
 HELP = "watch a live source (or replay a capture file) in a terminal UI"
 DESCRIPTION = """\
@@ -78,4 +78,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_app(capture, source_label=label)
     if capture.error is not None:
         raise capture.error  # a SourceError: one line, exit 1
-    return result
+    stats = capture.stats
+    if result == 0 and not is_file and not (stats.frames or stats.chunks):
+        raise SourceError(f"nothing was received from {label} in {stats.elapsed_s:.1f} s")
+    return int(result)

@@ -249,6 +249,14 @@ def run(args: argparse.Namespace) -> int:
             f"to {path} ({_megabytes(path)}); ended: {reason}",
             file=sys.stderr,
         )
+    if result == 0 and not inputs and not (stats.frames or stats.chunks):
+        # A live source that delivered nothing is a failed capture (exit 1), not a success.
+        print(
+            f"gimbal-analyzer record: nothing was received from {description} in "
+            f"{stats.elapsed_s:.1f} s; the recording {path} holds only its link diagnostics",
+            file=sys.stderr,
+        )
+        result = 1
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "

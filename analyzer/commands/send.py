@@ -12,6 +12,7 @@ from analyzer.errors import UsageError
 from analyzer.protocol.command_table import BY_NAME, Command
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import COMPONENT_NAMES
+from analyzer.terminal_text import printable
 
 HELP = "encode a command by name and parameters; transmit it only with --to"
 DESCRIPTION = """\
@@ -301,7 +302,7 @@ def transmit(
             for event in decoder.feed(item):
                 replies.append(event)
                 if show:
-                    print(f"  reply {event.topic} {_summary(event.fields)}")
+                    print(printable(f"  reply {event.topic} {_summary(event.fields)}"))
 
     sent = 0
     try:
@@ -325,7 +326,7 @@ def transmit(
     print(f"  sent {sent} time(s){every} to {link.name}")
     attitudes = [e for e in replies if e.topic == TOPIC_GIMBAL_ATTITUDE]
     if attitudes and not listen:
-        print(f"  last attitude reply: {_summary(attitudes[-1].fields)}")
+        print(printable(f"  last attitude reply: {_summary(attitudes[-1].fields)}"))
     return 0
 
 
