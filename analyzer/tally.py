@@ -163,30 +163,32 @@ class Tally:
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs."""
-        topics = self.topics
-        first, last = self.first_time, self.last_time
+        if not isinstance(events, list):
+            events = list(events)
+        if not events:
+            return
+        self.events += len(events)
+        self.topics.update([event.topic for event in events])
+        times = [event.time for event in events]
+        first, last = min(times), max(times)
+        self.widen(first, last)
+        self.with_warnings += sum(1 for event in events if event.warnings)
+        commands = self.commands
+        feedback_topics = FEEDBACK_TOPICS
         for event in events:
-            self.events += 1
             topic = event.topic
-            topics[topic] += 1
-            t = event.time
-            if first is None or t < first:
-                first = t
-            if last is None or t > last:
-                last = t
-            if event.warnings:
-                self.with_warnings += 1
             fields = event.fields
-            if topic == TOPIC_DIAGNOSTICS:
+            if topic == TOPIC_COMMAND:
+                commands[str(fields.get("name", "unknown"))] += 1
+                if fields.get("transport") == "stream" and fields.get("crc_set", True):
+                    self.crc_checked += 1
+            elif topic == TOPIC_DIAGNOSTICS:
                 self.diagnostics += 1
                 kind = str(fields.get("kind", "unknown"))
                 self.kinds[kind] += 1
                 if kind == CRC_MISMATCH:
                     self.crc_errors += 1
-                continue
-            if topic == TOPIC_COMMAND:
-                self.commands[str(fields.get("name", "unknown"))] += 1
-            if topic in FEEDBACK_TOPICS:
+            elif topic in feedback_topics:
                 key = event.source
                 direction = fields.get("direction")
                 if direction:
@@ -198,11 +200,10 @@ class Tally:
                         self.crc_checked += 1
                         continue
                     track = self.feedback[key] = FeedbackTrack()
-                track.add(t)
+                track.add(event.time)
                 self.crc_checked += 1
             elif fields.get("transport") == "stream" and fields.get("crc_set", True):
                 self.crc_checked += 1
-        self.first_time, self.last_time = first, last
 
     def widen(self, first: float | None, last: float | None) -> None:
         """Take a time span the input saw (frames the reader skipped, for instance) into account."""

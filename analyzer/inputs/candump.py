@@ -19,6 +19,7 @@ _DIRECTIONS = {b"R": "rx", b"r": "rx", b"T": "tx", b"t": "tx"}
 _HEXDIGITS = frozenset(b"0123456789abcdefABCDEF")
 _NAN = float("nan")
 _DIGITS = b"0123456789"
+_HEX_TEXT = b"0123456789abcdefABCDEF"
 
 # Parsed ID text -> (can_id, extended, is_error, wanted); None marks an invalid ID text.
 IdInfo = tuple[int, bool, bool, bool]
@@ -86,7 +87,7 @@ class CandumpParser:
 
     def _id_info(self, text: bytes) -> IdInfo | None:
         info: IdInfo | None = None
-        if 0 < len(text) <= 8 and all(c in _HEXDIGITS for c in text):
+        if 0 < len(text) <= 8 and not text.translate(None, _HEX_TEXT):
             value = int(text, 16)
             extended = len(text) > 3
             error = extended and bool(value & CAN_ERR_FLAG)
@@ -125,6 +126,8 @@ class CandumpParser:
         skip = self._skip
         want = self._want
         ids = self._ids
+        channels = self._channels
+        wanted = self.wanted_ids
         directions = _DIRECTIONS
         digits = _DIGITS
         lineno = self.lines
@@ -148,7 +151,22 @@ class CandumpParser:
             if stamp:
                 id_text, sharp, data = frame.partition(b"#")
                 if id_text in skip or (
-                    sharp and id_text not in want and id_text not in ids and self._unwanted(id_text)
+                    sharp
+                    and id_text not in want
+                    and id_text not in ids
+                    and (
+                        # not cached (a log of very many IDs): an extended ID that
+                        # is not wanted is told apart here, without the slow path
+                        (
+                            wanted is not None
+                            and len(id_text) == 8
+                            and not id_text.translate(None, _HEX_TEXT)
+                            and (value := int(id_text, 16)) <= CAN_EFF_MASK
+                            and value not in wanted
+                        )
+                        if len(ids) >= MAX_CACHED_IDS
+                        else self._unwanted(id_text)
+                    )
                 ):
                     if (
                         sharp
@@ -193,7 +211,7 @@ class CandumpParser:
                                     info[0],
                                     payload,
                                     info[1],
-                                    self._channel(channel),
+                                    channels.get(channel) or self._channel(channel),
                                     is_remote,
                                     info[2],
                                     is_fd,

@@ -226,9 +226,10 @@ def split_blocks(
             lines.append(tail[: MAX_LINE + 1])
             tail = b""
             skipping = True
-        for i, line in enumerate(lines):
-            if len(line) > MAX_LINE:
-                lines[i] = line[: MAX_LINE + 1]
+        if lines and max(map(len, lines)) > MAX_LINE:  # rare: look line by line only then
+            for i, line in enumerate(lines):
+                if len(line) > MAX_LINE:
+                    lines[i] = line[: MAX_LINE + 1]
         yield lines
     if tail:
         yield [tail.rstrip(b"\r")]

@@ -33,6 +33,8 @@ from analyzer.protocol.types import (
 from analyzer.protocol.uav import STATUS_FRAMES, TextAssembler, decode_status
 
 _NO_EVENTS: tuple[Event, ...] = ()
+# The extra fields of a plain CAN frame: none. Shared and never written to.
+_NO_EXTRA: dict[str, Any] = {}
 
 
 class Decoder:
@@ -79,7 +81,7 @@ class Decoder:
         """Decode one CAN frame (from a bus or a log)."""
         self.frames += 1
         self.last_time = frame.time
-        return self._can(frame, frame.channel or "can", {})
+        return self._can(frame, frame.channel or "can", _NO_EXTRA)
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         """Decode bytes read from a TCP / UART stream."""
@@ -174,6 +176,20 @@ class Decoder:
     # -- CAN -------------------------------------------------------------------------------------
 
     def _can(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        can_id = frame.can_id
+        if (
+            can_id == CONTROL_ID
+            and frame.extended
+            and not (frame.is_error or frame.is_remote or frame.is_fd)
+        ):  # the most common protocol frame, the short way (same result)
+            self.protocol_frames += 1
+            fields, warnings = decode_command(frame.data)
+            if extra:
+                fields.update(extra)
+            return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings)]
+        return self._can_any(frame, source, extra)
+
+    def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
         can_id = frame.can_id
         if frame.is_error:
             return [
