@@ -1,4 +1,5 @@
-"""The same input gives the same figures in every command (decode, convert, record, info)."""
+"""The same input gives the same figures in every command: decode, convert, record, info
+and the monitor."""
 
 from __future__ import annotations
 
@@ -11,7 +12,9 @@ import pytest
 from analyzer import PROTOCOL_NOTES
 from analyzer.capture import Capture
 from analyzer.cli import main
+from analyzer.pipeline import Batch
 from analyzer.sources.file_replay import FileReplaySource
+from analyzer.tui.state import MonitorState
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = sorted(p for p in (ROOT / "samples").iterdir() if p.name != "README.md")
@@ -27,6 +30,19 @@ FIGURES = (
     "crc_errors",
     "crc_error_rate",
 )
+
+
+class ScreenSink:
+    """Folds every batch into the monitor's state, as the monitor app does."""
+
+    def __init__(self, state: MonitorState) -> None:
+        self.state = state
+
+    def handle(self, batch: Batch) -> None:
+        self.state.fold(batch)
+
+    def close(self) -> None:
+        pass
 
 
 def run_json(capsys: pytest.CaptureFixture[str], *argv: str) -> dict[str, Any]:
@@ -65,14 +81,20 @@ def test_every_command_reports_the_same_figures(
         for topic, n in decoded["topics"].items():
             assert counts[topic] == n
 
-    # The live engine behind record, monitor and demo, read in process.
-    capture = Capture(FileReplaySource(str(sample)), [])
+    # The live engine behind record, monitor and demo, read in process, with the
+    # monitor's screen state fed as the monitor feeds it.
+    screen = MonitorState()
+    capture = Capture(FileReplaySource(str(sample)), [ScreenSink(screen)])
     capture.start()
     capture.wait()
     assert capture.error is None
     live = capture.stats
     assert live.tally.figures() == decoded
     assert live.events == decoded["events"] and live.diagnostics == decoded["diagnostics"]
+    assert screen.total.events == decoded["events"]
+    assert dict(screen.total.kinds) == decoded["diagnostics_by_kind"]
+    feedback = sum(track["messages"] for track in decoded["feedback"].values())
+    assert screen.feedback_count == feedback
 
 
 def test_decode_and_info_name_the_same_longest_gap(

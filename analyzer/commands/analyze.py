@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from collections.abc import Callable, Iterator
 from typing import IO, Any
 
+from analyzer import timefmt
 from analyzer.errors import UsageError
 from analyzer.terminal_text import printable, printable_lines
 
@@ -197,19 +197,19 @@ VERDICT_WORDS = {
 
 
 def clock(t: float) -> str:
-    """UTC time of day with milliseconds and a Z; seconds from the start for relative times."""
-    if t < 1e8:
+    """Time of day with milliseconds, UTC with a Z (or local time with its offset after
+    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
+    if not timefmt.is_absolute(t):
         return f"{t:10.3f} s"
-    whole = int(t)
-    millis = min(999, round((t - whole) * 1000))
-    return time.strftime("%H:%M:%S", time.gmtime(whole)) + f".{millis:03d}Z"
+    return timefmt.format_clock(t)
 
 
 def render_findings(header: str, findings: list[Any], verdicts: str) -> str:
     """The text report: a header, one block per finding, the verdict counts."""
     lines = [header]
-    if findings and findings[0].time >= 1e8:
-        lines.append("times are UTC, " + time.strftime("%Y-%m-%d", time.gmtime(findings[0].time)))
+    if findings and timefmt.is_absolute(findings[0].time):
+        zone = "local" if timefmt.local_time() else "UTC"
+        lines.append(f"times are {zone}, " + timefmt.format_datetime(findings[0].time)[:10])
     lines.append("")
     for event in findings:
         f = event.fields

@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from analyzer import PROTOCOL_DOCUMENT, __version__
+from analyzer import PROTOCOL_DOCUMENT, __version__, timefmt
 from analyzer.errors import SourceError
 from analyzer.mcapio.channels import (
     CAN_FRAME_SCHEMA,
@@ -437,10 +437,9 @@ def format_clock(seconds: float | None) -> str:
     """HH:MM:SS.mmmZ (UTC) of a Unix time; seconds for small (relative) times."""
     if seconds is None:
         return "-"
-    if seconds < 946_684_800:  # before 2000: a relative time, not a date
+    if not timefmt.is_absolute(seconds):  # a relative time, not a date
         return f"{seconds:.3f} s"
-    stamp = time.strftime("%H:%M:%S", time.gmtime(seconds))
-    return f"{stamp}.{int(seconds % 1 * 1000):03d}Z"
+    return timefmt.format_clock(seconds)
 
 
 def recording_metadata(source: str, **extra: str) -> dict[str, str]:

@@ -8,7 +8,7 @@ import time
 from importlib import resources
 from typing import Any
 
-from analyzer import __version__
+from analyzer import __version__, timefmt
 from analyzer.analysis.findings import VERDICTS
 from analyzer.report.collect import MAX_ROWS, ReportData, thin
 
@@ -36,12 +36,10 @@ table.kv td:first-child { width: 200px; color: #555; }
 
 
 def _clock(t: float, with_date: bool = False) -> str:
-    if t < 1e8:
+    """The one time rule (analyzer.timefmt): UTC with Z, or local time with --local-time."""
+    if not timefmt.is_absolute(t):
         return f"{t:.3f} s"
-    whole = int(t)
-    millis = min(999, round((t - whole) * 1000))
-    fmt = "%Y-%m-%d %H:%M:%S" if with_date else "%H:%M:%S"
-    return time.strftime(fmt, time.gmtime(whole)) + f".{millis:03d}Z"
+    return timefmt.format_datetime(t) if with_date else timefmt.format_clock(t)
 
 
 def _e(value: Any) -> str:
