@@ -14,6 +14,9 @@ local TEXT_ID = 0x02008201
 local TEXT_END_ID = 0x02008202
 local FEEDBACK_SIZE = 32
 local MIN_FEEDBACK_FRAME = 27
+local FEEDBACK_ID_BYTES = "21 FE 0F 01"
+local MOTOR_YAW_LIMIT = 17000
+local WIDE_MOTOR_YAW_TYPES = {[3]=true, [4]=true}
 local FRAME_SIZES = {[0x0A]=24, [0x0B]=24, [0x0C]=27, [0x10]=31}
 local FRAME_TYPE_NAMES = {[0x0A]="control command", [0x0B]="forwarded CAN frame", [0x0C]="attitude feedback", [0x10]="laser ranging feedback"}
 local CAN_ID_NAMES = {[0x00000F01]="command", [0x030F0001]="gimbal feedback segment", [0x0000FF15]="UAV gps", [0x0000FF16]="UAV altitude", [0x0000FF13]="UAV attitude", [0x02008201]="UAV text (start/middle)", [0x02008202]="UAV text (end)"}
@@ -48,9 +51,9 @@ local FEEDBACK = {}
 FEEDBACK[0x0C] = {name="attitude", size=27, fields={F{abbr="gimbal.attitude.gimbal_type", name="gimbal_type", desc="gimbal type (Note 1)", off=16, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="35x zoom 2MP / 30x zoom 4K", [2]="30x zoom 5MP", [3]="3.5x zoom", [4]="3.5x zoom dual-sensor", [5]="laser distance measurement", [7]="30x zoom dual-sensor"}}, F{abbr="gimbal.attitude.tracking", name="tracking", desc="trace_flag: target tracking is on", off=17, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", boolean=true}, F{abbr="gimbal.attitude.control_mode", name="control_mode", desc="control mode (Note 2)", off=18, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", labels={[1]="full_lock", [2]="course_following", [3]="locking"}}, F{abbr="gimbal.attitude.pitch_deg", name="pitch_deg", desc="pitch angle theta [deg]", off=19, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg", min=-11000, max=6000, min_text="-110.00", max_text="60.00"}, F{abbr="gimbal.attitude.yaw_deg", name="yaw_deg", desc="yaw angle psi (geomagnetic) [deg]", off=21, size=2, signed=false, div=100, mul=1, decimals=2, unit_suffix=" deg", min=0, max=36000, min_text="0.00", max_text="360.00"}, F{abbr="gimbal.attitude.motor_yaw_deg", name="motor_yaw_deg", desc="yaw motor angle; +-170 deg, +-325 deg on 3.5x zoom models [deg]", off=23, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg", min=-32500, max=32500, min_text="-325.00", max_text="325.00"}}}
 FEEDBACK[0x10] = {name="ranging", size=31, fields={F{abbr="gimbal.ranging.success", name="success", desc="distance measuring success marker", off=16, size=1, signed=false, div=1, mul=1, decimals=0, unit_suffix="", boolean=true}, F{abbr="gimbal.ranging.distance_m", name="distance_m", desc="target distance [m]", off=17, size=2, signed=false, div=10, mul=1, decimals=1, unit_suffix=" m"}, F{abbr="gimbal.ranging.height_m", name="height_m", desc="target height [m]", off=19, size=2, signed=true, div=10, mul=1, decimals=1, unit_suffix=" m"}, F{abbr="gimbal.ranging.longitude_deg", name="longitude_deg", desc="target longitude [deg]", off=21, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-1800000000, max=1800000000, min_text="-180.0000000", max_text="180.0000000"}, F{abbr="gimbal.ranging.latitude_deg", name="latitude_deg", desc="target latitude [deg]", off=25, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-900000000, max=900000000, min_text="-90.0000000", max_text="90.0000000"}}}
 local STATUS = {}
-STATUS[0x0000FF15] = {name="uav_gps", fields={F{abbr="gimbal.uav_gps.latitude_deg", name="latitude_deg", desc="latitude [deg]", off=0, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-900000000, max=900000000, min_text="-90.0000000", max_text="90.0000000"}, F{abbr="gimbal.uav_gps.longitude_deg", name="longitude_deg", desc="fusion longitude [deg]", off=4, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-1800000000, max=1800000000, min_text="-180.0000000", max_text="180.0000000"}}}
-STATUS[0x0000FF16] = {name="uav_altitude", fields={F{abbr="gimbal.uav_altitude.altitude_m", name="altitude_m", desc="altitude [m]", off=0, size=4, signed=true, div=100, mul=1, decimals=2, unit_suffix=" m"}}}
-STATUS[0x0000FF13] = {name="uav_attitude", fields={F{abbr="gimbal.uav_attitude.pitch_deg", name="pitch_deg", desc="pitch angle [deg]", off=0, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.roll_deg", name="roll_deg", desc="roll angle [deg]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.yaw_deg", name="yaw_deg", desc="yaw angle [deg]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}}}
+STATUS[0x0000FF15] = {name="uav_gps", used=8, fields={F{abbr="gimbal.uav_gps.latitude_deg", name="latitude_deg", desc="latitude [deg]", off=0, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-900000000, max=900000000, min_text="-90.0000000", max_text="90.0000000"}, F{abbr="gimbal.uav_gps.longitude_deg", name="longitude_deg", desc="fusion longitude [deg]", off=4, size=4, signed=true, div=10000000, mul=1, decimals=7, unit_suffix=" deg", min=-1800000000, max=1800000000, min_text="-180.0000000", max_text="180.0000000"}}}
+STATUS[0x0000FF16] = {name="uav_altitude", used=4, fields={F{abbr="gimbal.uav_altitude.altitude_m", name="altitude_m", desc="altitude [m]", off=0, size=4, signed=true, div=100, mul=1, decimals=2, unit_suffix=" m"}}}
+STATUS[0x0000FF13] = {name="uav_attitude", used=6, fields={F{abbr="gimbal.uav_attitude.pitch_deg", name="pitch_deg", desc="pitch angle [deg]", off=0, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.roll_deg", name="roll_deg", desc="roll angle [deg]", off=2, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}, F{abbr="gimbal.uav_attitude.yaw_deg", name="yaw_deg", desc="yaw angle [deg]", off=4, size=2, signed=true, div=100, mul=1, decimals=2, unit_suffix=" deg"}}}
 
 -- The dissector body; the tables above it are generated from the protocol tables.
 
@@ -88,7 +91,7 @@ local ex = {
         expert.severity.ERROR),
     garbage = ProtoExpert.new("gimbal.garbage.expert", "Bytes outside any frame",
         expert.group.MALFORMED, expert.severity.WARN),
-    range = ProtoExpert.new("gimbal.value.warning", "Value outside the document",
+    doubt = ProtoExpert.new("gimbal.warning", "Doubt about a value or byte",
         expert.group.PROTOCOL, expert.severity.WARN),
     unknown = ProtoExpert.new("gimbal.unknown", "Unknown command or value",
         expert.group.UNDECODED, expert.severity.WARN),
@@ -123,7 +126,7 @@ for _, field in pairs(pf) do
     fields[#fields + 1] = field
 end
 gimbal.fields = fields
-gimbal.experts = {ex.crc_bad, ex.cut_short, ex.garbage, ex.range, ex.unknown}
+gimbal.experts = {ex.crc_bad, ex.cut_short, ex.garbage, ex.doubt, ex.unknown}
 
 -- CRC-16/MODBUS (the document's crc_fly16): reflected 0xA001, init 0xFFFF, low byte first.
 local CRC_TABLE = {}
@@ -177,7 +180,11 @@ local function add_field(tree, tvb, base, spec)
     end
     if spec.boolean then
         text = tostring(raw ~= 0)
-        tree:add(spec.pf, range, raw ~= 0, string.format("%s: %s", spec.name, text))
+        item = tree:add(spec.pf, range, raw ~= 0, string.format("%s: %s", spec.name, text))
+        if raw > 1 then
+            item:add_proto_expert_info(ex.doubt,
+                string.format("%s: flag value %d, expected 0 or 1", spec.name, raw))
+        end
         return raw, text
     end
     local value = raw * spec.mul / spec.div
@@ -185,23 +192,48 @@ local function add_field(tree, tvb, base, spec)
     text = fmt_number(spec, value) .. spec.unit_suffix
     item = tree:add(spec.pf, range, value,
         string.format("%s: %s (raw %d)", spec.name, text, raw))
+    if spec.expected ~= nil and raw ~= spec.expected then
+        item:add_proto_expert_info(ex.doubt, string.format(
+            "%s: raw value %d, the document prescribes %d", spec.name, raw, spec.expected))
+    end
     if (spec.min ~= nil and raw < spec.min) or (spec.max ~= nil and raw > spec.max) then
-        item:add_proto_expert_info(ex.range, string.format("%s: %s out of range [%s, %s]%s",
+        item:add_proto_expert_info(ex.doubt, string.format("%s: %s out of range [%s, %s]%s",
             spec.name, fmt_number(spec, value), spec.min_text, spec.max_text, spec.unit_suffix))
     elseif spec.soft_max ~= nil and raw > spec.soft_max then
-        item:add_proto_expert_info(ex.range,
+        item:add_proto_expert_info(ex.doubt,
             string.format("%s: %s %s", spec.name, fmt_number(spec, value), spec.soft_note))
-    elseif spec.expected ~= nil and raw ~= spec.expected then
-        item:add_proto_expert_info(ex.range, string.format(
-            "%s: raw value %d, the document prescribes %d", spec.name, raw, spec.expected))
     end
     return raw, text
 end
 
+-- Adds the fields; returns their raw values by name.
 local function add_fields(tree, tvb, base, specs, summary)
+    local raws = {}
     for _, spec in ipairs(specs) do
-        local _, text = add_field(tree, tvb, base, spec)
+        local raw, text = add_field(tree, tvb, base, spec)
         summary[#summary + 1] = spec.name .. "=" .. text
+        raws[spec.name] = raw
+    end
+    return raws
+end
+
+local function hex(tvb, offset, count)
+    local out = {}
+    for i = 0, count - 1 do out[#out + 1] = string.format("%02X", tvb(offset + i, 1):uint()) end
+    return table.concat(out, " ")
+end
+
+local function any_set(tvb, offset, count)
+    for i = 0, count - 1 do
+        if tvb(offset + i, 1):uint() ~= 0 then return true end
+    end
+    return false
+end
+
+-- Bytes that must be zero: one warning naming them when they are not.
+local function check_zero(item, tvb, offset, count, what)
+    if count > 0 and any_set(tvb, offset, count) then
+        item:add_proto_expert_info(ex.doubt, what .. " are not zero: " .. hex(tvb, offset, count))
     end
 end
 
@@ -222,23 +254,55 @@ local function dissect_command(tree, tvb, base)
     end
     sub:append_text(" (" .. row.title .. ")")
     local summary = {}
-    add_fields(sub, tvb, base, row.params, summary)
+    local used = {[0] = true, [1] = true}
+    local fields = {}
+    for _, spec in ipairs(row.params) do fields[#fields + 1] = spec end
     if row.selector ~= nil then
         local key = add_field(sub, tvb, base, row.selector)
+        used[row.selector.off] = true
         summary[#summary + 1] = row.selector.name .. "=" ..
             (row.selector.labels[key] or tostring(key))
         local variant = row.variants[key]
-        if variant ~= nil then add_fields(sub, tvb, base, variant, summary) end
+        if variant ~= nil then
+            for _, spec in ipairs(variant) do fields[#fields + 1] = spec end
+        else
+            sub:add_proto_expert_info(ex.doubt,
+                string.format("%s: no layout for value %d", row.selector.name, key))
+        end
+    end
+    add_fields(sub, tvb, base, fields, summary)
+    for _, spec in ipairs(fields) do
+        for i = spec.off, spec.off + spec.size - 1 do used[i] = true end
+    end
+    local unused = {}
+    for i = 2, 7 do
+        local byte = tvb(base + i, 1):uint()
+        if not used[i] and byte ~= 0 then
+            unused[#unused + 1] = string.format("DATA%d=0x%02X", i - 1, byte)
+        end
+    end
+    if #unused > 0 then
+        sub:add_proto_expert_info(ex.doubt, "bytes not used by " .. row.name ..
+            " are not zero: " .. table.concat(unused, ", "))
     end
     if COMPONENT_NAMES[s_id] ~= "gimbal" then name = COMPONENT_NAMES[s_id] .. " " .. name end
     return name .. " " .. table.concat(summary, " ")
 end
 
+local function check_marker(tree, tvb, offset)
+    local item = tree:add(pf.marker, tvb(offset + 12, 2))
+    if tvb(offset + 12, 2):uint() ~= 0x4088 then
+        item:add_proto_expert_info(ex.doubt, string.format("bytes 12-13 are %s, expected 40 88",
+            hex(tvb, offset + 12, 2)))
+    end
+end
+
 local function dissect_can_frame(tree, tvb, offset)
     local can_id = tvb(offset + 3, 4):uint()
     tree:add(pf.can_id, tvb(offset + 3, 4))
-    tree:add(pf.reserved, tvb(offset + 7, 5))
-    tree:add(pf.marker, tvb(offset + 12, 2))
+    check_zero(tree:add(pf.reserved, tvb(offset + 7, 5)), tvb, offset + 7, 5,
+        "reserved bytes 7-11")
+    check_marker(tree, tvb, offset)
     local data = offset + 14
     if can_id == CONTROL_ID then
         return dissect_command(tree, tvb, data)
@@ -248,6 +312,8 @@ local function dissect_can_frame(tree, tvb, offset)
         local sub = tree:add(pf.message, tvb(data, 8), status.name)
         local summary = {}
         add_fields(sub, tvb, data, status.fields, summary)
+        check_zero(sub, tvb, data + status.used, 8 - status.used,
+            string.format("unused bytes %d-7", status.used))
         return status.name .. " " .. table.concat(summary, " ")
     end
     tree:add(pf.can_data, tvb(data, 8))
@@ -263,11 +329,22 @@ local function dissect_can_frame(tree, tvb, offset)
 end
 
 local function dissect_feedback(tree, tvb, offset, layout)
-    tree:add(pf.reserved, tvb(offset + 3, 9))
-    tree:add(pf.id_bytes, tvb(offset + 12, 4))
+    check_zero(tree:add(pf.reserved, tvb(offset + 3, 9)), tvb, offset + 3, 9, "reserved bytes 3-11")
+    local ids = tree:add(pf.id_bytes, tvb(offset + 12, 4))
+    if hex(tvb, offset + 12, 4) ~= FEEDBACK_ID_BYTES then
+        ids:add_proto_expert_info(ex.doubt, "bytes 12-15 are " .. hex(tvb, offset + 12, 4) ..
+            ", expected " .. FEEDBACK_ID_BYTES)
+    end
     local sub = tree:add(pf.message, tvb(offset + 16, layout.size - 18), layout.name)
     local summary = {}
-    add_fields(sub, tvb, offset, layout.fields, summary)
+    local raws = add_fields(sub, tvb, offset, layout.fields, summary)
+    local motor = raws.motor_yaw_deg
+    if motor ~= nil and math.abs(motor) > MOTOR_YAW_LIMIT
+        and not WIDE_MOTOR_YAW_TYPES[raws.gimbal_type] then
+        sub:add_proto_expert_info(ex.doubt, string.format(
+            "motor_yaw_deg: %.2f deg out of range [%.2f, %.2f] deg for this gimbal type",
+            motor / 100, -MOTOR_YAW_LIMIT / 100, MOTOR_YAW_LIMIT / 100))
+    end
     return layout.name .. " " .. table.concat(summary, " ")
 end
 
@@ -288,8 +365,9 @@ local function dissect_frame(root, tvb, pinfo, offset, size, crc_state)
     add_direction(tree, pinfo)
     local summary
     if frame_type == FRAME_CONTROL then
-        tree:add(pf.reserved, tvb(offset + 3, 9))
-        tree:add(pf.marker, tvb(offset + 12, 2))
+        check_zero(tree:add(pf.reserved, tvb(offset + 3, 9)), tvb, offset + 3, 9,
+            "reserved bytes 3-11")
+        check_marker(tree, tvb, offset)
         summary = dissect_command(tree, tvb, offset + 14)
     elseif frame_type == FRAME_CAN then
         summary = dissect_can_frame(tree, tvb, offset)
@@ -340,7 +418,7 @@ end
 
 -- Cut the bytes of one call into steps (frames, padding, skipped bytes, cut-short frames)
 -- without showing anything yet; returns the steps and, when the last frame is not
--- complete, the offset and length to ask TCP for.
+-- complete, the offset where it starts (and how many bytes it lacks).
 local function plan(tvb)
     local length = tvb:len()
     local offset = 0
@@ -406,20 +484,22 @@ local function plan(tvb)
     return steps
 end
 
+local tcp_len = Field.new("tcp.len")
+
 function gimbal.dissector(tvb, pinfo, root)
-    local steps, wait_at, wait_for = plan(tvb)
+    local steps, wait_at = plan(tvb)
     if wait_at ~= nil then
-        -- After a frame cut short the next frame may start inside bytes TCP has already
-        -- joined, where it cannot start a new PDU: wait and show it all with the next data.
-        for i, step in ipairs(steps) do
-            if step.kind == "cut" then
-                for j = #steps, i, -1 do steps[j] = nil end
-                wait_at, wait_for = step.at, DESEGMENT_ONE_MORE_SEGMENT
-                break
-            end
+        -- Always ask for whole segments: then the bytes TCP joined before this segment are
+        -- exactly those before its payload. A frame starting among them cannot begin a new
+        -- PDU (TCP would join all of it again): show nothing now, everything next time.
+        local lengths = {tcp_len()}
+        local earlier = 0
+        if #lengths > 0 then earlier = tvb:len() - lengths[#lengths].value end
+        if wait_at <= earlier then
+            steps, wait_at = {}, 0
         end
         pinfo.desegment_offset = wait_at
-        pinfo.desegment_len = wait_for
+        pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT
     end
     local infos = {}
     for _, step in ipairs(steps) do

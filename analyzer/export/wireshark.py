@@ -6,7 +6,13 @@ from functools import cache
 from importlib import resources
 
 from analyzer.protocol.command_table import COMMANDS, Command
-from analyzer.protocol.feedback import LAYOUTS, FeedbackLayout
+from analyzer.protocol.feedback import (
+    FEEDBACK_ID_BYTES,
+    LAYOUTS,
+    MOTOR_YAW_LIMIT,
+    WIDE_MOTOR_YAW_TYPES,
+    FeedbackLayout,
+)
 from analyzer.protocol.fields import Field
 from analyzer.protocol.framing import FRAME_LENGTHS
 from analyzer.protocol.ids import (
@@ -22,7 +28,7 @@ from analyzer.protocol.ids import (
     TEXT_END_ID,
     TEXT_ID,
 )
-from analyzer.protocol.uav import STATUS_FRAMES, StatusFrame
+from analyzer.protocol.uav import STATUS_FRAMES, USED_BYTES, StatusFrame
 
 __all__ = ["command_abbr", "feedback_abbr", "lua_text", "status_abbr"]
 
@@ -140,6 +146,11 @@ def _generated() -> list[str]:
         f"local TEXT_END_ID = 0x{TEXT_END_ID:08X}",
         f"local FEEDBACK_SIZE = {FEEDBACK_MESSAGE_SIZE}",
         f"local MIN_FEEDBACK_FRAME = {min(layout.frame_size for layout in LAYOUTS.values())}",
+        f"local FEEDBACK_ID_BYTES = {_lua_str(FEEDBACK_ID_BYTES.hex(' ').upper())}",
+        f"local MOTOR_YAW_LIMIT = {MOTOR_YAW_LIMIT}",
+        "local WIDE_MOTOR_YAW_TYPES = {"
+        + ", ".join(f"[{t}]=true" for t in sorted(WIDE_MOTOR_YAW_TYPES))
+        + "}",
         "local FRAME_SIZES = "
         + "{"
         + ", ".join(f"[0x{k:02X}]={v}" for k, v in FRAME_LENGTHS.items())
@@ -177,7 +188,7 @@ def _generated() -> list[str]:
         specs = ", ".join(_spec(status_abbr(status, f), f) for f in status.layout.fields)
         lines.append(
             f"STATUS[0x{can_id:08X}] = {{name={_lua_str('uav_' + status.name)}, "
-            f"fields={{{specs}}}}}"
+            f"used={USED_BYTES[can_id]}, fields={{{specs}}}}}"
         )
     lines.append("")
     return lines
