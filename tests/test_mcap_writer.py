@@ -164,11 +164,46 @@ def test_timed_flush_puts_older_messages_on_disk(tmp_path: Path) -> None:
         now[0] = 0.6
         sink.handle(parts[3])  # interval passed: chunk closed and written
         on_disk = read_items(path)
-        assert on_disk.recovered
+        # a provisional summary follows the data: the file as it stands is complete
+        assert not on_disk.recovered
         assert list(on_disk) == [i for b in parts[:4] for i in b.items]
+        assert examine(path).errors == []
+        with open(path, "rb") as f:
+            summary = make_reader(f).get_summary()
+        assert summary is not None and summary.statistics is not None
+        assert summary.statistics.message_count == sink.messages_written
+        now[0] = 1.2
+        sink.handle(parts[4])  # the next chunk replaces the provisional summary
+        assert list(read_items(path)) == [i for b in parts[:5] for i in b.items]
+        assert examine(path).errors == [] and examine(path).warnings == []
     finally:
         sink.close()
     assert not read_items(path).recovered
+    assert list(read_items(path)) == [i for b in parts[:5] for i in b.items]
+    diagnosis = examine(path)
+    assert diagnosis.errors == [] and diagnosis.warnings == []
+
+
+def test_a_large_provisional_summary_is_not_rewritten_at_every_flush(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from analyzer.mcapio import chunked_writer
+
+    monkeypatch.setattr(chunked_writer, "LIVE_SUMMARY_FREE", 4096)
+    path = tmp_path / "live.mcap"
+    with open(path, "wb") as f:
+        writer = chunked_writer.ChunkedWriter(f, live_summary=True)
+        writer.start("", "test")
+        channel = writer.register_channel("/t", "json", writer.register_schema("s", "", b""))
+        tails = 0
+        for n in range(2000):  # many tiny chunks: the summary grows past the free size
+            writer.add_message(channel, n, b"{}", n, n)
+            writer.flush()
+            tails += writer._tail_at is not None
+        writer.finish()
+    assert 20 < tails < 1000  # every flush while small, then more and more rarely
+    diagnosis = examine(path)
+    assert diagnosis.errors == [] and diagnosis.chunks == 2000
 
 
 class _FullDisk(io.FileIO):

@@ -24,9 +24,11 @@ Times are UTC (Z); --local-time shows local time with its offset.
 A finished recording is summarised from its MCAP summary (checked against its
 CRC) and the stats record written at the end; the data section is checked
 against its CRC in one pass, and where that fails every chunk is checked and
-each damaged one is listed. A recording whose recorder was killed has no
-summary (and one whose summary fails its CRC check is not believed): its
-readable part is scanned and `info` says that the file was recovered.
+each damaged one is listed. A live recording carries a provisional summary
+after every flush: if its recorder was killed, `info` says NOT CLOSED and
+counts its messages again. One cut in the middle of a write has no summary
+(and one whose summary fails its CRC check is not believed): its readable part
+is scanned and `info` says that the file was recovered.
 
   gimbal-analyzer info flight.mcap
   gimbal-analyzer info flight.mcap --json
@@ -64,6 +66,10 @@ def render(info: RecordingInfo) -> str:
         state = "RECOVERED (recording was not finished)"
     elif info.damage:
         state = f"finished, DAMAGED ({len(info.damage)} unreadable part(s))"
+    elif not info.closed:
+        state = (
+            "NOT CLOSED (the recorder stopped without closing it; complete up to its last flush)"
+        )
     else:
         state = "finished"
     lines.append(f"file        {info.path} ({_size(info.size_bytes)}, {state})")

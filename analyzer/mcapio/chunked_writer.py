@@ -50,6 +50,9 @@ _INDEX_HEAD = struct.Struct("<BQHI")
 _RECORD_HEAD = struct.Struct("<BQ")
 
 ZSTD_LEVEL = 3  # what the mcap library's writer uses
+# A provisional summary up to this size is rewritten at every live flush; a larger one only
+# once as many data bytes followed it (so it at most doubles what is written).
+LIVE_SUMMARY_FREE = 256 * 1024
 
 
 def compressor(name: str) -> tuple[str, Callable[[bytes], bytes] | None]:
@@ -72,8 +75,14 @@ class ChunkedWriter:
         *,
         chunk_size: int = 128 * 1024,
         compression: str = DEFAULT_COMPRESSION,
+        live_summary: bool = False,
     ) -> None:
         self._stream = stream
+        # Live recording: every flush also writes a provisional summary and footer after the
+        # data (overwritten by the next chunk), so a killed recorder leaves an indexed file.
+        self._live_summary = live_summary
+        self._tail_at: int | None = None  # where the provisional summary starts, if written
+        self._since_tail = 0  # data bytes written since the last provisional summary
         self._chunk_size = chunk_size
         self._compression, self._compress = compressor(compression)
         self.retimed = 0  # messages whose log time was raised to keep the file in order
@@ -82,8 +91,8 @@ class ChunkedWriter:
         self._data_crc = 0
         self._schemas: dict[int, Schema] = {}
         self._channels: dict[int, Channel] = {}
-        self._chunk_indexes: list[ChunkIndex] = []
-        self._metadata_indexes: list[MetadataIndex] = []
+        self._chunk_indexes: list[bytes] = []  # serialised once: summaries repeat them
+        self._metadata_indexes: list[bytes] = []
         self._channel_counts: dict[int, int] = {}
         self._message_count = 0
         self._chunk_count = 0
@@ -110,7 +119,10 @@ class ChunkedWriter:
 
     def _write(self, data: bytes | bytearray | memoryview) -> None:
         """Write a data-section record. ``position`` moves only once all of it is written."""
+        if self._tail_at is not None:
+            self._drop_tail()
         self._write_all(data)
+        self._since_tail += len(data)
         self._data_crc = zlib.crc32(data, self._data_crc)
         self._pos += len(data)
 
@@ -207,19 +219,45 @@ class ChunkedWriter:
         record = self._record(Metadata(name=name, metadata=dict(data)))
         offset = self._pos
         self._write(record)
-        self._metadata_indexes.append(MetadataIndex(offset=offset, length=len(record), name=name))
+        index = MetadataIndex(offset=offset, length=len(record), name=name)
+        self._metadata_indexes.append(self._record(index))
         self._metadata_count += 1
 
     def flush(self) -> None:
-        """Close the open chunk (if it holds messages) and flush the stream."""
+        """Close the open chunk (if it holds messages) and flush the stream.
+
+        With ``live_summary`` a provisional summary and footer follow the data, so the file
+        is complete as it stands; the next data written replaces them. To bound the extra
+        writes of a long recording, a summary larger than ``LIVE_SUMMARY_FREE`` is written
+        again only once at least as many data bytes have followed the previous one."""
         self._finish_chunk()
+        if self._live_summary and self._tail_at is None and self._message_count:
+            tail = self._tail(self._pos)
+            if len(tail) <= LIVE_SUMMARY_FREE or self._since_tail >= len(tail):
+                self._write_all(tail)  # not data: position and the data CRC stay
+                self._tail_at = self._pos
+                self._since_tail = 0
         self._stream.flush()
 
     def finish(self) -> None:
         """Write the last chunk, the data end, the summary and the footer."""
         self._finish_chunk()
-        self._write(self._record(DataEnd(data_section_crc=self._data_crc)))
-        summary_start = self._pos
+        if self._tail_at is not None:
+            self._drop_tail()
+        self._write_all(self._tail(self._pos))
+        self._stream.flush()
+
+    def _drop_tail(self) -> None:
+        """Cut the provisional summary off; new data goes where it was."""
+        assert self._tail_at is not None
+        self._stream.seek(self._tail_at)
+        self._stream.truncate()
+        self._tail_at = None
+
+    def _tail(self, data_end: int) -> bytes:
+        """DataEnd, summary, summary offsets, footer and magic for data ending at ``data_end``."""
+        data_end_record = self._record(DataEnd(data_section_crc=self._data_crc))
+        summary_start = data_end + len(data_end_record)
         parts: list[bytes] = []
         offsets: list[SummaryOffset] = []
         position = summary_start
@@ -249,8 +287,8 @@ class ChunkedWriter:
             channel_message_counts={k: v for k, v in self._channel_counts.items() if v},
         )
         group(Opcode.STATISTICS, [self._record(statistics)])
-        group(Opcode.CHUNK_INDEX, [self._record(c) for c in self._chunk_indexes])
-        group(Opcode.METADATA_INDEX, [self._record(m) for m in self._metadata_indexes])
+        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
+        group(Opcode.METADATA_INDEX, self._metadata_indexes)
         summary_offset_start = position
         parts.extend(self._record(o) for o in offsets)
         summary = b"".join(parts)
@@ -259,14 +297,12 @@ class ChunkedWriter:
             struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start, summary_offset_start),
             crc,
         )
-        self._write_all(summary)
         footer = Footer(
             summary_start=summary_start,
             summary_offset_start=summary_offset_start,
             summary_crc=crc,
         )
-        self._write_all(self._record(footer) + MAGIC)
-        self._stream.flush()
+        return data_end_record + summary + self._record(footer) + MAGIC
 
     # -- chunks ----------------------------------------------------------------------------------
 
@@ -310,16 +346,18 @@ class ChunkedWriter:
             self._channel_counts[channel_id] += len(pairs) // 2
             messages += len(pairs) // 2
         self._chunk_indexes.append(
-            ChunkIndex(
-                message_start_time=start,
-                message_end_time=end,
-                chunk_start_offset=chunk_offset,
-                chunk_length=len(chunk_record),
-                message_index_offsets=offsets,
-                message_index_length=len(indexes),
-                compression=self._compression,
-                compressed_size=len(stored),
-                uncompressed_size=len(data),
+            self._record(
+                ChunkIndex(
+                    message_start_time=start,
+                    message_end_time=end,
+                    chunk_start_offset=chunk_offset,
+                    chunk_length=len(chunk_record),
+                    message_index_offsets=offsets,
+                    message_index_length=len(indexes),
+                    compression=self._compression,
+                    compressed_size=len(stored),
+                    uncompressed_size=len(data),
+                )
             )
         )
         if self._message_count == 0:

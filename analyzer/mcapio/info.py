@@ -45,6 +45,9 @@ class RecordingInfo:
     extra: dict[str, Any] = field(default_factory=dict)
     damage: list[str] = field(default_factory=list)  # parts of the file that cannot be read
     summary_damaged: bool = False  # a finished file whose summary failed its checks
+    # False for a live recording whose recorder never closed it (killed, power lost): its
+    # provisional summary makes it complete up to the last flush, the closing stats are absent.
+    closed: bool = True
 
     @property
     def duration_s(self) -> float:
@@ -58,6 +61,7 @@ class RecordingInfo:
             "size_bytes": self.size_bytes,
             "recovered": self.recovered,
             "recovery_note": self.recovery_note,
+            "closed": self.closed,
             "start_time": None if self.start_ns is None else self.start_ns / 1e9,
             "end_time": None if self.end_ns is None else self.end_ns / 1e9,
             "duration_s": self.duration_s,
@@ -151,6 +155,7 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     )
     stored = metadata.get(STATS_METADATA_NAME)
     malformed = ""
+    info.closed = stored is not None
     if stored is not None and not scan:
         try:
             info.tally = Tally.from_metadata(stored)

@@ -87,9 +87,10 @@ class McapSink:
     time of every message are the event / item time in nanoseconds.
 
     With ``flush_interval`` set (live recording) the open chunk is closed and the file flushed
-    at that interval by a background thread (and by ``handle``), and fsync'ed, so a killed
-    recorder leaves a file whose older messages the reader recovers. A write error (disk full,
-    device gone), in the caller's thread or the flush thread, stops the recording: every
+    at that interval by a background thread (and by ``handle``), followed by a provisional
+    summary and footer, and fsync'ed, so a killed recorder leaves a complete, indexed file of
+    everything up to the last flush (only its closing stats record is missing). A write error
+    (disk full, device gone), in the caller's thread or the flush thread, stops the recording: every
     chunk written completely stays in the file (finished with a summary when there is room),
     ``error`` says what happened and how much was kept, and a ``SourceError`` is raised once,
     by the next ``handle`` / ``flush`` / ``close``.
@@ -151,7 +152,12 @@ class McapSink:
             **{str(k): str(v) for k, v in metadata.items()},
         }
         try:
-            self._writer = ChunkedWriter(self._file, chunk_size=chunk_size, compression=compression)
+            self._writer = ChunkedWriter(
+                self._file,
+                chunk_size=chunk_size,
+                compression=compression,
+                live_summary=flush_interval is not None,
+            )
             self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
             self._writer.add_metadata(METADATA_NAME, info)
         except OSError as exc:
