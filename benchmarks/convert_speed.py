@@ -4,9 +4,11 @@ Writes a candump log of mixed gimbal traffic, converts it to MCAP the way
 ``gimbal-analyzer convert`` does (input reader, decoder, McapSink), and times a bare loop
 of ``mcap.writer.Writer.add_message`` writing the same number of JSON messages. Each side
 runs several times, interleaved, and the best time of each counts (the machine may be
-busy). Target: convert at no less than half the rate of the bare loop.
+busy). Both sides compress their chunks the same way (zstd by default, as recordings
+are). Target: convert at no less than half the rate of the bare loop. It also reports the
+recording's size against the same convert written uncompressed.
 
-  python benchmarks/convert_speed.py [--frames 200000] [--repeat 3]
+  python benchmarks/convert_speed.py [--frames 200000] [--repeat 3] [--compression zstd]
 """
 
 from __future__ import annotations
@@ -88,7 +90,9 @@ def write_candump(frames: list[CanFrame], path: Path) -> None:
             f.write(f"({fr.time:.6f}) {fr.channel} {ident}#{fr.data.hex().upper()}\n")
 
 
-def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[float, Any, str]:
+def run_convert(
+    source_path: Path, frames: list[CanFrame], out: Path, compression: str
+) -> tuple[float, Any, str]:
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.pipeline import Pipeline, run_items
 
@@ -106,7 +110,9 @@ def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[f
     else:
         items = frames
         how = "in-memory frames (analyzer.inputs not available: input parsing not measured)"
-    sink = McapSink(out, metadata=recording_metadata("bench"), flush_interval=None)
+    sink = McapSink(
+        out, metadata=recording_metadata("bench"), flush_interval=None, compression=compression
+    )
     pipeline = Pipeline([sink])
     run_items(items, pipeline)  # closes the sink
     tally = pipeline.tally
@@ -116,7 +122,7 @@ def run_convert(source_path: Path, frames: list[CanFrame], out: Path) -> tuple[f
     return time.perf_counter() - started, result, how
 
 
-def run_bare(count: int, out: Path, *, encode: bool) -> float:
+def run_bare(count: int, out: Path, *, encode: bool, compression: str) -> float:
     """``count`` JSON messages through mcap.writer.Writer.add_message, nothing else."""
     from mcap.writer import CompressionType, Writer
 
@@ -131,7 +137,7 @@ def run_bare(count: int, out: Path, *, encode: bool) -> float:
     fixed = json.dumps(body).encode()
     started = time.perf_counter()
     with open(out, "wb") as f:
-        writer = Writer(f, chunk_size=128 * 1024, compression=CompressionType.NONE)
+        writer = Writer(f, chunk_size=128 * 1024, compression=CompressionType[compression.upper()])
         writer.start()
         schema = writer.register_schema("frame", "jsonschema", b'{"type":"object"}')
         channel = writer.register_channel("/can/frames", "json", schema)
@@ -151,18 +157,19 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=200_000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--compression", choices=("zstd", "lz4", "none"), default="zstd")
     args = parser.parse_args()
     for gimbal_only, title in (
         (False, "saturated bus: gimbal traffic among foreign IDs (the live-load mix)"),
         (True, "gimbal traffic only: nearly every frame gives an event (worst case)"),
     ):
         print(f"== {title}")
-        scenario(make_frames(args.frames, gimbal_only=gimbal_only), args.repeat)
+        scenario(make_frames(args.frames, gimbal_only=gimbal_only), args.repeat, args.compression)
         print()
     return 0
 
 
-def scenario(frames: list[CanFrame], repeat: int) -> None:
+def scenario(frames: list[CanFrame], repeat: int, compression: str) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         log = folder / "traffic.log"
@@ -173,11 +180,15 @@ def scenario(frames: list[CanFrame], repeat: int) -> None:
         result: Any = None
         how = ""
         for _ in range(repeat):
-            seconds, result, how = run_convert(log, frames, folder / "converted.mcap")
+            seconds, result, how = run_convert(log, frames, folder / "converted.mcap", compression)
             convert_times.append(seconds)
-            bare_times.append(run_bare(len(frames), folder / "bare.mcap", encode=True))
-            bare_fixed.append(run_bare(len(frames), folder / "bare2.mcap", encode=False))
+            bare = folder / "bare.mcap"
+            bare_times.append(run_bare(len(frames), bare, encode=True, compression=compression))
+            fixed = folder / "bare2.mcap"
+            bare_fixed.append(run_bare(len(frames), fixed, encode=False, compression=compression))
         size = os.path.getsize(folder / "converted.mcap")
+        run_convert(log, frames, folder / "plain.mcap", "none")
+        plain = os.path.getsize(folder / "plain.mcap")
     n = len(frames)
     convert_rate = n / min(convert_times)
     bare_rate = n / min(bare_times)
@@ -187,7 +198,11 @@ def scenario(frames: list[CanFrame], repeat: int) -> None:
     print(
         f"convert:  {convert_rate:12,.0f} frames/s   "
         f"({result.messages} MCAP messages: {result.frames} raw frames + {result.events} events "
-        f"+ Foxglove views; {size / 1e6:.1f} MB)"
+        f"+ Foxglove views)"
+    )
+    print(
+        f"file size: {size / 1e6:.2f} MB {compression} vs {plain / 1e6:.2f} MB uncompressed "
+        f"({plain / size:.1f}x smaller)"
     )
     print(
         f"bare loop: {bare_rate:11,.0f} messages/s  (json.dumps + Writer.add_message, {n} messages)"
@@ -196,7 +211,7 @@ def scenario(frames: list[CanFrame], repeat: int) -> None:
     verdict = "met" if ratio >= 0.5 else "NOT met"
     print(f"ratio convert / bare loop: {ratio:.2f} (target >= 0.50: {verdict})")
     print(f"ratio convert / pre-encoded loop: {convert_rate / fixed_rate:.2f}")
-    print(f"best of {repeat} runs each, interleaved")
+    print(f"best of {repeat} runs each, interleaved; {compression} chunks on both sides")
 
 
 if __name__ == "__main__":
