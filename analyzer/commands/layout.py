@@ -4,12 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
-from pathlib import Path
-
-from analyzer.errors import SourceError, UsageError
 
 HELP = "write a Foxglove Studio layout (map, log, plots, modes, commands, diagnostics)"
 DEFAULT_OUTPUT = "gimbal-layout.json"
@@ -57,34 +52,11 @@ def run(args: argparse.Namespace) -> int:
     if args.output == "-":
         sys.stdout.write(text)
         return 0
-    _write(Path(args.output), text, force=args.force)
+    from analyzer.output_file import write_output
+
+    write_output(args.output, text, force=args.force)
     print(
         f"wrote {args.output}: in Foxglove, Layouts -> Import layout, then open a recording",
         file=sys.stderr,
     )
     return 0
-
-
-def _write(path: Path, text: str, *, force: bool) -> None:
-    """Write through a temporary file and an atomic rename; never replace without --force."""
-    if path.is_symlink():
-        raise UsageError(f"{path} is a symbolic link; give the real path")
-    if path.is_dir():
-        raise UsageError(f"{path} is a directory")
-    if path.exists() and not force:
-        raise UsageError(f"{path} exists; add --force to replace it")
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise UsageError(f"directory {directory} does not exist")
-    try:
-        fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    except OSError as exc:
-        raise UsageError(f"cannot write {path}: {exc.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as out:
-            out.write(text)
-        os.chmod(temp, 0o644)
-        os.replace(temp, path)
-    except OSError as exc:
-        os.unlink(temp)
-        raise SourceError(f"cannot write {path}: {exc.strerror}") from None
