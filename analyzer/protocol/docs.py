@@ -42,6 +42,11 @@ def command_reference() -> str:
         "Generated from the protocol tables by `gimbal-analyzer commands --markdown`; "
         "do not edit by hand.",
         "",
+        "A field with `values:` is decoded to its label, with the number on the wire in a "
+        "companion field `<name>_code` (e.g. `palette: iron_red`, `palette_code: 2`); a number "
+        "the table does not list gets the label `unknown_0x..` (e.g. `unknown_0x7f`) and a "
+        "warning.",
+        "",
         "## Commands (CAN ID 0x00000F01, TCP/UART frame type 0x0A)",
         "",
         "| S_ID | CMD | name | document name | parameters |",
