@@ -101,6 +101,21 @@ def test_every_generated_schema_is_in_the_foxglove_subset() -> None:
         assert foxglove_problems(json.loads(path.read_text()), path.name) == [], path.name
 
 
+def test_schemas_check_refuses_a_schema_foxglove_would_drop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["schemas", str(tmp_path)]) == 0
+    assert main(["schemas", "--check", str(tmp_path)]) == 0
+    assert "subset Foxglove reads" in capsys.readouterr().out
+    path = tmp_path / "gimbal.command.schema.json"
+    schema = json.loads(path.read_text())
+    schema["properties"]["palette"]["type"] = ["string", "integer"]  # the old, refused form
+    path.write_text(json.dumps(schema))
+    assert main(["schemas", "--check", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert "gimbal.command.schema.json: palette: unsupported type ['string', 'integer']" in out
+
+
 def _recorded_schemas(path: Path) -> dict[str, Any]:
     with path.open("rb") as f:
         summary = make_reader(f).get_summary()

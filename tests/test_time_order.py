@@ -63,3 +63,16 @@ def test_convert_compression_choices(tmp_path: Path, capsys: pytest.CaptureFixtu
     with pytest.raises(SystemExit):
         main(["convert", sample, "-o", str(tmp_path / "x.mcap"), "--compression", "gzip"])
     assert "invalid choice: 'gzip'" in capsys.readouterr().err
+
+
+def test_convert_of_a_log_that_goes_back_in_time_stays_in_order_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a clock set back by 60 s in the middle of a log
+    log = tmp_path / "back.log"
+    times = [1_700_000_000 + i * 0.01 - (60 if i >= 3000 else 0) for i in range(6000)]
+    log.write_text("".join(f"({t:.6f}) can0 00000F01#0F04E803F4010000\n" for t in times))
+    out = tmp_path / "back.mcap"
+    assert main(["convert", str(log), "-o", str(out), "-q"]) == 0
+    assert_in_order(out)
+    assert "the input goes back in time" in capsys.readouterr().err

@@ -37,6 +37,16 @@ def run(args: argparse.Namespace) -> int:
     directory = Path(args.directory)
     files = rendered()
     if args.check:
+        from analyzer.mcapio.schema_subset import foxglove_problems
+
+        refused = [
+            f"{path.name}: {problem}"
+            for path in sorted(directory.glob("*.schema.json"))
+            for problem in foxglove_problems(_load(path), path.name)
+        ]
+        if refused:
+            print(f"Foxglove would refuse schemas in {directory}: " + "; ".join(refused))
+            return 1
         stale = [
             name
             for name, text in files.items()
@@ -45,7 +55,10 @@ def run(args: argparse.Namespace) -> int:
         if stale:
             print(f"out of date in {directory}: {', '.join(stale)} (run: gimbal-analyzer schemas)")
             return 1
-        print(f"{len(files)} schemas in {directory} match the protocol table")
+        print(
+            f"{len(files)} schemas in {directory} match the protocol table "
+            "and are in the JSON Schema subset Foxglove reads"
+        )
         return 0
     try:
         directory.mkdir(parents=True, exist_ok=True)
@@ -55,3 +68,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"cannot write schemas to {directory}: {exc.strerror}") from None
     print(f"wrote {len(files)} schemas to {directory}")
     return 0
+
+
+def _load(path: Path) -> object:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        return f"unreadable: {exc}"

@@ -266,6 +266,11 @@ class McapSink:
             self._output.discard()
 
     @property
+    def retimed(self) -> int:
+        """Messages older than a chunk already written, logged at that chunk's end time."""
+        return self._writer.retimed
+
+    @property
     def closed(self) -> bool:
         return self._closed
 
