@@ -125,3 +125,23 @@ def test_an_interrupt_leaves_finishing_to_the_caller_and_finish_runs_once() -> N
     assert pipeline.tally.frames + pipeline.tally.chunks == 5
     pipeline.finish()
     assert pipeline.tally.frames + pipeline.tally.chunks == 5
+
+
+def test_the_response_analyzer_is_a_stage_and_analyze_runs_it_in_the_pipeline(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.cli import main
+    from analyzer.inputs import open_input
+    from analyzer.protocol.ids import PROTOCOL_IDS
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+
+    sample = str(Path(__file__).resolve().parent.parent / "samples" / "flight-candump.log")
+    sink = Collect()
+    pipeline = Pipeline([sink], stages=[ResponseAnalyzer()])
+    run_items(open_input(sample, None, 2000, wanted_ids=PROTOCOL_IDS), pipeline)
+    found = [e for b in sink.batches for e in b.events if e.topic == TOPIC_ANALYSIS_RESPONSE]
+    assert found and pipeline.tally.topics[TOPIC_ANALYSIS_RESPONSE] == len(found)
+    assert main(["analyze", sample, "--json"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(found)

@@ -25,6 +25,7 @@ from analyzer.analysis.targets import AxisGoal, judge_axis
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -145,6 +146,17 @@ class ResponseAnalyzer:
             elif topic == TOPIC_COMMAND:
                 out += self._command(t, event.fields)
         return self._emit(out)
+
+    def process(self, events: list[Event]) -> list[Event]:
+        """As a pipeline stage (``analyzer.pipeline.Stage``): the findings of a batch.
+
+        Findings already in the input (a recording made with this stage) are not judged
+        again as input."""
+        out: list[Event] = []
+        for event in events:
+            if event.topic != TOPIC_ANALYSIS_RESPONSE:
+                out += self.feed(event)
+        return out
 
     def close(self) -> list[Event]:
         """The end of the input: judge what is still open with what was seen."""

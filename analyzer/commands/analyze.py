@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import IO, Any
 
 from analyzer import timefmt
@@ -105,21 +105,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def decoded_events(args: argparse.Namespace, reader: Any) -> Iterator[Any]:
-    """Every event the decoder makes of the input (diagnostics of the reader too)."""
-    from analyzer.protocol.decoder import Decoder
-    from analyzer.protocol.types import CanFrame, StreamChunk
+class KeepFindings:
+    """A pipeline stage around the response analyzer that also keeps what it found."""
 
-    decoder = Decoder()
-    for item in reader:
-        kind = type(item)
-        if kind is CanFrame:
-            yield from decoder.feed_can(item)
-        elif kind is StreamChunk:
-            yield from decoder.feed_stream(item)
-        else:
-            yield item
-    yield from decoder.close()
+    def __init__(self, analyzer: Any) -> None:
+        self.analyzer = analyzer
+        self.findings: list[Any] = []
+
+    def process(self, events: list[Any]) -> list[Any]:
+        found: list[Any] = self.analyzer.process(events)
+        self.findings += found
+        return found
+
+    def close(self) -> list[Any]:
+        found: list[Any] = self.analyzer.close()
+        self.findings += found
+        return found
 
 
 def open_reader(args: argparse.Namespace) -> Any:
@@ -140,28 +141,22 @@ def settings_from(args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
-    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+    from analyzer.pipeline import Pipeline, run_items
 
     settings = settings_from(args)
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
-    findings: list[Any] = []
-    commands = 0
-    times: set[float] = set()
+    kept = KeepFindings(analyzer)
+    pipeline = Pipeline(stages=[kept])  # the same decoding and counting as every command
     try:
-        for event in decoded_events(args, reader):
-            if event.topic == TOPIC_ANALYSIS_RESPONSE:
-                continue  # findings stored in a recording: judged afresh here
-            if event.topic == "/gimbal/command":
-                commands += 1
-            if len(times) < 2:
-                times.add(event.time)
-            findings += analyzer.feed(event)
-        findings += analyzer.close()
+        run_items(reader, pipeline)
     finally:
         reader.close()
+    findings = kept.findings
+    tally = pipeline.tally
+    commands = tally.topics.get("/gimbal/command", 0)
     notes = list(reader.notes)
-    if len(times) < 2 and findings:
+    if (tally.first_time is None or tally.first_time == tally.last_time) and findings:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         findings = []
         analyzer.verdicts.clear()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import IO, Any, cast
 
 HELP = "write a flight report: one offline HTML file with plots, findings and diagnostics"
@@ -40,14 +41,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_settings_arguments(parser)
 
 
+class EventsInto:
+    """A sink handing every decoded event (not findings stored in the input) to ``add``."""
+
+    def __init__(self, add: Callable[[Any], None]) -> None:
+        self.add = add
+
+    def handle(self, batch: Any) -> None:
+        from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+
+        add = self.add
+        for event in batch.events:
+            if event.topic != TOPIC_ANALYSIS_RESPONSE:
+                add(event)
+
+    def close(self) -> None:
+        pass
+
+
 def run(args: argparse.Namespace) -> int:
     import sys
 
     from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
-    from analyzer.commands.analyze import decoded_events, open_reader, settings_from
+    from analyzer.commands.analyze import KeepFindings, open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
-    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+    from analyzer.pipeline import Pipeline, run_items
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
 
@@ -57,21 +76,15 @@ def run(args: argparse.Namespace) -> int:
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    add = data.add
-
-    def take(findings: list[Any]) -> None:
-        for finding in findings:
-            add(finding)
-
+    kept = KeepFindings(analyzer)
+    # The same decoding and counting as every command; the analyzer is a stage of it.
+    pipeline = Pipeline([EventsInto(data.add)], stages=[kept])
     try:
-        for event in decoded_events(args, reader):
-            if event.topic == TOPIC_ANALYSIS_RESPONSE:
-                continue  # findings stored in a recording: judged afresh
-            add(event)
-            take(analyzer.feed(event))
-        take(analyzer.close())
+        run_items(reader, pipeline)
     finally:
         reader.close()
+    for finding in kept.findings:
+        data.add(finding)
     data.notes.extend(reader.notes)
     if data.first is not None and data.first == data.last and data.findings:
         data.findings.clear()
