@@ -11,7 +11,8 @@ import threading
 import time
 from typing import IO, Any
 
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import EXIT_FAILED, SourceError, UsageError
+from analyzer.link_status import LinkStatus
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 
@@ -95,23 +96,53 @@ def _megabytes(path: str) -> str:
         return "? MB"
 
 
-class StatusLine:
-    """Sink writing a short status line to stderr (overwritten in place on a terminal)."""
+class LinkWatch:
+    """Sink following the source's link state (for the status line and the final word)."""
 
-    def __init__(self, stream: IO[str], path: str) -> None:
+    def __init__(self) -> None:
+        self.status = LinkStatus()
+
+    def handle(self, batch: Batch) -> None:
+        self.status.fold(batch.events)
+
+    def close(self) -> None:
+        pass
+
+    def last_words(self) -> str:
+        """The last link message worth reporting at the end (a failure before a retry)."""
+        return self.status.problem or self.status.detail
+
+
+class StatusLine:
+    """Sink writing a short status line to stderr (overwritten in place on a terminal).
+
+    Besides the counts it says what the link is doing (connecting, refused, connected,
+    lost, retrying in N s), so a capture that receives nothing says why.
+    """
+
+    def __init__(
+        self,
+        stream: IO[str],
+        path: str,
+        link: LinkWatch | None = None,
+        waiting: str = "waiting for data",
+    ) -> None:
         self.stream = stream
         self.path = path
+        self.link = link or LinkWatch()
+        self.waiting = waiting
         self.tty = stream.isatty()
         self.interval = STATUS_INTERVAL_TTY if self.tty else STATUS_INTERVAL_LOG
         self.capture: Any = None
         self._next = time.monotonic() + self.interval
         self._width = 0
+        self._link_shown = ""
 
     def line(self) -> str:
         stats = self.capture.stats if self.capture is not None else None
         if stats is None:
             return f"recording {self.path}"
-        parts = [f"recording {self.path}", f"{stats.elapsed_s:7.1f} s"]
+        parts = [f"recording {self.path}", f"{stats.elapsed_s:7.1f} s", self.link_words(stats)]
         if stats.frames or not stats.chunks:
             parts.append(f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)")
         if stats.chunks:
@@ -123,8 +154,19 @@ class StatusLine:
         parts.append(_megabytes(self.path))
         return "  ".join(parts)
 
+    def link_words(self, stats: Any) -> str:
+        link = self.link.status
+        if link.seen:
+            return f"[{link.describe(time.time())}]"
+        return "[receiving]" if stats.frames or stats.chunks else f"[{self.waiting}]"
+
     def handle(self, batch: Batch) -> None:
         now = time.monotonic()
+        link = self.link.status
+        change = link.problem if link.failing else link.detail
+        if change != self._link_shown and not self.tty:
+            self._next = now  # a log gets every change of the link at once
+        self._link_shown = change
         if now < self._next:
             return
         self._next = now + self.interval
@@ -167,6 +209,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.duration is not None and not args.duration > 0:
         raise UsageError("--duration must be a positive number of seconds")
+    if args.tui and not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise UsageError(
+            "record --tui needs a terminal; leave out --tui to record with a status line "
+            "on standard error"
+        )
     inputs = _input_files(args.source)
     target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
@@ -192,10 +239,13 @@ def run(args: argparse.Namespace) -> int:
     except SourceError:
         source.close()
         raise
-    sinks: list[Any] = [sink]
+    link = LinkWatch()
+    sinks: list[Any] = [sink, link]
     status = None
     if not args.quiet and not args.tui:
-        status = StatusLine(sys.stderr, path)
+        address = getattr(source, "address", None)
+        waiting = f"connecting to {address}" if address else "waiting for data"
+        status = StatusLine(sys.stderr, path, link, waiting)
         sinks.append(status)
     if args.print and not args.tui:
         sinks.append(EventPrinter(sys.stdout))
@@ -241,6 +291,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         result = 1
+    nothing_received = result == 0 and not inputs and not (stats.frames or stats.chunks)
     reason = capture.stop_reason or "stopped"
     if not args.quiet:
         print(
@@ -249,14 +300,18 @@ def run(args: argparse.Namespace) -> int:
             f"to {path} ({_megabytes(path)}); ended: {reason}",
             file=sys.stderr,
         )
-    if result == 0 and not inputs and not (stats.frames or stats.chunks):
-        # A live source that delivered nothing is a failed capture (exit 1), not a success.
+    if nothing_received:
+        # A live source that delivered nothing is a failed capture (exit 1), not a
+        # success: say why we think nothing came (the last link message).
+        last = link.last_words()
         print(
             f"gimbal-analyzer record: nothing was received from {description} in "
-            f"{stats.elapsed_s:.1f} s; the recording {path} holds only its link diagnostics",
+            f"{stats.elapsed_s:.1f} s"
+            + (f" (last link message: {last})" if last else "")
+            + f"; the recording {path} holds only its link diagnostics",
             file=sys.stderr,
         )
-        result = 1
+        result = EXIT_FAILED
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "

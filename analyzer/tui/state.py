@@ -12,6 +12,7 @@ import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
 
+from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
 from analyzer.protocol.ids import (
     ALTITUDE_ID,
@@ -203,6 +204,7 @@ class MonitorState:
         # link
         self.link_state = ""
         self.link_detail = ""
+        self.link = LinkStatus()
         self.source_ended = False
         # rates over windows of bus time
         self.frames_per_s = 0.0
@@ -406,8 +408,9 @@ class MonitorState:
                 total.kinds[kind] += 1
                 counters.kinds[kind] += 1
                 if kind == LINK:
-                    self.link_state = str(event.fields.get("state") or "")
-                    self.link_detail = str(event.fields.get("detail", ""))
+                    self.link.note(event)
+                    self.link_state = self.link.state
+                    self.link_detail = self.link.detail
                 else:
                     self._window_errors += 1
             elif topic == TOPIC_UAV_GPS:

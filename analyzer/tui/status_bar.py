@@ -27,25 +27,18 @@ class StatusInfo:
     dropped: int = 0  # frames / chunks the source dropped because the capture fell behind
 
 
-_GOOD_STATES = frozenset({"open", "connected", "gs_connected"})
-_WAIT_STATES = frozenset({"listening", "reconnecting", "connecting"})
-_BAD_WORDS = ("down", "lost", "disconnect", "error", "fail", "refused", "closed")
-
-
 def link_text(state: MonitorState) -> tuple[str, str]:
     """(words, style) for the connection state, from the last link diagnostic."""
-    link = state.link_state
-    detail = state.link_detail
-    bad = any(w in (link or detail).lower() for w in _BAD_WORDS)
+    link = state.link
+    words = link.describe(state.now)
     if state.source_ended:
-        return ("ended: " + detail if bad and detail else "source ended"), "bold yellow"
-    if link or detail:
-        words = link or detail
-        if link in _GOOD_STATES:
+        return ("ended: " + words if link.failing and words else "source ended"), "bold yellow"
+    if link.seen:
+        if link.good:
             return words, "bold green"
-        if link in _WAIT_STATES or not bad:
-            return (f"{link}: {detail}" if link and detail else words), "bold yellow"
-        return (f"{link}: {detail}" if link and detail else words), "bold white on red"
+        if link.failing:
+            return words, "bold white on red"
+        return words, "bold yellow"
     if state.total.frames or state.total.chunks:
         return "receiving", "bold green"
     return "waiting for data", "yellow"
