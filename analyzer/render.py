@@ -31,11 +31,11 @@ DIRECTION_WORDS = {TO_IDU: "gs->idu", FROM_IDU: "idu->gs"}
 
 # Short names of the topics that carry no name field.
 TOPIC_LABELS = {
-    TOPIC_GIMBAL_ATTITUDE: "attitude",
+    TOPIC_GIMBAL_ATTITUDE: "gimbal attitude",
     TOPIC_GIMBAL_RANGING: "ranging",
     TOPIC_UAV_GPS: "gps",
     TOPIC_UAV_ALTITUDE: "altitude",
-    TOPIC_UAV_ATTITUDE: "attitude",
+    TOPIC_UAV_ATTITUDE: "uav attitude",
     TOPIC_UAV_TEXT: "text",
     TOPIC_CAN_OTHER: "other frame",
 }

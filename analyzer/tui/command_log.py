@@ -7,7 +7,6 @@ cursor it follows the newest entry; moving the cursor stops following until End.
 
 from __future__ import annotations
 
-from bisect import bisect_left
 from typing import ClassVar
 
 from rich.style import Style
@@ -62,7 +61,7 @@ class CommandLog(ScrollView, can_focus=True):
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)
         self.entries: list[LogEntry] = []
-        self._seqs: list[int] = []
+        self._index: dict[int, int] = {}  # seq -> position in entries
         self.cursor_seq: int | None = None
         self.raw = False
         self.search = ""
@@ -73,7 +72,7 @@ class CommandLog(ScrollView, can_focus=True):
     def set_entries(self, entries: list[LogEntry]) -> None:
         """Show these entries (oldest first); keeps the cursor on its entry if still there."""
         self.entries = entries
-        self._seqs = [e.seq for e in entries]
+        self._index = {e.seq: i for i, e in enumerate(entries)}
         if len(self._texts) > TEXT_CACHE_LIMIT:
             self._texts.clear()
         self.virtual_size = Size(0, len(entries))
@@ -138,7 +137,8 @@ class CommandLog(ScrollView, can_focus=True):
     def cursor_index(self) -> int | None:
         if self.cursor_seq is None or not self.entries:
             return None
-        return min(bisect_left(self._seqs, self.cursor_seq), len(self.entries) - 1)
+        # an entry that has left the bounded log: the cursor stays at the top
+        return self._index.get(self.cursor_seq, 0)
 
     @property
     def selected(self) -> LogEntry | None:
@@ -162,8 +162,8 @@ class CommandLog(ScrollView, can_focus=True):
         self.refresh()
 
     def move_to_seq(self, seq: int) -> None:
-        if seq in self._seqs:
-            self._move(self._seqs.index(seq))
+        if seq in self._index:
+            self._move(self._index[seq])
 
     def action_cursor_up(self) -> None:
         index = self.cursor_index

@@ -37,11 +37,15 @@ class PromptBar(Input):
         self.mode = ""
 
     def open(self, mode: str, value: str = "") -> None:
+        """Show the prompt with ``value`` selected: typing replaces it, arrows keep it."""
         self.mode = mode
         self.placeholder = PLACEHOLDERS.get(mode, "")
         self.value = value
         self.add_class("-open")
         self.focus()
+        self.select_all()
+        # focusing a widget that was hidden completes after the next refresh
+        self.call_after_refresh(self.select_all)
 
     def close(self) -> None:
         self.remove_class("-open")

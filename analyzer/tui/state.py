@@ -138,8 +138,26 @@ class IdRow:
         return tuple(now - t < within for t in self.changed_at[: len(self.data)])
 
 
+def _insert_in_time_order(log: deque[LogEntry], entry: LogEntry) -> None:
+    """Append, or insert before newer entries: events can be reported after later ones.
+
+    (A partial message is reported when it times out, with the time it started; a link
+    change carries the wall clock.) Entries of equal time keep their arrival order.
+    """
+    t = entry.event.time
+    if not log or log[-1].event.time <= t:
+        log.append(entry)
+        return
+    if len(log) == log.maxlen:
+        log.popleft()  # the oldest makes room, as an append would do
+    i = len(log)
+    while i > 0 and log[i - 1].event.time > t:
+        i -= 1
+    log.insert(i, entry)
+
+
 class LogEntry:
-    """An event in a log view, numbered in arrival order."""
+    """An event in a log view, numbered in arrival order (the views are in time order)."""
 
     __slots__ = ("event", "seq")
 
@@ -392,9 +410,9 @@ class MonitorState:
                 counters.warnings += 1
             self.seq += 1
             entry = LogEntry(self.seq, event)
-            self.all_log.append(entry)
+            _insert_in_time_order(self.all_log, entry)
             if topic in COMMAND_VIEW_TOPICS:
-                self.command_log.append(entry)
+                _insert_in_time_order(self.command_log, entry)
             if topic == TOPIC_GIMBAL_ATTITUDE:
                 self.attitude = event
                 self._note_feedback(event)
