@@ -224,7 +224,7 @@ def test_two_connections_on_the_same_ports_are_kept_apart(tmp_path: Path) -> Non
     ("cut", "words"),
     [
         (lambda b: b[:-60], "too short"),  # not even the IP header of the last packet
-        (lambda b: b + b"\x01\x02", "reading the capture stopped"),  # half a record header
+        (lambda b: b + b"\x01\x02", "cut off inside the header"),  # half a record header
         (lambda b: b[:-10], "captured shorter than sent"),  # inside the last segment's data
     ],
 )

@@ -6,12 +6,13 @@ import socket
 import struct
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.tcp_reassembly import Delivered, Result, TcpDirection
+from analyzer.inputs.pcap_file import CaptureFile, Damage, Packet
+from analyzer.inputs.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
+from analyzer.inputs.tcp_reassembly import Delivered, Result
 from analyzer.protocol.ids import TCP_PORT
 from analyzer.protocol.types import (
     BAD_FRAME,
@@ -51,24 +52,8 @@ CAN_EFF_FLAG, CAN_RTR_FLAG, CAN_ERR_FLAG = 0x80000000, 0x40000000, 0x20000000
 CANFD_FDF = 0x04
 CAN_HEADER = 8  # id (4, big-endian in captures), length, flags, 2 reserved
 
-PCAP_MAGICS = (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d")
-PCAPNG_MAGIC = b"\x0a\x0d\x0d\x0a"
 
-
-@dataclass
-class _Flow:
-    """Both directions of one TCP connection with the IDU port."""
-
-    source: str
-    directions: dict[str, TcpDirection] = field(default_factory=dict)
-
-    def direction(self, name: str) -> TcpDirection:
-        state = self.directions.get(name)
-        if state is None:
-            state = self.directions[name] = TcpDirection()
-        return state
-
-
+OVERSIZE_SLACK = 64  # bytes after an IP packet that padding and an FCS can explain
 MAX_PORTS_SEEN = 64  # distinct other TCP ports counted for the "wrong port?" note
 
 
@@ -81,7 +66,13 @@ class PcapStats:
     truncated_packets: int = 0  # segments of the port captured shorter than sent
     fragments: int = 0  # IP fragments (not reassembled)
     can_frames: int = 0  # SocketCAN captures
+    damaged_records: int = 0  # damage in the file itself (record headers, blocks)
+    offloaded_packets: int = 0  # IP total length 0 or over the packet (TCP offload)
+    oversized_packets: int = 0  # far more bytes than their IP packet: a wrong record length?
+    swapped_can_ids: int = 0  # SocketCAN IDs in little-endian byte order
     flows: int = 0
+    flows_given_up: int = 0  # connections closed early to stay within MAX_FLOWS
+    bytes_given_up: int = 0  # out-of-order bytes handed on past holes to bound memory
     bytes_in: int = 0
     bytes_delivered: int = 0
     bytes_duplicate: int = 0
@@ -103,62 +94,69 @@ class PcapReader(InputReader):
 
     def __init__(self, path: str, *, port: int = TCP_PORT) -> None:
         super().__init__(path)
-        import dpkt
-
         self.port = port
         self._raw = self._open_binary()
-        magic = self._raw.read(4)
-        self._raw.seek(0)
         try:
-            if magic == PCAPNG_MAGIC:
-                self._reader: Any = dpkt.pcapng.Reader(self._raw)
+            self._file = CaptureFile(self._raw)
+            if self._file.ng:
                 self.format_name = "pcapng"
-            elif magic in PCAP_MAGICS:
-                self._reader = dpkt.pcap.Reader(self._raw)
+                probe_link = self._probe_link()  # the first interface's link type
+                self._file = CaptureFile(self._raw)
             else:
-                raise ValueError("not a pcap or pcapng file")
+                probe_link = self._file.link
         except Exception as exc:
             self.close()
             raise UsageError(f"cannot read {path} as a capture: {_why(exc)}") from None
-        self.link = int(self._reader.datalink())
+        self.link = probe_link if probe_link is not None else LINK_ETHERNET
         if self.link not in SUPPORTED_LINKS:
             self.close()
             raise UsageError(
                 f"{path}: link type {self.link} is not supported "
                 "(Ethernet, Linux cooked SLL/SLL2, raw IP, loopback, SocketCAN are)"
             )
-        self._flows: dict[tuple[Any, ...], _Flow] = {}
+        self._flows = FlowTable(max_flows=MAX_FLOWS, max_pending_total=MAX_PENDING_TOTAL)
         self.counts = PcapStats()
         self._other_ports: Counter[int] = Counter()  # TCP packets by the lower port number
+        self._other_links: Counter[int] = Counter()  # packets of unsupported interfaces
+
+    def _probe_link(self) -> int | None:
+        probe = CaptureFile(self._raw)
+        for _item in probe:
+            break
+        self._raw.seek(0)
+        return probe.link
 
     def __iter__(self) -> Iterator[InputItem]:
         raw = self._raw
         counts = self.counts
         time = 0.0
-        try:
-            for ts, packet in self._reader:
-                time = float(ts)
-                counts.packets += 1
-                if self.first_time is None:
-                    self.first_time = time
-                self.last_time = time
-                if not counts.packets & 0xFF:
-                    self.position_bytes = raw.tell()
-                yield from self._packet(time, packet)
-        except Exception as exc:  # a damaged or cut-off capture file
-            yield diagnostic(
-                time,
-                self.source,
-                BAD_FRAME,
-                f"reading the capture stopped after packet {counts.packets}: {_why(exc)}",
-                packets_read=counts.packets,
-            )
-        for flow in self._flows.values():
-            for name, state in flow.directions.items():
-                yield from self._results(flow, name, state.flush(time))
+        for record in self._file:
+            if isinstance(record, Damage):
+                counts.damaged_records += 1
+                yield diagnostic(
+                    time,
+                    self.source,
+                    BAD_FRAME,
+                    f"capture file damaged after packet {counts.packets}: {record.text}",
+                    packets_read=counts.packets,
+                )
+                continue
+            time = record.time
+            counts.packets += 1
+            if self.first_time is None:
+                self.first_time = time
+            self.last_time = time
+            if not counts.packets & 0xFF:
+                self.position_bytes = raw.tell()
+            yield from self._packet(record)
+        yield from self._results_of(self._flows.flush_all(time))
         self._collect()
         yield from self._capture_problems(time)
         self.position_bytes = self.size_bytes or 0
+        self._add_notes()
+
+    def _add_notes(self) -> None:
+        counts = self.counts
         if not counts.tcp_packets and self._other_ports:
             seen = ", ".join(
                 f"{port} ({n} packets)" for port, n in self._other_ports.most_common(5)
@@ -166,6 +164,32 @@ class PcapReader(InputReader):
             self.notes.append(
                 f"no TCP traffic to or from port {self.port} in {self.source}; "
                 f"TCP ports seen: {seen}. Give the IDU's port with --port."
+            )
+        if counts.offloaded_packets:
+            self.notes.append(
+                f"{counts.offloaded_packets:,} IP packet(s) of port {self.port} had a total "
+                "length of 0 or larger than the packet, as a capture on the sending host with "
+                "TCP segmentation offload records them: read with the captured length, as "
+                "Wireshark does"
+            )
+        if counts.swapped_can_ids:
+            self.notes.append(
+                f"{counts.swapped_can_ids:,} SocketCAN frame(s) had their CAN ID in "
+                "little-endian byte order (written by an old libpcap on a little-endian "
+                "host): read byte-swapped"
+            )
+        if self._other_links:
+            links = ", ".join(str(link) for link in sorted(self._other_links))
+            self.notes.append(
+                f"{sum(self._other_links.values()):,} packet(s) of interfaces with an "
+                f"unsupported link type ({links}) were skipped"
+            )
+        given_up = self._flows.given_up
+        if given_up.flows or given_up.bytes:
+            self.notes.append(
+                f"TCP reassembly was bounded: {given_up.flows:,} connection(s) closed early "
+                f"(more than {MAX_FLOWS:,} open at once) and {given_up.bytes:,} out-of-order "
+                "byte(s) given up to stay within memory; see the incomplete diagnostics"
             )
 
     def _capture_problems(self, time: float) -> list[InputItem]:
@@ -180,6 +204,18 @@ class PcapReader(InputReader):
                     f"{counts.truncated_packets} TCP segment(s) of port {self.port} were captured "
                     "shorter than sent (snap length or a cut-off file): bytes are missing",
                     packets=counts.truncated_packets,
+                )
+            )
+        if counts.oversized_packets:
+            out.append(
+                diagnostic(
+                    time,
+                    self.source,
+                    BAD_FRAME,
+                    f"{counts.oversized_packets} packet record(s) hold far more bytes than their "
+                    "IP packet: their captured length may be wrong, and packets that follow "
+                    "them in the file may be hidden inside them",
+                    packets=counts.oversized_packets,
                 )
             )
         if counts.bad_packets:
@@ -201,18 +237,24 @@ class PcapReader(InputReader):
 
     def _collect(self) -> None:
         counts = self.counts
-        states = [s for f in self._flows.values() for s in f.directions.values()]
-        counts.flows = len(self._flows)
-        counts.bytes_in = sum(s.bytes_in for s in states)
-        counts.bytes_delivered = sum(s.bytes_delivered for s in states)
-        counts.bytes_duplicate = sum(s.bytes_duplicate for s in states)
-        counts.bytes_missing = sum(s.bytes_missing for s in states)
-        counts.bytes_out_of_window = sum(s.bytes_out_of_window for s in states)
+        totals = self._flows.totals()
+        counts.flows = totals["flows"]
+        counts.bytes_in = totals["bytes_in"]
+        counts.bytes_delivered = totals["bytes_delivered"]
+        counts.bytes_duplicate = totals["bytes_duplicate"]
+        counts.bytes_missing = totals["bytes_missing"]
+        counts.bytes_out_of_window = totals["bytes_out_of_window"]
+        counts.flows_given_up = self._flows.given_up.flows
+        counts.bytes_given_up = self._flows.given_up.bytes
 
     # -- layers ----------------------------------------------------------------------------
 
-    def _packet(self, time: float, packet: bytes) -> list[InputItem]:
-        link = self.link
+    def _packet(self, record: Packet) -> list[InputItem]:
+        link = record.link
+        packet = record.data
+        time = record.time
+        if record.fcs_bytes and not record.snapped:  # the frame check sequence is no payload
+            packet = packet[: -record.fcs_bytes]
         if link == LINK_SOCKETCAN:
             return self._can(time, packet)
         ip: bytes | None
@@ -224,14 +266,19 @@ class PcapReader(InputReader):
             ip = packet[20:] if packet[0:2] in (b"\x08\x00", b"\x86\xdd") else None
         elif link in (LINK_NULL, LINK_LOOP):
             ip = packet[4:]
-        else:
+        elif link in RAW_IP_LINKS:
             ip = packet
+        else:  # an interface of a pcapng file with a link type we do not read
+            if len(self._other_links) < MAX_PORTS_SEEN or link in self._other_links:
+                self._other_links[link] += 1
+            self.counts.other_packets += 1
+            return []
         if not ip:
             self.counts.other_packets += 1
             return []
-        return self._ip(time, ip)
+        return self._ip(time, ip, record.snapped)
 
-    def _ip(self, time: float, ip: bytes) -> list[InputItem]:
+    def _ip(self, time: float, ip: bytes, snapped: bool) -> list[InputItem]:
         counts = self.counts
         version = ip[0] >> 4
         if version == 4:
@@ -240,6 +287,11 @@ class PcapReader(InputReader):
                 return []
             header = (ip[0] & 0x0F) * 4
             total = int.from_bytes(ip[2:4], "big")
+            offloaded = total == 0 or (total > len(ip) and not snapped)
+            if offloaded:  # TCP segmentation offload: the header was never filled in
+                total = len(ip)
+            elif len(ip) > total + OVERSIZE_SLACK:
+                counts.oversized_packets += 1
             if header < 20 or total < header:
                 counts.bad_packets += 1
                 return []
@@ -251,12 +303,17 @@ class PcapReader(InputReader):
                 return []
             src = socket.inet_ntop(socket.AF_INET, ip[12:16])
             dst = socket.inet_ntop(socket.AF_INET, ip[16:20])
-            return self._tcp(time, src, dst, ip[header:total], len(ip) < total)
+            return self._tcp(time, src, dst, ip[header:total], len(ip) < total, offloaded)
         if version == 6:
             if len(ip) < 40:
                 counts.bad_packets += 1
                 return []
             total = 40 + int.from_bytes(ip[4:6], "big")
+            offloaded = total == 40 or (total > len(ip) and not snapped)
+            if offloaded:
+                total = len(ip)
+            elif len(ip) > total + OVERSIZE_SLACK:
+                counts.oversized_packets += 1
             nxt, offset = ip[6], 40
             while nxt in IPV6_SKIPPED_HEADERS and len(ip) >= offset + 8:
                 nxt, offset = ip[offset], offset + (ip[offset + 1] + 1) * 8
@@ -268,11 +325,13 @@ class PcapReader(InputReader):
                 return []
             src = "[" + socket.inet_ntop(socket.AF_INET6, ip[8:24]) + "]"
             dst = "[" + socket.inet_ntop(socket.AF_INET6, ip[24:40]) + "]"
-            return self._tcp(time, src, dst, ip[offset:total], len(ip) < total)
+            return self._tcp(time, src, dst, ip[offset:total], len(ip) < total, offloaded)
         self.counts.other_packets += 1
         return []
 
-    def _tcp(self, time: float, src: str, dst: str, tcp: bytes, truncated: bool) -> list[InputItem]:
+    def _tcp(
+        self, time: float, src: str, dst: str, tcp: bytes, truncated: bool, offloaded: bool
+    ) -> list[InputItem]:
         counts = self.counts
         if len(tcp) < 20:
             counts.bad_packets += 1
@@ -294,33 +353,27 @@ class PcapReader(InputReader):
         counts.tcp_packets += 1
         if truncated:
             counts.truncated_packets += 1
-        flags = tcp[13]
-        key = (client, server)
-        flow = self._flows.get(key)
-        out: list[InputItem] = []
-        if flow is None or (flags & TCP_SYN and _new_connection(flow, direction, seq)):
-            if flow is not None:  # the same ports reused by a new connection
-                for name, state in flow.directions.items():
-                    out.extend(self._results(flow, name, state.flush(time)))
-                generation = flow.source.rsplit("#", 1)
-                number = int(generation[1]) + 1 if len(generation) == 2 else 2
-                name = f"{_flow_name(client, server)}#{number}"
-            else:
-                name = _flow_name(client, server)
-            flow = self._flows[key] = _Flow(name)
-        state = flow.direction(direction)
-        payload = tcp[offset:]
-        out.extend(
-            self._results(flow, direction, state.segment(seq, payload, time, syn=bool(flags & 2)))
+        if offloaded and len(tcp) > offset:
+            counts.offloaded_packets += 1
+        out = self._flows.segment(
+            (client, server),
+            _flow_name(client, server),
+            direction,
+            seq,
+            tcp[offset:],
+            time,
+            tcp[13],
         )
-        if flags & TCP_FIN:
-            state.fin_seen = True
-        if flags & TCP_RST:
-            for name, each in flow.directions.items():
-                out.extend(self._results(flow, name, each.flush(time)))
+        return self._results_of(out)
+
+    def _results_of(self, outputs: Output) -> list[InputItem]:
+        out: list[InputItem] = []
+        for flow, direction, results in outputs:
+            if results:
+                out.extend(self._results(flow, direction, results))
         return out
 
-    def _results(self, flow: _Flow, direction: str, results: list[Result]) -> list[InputItem]:
+    def _results(self, flow: Flow, direction: str, results: list[Result]) -> list[InputItem]:
         out: list[InputItem] = []
         for result in results:
             if isinstance(result, Delivered):
@@ -344,6 +397,11 @@ class PcapReader(InputReader):
             self.counts.bad_packets += 1
             return []
         raw_id = int.from_bytes(packet[0:4], "big")
+        if not _plausible_can_id(raw_id):
+            swapped = int.from_bytes(packet[0:4], "little")
+            if _plausible_can_id(swapped):  # an old libpcap wrote it in host byte order
+                raw_id = swapped
+                self.counts.swapped_can_ids += 1
         length = packet[4]
         data = packet[CAN_HEADER : CAN_HEADER + length]
         if len(data) < length:
@@ -376,12 +434,12 @@ def _ethernet_payload(packet: bytes) -> bytes | None:
     return None
 
 
-def _new_connection(flow: _Flow, direction: str, seq: int) -> bool:
-    """A SYN whose sequence number does not fit the connection seen so far."""
-    state = flow.directions.get(direction)
-    if state is None or state.base is None:
-        return False
-    return (seq + 1) % (1 << 32) != state.base
+def _plausible_can_id(raw_id: int) -> bool:
+    """Whether a SocketCAN ID word makes sense: 11 bits unless extended, small error classes."""
+    ident = raw_id & 0x1FFFFFFF
+    if raw_id & CAN_ERR_FLAG:
+        return ident < 0x1000
+    return bool(raw_id & CAN_EFF_FLAG) or ident <= 0x7FF
 
 
 def _flow_name(client: tuple[str, int], server: tuple[str, int]) -> str:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 SEQ_MOD = 1 << 32
 HALF = 1 << 31
 MAX_PENDING_BYTES = 1 << 20  # out-of-order data held while waiting for a missing segment
+MAX_PENDING_SEGMENTS = 4096  # segments held: many tiny ones must not cost more than their bytes
 MAX_WAIT_S = 10.0  # capture seconds to wait for a missing segment before giving up on it
 WINDOW = 1 << 26  # data further ahead than this is not part of this connection
 
@@ -158,6 +159,7 @@ class TcpDirection:
     def _give_up_stale(self, time: float, out: list[Result]) -> None:
         while self._pending and (
             self.bytes_pending > self.max_pending
+            or len(self._pending) > MAX_PENDING_SEGMENTS
             or time - self._pending[self._starts[0]][1] > self.max_wait
         ):
             self._skip_to_first(time, out)
