@@ -51,7 +51,9 @@ PAGES: dict[str, tuple[str, str]] = {
     "4": ("diagnostics", "Diag"),
 }
 # keys left out of the footer when it has to make room for the page keys (they still work)
-PAGED_FOOTER_HIDES = frozenset({"toggle_pause", "clear_counters", "toggle_raw", "toggle_view"})
+PAGED_FOOTER_HIDES = frozenset(
+    {"toggle_pause", "clear_counters", "toggle_raw", "toggle_view", "select", "select_cursor"}
+)
 
 
 class MonitorFooter(Footer):
