@@ -111,6 +111,7 @@ class Summary:
         self.tally = tally if tally is not None else Tally()
         self.input_stats: dict[str, int] = {}
         self.decoder_stats: dict[str, int] = {}
+        self.time_base: str | None = None
 
     def add(self, event: Event) -> None:
         """Count one event (the pipeline counts whole batches itself)."""
@@ -159,10 +160,21 @@ class Summary:
         decoder_stats: dict[str, int] | None = None,
         first_time: float | None = None,
         last_time: float | None = None,
+        time_base: str | None = None,
     ) -> None:
-        """Add the reader's and decoder's counters and the capture's own time span."""
+        """Add the reader's and decoder's counters and the capture's own time span.
+
+        Frames the reader skipped because their IDs are not the protocol's are other
+        frames the decoder never saw: they are counted once, as ``other_frames`` of the
+        decoder. ``time_base`` says how the file wrote its times (absolute, relative to
+        the start, since the previous frame).
+        """
         self.input_stats = dict(input_stats or {})
         self.decoder_stats = dict(decoder_stats or {})
+        skipped = self.input_stats.pop("other_frames", 0)
+        if skipped or "other_frames" in self.decoder_stats:
+            self.decoder_stats["other_frames"] = self.decoder_stats.get("other_frames", 0) + skipped
+        self.time_base = time_base
         self.tally.widen(first_time, last_time)
 
     def to_dict(self) -> dict[str, Any]:
@@ -177,6 +189,7 @@ class Summary:
             "span_s": round(tally.span, 6),
             **tally.figures(),
             "figures": tally.figures(),  # as `info --json` has them
+            "time_base": self.time_base,
             "input": self.input_stats,
             "decoder": self.decoder_stats,
         }
@@ -195,6 +208,8 @@ class Summary:
         else:
             span = "no timestamps"
         lines.append(f"  {'time span':<15}{span}")
+        if self.time_base:
+            lines.append(f"  {'time base':<15}{self.time_base}")
         lines.append(f"  {'input':<15}{self._input_words()}")
         lines.extend(event_lines(tally, alarm))
         lines.extend(feedback_lines(tally, alarm))
@@ -216,7 +231,10 @@ class Summary:
         if "lines" in s:
             parts.append(f"{s['lines']:,} lines")
         if "packets" in s:
-            parts.append(f"{s['packets']:,} packets, {s.get('tcp_packets', 0):,} TCP to/from port")
+            port = f" {s['port']}" if "port" in s else ""
+            parts.append(
+                f"{s['packets']:,} packets, {s.get('tcp_packets', 0):,} TCP to/from port{port}"
+            )
         frames = s.get("frames", d.get("frames", 0))
         if frames or "frames" in s:
             protocol = d.get("protocol_frames", 0)

@@ -96,7 +96,9 @@ def test_summary_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     assert obj["topics"] == {"/diagnostics": 1, "/gimbal/attitude": 1, "/gimbal/command": 2}
     assert obj["diagnostics"] == 1
     assert obj["diagnostics_by_kind"] == {"bad_line": 1}
-    assert obj["input"]["frames_skipped"] == 1
+    # Frames with other IDs are counted once, under one name (the reader skipped this one).
+    assert obj["decoder"]["other_frames"] == 1 and "other_frames" not in obj["input"]
+    assert obj["time_base"] == "absolute"
     assert obj["first_time"] == T0
 
 

@@ -174,7 +174,7 @@ def test_wanted_ids_skip_other_frames_but_count_them() -> None:
     items, parser = parse(*lines, wanted_ids=PROTOCOL_IDS)
     kinds = [(type(i).__name__, getattr(i, "time", None)) for i in items]
     assert kinds == [("CanFrame", 2.0), ("Event", 3.0), ("CanFrame", 5.0)]
-    assert parser.stats["frames"] == 5 and parser.stats["frames_skipped"] == 3
+    assert parser.stats["frames"] == 5 and parser.stats["other_frames"] == 3
     assert (parser.first_time, parser.last_time) == (1.0, 6.0)
     assert_accounted(parser)
 
@@ -304,4 +304,4 @@ def test_arbitrary_lines_never_raise_and_are_accounted(
     diagnostics = [i for i in items if isinstance(i, Event)]
     assert len(diagnostics) == parser.stats["bad_lines"]
     returned = len(items) - len(diagnostics)
-    assert returned + parser.stats["frames_skipped"] == parser.stats["frames"]
+    assert returned + parser.stats["other_frames"] == parser.stats["frames"]

@@ -174,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
             decoder_stats=decoder_stats,
             first_time=reader.first_time,
             last_time=reader.last_time,
+            time_base=reader.time_base,
         )
         if args.json:
             out.write(json.dumps(summary.to_dict(), default=str) + "\n")

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import datetime
+import itertools
 from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
 
 from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.python_can_text import ABSOLUTE, DELTA, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, open_lines, split_blocks
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
@@ -19,6 +21,8 @@ _DIRECTIONS = {b"R": "rx", b"r": "rx", b"T": "tx", b"t": "tx"}
 _HEXDIGITS = frozenset(b"0123456789abcdefABCDEF")
 _NAN = float("nan")
 _DIGITS = b"0123456789"
+RELATIVE_LIMIT = 1e8  # a screen time below this is no date: -tz or -td
+DECIDE_AFTER = 50  # relative times looked at before -tz and -td are told apart by rate
 _HEX_TEXT = b"0123456789abcdefABCDEF"
 
 # Parsed ID text -> (can_id, extended, is_error, wanted); None marks an invalid ID text.
@@ -71,13 +75,19 @@ class CandumpParser:
         self._want: dict[bytes, IdInfo] = {}  # ID texts of frames to return
         self._channels: dict[bytes, str] = {}
         self._after_error = False
+        # How the times were written: ABSOLUTE, RELATIVE_TO_START (-tz) or DELTA (-td).
+        self.time_base: str | None = None
+        self._elapsed = 0.0
+        self._raw_times: list[float] = []  # relative times while the base is open
+        self._undecided: list[tuple[int, CanFrame]] = []  # held frames and their time index
+        self._held: list[InputItem] = []
 
     @property
     def stats(self) -> dict[str, int]:
         return {
             "lines": self.lines,
             "frames": self.frames,
-            "frames_skipped": self.frames_skipped,
+            "other_frames": self.frames_skipped,
             "bad_lines": self.bad_lines,
             "blank_lines": self.blank_lines,
             "note_lines": self.note_lines,
@@ -229,6 +239,9 @@ class CandumpParser:
         if skipped:
             self._count_skipped(skipped, run_start, pending)
         self.lines = lineno
+        if self._held or self._undecided:  # frames wait for their time base (-tz / -td)
+            self._held.extend(out)
+            return self._release() if self.time_base is not None else []
         return out
 
     def _count_skipped(self, count: int, first: bytes, last: bytes) -> None:
@@ -282,13 +295,17 @@ class CandumpParser:
             return self._bad(line, lineno, "comment line")
         try:
             if stripped[:1] == b"(" and (b"#" in stripped or b"[" not in stripped):
-                frame, timed = self._log_line(stripped), True
+                frame, timed, relative = self._log_line(stripped), True, False
             else:
-                frame, timed = self._screen_line(stripped)
+                frame, timed, relative = self._screen_line(stripped)
         except LineError as exc:
             return self._bad(line, lineno, str(exc))
         self._after_error = frame.is_error
         self.frames += 1
+        if relative:
+            timed = self._relative_time(frame)
+        elif timed and self.time_base is None and frame.time >= RELATIVE_LIMIT:
+            self.time_base = ABSOLUTE
         if timed:
             if self.first_time is None:
                 self.first_time = frame.time
@@ -334,14 +351,16 @@ class CandumpParser:
             direction,
         )
 
-    def _screen_line(self, line: bytes) -> tuple[CanFrame, bool]:
+    def _screen_line(self, line: bytes) -> tuple[CanFrame, bool, bool]:
         """The default ``candump`` output: ``[(time)] can0 [RX - -] 123 [8] 11 22 ...``.
 
-        Returns the frame and whether its time is known (from the line or the clock).
+        Returns the frame, whether its time is known (from the line or the clock) and
+        whether that time is a relative one (-tz or -td: no date).
         """
         tokens = line.split()
         i = 0
         ts: float | None = None
+        dated = False  # ``-t A``: a date and time of day
         if tokens[0][:1] == b"(":
             if tokens[0].endswith(b")"):
                 ts = _timestamp(tokens[0][1:-1])
@@ -349,6 +368,7 @@ class CandumpParser:
             elif len(tokens) > 1 and tokens[1].endswith(b")"):
                 ts = _date_time(tokens[0][1:] + b" " + tokens[1][:-1])
                 i = 2
+                dated = True
             else:
                 raise LineError("timestamp not closed by ')'")
         if len(tokens) < i + 3:
@@ -398,6 +418,7 @@ class CandumpParser:
             raise LineError("unexpected text after the data")
         timed = ts is not None or self.clock is not None
         when = ts if ts is not None else (self.clock() if self.clock is not None else 0.0)
+        relative = ts is not None and not dated and 0 <= ts < RELATIVE_LIMIT
         frame = CanFrame(
             when,
             info[0],
@@ -409,7 +430,73 @@ class CandumpParser:
             is_fd,
             direction,
         )
-        return frame, timed
+        return frame, timed, relative
+
+    # -- relative (-tz) and delta (-td) screen times -----------------------------------------
+
+    def _relative_time(self, frame: CanFrame) -> bool:
+        """A ``(000.123456)`` time: since the start (-tz) or since the previous frame (-td).
+
+        The two look alike; until the lines tell them apart (a time going back, or most
+        times repeating as a steady rate does under -td) the frames are held. Returns
+        whether the frame's time is final now.
+        """
+        raw = frame.time
+        if self.time_base == DELTA:
+            self._elapsed += raw
+            frame.time = self._elapsed
+            return True
+        if self.time_base is not None:
+            return True
+        self._raw_times.append(raw)
+        self._undecided.append((len(self._raw_times) - 1, frame))
+        times = self._raw_times
+        if len(times) >= 2 and times[-1] < times[-2]:
+            self._decide(DELTA)
+        elif len(times) >= DECIDE_AFTER:
+            self._decide(self._steady_guess())
+        return False
+
+    def _steady_guess(self) -> str:
+        """No time went back: mostly repeated times mean a steady rate under -td."""
+        times = self._raw_times[1:]
+        repeats = sum(1 for a, b in itertools.pairwise(times) if a == b)
+        return DELTA if times and repeats * 2 > len(times) else RELATIVE_TO_START
+
+    def _decide(self, base: str) -> None:
+        self.time_base = base
+        times = self._raw_times
+        if base == DELTA:
+            total, sums = 0.0, []
+            for t in times:
+                total += t
+                sums.append(total)
+            self._elapsed = total
+            for index, frame in self._undecided:
+                frame.time = sums[index]
+            times = sums
+        if times:
+            if self.first_time is None or times[0] < self.first_time:
+                self.first_time = times[0]
+            self.last_time = times[-1]
+        self._raw_times = []
+        self._undecided = []
+
+    def finish(self) -> list[InputItem]:
+        """The end of the input: items still held while the time base was open."""
+        if self.time_base is None and self._raw_times:
+            self._decide(self._steady_guess())
+        return self._release()
+
+    def base_of_times(self) -> str | None:
+        """The time base of what was read (None when no line had a time)."""
+        if self.time_base is None and self.first_time is not None:
+            return ABSOLUTE if self.first_time >= RELATIVE_LIMIT else RELATIVE_TO_START
+        return self.time_base
+
+    def _release(self) -> list[InputItem]:
+        held, self._held = self._held, []
+        return held
 
 
 def _timestamp(text: bytes) -> float:
@@ -493,6 +580,9 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 yield self._damage(problems[reported])
                 reported += 1
+        yield from parser.finish()
+        self.first_time, self.last_time = parser.first_time, parser.last_time
+        self.time_base = parser.base_of_times()
         while reported < len(problems):
             yield self._damage(problems[reported])
             reported += 1

@@ -233,7 +233,7 @@ class PcapReader(InputReader):
     @property
     def stats(self) -> dict[str, int]:
         self._collect()
-        return dict(vars(self.counts))
+        return {**vars(self.counts), "port": self.port}
 
     def _collect(self) -> None:
         counts = self.counts

@@ -49,6 +49,9 @@ class StdinCandumpReader(InputReader):
             items = parser.parse_lines([line.rstrip(b"\r\n")])
             self.first_time, self.last_time = parser.first_time, parser.last_time
             yield from items
+        yield from parser.finish()
+        self.first_time, self.last_time = parser.first_time, parser.last_time
+        self.time_base = parser.base_of_times()
 
     @property
     def stats(self) -> dict[str, int]:
