@@ -269,7 +269,9 @@ def test_unsupported_link_type_is_a_usage_error(tmp_path: Path) -> None:
         open_input(str(path))
 
 
-@settings(max_examples=100, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(
     st.sampled_from([1, 113, 276, 101, 0, 227]),
     st.lists(st.binary(max_size=120), max_size=12),
