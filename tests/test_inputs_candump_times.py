@@ -122,3 +122,57 @@ def test_any_delta_sequence_that_varies_adds_up(
         assert all(b >= a for a, b in itertools.pairwise(stamps))
         assert [f.time for f in frames] == pytest.approx([g / 1e6 for g in stamps])
     assert len(frames) == len(stamps)
+
+
+# -- a .log that is no candump ---------------------------------------------------------------
+
+
+def busmaster_log(count: int) -> str:
+    """A BusMaster CAN log as BusMaster 3.2 writes it (the layout SavvyCAN's loader reads)."""
+    head = [
+        "***BUSMASTER Ver 3.2.2***",
+        "***PROTOCOL CAN***",
+        "***NOTE: PLEASE DO NOT EDIT THIS DOCUMENT***",
+        "***[START LOGGING SESSION]***",
+        "***START DATE AND TIME 14:5:2024 10:0:0:000***",
+        "***HEX***",
+        "***SYSTEM MODE***",
+        "***START CHANNEL BAUD RATE***",
+        "***CHANNEL 1 - Kvaser - Kvaser Leaf Light v2 #0 (Channel 0) - 1000000 bps***",
+        "***END CHANNEL BAUD RATE***",
+        "***START DATABASE FILES (DBF/DBC)***",
+        "***END OF DATABASE FILES (DBF/DBC)***",
+        "***<Time><Tx/Rx><Channel><CAN ID><Type><DLC><DataBytes>***",
+    ]
+    body = [
+        f"10:00:{i // 100 % 60:02d}:{i % 100 * 100:04d} Rx 1 0x00000F01 x 8 {DATA}"
+        for i in range(count)
+    ]
+    return "\n".join(head + body + ["***[STOP LOGGING SESSION]***"]) + "\n"
+
+
+def test_a_busmaster_log_gets_one_note_and_capped_diagnostics(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "bench.log"
+    path.write_text(busmaster_log(3000))
+    with open_input(str(path)) as reader:
+        items = list(reader)
+    assert len(items) <= 11  # the first bad lines, then one count
+    assert reader.stats["bad_lines"] == 3014
+    listed = len(items) - 1
+    assert f"{3014 - listed:,} more bad lines not listed" in items[-1].fields["detail"]  # type: ignore[union-attr]
+    assert len(reader.notes) == 1 and "BusMaster log" in reader.notes[0]
+    assert main(["decode", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert err.count("is not candump output") == 1  # one note, not one per line
+
+
+def test_an_asc_file_named_log_says_which_format_to_try(tmp_path: Path) -> None:
+    lines = ["date Tue May 14 10:00:00.000 am 2024", "base hex  timestamps absolute"]
+    lines += [f"   {i / 10:.6f} 1  F01x   Rx   d 8 {DATA}" for i in range(30)]
+    path = tmp_path / "export.log"
+    path.write_text("\n".join(lines) + "\n")
+    with open_input(str(path)) as reader:
+        list(reader)
+    assert len(reader.notes) == 1 and "--format asc" in reader.notes[0]

@@ -22,6 +22,8 @@ _HEXDIGITS = frozenset(b"0123456789abcdefABCDEF")
 _NAN = float("nan")
 _DIGITS = b"0123456789"
 RELATIVE_LIMIT = 1e8  # a screen time below this is no date: -tz or -td
+FOREIGN_HEAD = 20  # first bad lines looked at to tell what a file that is no candump is
+FOREIGN_BAD = 10  # bad lines (with under a tenth as many frames) that make it no candump
 DECIDE_AFTER = 50  # relative times looked at before -tz and -td are told apart by rate
 _HEX_TEXT = b"0123456789abcdefABCDEF"
 
@@ -81,6 +83,11 @@ class CandumpParser:
         self._raw_times: list[float] = []  # relative times while the base is open
         self._undecided: list[tuple[int, CanFrame]] = []  # held frames and their time index
         self._held: list[InputItem] = []
+        # A file that is no candump at all (BusMaster and others also write .log).
+        self._head: list[bytes] = []  # the first bad lines, to tell what the file is
+        self.not_candump = False
+        self.bad_lines_not_shown = 0
+        self.notes: list[str] = []
 
     @property
     def stats(self) -> dict[str, int]:
@@ -265,9 +272,16 @@ class CandumpParser:
         except LineError:
             return None
 
-    def _bad(self, line: bytes, lineno: int, why: str) -> Event:
+    def _bad(self, line: bytes, lineno: int, why: str) -> Event | None:
         self.bad_lines += 1
         self._after_error = False
+        if len(self._head) < FOREIGN_HEAD:
+            self._head.append(line[:RAW_LIMIT])
+            if self.bad_lines >= FOREIGN_BAD and self.frames * 10 < self.bad_lines:
+                self._foreign_note()
+        if self.not_candump:
+            self.bad_lines_not_shown += 1
+            return None
         shown = line[:RAW_LIMIT]
         text = shown.decode("ascii", "replace").strip()
         if len(text) > 60:
@@ -279,6 +293,31 @@ class CandumpParser:
             f"line {lineno}: {why}: {text!r}",
             shown,
             line=lineno,
+        )
+
+    def _foreign_note(self) -> None:
+        """Nearly nothing parses: say once what the file looks like; stop listing lines."""
+        if self.not_candump:
+            return
+        self.not_candump = True
+        from analyzer.inputs import FORMATS, sniff_format  # the dispatcher imports us
+
+        head = b"\n".join(self._head)
+        if b"***BUSMASTER" in head.upper():
+            what = (
+                "it looks like a BusMaster log, which gimbal-analyzer does not read: export "
+                "it to ASC or BLF with BusMaster's format converter and decode that"
+            )
+        else:
+            fmt = sniff_format(head)
+            what = (
+                f"it looks like {FORMATS[fmt]}: try --format {fmt}"
+                if fmt not in (None, "candump")
+                else f"give its format with --format ({', '.join(FORMATS)})"
+            )
+        self.notes.append(
+            f"{self.source} is not candump output: none of its first {len(self._head)} "
+            f"lines is a CAN frame; {what}. Further bad lines are counted, not listed."
         )
 
     def _slow_line(self, line: bytes, lineno: int) -> InputItem | None:
@@ -486,7 +525,19 @@ class CandumpParser:
         """The end of the input: items still held while the time base was open."""
         if self.time_base is None and self._raw_times:
             self._decide(self._steady_guess())
-        return self._release()
+        held = self._release()
+        if self.bad_lines_not_shown:
+            held.append(
+                diagnostic(
+                    self.last_time if self.last_time is not None else 0.0,
+                    self.source,
+                    BAD_LINE,
+                    f"{self.bad_lines_not_shown:,} more bad lines not listed (the file is not "
+                    "candump output)",
+                    count=self.bad_lines_not_shown,
+                )
+            )
+        return held
 
     def base_of_times(self) -> str | None:
         """The time base of what was read (None when no line had a time)."""
@@ -583,6 +634,7 @@ class CandumpReader(InputReader):
         yield from parser.finish()
         self.first_time, self.last_time = parser.first_time, parser.last_time
         self.time_base = parser.base_of_times()
+        self.notes.extend(parser.notes)
         while reported < len(problems):
             yield self._damage(problems[reported])
             reported += 1

@@ -52,6 +52,7 @@ class StdinCandumpReader(InputReader):
         yield from parser.finish()
         self.first_time, self.last_time = parser.first_time, parser.last_time
         self.time_base = parser.base_of_times()
+        self.notes.extend(parser.notes)
 
     @property
     def stats(self) -> dict[str, int]:
