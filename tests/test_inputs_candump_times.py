@@ -176,3 +176,21 @@ def test_an_asc_file_named_log_says_which_format_to_try(tmp_path: Path) -> None:
     with open_input(str(path)) as reader:
         list(reader)
     assert len(reader.notes) == 1 and "--format asc" in reader.notes[0]
+
+
+def test_a_ten_byte_frame_is_refused_in_both_layouts() -> None:
+    from analyzer.inputs.candump import CandumpParser
+
+    ten = "00 11 22 33 44 55 66 77 88 99"
+    lines = [
+        b"(1.0) can0 123#00112233445566778899",
+        b"(1.0) can0 123##000112233445566778899",
+        f"  can0  123   [10]  {ten}".encode(),
+        f"(1.0) can0 123 [10] {ten}".encode(),
+    ]
+    items = CandumpParser("x.log").parse_lines(lines)
+    assert [i.fields["line"] for i in items] == [1, 2, 3, 4]  # type: ignore[union-attr]
+    ok = CandumpParser("x.log").parse_lines(
+        [b"(1.0) can0 123##0" + b"00" * 12, b"  can0  123   [12]  " + b"00 " * 12]
+    )
+    assert [len(f.data) for f in ok] == [12, 12]  # type: ignore[union-attr]

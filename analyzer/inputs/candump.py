@@ -433,8 +433,7 @@ class CandumpParser:
             raise LineError("data length is not a number")
         length = int(inner)
         is_fd = len(inner) == 2  # candump prints CAN FD lengths with two digits
-        if length > (64 if is_fd else 8):
-            raise LineError(f"data length {length} too large")
+        _check_length(length, is_fd)
         rest = tokens[i + 2 :]
         is_remote = False
         payload = b""
@@ -550,6 +549,17 @@ class CandumpParser:
         return held
 
 
+FD_LENGTHS = frozenset((*range(9), 12, 16, 20, 24, 32, 48, 64))
+
+
+def _check_length(length: int, is_fd: bool) -> None:
+    """One rule for both layouts: classic frames hold 0..8 bytes, CAN FD the DLC lengths."""
+    if not is_fd and length > 8:
+        raise LineError(f"data length {length} too large for a classic CAN frame (at most 8)")
+    if is_fd and length not in FD_LENGTHS:
+        raise LineError(f"{length} data bytes is no CAN FD length (0..8, 12, 16, ..., 64)")
+
+
 def _timestamp(text: bytes) -> float:
     try:
         value = float(text)
@@ -585,7 +595,9 @@ def _log_payload(data: bytes) -> tuple[bytes, bool, bool]:
             raise LineError("CAN XL frames are not supported")
         if len(data) < 2 or data[1] not in _HEXDIGITS:
             raise LineError("CAN FD frame without its flags digit")
-        return _hex(data[2:], MAX_FD_HEX, "CAN FD frame"), True, False
+        payload = _hex(data[2:], MAX_FD_HEX, "CAN FD frame")
+        _check_length(len(payload), True)
+        return payload, True, False
     if data[:1] in (b"R", b"r"):  # remote request, optionally with its DLC: R, R5, R5_9
         rest = data[1:].split(b"_", 1)[0]
         if rest and not (len(rest) == 1 and rest in b"012345678"):
