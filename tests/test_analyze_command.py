@@ -9,6 +9,7 @@ import jsonschema
 import pytest
 
 from analyzer.cli import main
+from analyzer.mcapio.reader import read_events
 from analyzer.protocol.types import CanFrame
 from analyzer.samplegen import write_samples
 from analyzer.sim.behaviour import Behaviour
@@ -124,6 +125,12 @@ def test_a_recording_gives_the_findings_of_its_source(
     _, direct, _ = run(capsys, str(source), "--json")
     code, recorded, _ = run(capsys, str(recording), "--json")
     assert code == 0 and findings(recorded) == findings(direct)
+    # The recording holds the same findings on /analysis/response, valid to the schema.
+    stored = [e.to_dict() for e in read_events(recording) if e.topic == "/analysis/response"]
+    for finding in stored:
+        jsonschema.validate(finding, SCHEMA)
+    by_time = sorted(findings(direct), key=lambda f: (f["time"], f["check"]))
+    assert sorted(stored, key=lambda f: (f["time"], f["check"])) == by_time
 
 
 def test_unreadable_input_is_a_usage_error(

@@ -54,8 +54,10 @@ def test_candump_convert_decode_round_trip(
     ]
     # Re-decoding the raw channel gives exactly what decoding the candump gives...
     assert _decode(recorded) == direct
-    # ...and so do the events stored at conversion.
-    assert [json.loads(json.dumps(e.to_dict())) for e in read_events(out)] == direct
+    # ...and so do the events stored at conversion, with the response findings besides.
+    stored = [json.loads(json.dumps(e.to_dict())) for e in read_events(out)]
+    assert [e for e in stored if e["topic"] != "/analysis/response"] == direct
+    assert any(e["topic"] == "/analysis/response" for e in stored)
     recording = Recording(out)
     assert not recording.recovered
     meta = recording.metadata()["gimbal-analyzer"]

@@ -111,7 +111,10 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
-    pipeline = Pipeline()  # before the output exists: the decoder's import takes a while
+    from analyzer.analysis.stage import analysis_stages
+
+    # Made before the output exists: the decoder's import takes a while.
+    pipeline = Pipeline(stages=analysis_stages())
     progress = Progress(sys.stderr, args.input, source)
     started = time.perf_counter()
 

@@ -157,6 +157,7 @@ def written_by_demo(path: Path) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import OUTPUT_CLOSED, Capture
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
@@ -197,7 +198,9 @@ def run(args: argparse.Namespace) -> int:
         source.close()
         raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    capture = Capture(source, [sink] if printer is None else [sink, printer])
+    capture = Capture(
+        source, [sink] if printer is None else [sink, printer], stages=analysis_stages()
+    )
     try:
         scene = Scene(spec, config)
     except BaseException:

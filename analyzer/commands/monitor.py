@@ -69,11 +69,12 @@ def run(args: argparse.Namespace) -> int:
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise UsageError("monitor needs a terminal; use `decode` to print events to a pipe")
 
+    from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
     from analyzer.tui.app import run_app
 
     source = open_source(args.source, replay_speed=speed)
-    capture = Capture(source, [])
+    capture = Capture(source, [], stages=analysis_stages())
     label = str(getattr(source, "description", args.source))
     result = run_app(capture, source_label=label)
     if capture.error is not None:

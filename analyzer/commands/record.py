@@ -202,6 +202,7 @@ def _input_files(spec: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture, run_until_interrupted
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
@@ -249,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
         sinks.append(status)
     if args.print and not args.tui:
         sinks.append(EventPrinter(sys.stdout))
-    capture = Capture(source, sinks)
+    capture = Capture(source, sinks, stages=analysis_stages())
     if status is not None:
         status.capture = capture
     timer: threading.Timer | None = None
