@@ -18,6 +18,7 @@ from typing import Any
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import (
     CRC_MISMATCH,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -162,9 +163,12 @@ class Tally:
             self.widen(min(first, last), max(first, last))
 
     def add_events(self, events: Iterable[Event]) -> None:
-        """Count events: per topic, diagnostic kind and command; feedback timing; CRCs."""
-        if not isinstance(events, list):
-            events = list(events)
+        """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.
+
+        Findings of the response analysis are judgements, not input: not counted, so
+        every command reports the same figures for the same input, stage or no stage.
+        """
+        events = [event for event in events if event.topic != TOPIC_ANALYSIS_RESPONSE]
         if not events:
             return
         self.events += len(events)
