@@ -141,7 +141,8 @@ def test_the_response_analyzer_is_a_stage_and_analyze_runs_it_in_the_pipeline(
     pipeline = Pipeline([sink], stages=[ResponseAnalyzer()])
     run_items(open_input(sample, None, 2000, wanted_ids=PROTOCOL_IDS), pipeline)
     found = [e for b in sink.batches for e in b.events if e.topic == TOPIC_ANALYSIS_RESPONSE]
-    assert found and pipeline.tally.topics[TOPIC_ANALYSIS_RESPONSE] == len(found)
+    assert found  # the findings reach the sinks, but as judgements they are not counted
+    assert TOPIC_ANALYSIS_RESPONSE not in pipeline.tally.topics
     assert main(["analyze", sample, "--json"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == len(found)
