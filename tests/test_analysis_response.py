@@ -370,3 +370,9 @@ def test_a_burst_shorter_than_two_feedback_messages_is_not_measured() -> None:
     steps = (Step(1.0, "gimbal_control", {"pan_speed_dps": 20}, until=1.3),)
     rate = only(session(steps, 6.0), "gimbal_control", "rate")
     assert rate["verdict"] == "unknown" and "fewer than two feedback messages" in rate["detail"]
+
+
+def test_a_clock_that_jumps_by_years_is_not_a_window_per_minute() -> None:
+    events = [attitude(0.0), attitude(1_700_000_000.0), attitude(1_700_000_000.5)]
+    windows = [f for f in analyse(events) if f["check"] == "feedback"]
+    assert len(windows) == 2

@@ -51,9 +51,12 @@ class FeedbackHealth:
         if self.last is None or t > self.last:
             self.last = t
         out: list[Finding] = []
-        while self._window_of(t) > self._window:
+        window = self._window_of(t)
+        if window > self._window:
+            # One judgement for the window that ended; empty windows in between (a long
+            # silence, or a clock that jumps by years) are not listed one by one.
             out.append(self._judge_window(WINDOW_S))
-            self._window += 1
+            self._window = window
         return out
 
     def feedback(self, t: float) -> list[Finding]:
