@@ -92,7 +92,7 @@ def test_layout_command_writes_and_refuses_to_overwrite(
     assert "Import layout" in capsys.readouterr().err
     written.write_text("mine")
     assert main(["layout"]) == 2
-    assert "exists" in capsys.readouterr().err
+    assert "exists; choose another name or use --force" in capsys.readouterr().err
     assert written.read_text() == "mine"
     assert main(["layout", "--force"]) == 0
     assert json.loads(written.read_text())["configById"]

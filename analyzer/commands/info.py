@@ -57,6 +57,11 @@ def _size(n: int) -> str:
     return f"{n} B"
 
 
+def _repaired_name(path: str) -> str:
+    stem = path[:-5] if path.endswith(".mcap") else path
+    return f"{stem}-repaired.mcap"
+
+
 def render(info: RecordingInfo) -> str:
     """Human-readable report."""
     lines = []
@@ -85,6 +90,12 @@ def render(info: RecordingInfo) -> str:
         lines.append(
             "            (the counts below come from the summary and include what was lost)"
         )
+    if info.damage or info.summary_damaged:
+        lines.append(
+            f"repair      gimbal-analyzer convert {info.path} -o {_repaired_name(info.path)}"
+        )
+        lines.append("            writes a clean copy of everything readable: Foxglove refuses a")
+        lines.append("            file with a damaged chunk and stops at the first damaged record")
     meta = info.metadata
     if meta.get("source"):
         lines.append(f"source      {meta['source']}")

@@ -49,8 +49,6 @@ class McapReader(InputReader):
         # every damaged part already came as an `incomplete` diagnostic where it was
         for damage in getattr(self._items, "damage", ()):
             self.notes.append(f"{self.path}: damaged recording: {damage.detail}")
-        if note and not getattr(self._items, "recovered", False):
-            self.notes.append(f"{self.path}: {note}")
 
     @property
     def stats(self) -> dict[str, int]:
