@@ -424,8 +424,18 @@ class McapSink:
                 writer.finish()
             os.fsync(fd)
         except OSError:
+            # No room for the closing records: try the summary alone (what a live flush
+            # writes), so the file still opens indexed; else leave the complete chunks.
+            end = writer.position
+            try:
+                os.ftruncate(fd, end)
+                os.lseek(fd, end, os.SEEK_SET)
+                if writer.message_count:
+                    writer.finish()
+            except OSError:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, end)
             with contextlib.suppress(OSError):
-                os.ftruncate(fd, good)
                 os.fsync(fd)
         self.kept_messages = writer.message_count
         self.kept_until = writer.end_time / 1e9 if writer.message_count else None
