@@ -59,7 +59,9 @@ def _load(name: str) -> ModuleType | None:
         raise
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, or (``only``) of that one alone: running a command
+    imports no other command's module, which keeps start-up short."""
     parser = argparse.ArgumentParser(
         prog="gimbal-analyzer",
         description=DESCRIPTION,
@@ -69,7 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--local-time", action="store_true", help=timefmt.FLAG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMANDS:
+    for name in [only] if only in COMMANDS else COMMANDS:
         module = _load(name)
         if module is None:
             continue
@@ -95,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     with guarded_stdout(), sigterm_as_interrupt():
         name = "gimbal-analyzer"
         try:
-            parser = build_parser()
+            parser = build_parser(_command_name(sys.argv[1:] if argv is None else argv))
             try:
                 args = parser.parse_args(argv)
             except SystemExit:  # --help, --version, a usage error: argparse printed it
@@ -117,6 +119,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt as exc:
             print(f"{name}: interrupted ({interrupt_name(exc)})", file=sys.stderr)
             return EXIT_INTERRUPTED
+
+
+def _command_name(argv: Sequence[str]) -> str | None:
+    """The command named on the command line (the options before it take no value)."""
+    for arg in argv:
+        if not arg.startswith("-"):
+            return arg
+        if arg == "--":
+            return None
+    return None
 
 
 def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -> int:

@@ -42,6 +42,28 @@ def test_help_shows_the_exit_code_table(capsys: pytest.CaptureFixture[str]) -> N
         assert re.search(rf"^  {code} ", out, re.MULTILINE)
 
 
+def test_a_command_loads_only_its_own_module(tmp_path: Path) -> None:
+    log = tmp_path / "x.log"
+    log.write_text(CANDUMP_LINE)
+    code = (
+        "import sys; from analyzer.cli import main; "
+        f"main(['--local-time', 'decode', '--summary', {str(log)!r}]); "
+        "print(sorted(m for m in sys.modules if m.startswith('analyzer.commands.')))"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=ENV, check=True
+    )
+    assert proc.stdout.splitlines()[-1] == "['analyzer.commands.decode']"
+
+
+def test_unknown_command_still_lists_every_command(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["no-such-command"])
+    assert exit_info.value.code == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "invalid choice" in err and "'simulate'" in err and "'decode'" in err
+
+
 def test_unreadable_mcap_input_is_exit_2_in_every_command(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -179,6 +179,14 @@ def test_wanted_ids_skip_other_frames_but_count_them() -> None:
     assert_accounted(parser)
 
 
+@pytest.mark.parametrize("line", [b"1(2.0) can0 123#11", b"(2.0)1 can0 123#11"])
+def test_skipped_id_with_text_around_its_timestamp_is_a_bad_line(line: bytes) -> None:
+    items, parser = parse(b"(1.0) can0 123#11", line, wanted_ids=PROTOCOL_IDS)
+    assert [(type(i), i.fields["line"]) for i in items] == [(Event, 2)]
+    assert (parser.first_time, parser.last_time) == (1.0, 1.0)
+    assert_accounted(parser)
+
+
 def test_skipped_and_decoded_paths_agree() -> None:
     lines = [f"({i}.5) can0 {cid}#0011".encode() for i, cid in enumerate(["123", "F01", "1FF"])]
     everything, _ = parse(*lines)

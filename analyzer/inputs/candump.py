@@ -189,6 +189,8 @@ class CandumpParser:
                         sharp
                         and len(data) <= MAX_CLASSIC_HEX
                         and len(stamp) > 3
+                        and stamp[:1] == b"("
+                        and stamp[-1:] == b")"
                         and stamp.translate(None, digits) == b"(.)"
                     ):
                         try:
