@@ -293,3 +293,28 @@ def test_the_id_table_is_bounded() -> None:
     assert len(state.rows) == 11
     assert state.rows["more IDs"].count == 90
     assert sum(row.count for row in state.rows.values()) == 100
+
+
+def test_the_latest_response_finding_and_the_verdicts_so_far() -> None:
+    from analyzer.pipeline import Batch
+    from analyzer.protocol.types import Event
+    from analyzer.tui.response_panel import render_response
+    from analyzer.tui.state import MonitorState
+
+    state = MonitorState()
+    assert "commands are judged" in render_response(state, 60).plain
+    finding = Event(
+        "/analysis/response",
+        10.0,
+        "analysis",
+        {
+            "command": "look_down",
+            "check": "target",
+            "verdict": "not_obeyed",
+            "detail": "pitch -90.0 not reached within 5 s: never moved (stayed at 0.0)",
+        },
+    )
+    state.fold(Batch([], [finding]), 10.0)
+    text = render_response(state, 60).plain
+    assert "NOT OBEYED  look_down target" in text and "never moved" in text
+    assert "1 not obeyed" in text and state.verdicts["not_obeyed"] == 1

@@ -31,6 +31,7 @@ from analyzer.tui.gimbal_panel import GimbalPanel
 from analyzer.tui.help_screen import HelpScreen
 from analyzer.tui.id_table import IdTable
 from analyzer.tui.prompt_bar import PromptBar
+from analyzer.tui.response_panel import ResponsePanel
 from analyzer.tui.state import LogEntry, MonitorState
 from analyzer.tui.status_bar import StatusBar, StatusInfo
 from analyzer.tui.uav_panel import UavPanel
@@ -137,6 +138,8 @@ class MonitorApp(App[int]):
     Screen.-paged.-narrow #top { layout: vertical; }
     Screen.-paged.-short.-page-state #middle { display: none; }
     Screen.-paged.-page-log #top { display: none; }
+    Screen.-paged #response { display: none; }
+    Screen.-paged.-page-state.-roomy #response { display: block; }
     Screen.-paged.-page-ids #top { display: none; }
     Screen.-paged.-page-ids #log { display: none; }
     Screen.-paged.-page-ids #ids { display: block; }
@@ -204,6 +207,7 @@ class MonitorApp(App[int]):
         with Horizontal(id="top"):
             yield GimbalPanel(id="gimbal")
             yield UavPanel(id="uav")
+        yield ResponsePanel(id="response")
         with Horizontal(id="middle"):
             yield CommandLog(id="log")
             yield IdTable(id="ids")
@@ -222,6 +226,7 @@ class MonitorApp(App[int]):
         self._status = self.query_one(StatusBar)
         self._gimbal = self.query_one(GimbalPanel)
         self._uav = self.query_one(UavPanel)
+        self._response = self.query_one(ResponsePanel)
         self._log_view = self.query_one(CommandLog)
         self._ids = self.query_one(IdTable)
         self._diagnostics = self.query_one(DiagnosticsPanel)
@@ -332,6 +337,7 @@ class MonitorApp(App[int]):
             self.stats.lag = max(now - self.stats.last_batch_wall, 0.0)
             self.stats.max_lag = max(self.stats.max_lag, self.stats.lag)
         self._show_top(state)
+        self._response.show(state)
         self._show_log()
         self._ids.show(state, self.filter)
         self._diagnostics.show(state)

@@ -28,6 +28,7 @@ from analyzer.protocol.types import (
     FROM_IDU,
     LINK,
     TO_IDU,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -201,6 +202,9 @@ class MonitorState:
         self.last_feedback_time: float | None = None
         self.feedback_count = 0
         self.last_commands: dict[str, Event] = {}
+        # response analysis: the latest finding and the verdicts so far
+        self.finding: Event | None = None
+        self.verdicts: Counter[str] = Counter()
         # UAV
         self.gps: Event | None = None
         self.altitude: Event | None = None
@@ -442,6 +446,9 @@ class MonitorState:
             elif topic == TOPIC_GIMBAL_RANGING:
                 self.ranging = event
                 self._note_feedback(event)
+            elif topic == TOPIC_ANALYSIS_RESPONSE:
+                self.finding = event
+                self.verdicts[str(event.fields.get("verdict", "unknown"))] += 1
 
     def _note_feedback(self, event: Event) -> None:
         self.feedback_count += 1
