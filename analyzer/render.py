@@ -156,7 +156,7 @@ def describe(event: Event) -> str:
         can_id = int(fields.get("can_id", 0))
         ident = f"0x{can_id:08X}" if fields.get("extended", True) else f"0x{can_id:03X}"
         if fields.get("remote"):
-            return f"id {ident} remote request"
+            return f"id {ident} [{fields.get('dlc', 0)}] remote request"
         return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
     head: list[str] = []
     words: list[str] = []

@@ -235,6 +235,7 @@ class CandumpParser:
                                     info[2],
                                     is_fd,
                                     direction,
+                                    _remote_dlc(data) if is_remote else 0,
                                 )
                             )
                             continue
@@ -390,6 +391,7 @@ class CandumpParser:
             info[2],
             is_fd,
             direction,
+            _remote_dlc(frame[h + 1 :]) if is_remote else 0,
         )
 
     def _screen_line(self, line: bytes) -> tuple[CanFrame, bool, bool]:
@@ -469,6 +471,7 @@ class CandumpParser:
             is_error,
             is_fd,
             direction,
+            length if is_remote else 0,
         )
         return frame, timed, relative
 
@@ -612,6 +615,12 @@ def _log_payload(data: bytes) -> tuple[bytes, bool, bool]:
             raise LineError("bad DLC suffix")
         data = data[:under]
     return _hex(data, MAX_CLASSIC_HEX, "CAN frame"), False, False
+
+
+def _remote_dlc(data: bytes) -> int:
+    """The DLC a ``-L`` remote frame requests (``R5`` -> 5); a bare ``R`` requests 0."""
+    digit = data[1:2]
+    return int(digit) if digit.isdigit() else 0
 
 
 class CandumpReader(InputReader):

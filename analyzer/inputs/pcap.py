@@ -419,6 +419,8 @@ class PcapReader(InputReader):
                 remote,
                 bool(raw_id & CAN_ERR_FLAG),
                 is_fd,
+                "",
+                length if remote else 0,
             )
         ]
 

@@ -23,9 +23,13 @@ READERS: dict[str, tuple[str, bool]] = {
 }
 
 
-def frame_from_message(msg: Any) -> CanFrame:
-    """A ``can.Message`` -> CanFrame (remote frames carry no data)."""
-    channel = msg.channel
+def frame_from_message(msg: Any, channel: str | None = None) -> CanFrame:
+    """A ``can.Message`` -> CanFrame (remote frames carry no data but keep their DLC).
+
+    ``channel`` names the channel when the message does not (a live bus).
+    """
+    if channel is None:
+        channel = msg.channel
     return CanFrame(
         float(msg.timestamp or 0.0),
         int(msg.arbitration_id),
@@ -36,6 +40,7 @@ def frame_from_message(msg: Any) -> CanFrame:
         bool(msg.is_error_frame),
         bool(msg.is_fd),
         "rx" if msg.is_rx else "tx",
+        int(msg.dlc or 0) if msg.is_remote_frame else 0,
     )
 
 

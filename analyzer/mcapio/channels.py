@@ -35,7 +35,11 @@ CAN_FRAME_SCHEMA: dict[str, Any] = {
         "time": {"type": "number", "description": "seconds (Unix time) of reception"},
         "id": {"type": "integer", "minimum": 0, "description": "CAN identifier"},
         "extended": {"type": "boolean", "description": "29-bit identifier"},
-        "dlc": {"type": "integer", "minimum": 0, "description": "number of data bytes"},
+        "dlc": {
+            "type": "integer",
+            "minimum": 0,
+            "description": "number of data bytes; of a remote frame, the length it requests",
+        },
         "data": {"type": "string", "description": "data bytes, hex pairs separated by spaces"},
         "channel": {"type": "string", "description": "CAN channel / interface name"},
         "remote": {"type": "boolean", "description": "remote transmission request"},
@@ -88,7 +92,7 @@ def can_frame_json(frame: CanFrame) -> bytes:
     data = frame.data
     return (
         f'{{"time":{_json_time(frame.time)},"id":{frame.can_id},'
-        f'"extended":{_TRUE_FALSE[frame.extended]},"dlc":{len(data)},'
+        f'"extended":{_TRUE_FALSE[frame.extended]},"dlc":{frame.dlc},'
         f'"data":"{data.hex(" ").upper()}","channel":{_json_str(frame.channel)},'
         f'"remote":{_TRUE_FALSE[frame.is_remote]},"error":{_TRUE_FALSE[frame.is_error]},'
         f'"fd":{_TRUE_FALSE[frame.is_fd]},"direction":{_json_str(frame.direction)}}}'
@@ -115,6 +119,7 @@ def can_frame_from_dict(obj: dict[str, Any]) -> CanFrame:
         is_error=bool(obj.get("error", False)),
         is_fd=bool(obj.get("fd", False)),
         direction=str(obj.get("direction", "")),
+        remote_dlc=int(obj.get("dlc", 0)) if obj.get("remote") else 0,
     )
 
 

@@ -214,7 +214,7 @@ class Decoder:
                     {
                         "can_id": can_id,
                         "extended": frame.extended,
-                        "dlc": len(frame.data),
+                        "dlc": frame.dlc,
                         "data": hexstr(frame.data),
                         "remote": frame.is_remote,
                         **extra,

@@ -72,10 +72,12 @@ class CanFrame:
     is_error: bool = False
     is_fd: bool = False
     direction: str = ""  # "rx" / "tx" when the log says so
+    remote_dlc: int = 0  # the DLC a remote frame requests (it carries no data)
 
     @property
     def dlc(self) -> int:
-        return len(self.data)
+        """The frame's DLC: the requested length of a remote frame, else its data length."""
+        return self.remote_dlc if self.is_remote else len(self.data)
 
 
 @dataclass(slots=True)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from analyzer.errors import SourceError, UsageError
+from analyzer.inputs.python_can import frame_from_message
 from analyzer.protocol.framing import wrap_can, wrap_control
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, TCP_PORT
 from analyzer.protocol.types import FROM_IDU, TO_IDU, CanFrame, StreamChunk
@@ -124,18 +125,7 @@ class CanLink:
         out: list[Item] = []
         msg = self.bus.recv(timeout=max(0.0, timeout))
         while msg is not None:
-            out.append(
-                CanFrame(
-                    msg.timestamp,
-                    msg.arbitration_id,
-                    bytes(msg.data),
-                    extended=msg.is_extended_id,
-                    channel=self.name,
-                    is_remote=msg.is_remote_frame,
-                    is_error=msg.is_error_frame,
-                    is_fd=msg.is_fd,
-                )
-            )
+            out.append(frame_from_message(msg, self.name))
             if len(out) >= 1000:
                 break
             msg = self.bus.recv(timeout=0.0)

@@ -6,6 +6,7 @@ import contextlib
 from typing import Any
 
 from analyzer.errors import SourceError, UsageError
+from analyzer.inputs.python_can import frame_from_message
 from analyzer.protocol.types import CanFrame
 from analyzer.sources.base import MAX_ITEMS_PER_READ, SourceItem, link_event
 from analyzer.sources.spec import CanSpec
@@ -103,17 +104,7 @@ class CanSource:
         return out
 
     def _frame(self, msg: Any) -> CanFrame:
-        return CanFrame(
-            time=msg.timestamp,
-            can_id=msg.arbitration_id,
-            data=bytes(msg.data),
-            extended=msg.is_extended_id,
-            channel=self.spec.channel,
-            is_remote=msg.is_remote_frame,
-            is_error=msg.is_error_frame,
-            is_fd=msg.is_fd,
-            direction="rx" if msg.is_rx else "tx",
-        )
+        return frame_from_message(msg, self.spec.channel)
 
     def close(self) -> None:
         if self._closed:
