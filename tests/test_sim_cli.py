@@ -21,7 +21,7 @@ def test_simulate_prints_what_it_does_and_ends_after_its_duration(
         "simulated gimbal, type 1 (35x zoom 2MP / 30x zoom 4K), on tcp:127.0.0.1:"
     )
     assert "as the IDU (TCP server)" in out
-    assert "ranging feedback: every 1 s" in out
+    assert "ranging feedback: every 2 s, in place of an attitude message" in out
     assert "faults: drop 5%, no feedback from 10 s for 3 s (seed 1)" in out
     assert "stops after 0.6 s" in out
     assert "done: 0 command(s) acted on" in out

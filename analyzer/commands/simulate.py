@@ -140,7 +140,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="LINK",
         help=f"where to speak the protocol (default {DEFAULT_LINK})",
     )
-    parser.add_argument("--ranging", action="store_true", help="also send laser-ranging feedback")
+    parser.add_argument(
+        "--ranging",
+        action="store_true",
+        help="also send laser-ranging feedback: every 2 s, in the place of an attitude "
+        "message (one feedback message every 500 ms in all)",
+    )
     parser.add_argument(
         "--uav", action="store_true", help="also play the UAV: GPS, altitude, attitude, text"
     )
@@ -221,7 +226,10 @@ def run(args: argparse.Namespace) -> int:
         say(f"  {role}: reads 0x0A control frames, answers with 0x0C attitude frames every 500 ms")
         if spec.kind == "tcp" and not _is_loopback(spec.host):
             say(f"  warning: {spec.host} is not a loopback address: reachable from the network")
-    say(f"  ranging feedback: {'every 1 s' if args.ranging else 'off (--ranging)'}")
+    say(
+        "  ranging feedback: "
+        + ("every 2 s, in place of an attitude message" if args.ranging else "off (--ranging)")
+    )
     say(
         "  UAV: "
         + (

@@ -22,8 +22,8 @@ from analyzer.sim.faults import FaultConfig, FaultInjector
 from analyzer.sim.model import GimbalModel
 from analyzer.sim.uav import UavPlayer
 
-FEEDBACK_PERIOD = 0.5  # chapter 2.2: one attitude message every 500 ms
-RANGING_PERIOD = 1.0
+FEEDBACK_PERIOD = 0.5  # chapter 2.2: one full feedback message every 500 ms
+RANGING_PERIOD = 2.0  # a ranging message takes the place of an attitude one this often
 
 # Fields of a command event that say nothing a reader needs in a one-line summary.
 _QUIET_FIELDS = frozenset({"s_id", "cmd", "name", "raw", "component", "transport", "direction"})
@@ -63,7 +63,7 @@ class SimulatedGimbal:
         self._seq = 0
         self._feedback_clear = start  # segments leave in order: none before this time
         self._next_attitude = start
-        self._next_ranging = start + self.config.feedback_period / 2
+        self._next_ranging = start + self.config.feedback_period  # the second slot
 
     # -- input -----------------------------------------------------------------------------
 
@@ -82,8 +82,6 @@ class SimulatedGimbal:
 
     def next_time(self) -> float:
         times = [self._next_attitude]
-        if self.config.ranging:
-            times.append(self._next_ranging)
         if self.uav is not None:
             times.append(self.uav.next_time())
         if self._queue:
@@ -100,18 +98,19 @@ class SimulatedGimbal:
         model.step(now)
         period = self.config.feedback_period
         stopped = self.faults.feedback_stopped(now - self.start)
-        if now >= self._next_attitude:
+        if now >= self._next_attitude:  # one feedback message per slot: attitude or ranging
             self._next_attitude = max(self._next_attitude + period, now)
+            ranging = self.config.ranging and now >= self._next_ranging
+            if ranging:
+                self._next_ranging = max(self._next_ranging + self.config.ranging_period, now)
             if stopped:
                 self.sent["attitude_suppressed"] += 1
+            elif ranging:
+                self._feedback(now, encode_ranging(**model.ranging()))
+                self.sent["ranging"] += 1
             else:
                 self._feedback(now, encode_attitude(**model.attitude()))
                 self.sent["attitude"] += 1
-        if self.config.ranging and now >= self._next_ranging:
-            self._next_ranging = max(self._next_ranging + self.config.ranging_period, now)
-            if not stopped:
-                self._feedback(now, encode_ranging(**model.ranging()))
-                self.sent["ranging"] += 1
         out: list[tuple[int, bytes]] = []
         while self._queue and self._queue[0][0] <= now:
             _, _, can_id, data = heapq.heappop(self._queue)
