@@ -301,3 +301,12 @@ def test_a_log_without_protocol_frames_says_so(
     assert "none of the 2 CAN frames uses a protocol ID" in err
     assert main(["decode", str(log_file(tmp_path))]) == 0
     assert "note:" not in capsys.readouterr().err
+
+
+def test_pcap_summary_names_the_port(capsys: pytest.CaptureFixture[str]) -> None:
+    sample = Path(__file__).resolve().parents[1] / "samples" / "idu-tcp.pcap"
+    code, out, _ = run(capsys, str(sample), "--summary")
+    assert code == 0
+    assert "TCP to/from port 2000," in out
+    code, out, _ = run(capsys, str(sample), "--summary", "--port", "2001")
+    assert "0 TCP to/from port 2001" in out
