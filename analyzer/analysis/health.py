@@ -16,10 +16,10 @@ from analyzer.analysis.findings import (
     UNKNOWN,
     Finding,
 )
+from analyzer.tally import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
+from analyzer.tally import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 from analyzer.tally import GAP_THRESHOLD_S
 
-EXPECTED_HZ = 2.0  # chapter 2.2: one message every 500 ms
-RATE_TOLERANCE = 0.25  # a window further off than this fraction is "partial"
 WINDOW_S = 60.0
 MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement only if it has data
 
