@@ -9,6 +9,7 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
+import lz4.frame
 import pytest
 import zstandard
 from hypothesis import HealthCheck, given, settings
@@ -241,16 +242,27 @@ def _chunk_record(payload: bytes, compression: str, size: int, crc: int) -> byte
     return RECORD_HEAD.pack(0x06, len(body)) + body
 
 
+def _bomb(compression: str) -> bytes:
+    """1 GiB of zeros: about 33 kB with zstd, about 4 MB with lz4 (16 frames of 64 MiB)."""
+    zeros = bytes(64 << 20)
+    if compression == "zstd":
+        return zstandard.ZstdCompressor(level=3).compress(zeros) * 16
+    return lz4.frame.compress(zeros) * 16
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4"])
 @pytest.mark.parametrize("honest", [True, False])
-def test_a_zstd_bomb_is_refused_with_bounded_memory(tmp_path: Path, honest: bool) -> None:
+def test_a_compression_bomb_is_refused_with_bounded_memory(
+    tmp_path: Path, honest: bool, compression: str
+) -> None:
     path = _recording(tmp_path)
     data = path.read_bytes()
     before = _everything(Recording(path))
     chunks = _chunks(data)
-    bomb_size = 1 << 30  # 1 GiB of zeros in about 33 kB
-    bomb = zstandard.ZstdCompressor(level=3).compress(bytes(64 << 20)) * 16
+    bomb_size = 1 << 30
+    bomb = _bomb(compression)
     claimed = bomb_size if honest else 4096
-    record = _chunk_record(bomb, "zstd", claimed, 0)
+    record = _chunk_record(bomb, compression, claimed, 0)
     at = chunks[-1].end
     hostile = data[:at] + record  # an unfinished recording whose last chunk is the bomb
     path.write_bytes(hostile)
