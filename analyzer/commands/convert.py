@@ -158,9 +158,9 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     for note in getattr(source, "notes", ()):
         print(f"note: {note}", file=sys.stderr)
-    if sink is not None and sink.retimed:
+    if sink is not None and sink.retimed_input:
         print(
-            f"note: the input goes back in time: {sink.retimed} message(s) older than data "
+            f"note: the input goes back in time: {sink.retimed_input} message(s) older than data "
             "already written got that data's time as MCAP log time (their own time stays in "
             "the message)",
             file=sys.stderr,

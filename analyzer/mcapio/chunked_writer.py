@@ -18,6 +18,7 @@ from __future__ import annotations
 import errno
 import struct
 import zlib
+from collections import Counter
 from collections.abc import Callable
 from typing import IO
 
@@ -86,6 +87,7 @@ class ChunkedWriter:
         self._chunk_size = chunk_size
         self._compression, self._compress = compressor(compression)
         self.retimed = 0  # messages whose log time was raised to keep the file in order
+        self.retimed_topics: Counter[str] = Counter()  # the same, by topic
         self._floor = 0  # end time of the last chunk written: no message may go below it
         self._pos = 0
         self._data_crc = 0
@@ -199,6 +201,7 @@ class ChunkedWriter:
             if log_time < self._floor:
                 log_time = self._floor  # older than a chunk on disk already
                 self.retimed += 1
+                self.retimed_topics[self._channels[channel_id].topic] += 1
             if log_time < self._chunk_last:
                 self._unsorted = True
         else:

@@ -37,7 +37,7 @@ from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveVi
 from analyzer.mcapio.options import DEFAULT_COMPRESSION
 from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
-from analyzer.protocol.types import CanFrame, Event
+from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, CanFrame, Event
 from analyzer.tally import Tally
 
 # Small chunks: a crash loses at most the chunk being built, and the time-based flush
@@ -269,6 +269,12 @@ class McapSink:
     def retimed(self) -> int:
         """Messages older than a chunk already written, logged at that chunk's end time."""
         return self._writer.retimed
+
+    @property
+    def retimed_input(self) -> int:
+        """``retimed`` less the response findings, which are judged after their command's
+        time by nature: what says that the input itself went back in time."""
+        return self._writer.retimed - self._writer.retimed_topics[TOPIC_ANALYSIS_RESPONSE]
 
     @property
     def closed(self) -> bool:
