@@ -10,6 +10,7 @@ from typing import IO, Any
 
 from analyzer import timefmt
 from analyzer.errors import UsageError
+from analyzer.input_options import add_input_arguments
 from analyzer.terminal_text import printable, printable_lines
 
 HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
@@ -55,22 +56,6 @@ def _positive(text: str) -> float:
     if not value > 0 or value != value or value == float("inf"):
         raise argparse.ArgumentTypeError(f"{text!r}: must be a number above 0")
     return value
-
-
-def add_input_arguments(parser: argparse.ArgumentParser) -> None:
-    """The input options analyze and report share with decode."""
-    from analyzer.inputs import FORMATS
-
-    parser.add_argument("file", help="capture file or MCAP recording; '-' reads candump text")
-    parser.add_argument(
-        "-f",
-        "--format",
-        metavar="FORMAT",
-        help="file format instead of guessing it: " + ", ".join(FORMATS),
-    )
-    parser.add_argument(
-        "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
-    )
 
 
 def add_settings_arguments(parser: argparse.ArgumentParser) -> None:

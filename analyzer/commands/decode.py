@@ -44,21 +44,9 @@ PROGRESS_INTERVAL_S = 0.2
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from analyzer.inputs import FORMATS
+    from analyzer.input_options import add_input_arguments
 
-    parser.add_argument("file", help="capture file; '-' reads candump text from standard input")
-    parser.add_argument(
-        "-f",
-        "--format",
-        metavar="FORMAT",
-        help="file format instead of guessing it: " + ", ".join(FORMATS),
-    )
-    parser.add_argument(
-        "--port",
-        type=int,
-        default=2000,
-        help="TCP port of the IDU in pcap captures (default: 2000)",
-    )
+    add_input_arguments(parser)
     parser.add_argument(
         "--stored",
         action="store_true",

@@ -27,7 +27,8 @@ file is replaced only with --force, and never one of the inputs.
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from analyzer.commands.analyze import add_input_arguments, add_settings_arguments
+    from analyzer.commands.analyze import add_settings_arguments
+    from analyzer.input_options import add_input_arguments
 
     add_input_arguments(parser)
     parser.add_argument(

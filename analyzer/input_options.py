@@ -1,0 +1,21 @@
+"""Command-line options of every command that reads a capture file or recording."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_input_arguments(parser: argparse.ArgumentParser) -> None:
+    """The input file, its format and the IDU's TCP port: decode, analyze, report."""
+    from analyzer.inputs import FORMATS
+
+    parser.add_argument("file", help="capture file or MCAP recording; '-' reads candump text")
+    parser.add_argument(
+        "-f",
+        "--format",
+        metavar="FORMAT",
+        help="file format instead of guessing it: " + ", ".join(FORMATS),
+    )
+    parser.add_argument(
+        "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
+    )
