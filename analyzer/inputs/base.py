@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 from collections.abc import Iterator
 from typing import IO, Any
@@ -43,6 +44,13 @@ class InputReader:
 
     def __iter__(self) -> Iterator[InputItem]:
         raise NotImplementedError
+
+    def batches(self, size: int) -> Iterator[list[InputItem]]:
+        """The items in file order, in lists of at most ``size`` (a reader that reads in
+        blocks hands on a block's items at once, which saves a step per item)."""
+        iterator = iter(self)
+        while chunk := list(itertools.islice(iterator, size)):
+            yield chunk
 
     @property
     def stats(self) -> dict[str, int]:

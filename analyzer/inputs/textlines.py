@@ -194,15 +194,18 @@ def _find_member(data: bytes) -> int:
     return -1
 
 
-def split_blocks(
+def line_blocks(
     blocks: Iterator[bytes] | IO[bytes], block_size: int = BLOCK_SIZE
-) -> Iterator[list[bytes]]:
-    """Lines (line ends removed) of a byte source, a list at a time.
+) -> Iterator[bytes]:
+    """Whole lines of a byte source, many at a time, each block ending with ``\\n``.
 
     ``blocks`` is an iterator of byte blocks or a binary file (read ``block_size`` at a
-    time). One line is one line whatever its length, so line numbers stay right: a line
-    longer than MAX_LINE is cut to MAX_LINE + 1 bytes (``is_overlong``) and the rest of it
-    up to the line end is skipped, so memory stays bounded.
+    time). CRLF line ends become LF. One line is one line whatever its length, so line
+    numbers stay right: a line with no line end within MAX_LINE bytes is cut to
+    MAX_LINE + 1 bytes (``is_overlong``) and the rest of it up to the line end is skipped,
+    so memory stays bounded. Lines inside a block may still be longer than MAX_LINE
+    (up to a block): whoever looks at one line on its own cuts it. The last line of the
+    source gets a line end if it has none.
     """
     if not isinstance(blocks, Iterator):
         handle = blocks
@@ -220,19 +223,34 @@ def split_blocks(
             block = tail + block
         if b"\r" in block:  # CRLF line ends
             block = block.replace(b"\r\n", b"\n")
-        lines = block.split(b"\n")
-        tail = lines.pop()
+        cut = block.rfind(b"\n") + 1
+        tail = block[cut:]
+        body = block[:cut]
         if len(tail) > MAX_LINE:  # no line end in sight: hand on its start, skip the rest
-            lines.append(tail[: MAX_LINE + 1])
+            body += tail[: MAX_LINE + 1] + b"\n"
             tail = b""
             skipping = True
-        if lines and max(map(len, lines)) > MAX_LINE:  # rare: look line by line only then
+        if body:
+            yield body
+    if tail:
+        yield tail.rstrip(b"\r") + b"\n"
+
+
+def split_blocks(
+    blocks: Iterator[bytes] | IO[bytes], block_size: int = BLOCK_SIZE
+) -> Iterator[list[bytes]]:
+    """Lines (line ends removed) of a byte source, a list at a time (see ``line_blocks``).
+
+    Every line handed on is at most MAX_LINE + 1 bytes long (``is_overlong``).
+    """
+    for block in line_blocks(blocks, block_size):
+        lines = block.split(b"\n")
+        lines.pop()  # the empty text after the block's last line end
+        if max(map(len, lines)) > MAX_LINE:  # rare: look line by line only then
             for i, line in enumerate(lines):
                 if len(line) > MAX_LINE:
                     lines[i] = line[: MAX_LINE + 1]
         yield lines
-    if tail:
-        yield [tail.rstrip(b"\r")]
 
 
 def open_lines(raw: IO[bytes], block_size: int = BLOCK_SIZE) -> tuple[Iterator[bytes], list[str]]:
