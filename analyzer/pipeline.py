@@ -12,11 +12,13 @@ counters and sinks then see like any other event.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import islice
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 from analyzer.protocol.types import CanFrame, Event, StreamChunk
 from analyzer.tally import Tally
@@ -68,9 +70,20 @@ class Decoding(Protocol):
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
 
+    def feed_batch(
+        self, items: Iterable[object], raw: list[RawItem], events: list[Event]
+    ) -> None: ...
+
     def tick(self, now: float) -> list[Event]: ...
 
     def close(self, now: float | None = None) -> list[Event]: ...
+
+
+@runtime_checkable
+class BatchedItems(Protocol):
+    """A reader that hands on its items in lists (``analyzer.inputs.base.InputReader``)."""
+
+    def batches(self, size: int) -> Iterator[list[Any]]: ...
 
 
 @dataclass(slots=True)
@@ -119,26 +132,7 @@ class Pipeline:
     def feed(self, items: Iterable[Item]) -> None:
         """Decode items into the open batch; ready-made events go in as they are."""
         batch = self.batch
-        raw = batch.items
-        events = batch.events
-        decoder = self.decoder
-        feed_can = decoder.feed_can
-        feed_stream = decoder.feed_stream
-        for item in items:
-            kind = type(item)
-            if kind is CanFrame:
-                raw.append(item)  # type: ignore[arg-type]
-                out = feed_can(item)  # type: ignore[arg-type]
-            elif kind is StreamChunk:
-                raw.append(item)  # type: ignore[arg-type]
-                out = feed_stream(item)  # type: ignore[arg-type]
-            elif isinstance(item, Event):
-                events.append(item)
-                continue
-            else:
-                continue
-            if out:
-                events.extend(out)
+        self.decoder.feed_batch(items, batch.items, batch.events)
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Events from outside the decoder (link changes, notes) into the open batch."""
@@ -222,21 +216,44 @@ def run_items(
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
-    A batch goes to the sinks every ``batch_items`` items (1 for live input such as
-    standard input, so each line shows at once); ``after_batch`` runs after each. Stops
+    A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
+    reads in blocks hands on a block's items at once; 1 for live input such as standard
+    input, so each line shows at once); ``after_batch`` runs after each. Stops
     early when a sink fails. An exception of the reader (Ctrl-C, unreadable input)
     propagates without ``finish``: the caller decides whether what was read counts
     (``decode`` of live input finishes, ``convert`` throws its output away).
     """
-    iterator = iter(items)
-    while True:
-        chunk = list(islice(iterator, batch_items))
-        if not chunk:
-            break
-        pipeline.feed(chunk)
-        batch = pipeline.deliver()
-        if pipeline.failed:
-            break
-        if after_batch is not None:
-            after_batch(batch)
-    pipeline.finish()
+    if isinstance(items, BatchedItems):
+        chunks: Iterator[list[Any]] = items.batches(batch_items)
+    else:
+        chunks = _chunks(iter(items), batch_items)
+    with fewer_collections():
+        for chunk in chunks:
+            pipeline.feed(chunk)
+            batch = pipeline.deliver()
+            if pipeline.failed:
+                break
+            if after_batch is not None:
+                after_batch(batch)
+        pipeline.finish()
+
+
+@contextlib.contextmanager
+def fewer_collections(young: int = 50_000) -> Iterator[None]:
+    """Run the cyclic garbage collector's youngest generation less often for a while.
+
+    Decoding a file makes millions of short-lived objects (frames, events, their dicts)
+    that reference counting frees and that form no cycles; with the default threshold
+    (700 allocations) the collector would look at them again and again.
+    """
+    threshold = gc.get_threshold()
+    gc.set_threshold(max(young, threshold[0]), *threshold[1:])
+    try:
+        yield
+    finally:
+        gc.set_threshold(*threshold)
+
+
+def _chunks(iterator: Iterator[Any], size: int) -> Iterator[list[Any]]:
+    while chunk := list(islice(iterator, size)):
+        yield chunk

@@ -8,6 +8,7 @@ import signal
 import threading
 import time
 import uuid
+from collections.abc import Iterable
 from typing import Any
 
 import can
@@ -96,6 +97,11 @@ class SpyDecoder:
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         return self.inner.feed_stream(chunk)
+
+    def feed_batch(
+        self, items: Iterable[object], raw: list[CanFrame | StreamChunk], events: list[Event]
+    ) -> None:
+        self.inner.feed_batch(items, raw, events)
 
     def tick(self, now: float) -> list[Event]:
         self.ticks.append(now)

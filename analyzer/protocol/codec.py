@@ -16,23 +16,30 @@ CAN_DATA_SIZE = 8
 
 # Decoded commands by their data bytes: a ground station repeats the same bytes again and
 # again (a held stick sends one gimbal_control every 50 ms), so most commands are decoded
-# once. Bounded: the memo starts over when it is full.
-_MEMO: dict[bytes, tuple[dict[str, Any], tuple[str, ...]]] = {}
+# once. Bounded: the memo starts over when it is full. Its entries are shared: never
+# change one (``decode_command`` hands out copies).
+COMMAND_MEMO: dict[bytes, tuple[dict[str, Any], tuple[str, ...]]] = {}
 MEMO_SIZE = 4096
+
+
+def remember_command(data: bytes) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """The shared memo entry (fields, warnings) of a control frame's data."""
+    key = bytes(data)
+    known = COMMAND_MEMO.get(key)
+    if known is None:
+        if len(COMMAND_MEMO) >= MEMO_SIZE:
+            COMMAND_MEMO.clear()
+        fields, warnings = _decode_command(key)
+        known = COMMAND_MEMO[key] = (fields, tuple(warnings))
+    return known
 
 
 def decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:
     """CAN data of a control frame -> (fields, warnings). Never raises.
 
     Returns a new dict and list on every call (callers add fields of their own)."""
-    key = bytes(data)
-    known = _MEMO.get(key)
-    if known is None:
-        if len(_MEMO) >= MEMO_SIZE:
-            _MEMO.clear()
-        fields, warnings = _decode_command(key)
-        known = _MEMO[key] = (fields, tuple(warnings))
-    return dict(known[0]), list(known[1])
+    fields, warnings = remember_command(data)
+    return dict(fields), list(warnings)
 
 
 def _decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from typing import Any
 
-from analyzer.protocol.codec import decode_command
+from analyzer.protocol.codec import COMMAND_MEMO, decode_command, remember_command
 from analyzer.protocol.feedback import decode_feedback
 from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.ids import (
@@ -30,7 +31,12 @@ from analyzer.protocol.types import (
     diagnostic,
     hexstr,
 )
-from analyzer.protocol.uav import STATUS_FRAMES, TextAssembler, decode_status
+from analyzer.protocol.uav import (
+    EIGHT_BYTE_DECODERS,
+    STATUS_FRAMES,
+    TextAssembler,
+    decode_status,
+)
 
 _NO_EVENTS: tuple[Event, ...] = ()
 # The extra fields of a plain CAN frame: none. Shared and never written to.
@@ -63,12 +69,21 @@ class Decoder:
             self._evict_framer, max_sources
         )
         self._given_up: list[Event] = []  # diagnostics of evicted state, for the caller
+        # The reassembler used last (only an add for another source can evict it).
+        self._recent_source: str | None = None
+        self._recent: FeedbackReassembler | None = None
         self._retired = {"bytes_fed": 0, "bytes_framed": 0, "bytes_discarded": 0}
         self.frames = 0
         self.protocol_frames = 0
         self.other_frames = 0
         self.chunks = 0
         self.last_time = 0.0
+        # The usual frame of each of these IDs goes straight to its handler.
+        self._handlers: dict[int, Callable[[CanFrame, str, list[Event]], None]] = {
+            CONTROL_ID: self._command,
+            FEEDBACK_ID: self._segment,
+            **dict.fromkeys(STATUS_FRAMES, self._status),
+        }
 
     # -- input ---------------------------------------------------------------------------------
 
@@ -82,6 +97,43 @@ class Decoder:
         self.frames += 1
         self.last_time = frame.time
         return self._can(frame, frame.channel or "can", _NO_EXTRA)
+
+    def feed_batch(
+        self, items: Iterable[object], raw: list[CanFrame | StreamChunk], events: list[Event]
+    ) -> None:
+        """Decode a batch in order: frames and chunks go to ``raw``, what they give to
+        ``events``; ready-made events (diagnostics of a reader) go to ``events`` as they are.
+
+        The same as ``feed_can`` / ``feed_stream`` item by item, with the usual CAN frame
+        (extended, no flags) taking the short way to its handler.
+        """
+        handlers = self._handlers
+        add_raw = raw.append
+        add_event = events.append
+        frames = 0
+        for item in items:
+            kind = type(item)
+            if kind is CanFrame:
+                frame: CanFrame = item  # type: ignore[assignment]
+                add_raw(frame)
+                frames += 1
+                if frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
+                    handler = handlers.get(frame.can_id)
+                    if handler is not None:
+                        handler(frame, frame.channel or "can", events)
+                        continue
+                self.last_time = frame.time
+                events.extend(self._can_any(frame, frame.channel or "can", _NO_EXTRA))
+            elif kind is StreamChunk:
+                add_raw(item)  # type: ignore[arg-type]
+                events.extend(self.feed_stream(item))  # type: ignore[arg-type]
+            elif isinstance(item, Event):
+                add_event(item)
+        self.frames += frames
+        if raw:
+            last = raw[-1]
+            if type(last) is CanFrame:
+                self.last_time = last.time
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         """Decode bytes read from a TCP / UART stream."""
@@ -176,20 +228,58 @@ class Decoder:
     # -- CAN -------------------------------------------------------------------------------------
 
     def _can(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
-        can_id = frame.can_id
-        if (
-            can_id == CONTROL_ID
-            and frame.extended
-            and not (frame.is_error or frame.is_remote or frame.is_fd)
-        ):  # the most common protocol frame, the short way (same result)
-            self.protocol_frames += 1
-            fields, warnings = decode_command(frame.data)
-            if extra:
-                fields.update(extra)
-            return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings)]
+        if not extra and frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
+            handler = self._handlers.get(frame.can_id)
+            if handler is not None:  # the usual frame, the short way (same result)
+                out: list[Event] = []
+                handler(frame, source, out)
+                return out
         return self._can_any(frame, source, extra)
 
+    # Handlers of the usual frame of each protocol ID (extended, no flags, nothing extra).
+
+    def _command(self, frame: CanFrame, source: str, out: list[Event]) -> None:
+        self.protocol_frames += 1
+        try:
+            fields, warnings = COMMAND_MEMO[frame.data]
+        except (KeyError, TypeError):  # not decoded yet (or not bytes)
+            fields, warnings = remember_command(frame.data)
+        out.append(Event(TOPIC_COMMAND, frame.time, source, dict(fields), list(warnings)))
+
+    def _status(self, frame: CanFrame, source: str, out: list[Event]) -> None:
+        self.protocol_frames += 1
+        can_id = frame.can_id
+        data = frame.data
+        if len(data) == 8:
+            fields, warnings = EIGHT_BYTE_DECODERS[can_id](data)
+        else:
+            fields, warnings = decode_status(can_id, data)
+        fields["raw"] = data.hex(" ").upper()
+        out.append(Event(STATUS_TOPICS[can_id], frame.time, source, fields, warnings))
+
+    def _segment(self, frame: CanFrame, source: str, out: list[Event]) -> None:
+        self.protocol_frames += 1
+        self.last_time = frame.time  # a new source may evict another, as of this time
+        reassembler = self._recent if source == self._recent_source else None
+        if reassembler is None:
+            reassembler = self._reassembler(source)
+        results = reassembler.feed(frame.data, frame.time)
+        if self._given_up:
+            out.extend(self._take_given_up())
+        if results:
+            out.extend(self._feedback(source, results, _NO_EXTRA))
+
+    def _reassembler(self, source: str) -> FeedbackReassembler:
+        if source == self._recent_source and self._recent is not None:
+            return self._recent  # still the most recently used: no reordering needed
+        reassembler = self._reassemblers.get(source)
+        if reassembler is None:
+            reassembler = self._reassemblers.add(source, FeedbackReassembler(source))
+        self._recent_source, self._recent = source, reassembler
+        return reassembler
+
     def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        """Any CAN frame: flags, standard IDs, other devices, text, extra fields."""
         can_id = frame.can_id
         if frame.is_error:
             return [
@@ -246,14 +336,9 @@ class Decoder:
             fields.update(extra)
             return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings + more)]
         if can_id == FEEDBACK_ID:
-            reassembler = self._reassemblers.get(source)
-            if reassembler is None:
-                reassembler = self._reassemblers.add(source, FeedbackReassembler(source))
-                if self._given_up:
-                    return self._take_given_up() + self._feedback(
-                        source, reassembler.feed(frame.data, frame.time), extra, warnings
-                    )
-            return self._feedback(source, reassembler.feed(frame.data, frame.time), extra, warnings)
+            results = self._reassembler(source).feed(frame.data, frame.time)
+            dropped = self._take_given_up() if self._given_up else []
+            return dropped + self._feedback(source, results, extra, warnings)
         if can_id in (TEXT_ID, TEXT_END_ID):
             text = self._texts.get(source)
             given_up: list[Event] = []
@@ -265,11 +350,10 @@ class Decoder:
                 event.warnings[:0] = warnings
                 event.fields.update(extra)
             return given_up + events if given_up else events
-        status = STATUS_FRAMES[can_id]
         fields, more = decode_status(can_id, frame.data)
         fields["raw"] = hexstr(frame.data)
         fields.update(extra)
-        return [Event(status.topic, frame.time, source, fields, warnings + more)]
+        return [Event(STATUS_TOPICS[can_id], frame.time, source, fields, warnings + more)]
 
     def _feedback(
         self,
@@ -343,3 +427,4 @@ class Decoder:
 
 
 _HANDLED = frozenset({CONTROL_ID, FEEDBACK_ID, TEXT_ID, TEXT_END_ID, *STATUS_FRAMES})
+STATUS_TOPICS = {can_id: status.topic for can_id, status in STATUS_FRAMES.items()}
