@@ -159,8 +159,27 @@ LAYOUTS: dict[int, FeedbackLayout] = {ATTITUDE.length_byte: ATTITUDE, RANGING.le
 FRAME_SIZES: dict[int, int] = {k: v.frame_size for k, v in LAYOUTS.items()}
 
 
+# Decoded feedback messages by their bytes: a gimbal at rest sends the same message again
+# and again. Bounded: the memo starts over when it is full.
+_MEMO: dict[bytes, tuple[FeedbackLayout | None, dict[str, Any], tuple[str, ...]]] = {}
+MEMO_SIZE = 4096
+
+
 def decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
-    """A CRC-checked feedback message (27 / 31 bytes, padding optional) -> fields."""
+    """A CRC-checked feedback message (27 / 31 bytes, padding optional) -> fields.
+
+    Returns a new dict and list on every call (callers add fields of their own)."""
+    key = bytes(message)
+    known = _MEMO.get(key)
+    if known is None:
+        if len(_MEMO) >= MEMO_SIZE:
+            _MEMO.clear()
+        layout, fields, warnings = _decode_feedback(key)
+        known = _MEMO[key] = (layout, fields, tuple(warnings))
+    return known[0], dict(known[1]), list(known[2])
+
+
+def _decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
     warnings: list[str] = []
     layout = LAYOUTS.get(message[2]) if len(message) >= 3 else None
     if layout is None or len(message) < layout.frame_size:

@@ -13,13 +13,13 @@ from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, 
 SEGMENTS_PER_MESSAGE = 4
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Segment:
     time: float
     data: bytes
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Message:
     """A reassembled message whose CRC checked."""
 
@@ -33,9 +33,21 @@ def _is_header(data: bytes) -> bool:
     return len(data) >= 3 and data[:2] == HEADER and data[2] in FRAME_SIZES
 
 
+# Messages whose CRC was checked, and the outcome: a gimbal at rest sends the same message
+# again and again. Bounded: the memo starts over when it is full.
+_CRC_MEMO: dict[bytes, bool] = {}
+CRC_MEMO_SIZE = 4096
+
+
 def _crc_ok(data: bytes) -> bool:
-    size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
-    return size is not None and len(data) >= size and check_crc(data[:size])
+    known = _CRC_MEMO.get(data)
+    if known is None:
+        size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
+        known = size is not None and len(data) >= size and check_crc(data[:size])
+        if len(_CRC_MEMO) >= CRC_MEMO_SIZE:
+            _CRC_MEMO.clear()
+        _CRC_MEMO[data] = known
+    return known
 
 
 class FeedbackReassembler:
@@ -53,6 +65,7 @@ class FeedbackReassembler:
         *,
         late_after: float = 0.2,
         stale_after: float = 1.0,
+        fast: bool = True,
     ) -> None:
         self.source = source
         self.late_after = late_after  # gap between segments of one message worth a warning
@@ -66,6 +79,11 @@ class FeedbackReassembler:
         # (a gimbal at rest sends the same message again and again).
         self._last_tail = b""
         self._last_tail_time = 0.0
+        # The usual case, a header and the three segments after it, takes a short way
+        # (same results): ``_open`` says that 1-3 segments are pending, the first a
+        # header that repeats nothing. ``fast=False`` always takes the long way (tests).
+        self._fast = fast
+        self._open = False
 
     @property
     def pending(self) -> int:
@@ -73,12 +91,39 @@ class FeedbackReassembler:
 
     def feed(self, data: bytes, time: float) -> list[Message | Event]:
         self.bytes_fed += len(data)
-        out: list[Message | Event] = []
-        if self._pending and time - self._pending[-1].time > self.stale_after:
+        pending = self._pending
+        if self._fast:
+            if self._open:
+                if time - pending[-1].time <= self.stale_after:
+                    if len(pending) < SEGMENTS_PER_MESSAGE - 1:
+                        pending.append(Segment(time, bytes(data)))
+                        return []
+                    message = pending[0].data + pending[1].data + pending[2].data + data
+                    if _crc_ok(message):
+                        segs = [*pending, Segment(time, bytes(data))]
+                        pending.clear()
+                        self._open = False
+                        out: list[Message | Event] = []
+                        self._emit(out, segs)
+                        return out
+            elif not pending and _is_header(data) and not self._repeats_tail(data, time):
+                pending.append(Segment(time, bytes(data)))
+                self._open = True
+                return []
+        out = []
+        if pending and time - pending[-1].time > self.stale_after:
             self._resolve(out, final=True, time=time)
-        self._pending.append(Segment(time, bytes(data)))
+        pending.append(Segment(time, bytes(data)))
         self._resolve(out, final=False, time=time)
         return out
+
+    def _repeats_tail(self, data: bytes, time: float) -> bool:
+        """Whether a segment repeats the last segment of the message just before it."""
+        return (
+            bool(self._last_tail)
+            and data == self._last_tail
+            and time - self._last_tail_time <= self.late_after
+        )
 
     def tick(self, now: float) -> list[Message | Event]:
         out: list[Message | Event] = []
@@ -117,13 +162,18 @@ class FeedbackReassembler:
         out.append(Message(segs[-1].time, data, tuple(segs), tuple(warnings)))
 
     def _resolve(self, out: list[Message | Event], *, final: bool, time: float) -> None:
+        self._settle(out, final=final, time=time)
+        pending = self._pending
+        self._open = (
+            0 < len(pending) < SEGMENTS_PER_MESSAGE
+            and _is_header(pending[0].data)
+            and not self._repeats_tail(pending[0].data, pending[0].time)
+        )
+
+    def _settle(self, out: list[Message | Event], *, final: bool, time: float) -> None:
         pending = self._pending
         while pending:
-            if (
-                self._last_tail
-                and pending[0].data == self._last_tail
-                and pending[0].time - self._last_tail_time <= self.late_after
-            ):
+            if self._repeats_tail(pending[0].data, pending[0].time):
                 self._report(
                     out, DUPLICATE, "last feedback segment repeated", pending[:1], pending[0].time
                 )
