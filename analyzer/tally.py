@@ -13,6 +13,7 @@ import json
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
+from operator import attrgetter
 from typing import Any
 
 from analyzer.protocol.lru import MAX_SOURCES
@@ -43,6 +44,12 @@ CAN_BITS_EXTENDED = 67
 CAN_BITS_STANDARD = 47
 
 _US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie exactly
+_DATA = attrgetter("data")
+_EXTENDED = attrgetter("extended")
+_TOPIC = attrgetter("topic")
+_TIME = attrgetter("time")
+_WARNINGS = attrgetter("warnings")
+_FIELDS = attrgetter("fields")
 
 
 @dataclass
@@ -142,25 +149,30 @@ class Tally:
 
     def add_items(self, items: Iterable[CanFrame | StreamChunk]) -> None:
         """Count raw CAN frames / stream chunks (and widen the time span)."""
-        frames = chunks = size = bits = 0
-        first = last = None
-        for item in items:
-            n = len(item.data)
-            size += n
-            if type(item) is CanFrame:
-                frames += 1
-                bits += (CAN_BITS_EXTENDED if item.extended else CAN_BITS_STANDARD) + 8 * n
-            else:
-                chunks += 1
-            if first is None:
-                first = item.time
-            last = item.time
+        items = items if isinstance(items, list) else list(items)
+        if not items:
+            return
+        sizes = list(map(len, map(_DATA, items)))
+        size = sum(sizes)
+        if set(map(type, items)) == {CanFrame}:  # the usual batch: counted in C loops
+            frames, chunks = len(items), 0
+            extended = sum(map(_EXTENDED, items))
+            bits = CAN_BITS_STANDARD * frames + 8 * size
+            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+        else:
+            frames = chunks = bits = 0
+            for item, n in zip(items, sizes, strict=True):
+                if type(item) is CanFrame:
+                    frames += 1
+                    bits += (CAN_BITS_EXTENDED if item.extended else CAN_BITS_STANDARD) + 8 * n
+                else:
+                    chunks += 1
         self.frames += frames
         self.chunks += chunks
         self.bytes += size
         self.bits += bits
-        if first is not None and last is not None:
-            self.widen(min(first, last), max(first, last))
+        first, last = items[0].time, items[-1].time
+        self.widen(min(first, last), max(first, last))
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.
@@ -168,46 +180,65 @@ class Tally:
         Findings of the response analysis are judgements, not input: not counted, so
         every command reports the same figures for the same input, stage or no stage.
         """
-        events = [event for event in events if event.topic != TOPIC_ANALYSIS_RESPONSE]
+        events = events if isinstance(events, list) else list(events)
+        topics = list(map(_TOPIC, events))
+        if TOPIC_ANALYSIS_RESPONSE in topics:
+            events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
+            topics = list(map(_TOPIC, events))
         if not events:
             return
         self.events += len(events)
-        self.topics.update([event.topic for event in events])
-        times = [event.time for event in events]
-        first, last = min(times), max(times)
-        self.widen(first, last)
-        self.with_warnings += sum(1 for event in events if event.warnings)
-        commands = self.commands
-        feedback_topics = FEEDBACK_TOPICS
-        for event in events:
-            topic = event.topic
-            fields = event.fields
-            if topic == TOPIC_COMMAND:
-                commands[str(fields.get("name", "unknown"))] += 1
-                if fields.get("transport") == "stream" and fields.get("crc_set", True):
-                    self.crc_checked += 1
-            elif topic == TOPIC_DIAGNOSTICS:
-                self.diagnostics += 1
-                kind = str(fields.get("kind", "unknown"))
-                self.kinds[kind] += 1
-                if kind == CRC_MISMATCH:
-                    self.crc_errors += 1
-            elif topic in feedback_topics:
-                key = event.source
-                direction = fields.get("direction")
-                if direction:
-                    key = f"{key} {direction}"
-                track = self.feedback.get(key)
-                if track is None:
-                    if len(self.feedback) >= MAX_FEEDBACK_SOURCES:
-                        self.feedback_untracked += 1
-                        self.crc_checked += 1
-                        continue
-                    track = self.feedback[key] = FeedbackTrack()
-                track.add(event.time)
-                self.crc_checked += 1
-            elif fields.get("transport") == "stream" and fields.get("crc_set", True):
-                self.crc_checked += 1
+        self.topics.update(topics)
+        times = list(map(_TIME, events))
+        self.widen(min(times), max(times))
+        self.with_warnings += sum(map(bool, map(_WARNINGS, events)))
+        fields = list(map(_FIELDS, events))
+        # Most events are commands or decoded messages without a stream's CRC: the loops
+        # below look at each event once, in C where they can, in Python where they must.
+        names = [
+            f.get("name", "unknown")
+            for t, f in zip(topics, fields, strict=True)
+            if t == TOPIC_COMMAND
+        ]
+        if names:
+            self.commands.update(map(str, names))
+        if TOPIC_DIAGNOSTICS in topics:
+            kinds = [
+                str(f.get("kind", "unknown"))
+                for t, f in zip(topics, fields, strict=True)
+                if t == TOPIC_DIAGNOSTICS
+            ]
+            self.diagnostics += len(kinds)
+            self.kinds.update(kinds)
+            self.crc_errors += kinds.count(CRC_MISMATCH)
+        self.crc_checked += sum(
+            1
+            for t, f in zip(topics, fields, strict=True)
+            if "transport" in f
+            and t != TOPIC_DIAGNOSTICS
+            and t not in FEEDBACK_TOPICS
+            and f["transport"] == "stream"
+            and f.get("crc_set", True)
+        )
+        if not FEEDBACK_TOPICS.isdisjoint(topics):
+            for event, topic, f in zip(events, topics, fields, strict=True):
+                if topic in FEEDBACK_TOPICS:
+                    self._add_feedback(event, f)
+
+    def _add_feedback(self, event: Event, fields: dict[str, Any]) -> None:
+        """One feedback message: its stream's timing, and one CRC checked."""
+        self.crc_checked += 1
+        key = event.source
+        direction = fields.get("direction")
+        if direction:
+            key = f"{key} {direction}"
+        track = self.feedback.get(key)
+        if track is None:
+            if len(self.feedback) >= MAX_FEEDBACK_SOURCES:
+                self.feedback_untracked += 1
+                return
+            track = self.feedback[key] = FeedbackTrack()
+        track.add(event.time)
 
     def widen(self, first: float | None, last: float | None) -> None:
         """Take a time span the input saw (frames the reader skipped, for instance) into account."""
