@@ -258,18 +258,32 @@ class Layout:
     def __post_init__(self) -> None:
         whole = layout_struct(self.fields)
         object.__setattr__(self, "_struct", whole)
-        object.__setattr__(self, "_decode", None if whole is None else compile_decoder(self.fields))
+        object.__setattr__(
+            self, "_decode", None if whole is None else compile_decoder(self.fields, whole)
+        )
 
     def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
         whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
         if whole is not None and len(data) >= whole.size:
             # One precompiled struct.Struct and a decoder made for this layout.
-            decoded: dict[str, Any] = self._decode(whole.unpack_from(data), warnings)  # type: ignore[attr-defined]
+            decoded: dict[str, Any] = self._decode(data, warnings)  # type: ignore[attr-defined]
             return decoded
         out: dict[str, Any] = {}
         for f in self.fields:
             f.decode_into(data, out, warnings)
         return out
+
+    @property
+    def decoder(self) -> Callable[[bytes, list[str]], dict[str, Any]] | None:
+        """The compiled ``decode`` for data of at least ``struct_size`` bytes (None when the
+        fields overlap and no single struct reads them)."""
+        decode: Callable[[bytes, list[str]], dict[str, Any]] | None = self._decode  # type: ignore[attr-defined]
+        return decode
+
+    @property
+    def struct_size(self) -> int:
+        whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
+        return self.size if whole is None else whole.size
 
     def encode(self, values: Mapping[str, Any], *, check_range: bool = True) -> bytearray:
         buffer = bytearray(self.size)
@@ -293,19 +307,20 @@ def layout_struct(fields: tuple[Field, ...]) -> struct.Struct | None:
 
 
 def compile_decoder(
-    fields: tuple[Field, ...],
-) -> Callable[[tuple[int, ...], list[str]], dict[str, Any]]:
-    """A function made for ``fields``: their raw numbers (from ``layout_struct``) -> values.
+    fields: tuple[Field, ...], whole: struct.Struct
+) -> Callable[[bytes, list[str]], dict[str, Any]]:
+    """A function made for ``fields``: data (read by ``whole``, from ``layout_struct``) ->
+    values.
 
     Plain numbers are scaled and range-checked inline; labels, flags and anything that
     needs a warning go through the field's own ``decode_raw``, so the result is exactly
     what decoding field by field gives, only faster.
     """
-    names = {f"r{i}" for i in range(len(fields))}
-    lines = ["def decode(raws, warnings):"]
-    lines.append(f"    {', '.join(sorted(names, key=lambda n: int(n[1:])))}, = raws")
+    names = [f"r{i}" for i in range(len(fields))]
+    lines = ["def decode(data, warnings):"]
+    lines.append(f"    {', '.join(names)}, = unpack_from(data)")
     lines.append("    out = {}")
-    env: dict[str, Any] = {}
+    env: dict[str, Any] = {"unpack_from": whole.unpack_from}
     for i, f in enumerate(fields):
         r, fv = f"r{i}", f"F{i}"
         env[fv] = f
@@ -328,7 +343,7 @@ def compile_decoder(
             lines.append(f"        {fv}._check({r}, warnings)")
     lines.append("    return out")
     exec("\n".join(lines), env)
-    decode: Callable[[tuple[int, ...], list[str]], dict[str, Any]] = env["decode"]
+    decode: Callable[[bytes, list[str]], dict[str, Any]] = env["decode"]
     return decode
 
 

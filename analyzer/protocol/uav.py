@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -87,19 +88,36 @@ STATUS_FRAMES: dict[int, StatusFrame] = {
     )
 }
 USED_BYTES = {cid: max(f.end for f in s.layout.fields) for cid, s in STATUS_FRAMES.items()}
+StatusDecoder = Callable[[bytes], tuple[dict[str, Any], list[str]]]
+
+
+def _eight_byte_decoder(can_id: int) -> StatusDecoder:
+    """Fields and warnings of 8 data bytes, through the layout's compiled decoder."""
+    decode = STATUS_FRAMES[can_id].layout.decoder
+    assert decode is not None  # status layouts have no overlapping fields
+    used = USED_BYTES[can_id]
+
+    def decode_eight(data: bytes) -> tuple[dict[str, Any], list[str]]:
+        warnings: list[str] = []
+        fields = decode(data, warnings)
+        if used < 8 and any(data[used:]):
+            warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
+        return fields, warnings
+
+    return decode_eight
+
+
+# The usual frame of each ID: exactly 8 data bytes.
+EIGHT_BYTE_DECODERS: dict[int, StatusDecoder] = {
+    can_id: _eight_byte_decoder(can_id) for can_id in STATUS_FRAMES
+}
 
 
 def decode_status(can_id: int, data: bytes) -> tuple[dict[str, Any], list[str]]:
     """Data of a GPS / altitude / attitude frame -> fields, warnings. Never raises."""
-    status = STATUS_FRAMES[can_id]
-    if len(data) == 8:  # the usual case, through the layout's precompiled struct
-        warnings: list[str] = []
-        fields = status.layout.decode(data, warnings)
-        used = USED_BYTES[can_id]
-        if used < 8 and any(data[used:]):
-            warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
-        return fields, warnings
-    return _decode_odd_status(status, can_id, data)
+    if len(data) == 8:  # the usual case
+        return EIGHT_BYTE_DECODERS[can_id](data)
+    return _decode_odd_status(STATUS_FRAMES[can_id], can_id, data)
 
 
 def _decode_odd_status(
