@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import Any
 
 from analyzer.protocol.codec import COMMAND_MEMO, decode_command, remember_command
@@ -78,12 +78,6 @@ class Decoder:
         self.other_frames = 0
         self.chunks = 0
         self.last_time = 0.0
-        # The usual frame of each of these IDs goes straight to its handler.
-        self._handlers: dict[int, Callable[[CanFrame, str, list[Event]], None]] = {
-            CONTROL_ID: self._command,
-            FEEDBACK_ID: self._segment,
-            **dict.fromkeys(STATUS_FRAMES, self._status),
-        }
 
     # -- input ---------------------------------------------------------------------------------
 
@@ -94,9 +88,9 @@ class Decoder:
 
     def feed_can(self, frame: CanFrame) -> list[Event]:
         """Decode one CAN frame (from a bus or a log)."""
-        self.frames += 1
-        self.last_time = frame.time
-        return self._can(frame, frame.channel or "can", _NO_EXTRA)
+        events: list[Event] = []
+        self.feed_batch((frame,), [], events)
+        return events
 
     def feed_batch(
         self, items: Iterable[object], raw: list[CanFrame | StreamChunk], events: list[Event]
@@ -104,13 +98,15 @@ class Decoder:
         """Decode a batch in order: frames and chunks go to ``raw``, what they give to
         ``events``; ready-made events (diagnostics of a reader) go to ``events`` as they are.
 
-        The same as ``feed_can`` / ``feed_stream`` item by item, with the usual CAN frame
-        (extended, no flags) taking the short way to its handler.
+        The usual frame of a protocol ID (extended, no flags, 8 bytes of a status frame)
+        is decoded right here; any other goes through ``_can_any``, with the same result.
         """
-        handlers = self._handlers
         add_raw = raw.append
         add_event = events.append
-        frames = 0
+        memo = COMMAND_MEMO
+        status_decoders = EIGHT_BYTE_DECODERS
+        status_topics = STATUS_TOPICS
+        frames = protocol = 0
         for item in items:
             kind = type(item)
             if kind is CanFrame:
@@ -118,9 +114,51 @@ class Decoder:
                 add_raw(frame)
                 frames += 1
                 if frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
-                    handler = handlers.get(frame.can_id)
-                    if handler is not None:
-                        handler(frame, frame.channel or "can", events)
+                    can_id = frame.can_id
+                    if can_id == CONTROL_ID:
+                        try:
+                            fields, warnings = memo[frame.data]
+                        except (KeyError, TypeError):  # not decoded yet (or not bytes)
+                            fields, warnings = remember_command(frame.data)
+                        add_event(
+                            Event(
+                                TOPIC_COMMAND,
+                                frame.time,
+                                frame.channel or "can",
+                                dict(fields),
+                                list(warnings),
+                            )
+                        )
+                        protocol += 1
+                        continue
+                    if can_id == FEEDBACK_ID:
+                        source = frame.channel or "can"
+                        reassembler = self._recent if source == self._recent_source else None
+                        if reassembler is None:
+                            self.last_time = frame.time  # an eviction happens as of now
+                            reassembler = self._reassembler(source)
+                            if self._given_up:
+                                events.extend(self._take_given_up())
+                        results = reassembler.feed(frame.data, frame.time)
+                        if results:
+                            events.extend(self._feedback(source, results, _NO_EXTRA))
+                        protocol += 1
+                        continue
+                    decode = status_decoders.get(can_id)
+                    if decode is not None and len(frame.data) == 8:
+                        data = frame.data
+                        fields, status_warnings = decode(data)
+                        fields["raw"] = data.hex(" ").upper()
+                        add_event(
+                            Event(
+                                status_topics[can_id],
+                                frame.time,
+                                frame.channel or "can",
+                                fields,
+                                status_warnings,
+                            )
+                        )
+                        protocol += 1
                         continue
                 self.last_time = frame.time
                 events.extend(self._can_any(frame, frame.channel or "can", _NO_EXTRA))
@@ -130,6 +168,7 @@ class Decoder:
             elif isinstance(item, Event):
                 add_event(item)
         self.frames += frames
+        self.protocol_frames += protocol
         if raw:
             last = raw[-1]
             if type(last) is CanFrame:
@@ -226,48 +265,6 @@ class Decoder:
         self._retire(framer)
 
     # -- CAN -------------------------------------------------------------------------------------
-
-    def _can(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
-        if not extra and frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
-            handler = self._handlers.get(frame.can_id)
-            if handler is not None:  # the usual frame, the short way (same result)
-                out: list[Event] = []
-                handler(frame, source, out)
-                return out
-        return self._can_any(frame, source, extra)
-
-    # Handlers of the usual frame of each protocol ID (extended, no flags, nothing extra).
-
-    def _command(self, frame: CanFrame, source: str, out: list[Event]) -> None:
-        self.protocol_frames += 1
-        try:
-            fields, warnings = COMMAND_MEMO[frame.data]
-        except (KeyError, TypeError):  # not decoded yet (or not bytes)
-            fields, warnings = remember_command(frame.data)
-        out.append(Event(TOPIC_COMMAND, frame.time, source, dict(fields), list(warnings)))
-
-    def _status(self, frame: CanFrame, source: str, out: list[Event]) -> None:
-        self.protocol_frames += 1
-        can_id = frame.can_id
-        data = frame.data
-        if len(data) == 8:
-            fields, warnings = EIGHT_BYTE_DECODERS[can_id](data)
-        else:
-            fields, warnings = decode_status(can_id, data)
-        fields["raw"] = data.hex(" ").upper()
-        out.append(Event(STATUS_TOPICS[can_id], frame.time, source, fields, warnings))
-
-    def _segment(self, frame: CanFrame, source: str, out: list[Event]) -> None:
-        self.protocol_frames += 1
-        self.last_time = frame.time  # a new source may evict another, as of this time
-        reassembler = self._recent if source == self._recent_source else None
-        if reassembler is None:
-            reassembler = self._reassembler(source)
-        results = reassembler.feed(frame.data, frame.time)
-        if self._given_up:
-            out.extend(self._take_given_up())
-        if results:
-            out.extend(self._feedback(source, results, _NO_EXTRA))
 
     def _reassembler(self, source: str) -> FeedbackReassembler:
         if source == self._recent_source and self._recent is not None:
@@ -370,17 +367,12 @@ class Decoder:
                 continue
             layout, fields, more = decode_feedback(result.data)
             assert layout is not None  # the reassembler only passes CRC-checked messages
-            fields["raw"] = hexstr(result.data)
-            fields.update(extra)
-            out.append(
-                Event(
-                    layout.topic,
-                    result.time,
-                    source,
-                    fields,
-                    [*(warnings or []), *result.warnings, *more],
-                )
-            )
+            fields["raw"] = result.data.hex(" ").upper()
+            if extra:
+                fields.update(extra)
+            if warnings or result.warnings:
+                more = [*(warnings or []), *result.warnings, *more]
+            out.append(Event(layout.topic, result.time, source, fields, more))
         return out
 
     # -- streams ---------------------------------------------------------------------------------
@@ -414,7 +406,7 @@ class Decoder:
                 warnings.append("reserved bytes 7-11 are not zero: " + hexstr(data[7:12]))
             inner = CanFrame(frame.time, can_id, data[14:22], channel=source)
             fields_extra = {**extra, "transport": "stream", "crc_set": frame.crc_set}
-            events = self._can(inner, source, fields_extra)
+            events = self._can_any(inner, source, fields_extra)
             for event in events:
                 event.warnings[:0] = warnings
             return events
