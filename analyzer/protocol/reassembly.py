@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import itertools
+import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from analyzer.protocol.crc import check_crc, crc16
 from analyzer.protocol.feedback import FRAME_SIZES
@@ -13,10 +14,15 @@ from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, 
 SEGMENTS_PER_MESSAGE = 4
 
 
-@dataclass(slots=True)
-class Segment:
+class Segment(NamedTuple):
+    """One 8-byte CAN segment and its time (a tuple: the usual case makes it cheaply)."""
+
     time: float
     data: bytes
+
+
+# ``Segment((time, data))`` without the named tuple's Python-level constructor.
+_segment = functools.partial(tuple.__new__, Segment)
 
 
 @dataclass(slots=True)
@@ -96,18 +102,18 @@ class FeedbackReassembler:
             if self._open:
                 if time - pending[-1].time <= self.stale_after:
                     if len(pending) < SEGMENTS_PER_MESSAGE - 1:
-                        pending.append(Segment(time, bytes(data)))
+                        pending.append(_segment((time, bytes(data))))
                         return []
                     message = pending[0].data + pending[1].data + pending[2].data + data
                     if _crc_ok(message):
-                        segs = [*pending, Segment(time, bytes(data))]
+                        segs = [*pending, _segment((time, bytes(data)))]
                         pending.clear()
                         self._open = False
                         out: list[Message | Event] = []
-                        self._emit(out, segs)
+                        self._emit(out, segs, data=message)
                         return out
             elif not pending and _is_header(data) and not self._repeats_tail(data, time):
-                pending.append(Segment(time, bytes(data)))
+                pending.append(_segment((time, bytes(data))))
                 self._open = True
                 return []
         out = []
@@ -146,20 +152,26 @@ class FeedbackReassembler:
         out.append(diagnostic(time, self.source, kind, detail, raw, segments=len(segs)))
 
     def _emit(
-        self, out: list[Message | Event], segs: list[Segment], extra: tuple[str, ...] = ()
+        self,
+        out: list[Message | Event],
+        segs: list[Segment],
+        extra: tuple[str, ...] = (),
+        data: bytes | None = None,
     ) -> None:
-        data = b"".join(s.data for s in segs)
+        """A message of four segments whose CRC checked (``data``: their bytes, if known)."""
+        if data is None:
+            data = b"".join([s.data for s in segs])
+        a, b, c, d = segs
         warnings = list(extra)
-        gaps = [b.time - a.time for a, b in itertools.pairwise(segs)]
-        if gaps and max(gaps) > self.late_after:
-            warnings.append(f"late segment: {max(gaps) * 1000:.0f} ms between segments")
-        sizes = [len(s.data) for s in segs]
-        if any(n != 8 for n in sizes):
-            warnings.append(f"segment lengths {sizes}, expected 8 each")
+        gap = max(b.time - a.time, c.time - b.time, d.time - c.time)
+        if gap > self.late_after:
+            warnings.append(f"late segment: {gap * 1000:.0f} ms between segments")
+        if not len(a.data) == len(b.data) == len(c.data) == len(d.data) == 8:
+            warnings.append(f"segment lengths {[len(s.data) for s in segs]}, expected 8 each")
         self.bytes_framed += len(data)
-        self._last_tail = segs[-1].data
-        self._last_tail_time = segs[-1].time
-        out.append(Message(segs[-1].time, data, tuple(segs), tuple(warnings)))
+        self._last_tail = d.data
+        self._last_tail_time = d.time
+        out.append(Message(d.time, data, tuple(segs), tuple(warnings)))
 
     def _resolve(self, out: list[Message | Event], *, final: bool, time: float) -> None:
         self._settle(out, final=final, time=time)
