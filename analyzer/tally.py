@@ -13,7 +13,7 @@ import json
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from operator import attrgetter
+from operator import attrgetter, methodcaller
 from typing import Any
 
 from analyzer.protocol.lru import MAX_SOURCES
@@ -50,6 +50,8 @@ _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
 _FIELDS = attrgetter("fields")
+_NAME = methodcaller("get", "name", "unknown")
+_KIND = methodcaller("get", "kind", "unknown")
 
 
 @dataclass
@@ -182,48 +184,47 @@ class Tally:
         """
         events = events if isinstance(events, list) else list(events)
         topics = list(map(_TOPIC, events))
-        if TOPIC_ANALYSIS_RESPONSE in topics:
+        present = set(topics)
+        if TOPIC_ANALYSIS_RESPONSE in present:
             events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
             topics = list(map(_TOPIC, events))
+            present.discard(TOPIC_ANALYSIS_RESPONSE)
         if not events:
             return
+        # A batch holds few topics: each is counted in one C pass. The figures below pick
+        # their events with a comprehension each, which beats chains of C iterators here.
         self.events += len(events)
-        self.topics.update(topics)
+        counts = self.topics
+        for topic in present:
+            counts[topic] += topics.count(topic)
         times = list(map(_TIME, events))
         self.widen(min(times), max(times))
-        self.with_warnings += sum(map(bool, map(_WARNINGS, events)))
-        fields = list(map(_FIELDS, events))
-        # Most events are commands or decoded messages without a stream's CRC: the loops
-        # below look at each event once, in C where they can, in Python where they must.
-        names = [
-            f.get("name", "unknown")
-            for t, f in zip(topics, fields, strict=True)
-            if t == TOPIC_COMMAND
-        ]
-        if names:
-            self.commands.update(map(str, names))
-        if TOPIC_DIAGNOSTICS in topics:
+        self.with_warnings += len(list(filter(None, map(_WARNINGS, events))))
+        if TOPIC_COMMAND in present:
+            names = [e.fields.get("name", "unknown") for e in events if e.topic == TOPIC_COMMAND]
+            commands = self.commands
+            for name in set(names):
+                commands[str(name)] += names.count(name)
+        if TOPIC_DIAGNOSTICS in present:
             kinds = [
-                str(f.get("kind", "unknown"))
-                for t, f in zip(topics, fields, strict=True)
-                if t == TOPIC_DIAGNOSTICS
+                str(e.fields.get("kind", "unknown")) for e in events if e.topic == TOPIC_DIAGNOSTICS
             ]
             self.diagnostics += len(kinds)
             self.kinds.update(kinds)
             self.crc_errors += kinds.count(CRC_MISMATCH)
-        self.crc_checked += sum(
-            1
-            for t, f in zip(topics, fields, strict=True)
-            if "transport" in f
-            and t != TOPIC_DIAGNOSTICS
-            and t not in FEEDBACK_TOPICS
-            and f["transport"] == "stream"
-            and f.get("crc_set", True)
-        )
-        if not FEEDBACK_TOPICS.isdisjoint(topics):
-            for event, topic, f in zip(events, topics, fields, strict=True):
-                if topic in FEEDBACK_TOPICS:
-                    self._add_feedback(event, f)
+        streamed = [e for e in events if "transport" in e.fields]  # read from a stream
+        if streamed:
+            self.crc_checked += sum(
+                1
+                for e in streamed
+                if e.topic != TOPIC_DIAGNOSTICS
+                and e.topic not in FEEDBACK_TOPICS
+                and e.fields["transport"] == "stream"
+                and e.fields.get("crc_set", True)
+            )
+        if not FEEDBACK_TOPICS.isdisjoint(present):
+            for event in [e for e in events if e.topic in FEEDBACK_TOPICS]:
+                self._add_feedback(event, event.fields)
 
     def _add_feedback(self, event: Event, fields: dict[str, Any]) -> None:
         """One feedback message: its stream's timing, and one CRC checked."""
