@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Layout
-from analyzer.protocol.uav import STATUS_FRAMES
+from analyzer.protocol.uav import EIGHT_BYTE_DECODERS, STATUS_FRAMES, USED_BYTES
 
 LAYOUTS: list[Layout] = [
     ATTITUDE.layout,
@@ -42,3 +42,17 @@ def test_compiled_decoding_equals_field_by_field(layout: Layout, data: bytes) ->
     assert list(fast) == list(slow)  # the same key order, so the same JSON
     assert warnings == slow_warnings
     assert [type(v) for v in fast.values()] == [type(v) for v in slow.values()]
+
+
+@settings(max_examples=200)
+@given(st.sampled_from(sorted(STATUS_FRAMES)), st.binary(min_size=8, max_size=8))
+def test_eight_byte_status_frames_decode_in_one_call_as_field_by_field(
+    can_id: int, data: bytes
+) -> None:
+    fields, warnings = EIGHT_BYTE_DECODERS[can_id](data)
+    slow, slow_warnings = field_by_field(STATUS_FRAMES[can_id].layout, data)
+    used = USED_BYTES[can_id]
+    if any(data[used:]):
+        slow_warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
+    assert (fields, warnings) == (slow, slow_warnings)
+    assert list(fields) == list(slow)

@@ -273,18 +273,6 @@ class Layout:
             f.decode_into(data, out, warnings)
         return out
 
-    @property
-    def decoder(self) -> Callable[[bytes, list[str]], dict[str, Any]] | None:
-        """The compiled ``decode`` for data of at least ``struct_size`` bytes (None when the
-        fields overlap and no single struct reads them)."""
-        decode: Callable[[bytes, list[str]], dict[str, Any]] | None = self._decode  # type: ignore[attr-defined]
-        return decode
-
-    @property
-    def struct_size(self) -> int:
-        whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
-        return self.size if whole is None else whole.size
-
     def encode(self, values: Mapping[str, Any], *, check_range: bool = True) -> bytearray:
         buffer = bytearray(self.size)
         for f in self.fields:
@@ -316,10 +304,40 @@ def compile_decoder(
     needs a warning go through the field's own ``decode_raw``, so the result is exactly
     what decoding field by field gives, only faster.
     """
+    body, env = _decoder_body(fields, whole)
+    decode: Callable[[bytes, list[str]], dict[str, Any]] = _define(
+        ["def decode(data, warnings):", *body, "    return out"], env
+    )
+    return decode
+
+
+def compile_frame_decoder(
+    fields: tuple[Field, ...],
+    whole: struct.Struct,
+    zero_from: int,
+    size: int,
+    on_nonzero: Callable[[bytes, list[str]], None],
+) -> Callable[[bytes], tuple[dict[str, Any], list[str]]]:
+    """Like ``compile_decoder``, for a whole frame of ``size`` bytes in one call: data ->
+    (values, warnings); bytes from ``zero_from`` on that are not zero go to
+    ``on_nonzero``."""
+    body, env = _decoder_body(fields, whole)
+    lines = ["def decode(data):", "    warnings = []", *body]
+    if zero_from < size:
+        env["ZEROS"], env["on_nonzero"] = bytes(size - zero_from), on_nonzero
+        lines += [f"    if data[{zero_from}:] != ZEROS:", "        on_nonzero(data, warnings)"]
+    decode: Callable[[bytes], tuple[dict[str, Any], list[str]]] = _define(
+        [*lines, "    return out, warnings"], env
+    )
+    return decode
+
+
+def _decoder_body(
+    fields: tuple[Field, ...], whole: struct.Struct
+) -> tuple[list[str], dict[str, Any]]:
+    """The lines that unpack ``data`` and fill ``out`` (doubts go to ``warnings``)."""
     names = [f"r{i}" for i in range(len(fields))]
-    lines = ["def decode(data, warnings):"]
-    lines.append(f"    {', '.join(names)}, = unpack_from(data)")
-    lines.append("    out = {}")
+    lines = [f"    {', '.join(names)}, = unpack_from(data)", "    out = {}"]
     env: dict[str, Any] = {"unpack_from": whole.unpack_from}
     for i, f in enumerate(fields):
         r, fv = f"r{i}", f"F{i}"
@@ -341,10 +359,12 @@ def compile_decoder(
         if tests:
             lines.append(f"    if {' or '.join(tests)}:")
             lines.append(f"        {fv}._check({r}, warnings)")
-    lines.append("    return out")
+    return lines, env
+
+
+def _define(lines: list[str], env: dict[str, Any]) -> Any:
     exec("\n".join(lines), env)
-    decode: Callable[[bytes, list[str]], dict[str, Any]] = env["decode"]
-    return decode
+    return env["decode"]
 
 
 def pad(data: bytes, size: int, what: str, warnings: list[str]) -> bytes:

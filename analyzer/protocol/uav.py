@@ -6,7 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from analyzer.protocol.fields import Field, Layout
+from analyzer.protocol.fields import Field, Layout, compile_frame_decoder, layout_struct
 from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID, TEXT_END_ID, TEXT_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import (
     TEXT_UNTERMINATED,
@@ -92,19 +92,16 @@ StatusDecoder = Callable[[bytes], tuple[dict[str, Any], list[str]]]
 
 
 def _eight_byte_decoder(can_id: int) -> StatusDecoder:
-    """Fields and warnings of 8 data bytes, through the layout's compiled decoder."""
-    decode = STATUS_FRAMES[can_id].layout.decoder
-    assert decode is not None  # status layouts have no overlapping fields
+    """Fields and warnings of 8 data bytes, in one compiled function."""
+    layout = STATUS_FRAMES[can_id].layout
     used = USED_BYTES[can_id]
 
-    def decode_eight(data: bytes) -> tuple[dict[str, Any], list[str]]:
-        warnings: list[str] = []
-        fields = decode(data, warnings)
-        if used < 8 and any(data[used:]):
-            warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
-        return fields, warnings
+    def unused_not_zero(data: bytes, warnings: list[str]) -> None:
+        warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
 
-    return decode_eight
+    whole = layout_struct(layout.fields)
+    assert whole is not None  # status layouts have no overlapping fields
+    return compile_frame_decoder(layout.fields, whole, used, 8, unused_not_zero)
 
 
 # The usual frame of each ID: exactly 8 data bytes.
