@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
 
@@ -17,20 +16,20 @@ from analyzer.inputs.candump_line import (
     parse_screen_line,
 )
 from analyzer.inputs.candump_scan import scanner
-from analyzer.inputs.python_can_text import ABSOLUTE, DELTA, RELATIVE_TO_START
+from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
+from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
 RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
 FOREIGN_HEAD = 20  # first bad lines looked at to tell what a file that is no candump is
 FOREIGN_BAD = 10  # bad lines (with under a tenth as many frames) that make it no candump
-DECIDE_AFTER = 50  # relative times looked at before -tz and -td are told apart by rate
 # ID texts and channel names kept in the caches; beyond that (a log of random IDs) a text
 # is looked at anew each time, and memory stays flat.
 MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
 
-__all__ = ["CandumpParser", "CandumpReader", "LineError"]
+__all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
 
 
 class CandumpParser:
@@ -71,11 +70,7 @@ class CandumpParser:
         self._ids: dict[bytes, IdInfo | None] = {}
         self._channels: dict[bytes, str] = {}
         self._after_error = False
-        # How the times were written: ABSOLUTE, RELATIVE_TO_START (-tz) or DELTA (-td).
-        self.time_base: str | None = None
-        self._elapsed = 0.0
-        self._raw_times: list[float] = []  # relative times while the base is open
-        self._undecided: list[tuple[int, CanFrame]] = []  # held frames and their time index
+        self._times = ScreenTimes()
         self._held: list[InputItem] = []
         # A file that is no candump at all (BusMaster and others also write .log).
         self._head: list[bytes] = []  # the first bad lines, to tell what the file is
@@ -179,7 +174,7 @@ class CandumpParser:
                 append(item)
             pos = mark = eol + 1
         self._count_scanned(block, mark, pos, taken)
-        if self._held or self._undecided:  # frames wait for their time base (-tz / -td)
+        if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
         return out
@@ -271,11 +266,12 @@ class CandumpParser:
         self._after_error = frame.is_error
         self.frames += 1
         if relative:
-            timed = self._relative_time(frame)
+            timed, settled = self._times.take(frame)
+            self._adopt(settled)
         elif screen and timed and self.time_base is None and frame.time >= RELATIVE_LIMIT:
             # A dated screen time settles the base for the screen times after it; the
             # base of -L times is judged from the first of them (``base_of_times``).
-            self.time_base = ABSOLUTE
+            self._times.base = ABSOLUTE
         if timed:
             if self.first_time is None:
                 self.first_time = frame.time
@@ -287,58 +283,21 @@ class CandumpParser:
 
     # -- relative (-tz) and delta (-td) screen times -----------------------------------------
 
-    def _relative_time(self, frame: CanFrame) -> bool:
-        """A ``(000.123456)`` time: since the start (-tz) or since the previous frame (-td).
+    @property
+    def time_base(self) -> str | None:
+        """How the times were written: ABSOLUTE, RELATIVE_TO_START (-tz) or DELTA (-td)."""
+        return self._times.base
 
-        The two look alike; until the lines tell them apart (a time going back, or most
-        times repeating as a steady rate does under -td) the frames are held. Returns
-        whether the frame's time is final now.
-        """
-        raw = frame.time
-        if self.time_base == DELTA:
-            self._elapsed += raw
-            frame.time = self._elapsed
-            return True
-        if self.time_base is not None:
-            return True
-        self._raw_times.append(raw)
-        self._undecided.append((len(self._raw_times) - 1, frame))
-        times = self._raw_times
-        if len(times) >= 2 and times[-1] < times[-2]:
-            self._decide(DELTA)
-        elif len(times) >= DECIDE_AFTER:
-            self._decide(self._steady_guess())
-        return False
-
-    def _steady_guess(self) -> str:
-        """No time went back: mostly repeated times mean a steady rate under -td."""
-        times = self._raw_times[1:]
-        repeats = sum(1 for a, b in itertools.pairwise(times) if a == b)
-        return DELTA if times and repeats * 2 > len(times) else RELATIVE_TO_START
-
-    def _decide(self, base: str) -> None:
-        self.time_base = base
-        times = self._raw_times
-        if base == DELTA:
-            total, sums = 0.0, []
-            for t in times:
-                total += t
-                sums.append(total)
-            self._elapsed = total
-            for index, frame in self._undecided:
-                frame.time = sums[index]
-            times = sums
+    def _adopt(self, times: list[float]) -> None:
+        """The times of held frames, now settled: they widen the span."""
         if times:
             if self.first_time is None or times[0] < self.first_time:
                 self.first_time = times[0]
             self.last_time = times[-1]
-        self._raw_times = []
-        self._undecided = []
 
     def finish(self) -> list[InputItem]:
         """The end of the input: items still held while the time base was open."""
-        if self.time_base is None and self._raw_times:
-            self._decide(self._steady_guess())
+        self._adopt(self._times.settle())
         held = self._release()
         if self.bad_lines_not_shown:
             held.append(

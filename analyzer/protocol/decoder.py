@@ -11,14 +11,12 @@ from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.ids import (
     CONTROL_ID,
     FEEDBACK_ID,
-    FRAME_CAN,
-    FRAME_CONTROL,
-    TCP_MARKER,
     TEXT_END_ID,
     TEXT_ID,
 )
 from analyzer.protocol.lru import MAX_SOURCES, LruTable
 from analyzer.protocol.reassembly import FeedbackReassembler, Message
+from analyzer.protocol.stream_frames import stream_frame_events
 from analyzer.protocol.types import (
     BAD_FRAME,
     BUS_ERROR,
@@ -385,37 +383,8 @@ class Decoder:
             if isinstance(result, Event):
                 out.append(result)
             else:
-                out.extend(self._stream_frame(result, source, extra))
+                out.extend(stream_frame_events(result, source, extra, self._can_any))
         return out
-
-    def _stream_frame(self, frame: RawFrame, source: str, extra: dict[str, Any]) -> list[Event]:
-        data = frame.data
-        warnings: list[str] = []
-        if frame.frame_type in (FRAME_CONTROL, FRAME_CAN) and data[12:14] != TCP_MARKER:
-            warnings.append(f"bytes 12-13 are {hexstr(data[12:14])}, expected 40 88")
-        if frame.frame_type == FRAME_CONTROL:
-            if any(data[3:12]):
-                warnings.append("reserved bytes 3-11 are not zero: " + hexstr(data[3:12]))
-            fields, more = decode_command(data[14:22])
-            fields.update(extra)
-            fields["transport"] = "stream"
-            return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings + more)]
-        if frame.frame_type == FRAME_CAN:
-            can_id = int.from_bytes(data[3:7], "big")
-            if any(data[7:12]):
-                warnings.append("reserved bytes 7-11 are not zero: " + hexstr(data[7:12]))
-            inner = CanFrame(frame.time, can_id, data[14:22], channel=source)
-            fields_extra = {**extra, "transport": "stream", "crc_set": frame.crc_set}
-            events = self._can_any(inner, source, fields_extra)
-            for event in events:
-                event.warnings[:0] = warnings
-            return events
-        layout, fields, more = decode_feedback(data)
-        assert layout is not None
-        fields["raw"] = hexstr(data)
-        fields.update(extra)
-        fields["transport"] = "stream"
-        return [Event(layout.topic, frame.time, source, fields, warnings + more)]
 
 
 _HANDLED = frozenset({CONTROL_ID, FEEDBACK_ID, TEXT_ID, TEXT_END_ID, *STATUS_FRAMES})
