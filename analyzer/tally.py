@@ -13,7 +13,7 @@ import json
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from operator import attrgetter, methodcaller
+from operator import attrgetter
 from typing import Any
 
 from analyzer.protocol.lru import MAX_SOURCES
@@ -49,9 +49,6 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
-_FIELDS = attrgetter("fields")
-_NAME = methodcaller("get", "name", "unknown")
-_KIND = methodcaller("get", "kind", "unknown")
 
 
 @dataclass

@@ -36,7 +36,6 @@ from analyzer.protocol.uav import (
     decode_status,
 )
 
-_NO_EVENTS: tuple[Event, ...] = ()
 # The extra fields of a plain CAN frame: none. Shared and never written to.
 _NO_EXTRA: dict[str, Any] = {}
 
