@@ -29,7 +29,7 @@ examples:
   gimbal-analyzer export dbc -o gimbal.dbc
   gimbal-analyzer export wireshark -o gimbal.lua
   gimbal-analyzer export dbc                     # to standard output
-  gimbal-analyzer export dbc -o exports/gimbal.dbc --check
+  gimbal-analyzer export dbc -o gimbal.dbc --check      # is my copy stale?
 
 An existing file is replaced only with --force. --check writes nothing and
 exits 1 when FILE differs from what the table gives (a stale export).
