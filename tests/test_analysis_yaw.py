@@ -9,16 +9,12 @@ from __future__ import annotations
 
 from typing import Any
 
-import jsonschema
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from analyzer.analysis.response import ResponseAnalyzer
 from analyzer.analysis.yaw_geometry import shortest_difference
-from analyzer.protocol.schema import topic_schemas
 from analyzer.protocol.types import (
-    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_GIMBAL_ATTITUDE,
     Event,
@@ -27,23 +23,11 @@ from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.ground import Step
 from analyzer.sim.offline import run_offline, run_offline_stream
+from tests.test_analysis_response import analyse  # the findings, each checked against the schema
 
-VALIDATOR = jsonschema.Draft202012Validator(topic_schemas()[TOPIC_ANALYSIS_RESPONSE])
 HEADING = 30.0
 OFFSET_30 = "psi offset from motor yaw: 30.0 deg"
 WRONG_FRAME = Behaviour(geodetic_as_airframe=True)
-
-
-def analyse(events: list[Event]) -> list[dict[str, Any]]:
-    analyzer = ResponseAnalyzer()
-    out: list[Event] = []
-    for event in events:
-        out += analyzer.feed(event)
-    out += analyzer.close()
-    found = [e.to_dict() for e in out]
-    for finding in found:
-        VALIDATOR.validate(finding)
-    return found
 
 
 def yaw_target(
