@@ -185,7 +185,9 @@ def test_airframe_yaw_when_the_command_asks_for_it() -> None:
     )
     events += [attitude(1.0 + 0.5 * i, motor=-10.0, yaw=0.0) for i in range(1, 12)]
     f = only(analyse(events), "specified_angle", "target")
-    assert f["verdict"] == "obeyed" and "as the command asked" in f["detail"]
+    assert f["verdict"] == "obeyed" and f["target_deg"] == 350  # as commanded, not -10
+    assert f["yaw_reference"] == "airframe" and f["reference_reason"] == "command DATA4 = 1"
+    assert "from the airframe's nose (command DATA4 = 1)" in f["detail"]
 
 
 def test_no_feedback_at_all_is_unknown() -> None:

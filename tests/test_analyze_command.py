@@ -3,19 +3,21 @@
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
+import dpkt
 import jsonschema
 import pytest
 
 from analyzer.cli import main
 from analyzer.mcapio.reader import read_events
-from analyzer.protocol.types import CanFrame
+from analyzer.protocol.types import TO_IDU, CanFrame, StreamChunk
 from analyzer.samplegen import write_samples
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.ground import Step
-from analyzer.sim.offline import run_offline
+from analyzer.sim.offline import run_offline, run_offline_stream
 
 ROOT = Path(__file__).resolve().parent.parent
 SCHEMA = json.loads((ROOT / "schemas" / "analysis.response.schema.json").read_text())
@@ -138,3 +140,56 @@ def test_unreadable_input_is_a_usage_error(
 ) -> None:
     code, _, err = run(capsys, str(tmp_path / "missing.log"))
     assert code == 2 and "error" in err
+
+
+# -- a gimbal on an aircraft at heading 30, as captured on the IDU's TCP port and on the bus ----
+
+GS, IDU = ("10.0.0.5", 50312), ("10.0.0.200", 2000)
+YAW_SCRIPT = (
+    Step(1.0, "specified_angle", {"yaw_deg": 45}),
+    Step(8.0, "specified_angle", {"yaw_deg": 200}),
+    Step(15.0, "specified_angle", {"yaw_deg": 350, "coordinate_system": "airframe"}),
+)
+
+
+def tcp_pcap(path: Path, chunks: list[StreamChunk]) -> Path:
+    """The chunks as tcpdump on the ground station would save them (Ethernet, IPv4)."""
+    seq = {True: 1000, False: 9000}
+    with path.open("wb") as f:
+        writer = dpkt.pcap.Writer(f, linktype=dpkt.pcap.DLT_EN10MB)
+        for chunk in chunks:
+            up = chunk.direction == TO_IDU
+            (src, sport), (dst, dport) = (GS, IDU) if up else (IDU, GS)
+            tcp = dpkt.tcp.TCP(
+                sport=sport, dport=dport, seq=seq[up], ack=seq[not up], flags=0x18, data=chunk.data
+            )
+            seq[up] += len(chunk.data)
+            ip = dpkt.ip.IP(src=socket.inet_aton(src), dst=socket.inet_aton(dst), p=6, data=tcp)
+            frame = dpkt.ethernet.Ethernet(src=b"\x02" * 6, dst=b"\x04" * 6, data=ip)
+            writer.writepkt(bytes(frame), ts=chunk.time)
+    return path
+
+
+@pytest.mark.parametrize("link", ["tcp", "can"])
+def test_heading_30_without_ff13_gives_no_false_stopped_short(
+    link: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    config = SimConfig(heading_deg=30.0)
+    if link == "tcp":
+        chunks, _ = run_offline_stream(YAW_SCRIPT, 22.0, config, start=START)
+        path = tcp_pcap(tmp_path / "idu.pcap", chunks)
+    else:
+        frames, _ = run_offline(YAW_SCRIPT, 22.0, config, start=START)
+        path = candump(tmp_path / "bus.log", frames)
+    code, out, _ = run(capsys, str(path))
+    assert code == 0 and "stopped short" not in out and "other way" not in out
+    assert (
+        "yaw reached 45.0" in out
+        and "yaw measured from north (psi offset from motor yaw: 30.0 deg)" in out
+    )
+    _, out, _ = run(capsys, str(path), "--json")
+    targets = [f for f in findings(out) if f["check"] == "target"]
+    assert [f["target_deg"] for f in targets] == [45, 200, 350]
+    assert [f["verdict"] for f in targets] == ["obeyed"] * 3
+    assert [f["yaw_reference"] for f in targets] == ["north", "north", "airframe"]
+    assert targets[2]["reference_reason"] == "command DATA4 = 1"

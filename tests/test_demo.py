@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 from collections import Counter
 from pathlib import Path
 
@@ -83,3 +84,32 @@ def test_demo_replaces_demo_mcap_but_no_other_file_without_force(
     assert main(["demo", "--no-tui", "-o", str(precious)]) == 2
     assert "use --force" in capsys.readouterr().err
     assert precious.read_bytes() == b"keep me"
+
+
+@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+def test_demo_with_a_heading_is_judged_from_north_without_a_false_stopped_short(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.mcapio.reader import read_events
+
+    path = tmp_path / "heading.mcap"
+    args = ["demo", "--no-tui", "--clean", "--heading", "30", "--duration", "6", "-o", str(path)]
+    assert main(args) == 0
+    capsys.readouterr()
+    events = list(read_events(path))
+    offsets = {
+        round((e.fields["yaw_deg"] - e.fields["motor_yaw_deg"]) % 360, 1)
+        for e in events
+        if e.topic == "/gimbal/attitude"
+    }
+    assert offsets == {30.0}  # psi = heading + motor yaw, as on a real aircraft
+    assert main(["analyze", str(path), "--json"]) == 0
+    found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert not [f for f in found if "stopped short" in f["detail"] or "other way" in f["detail"]]
+    yaw = next(f for f in found if f["check"] == "target" and f.get("axis") == "yaw")
+    assert yaw["target_deg"] == 90 and yaw["verdict"] == "obeyed", yaw["detail"]
+    assert (yaw["yaw_reference"], yaw["reference_reason"]) == ("north", "FF13 present")
+    recorded = [e.fields for e in events if e.topic == "/analysis/response"]
+    assert {f.get("reference_reason") for f in recorded if f.get("axis") == "yaw"} == {
+        "FF13 present"
+    }

@@ -107,12 +107,15 @@ def test_report_is_self_contained(samples: dict[str, Path], tmp_path: Path) -> N
     ):
         assert f"<h2>{words}</h2>" in page
     assert "pitch -45.0 not reached within 5 s" in page  # a response row
+    assert "<th>yaw reference</th>" in page
     assert "crc_mismatch" in page and "line 630" in page  # the diagnostics
     assert len(page) < 600_000
 
 
 def test_report_loads_in_chromium_with_every_plot_drawn(tmp_path: Path) -> None:
     page = report(tmp_path, session(tmp_path / "flight.log"))
+    # The yaw target's row says which reference judged it and why.
+    assert '<td>north<br><span class="small">FF13 present</span></td>' in page.read_text()
     dom, console = load(page, tmp_path)
     assert console == []  # no error, no warning, no message at all
     assert 'data-plots-ready="yes"' in dom

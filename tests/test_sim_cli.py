@@ -61,3 +61,16 @@ def test_bad_fault_rate_is_refused_by_the_parser(capsys: pytest.CaptureFixture[s
 def test_loopback_detection() -> None:
     assert _is_loopback("127.0.0.1") and _is_loopback("::1") and _is_loopback("localhost")
     assert not _is_loopback("0.0.0.0") and not _is_loopback("192.168.42.200")
+
+
+def test_heading_and_the_wrong_yaw_frame_from_the_command_line(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = ["simulate", "--duration", "0.1", "--heading", "390", "--geodetic-as-airframe"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "aircraft heading: 30 deg (psi = heading + yaw motor angle)" in out
+    assert "behaviour: takes geodetic yaw targets from the airframe's nose" in out
+    with pytest.raises(SystemExit):
+        main(["simulate", "--heading", "north"])
+    assert "'north' is not an angle in degrees" in capsys.readouterr().err

@@ -18,6 +18,7 @@ from analyzer.protocol.types import (
     CanFrame,
     Event,
 )
+from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig, SimulatedGimbal, describe_command
 from analyzer.sim.model import HOLD_S, PITCH_MAX, PITCH_MIN, SLEW_DPS, GimbalModel
 from analyzer.sim.uav import FlightPath, UavPlayer
@@ -232,3 +233,25 @@ def test_describe_command_is_one_readable_line() -> None:
     assert describe_command(command("palette", palette="iron_red")) == (
         "palette (dual_sensor) palette=iron_red"
     )
+
+
+def test_a_heading_offsets_psi_from_the_motor_and_the_uav_keeps_its_nose_there() -> None:
+    alone = SimulatedGimbal(0.0, SimConfig(heading_deg=30.0))
+    alone.handle(Event(TOPIC_COMMAND, 0.0, "t", command("specified_angle", yaw_deg=45)), 0.0)
+    last = [e for e in drive(alone, 3.0) if e.topic == TOPIC_GIMBAL_ATTITUDE][-1].fields
+    assert last["yaw_deg"] == pytest.approx(45.0) and last["motor_yaw_deg"] == pytest.approx(15.0)
+    flying = SimulatedGimbal(0.0, SimConfig(heading_deg=30.0, uav=True))
+    events = drive(flying, 3.0)
+    headings = {e.fields["yaw_deg"] for e in events if e.topic == "/uav/attitude"}
+    assert headings == {30.0}  # FF13 says 30 all along, while the aircraft orbits
+    assert len({e.fields["latitude_deg"] for e in events if e.topic == TOPIC_UAV_GPS}) > 1
+    assert FlightPath(heading_deg=200.0).pose(5.0)[0].heading_deg == -160.0  # FF13's s16 range
+
+
+def test_a_gimbal_that_takes_geodetic_targets_from_the_nose() -> None:
+    model = GimbalModel(0.0, behaviour=Behaviour(geodetic_as_airframe=True))
+    model.uav.heading_deg = 30.0
+    model.apply(command("specified_angle", yaw_deg=45), 0.0)
+    model.step(3.0)
+    assert model.motor_yaw_deg == pytest.approx(45.0) and model.yaw_deg == pytest.approx(75.0)
+    assert "takes geodetic yaw targets from the airframe's nose" in model.behaviour.describe()

@@ -8,7 +8,6 @@ from typing import Any
 
 from analyzer.analysis.findings import (
     CHECK_LIMIT,
-    CHECK_TARGET,
     CHECK_TRACKING,
     FEEDBACK_COMMAND,
     NOT_OBEYED,
@@ -16,12 +15,11 @@ from analyzer.analysis.findings import (
     PARTIAL,
     UNKNOWN,
     Finding,
-    worst,
 )
 from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
-from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from, wrap180
-from analyzer.analysis.targets import AxisGoal, judge_axis
+from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
+from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -40,7 +38,6 @@ DEFAULT_TIME_ALLOWED_S = 5.0
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
-LOOK_DOWN_DEG = -90.0
 HISTORY = 4096  # attitude samples kept (over half an hour at 2 Hz)
 DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
@@ -48,12 +45,6 @@ MOTION = frozenset(
     {"gimbal_control", "specified_angle", "look_down", "forward", "tap_zoom", "tracking"}
 )
 
-REFERENCE_NOTES = {
-    "north": "yaw measured from north, since the flight controller's attitude is present",
-    "airframe": "yaw measured from the airframe's nose, since no flight-controller attitude "
-    "(0x0000FF13) was seen",
-    "airframe_asked": "yaw measured from the airframe's nose, as the command asked (DATA4 = 1)",
-}
 BOTH = frozenset({PITCH, YAW})
 # Which axes a motion command takes over (yaw stands for both yaw references).
 AXES = {
@@ -80,16 +71,6 @@ class Settings:
 
 
 @dataclass
-class _TargetCheck:
-    command: str
-    time: float
-    goals: tuple[AxisGoal, ...]
-    deadline: float
-    reference: str = ""
-    raw_target: float = 0.0
-
-
-@dataclass
 class _TrackingCheck:
     command: str
     time: float
@@ -112,7 +93,7 @@ class ResponseAnalyzer:
         self.health = FeedbackHealth()
         self.verdicts: Counter[str] = Counter()
         self.samples: deque[Sample] = deque(maxlen=HISTORY)
-        self._targets: list[_TargetCheck] = []
+        self._targets: list[TargetCheck] = []
         self._tracking: list[_TrackingCheck] = []
         self._burst: Burst | None = None
         self._bursts: list[_BurstCheck] = []
@@ -208,16 +189,11 @@ class ResponseAnalyzer:
         if name == "gimbal_control":
             pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
             self._burst = Burst(name, pan, tilt, [t])
-        elif name == "specified_angle":
-            check = self._angle_check(t, fields)
+        else:
+            fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
+            check = target_check(name, t, fields, t + allowed, fresh)
             if check is not None:
                 self._targets.append(check)
-        elif name == "look_down":
-            goal = AxisGoal(PITCH, LOOK_DOWN_DEG, "pitch")
-            self._targets.append(_TargetCheck(name, t, (goal,), t + allowed))
-        elif name == "forward":
-            goals = (AxisGoal(PITCH, 0.0, "pitch"), AxisGoal(MOTOR_YAW, 0.0, "yaw (airframe)"))
-            self._targets.append(_TargetCheck(name, t, goals, t + allowed))
         if name in ("tracking", "tracking_stop"):
             for old in self._tracking:
                 why = f"{name} came {t - old.time:.1f} s later" if t < old.deadline else ""
@@ -225,30 +201,12 @@ class ResponseAnalyzer:
             self._tracking = [_TrackingCheck(name, t, name == "tracking", t + allowed)]
         return out
 
-    def _angle_check(self, t: float, fields: dict[str, Any]) -> _TargetCheck | None:
-        allowed = self.settings.time_allowed_s
-        axis = fields.get("axis")
-        if axis == "pitch" and isinstance(fields.get("pitch_deg"), (int, float)):
-            target = float(fields["pitch_deg"])
-            goal = AxisGoal(PITCH, target, "pitch")
-            return _TargetCheck("specified_angle", t, (goal,), t + allowed)
-        if axis != "yaw" or not isinstance(fields.get("yaw_deg"), (int, float)):
-            return None  # zoom: the feedback does not report it
-        target = float(fields["yaw_deg"])
-        if fields.get("coordinate_system") == "airframe":
-            reference, goal = "airframe_asked", AxisGoal(MOTOR_YAW, wrap180(target), "yaw")
-        elif self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S:
-            reference, goal = "north", AxisGoal(YAW, target % 360.0, "yaw")
-        else:
-            reference, goal = "airframe", AxisGoal(MOTOR_YAW, wrap180(target), "yaw")
-        return _TargetCheck("specified_angle", t, (goal,), t + allowed, reference, target)
-
     def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A new motion command: earlier targets on its axes, and bursts, end here."""
         out: list[Finding] = []
-        keep: list[_TargetCheck] = []
+        keep: list[TargetCheck] = []
         for check in self._targets:
-            if {PITCH if g.axis == PITCH else YAW for g in check.goals} & axes:
+            if check.axes() & axes:
                 why = f"{name} came {t - check.time:.1f} s later" if t < check.deadline else ""
                 out.append(self._judge_target(check, why, t))
             else:
@@ -273,7 +231,7 @@ class ResponseAnalyzer:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
         late = GAP_THRESHOLD_S  # without feedback, wait this long past a deadline
-        keep: list[_TargetCheck] = []
+        keep: list[TargetCheck] = []
         for check in self._targets:
             if t > check.deadline + (0.0 if sample is not None else late):
                 out.append(self._judge_target(check, "", check.deadline))
@@ -313,48 +271,17 @@ class ResponseAnalyzer:
 
     # -- judgements -----------------------------------------------------------------------
 
-    def _judge_target(self, check: _TargetCheck, cut_short: str, end: float | None) -> Finding:
+    def _judge_target(self, check: TargetCheck, cut_short: str, end: float | None) -> Finding:
         stop = check.deadline if end is None else min(end, check.deadline)
-        samples = self._between(check.time, stop)
-        before = self._before(check.time)
-        results = [
-            judge_axis(
-                goal,
-                check.time,
-                before,
-                samples,
-                self.settings.tolerance_deg,
-                self.settings.time_allowed_s,
-                cut_short=cut_short,
-            )
-            for goal in check.goals
-        ]
-        verdict = worst(*(r.verdict for r in results))
-        detail = "; ".join(dict.fromkeys(r.text for r in results))
-        if check.reference:
-            detail += f"; {REFERENCE_NOTES[check.reference]}"
-        extra: dict[str, Any] = {
-            "axis": "+".join(g.axis for g in check.goals),
-            "target_deg": check.raw_target if check.reference else check.goals[0].target,
-            "yaw_reference": ("north" if check.reference == "north" else "airframe")
-            if check.reference
-            else None,
-        }
-        errors = [r.error_deg for r in results if r.error_deg is not None]
-        if errors:
-            extra["error_deg"] = max(errors, key=abs)
-        responses = [r.response_s for r in results]
-        if responses and all(r is not None for r in responses):
-            extra["response_s"] = max(r for r in responses if r is not None)
-        overshoots = [r.overshoot_deg for r in results if r.overshoot_deg is not None]
-        if overshoots:
-            extra["overshoot_deg"] = max(overshoots)
-        if len(results) == 1:
-            extra["start_deg"] = results[0].start_deg
-            extra["final_deg"] = results[0].final_deg
-        if samples:
-            extra["observed_at"] = samples[-1].time
-        return Finding(check.command, check.time, CHECK_TARGET, verdict, detail, extra)
+        settings = self.settings
+        return judge_target(
+            check,
+            self._before(check.time),
+            self._between(check.time, stop),
+            settings.tolerance_deg,
+            settings.time_allowed_s,
+            cut_short,
+        )
 
     def _judge_tracking(
         self, check: _TrackingCheck, sample: Sample | None, cut_short: str

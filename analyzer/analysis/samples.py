@@ -1,4 +1,4 @@
-"""Attitude feedback as samples, and the angle arithmetic the checks share (yaw modulo 360)."""
+"""Attitude feedback as samples: pitch, yaw from north, yaw motor, and their limits."""
 
 from __future__ import annotations
 
@@ -10,22 +10,11 @@ from analyzer.protocol.feedback import MOTOR_YAW_LIMIT, WIDE_MOTOR_YAW_TYPES
 PITCH = "pitch"
 YAW = "yaw"  # geomagnetic yaw psi: referenced to north
 MOTOR_YAW = "motor_yaw"  # yaw motor angle: referenced to the airframe's nose
-CIRCULAR = frozenset({YAW})
 
 PITCH_LIMITS = (-110.0, 60.0)  # chapter 2.2, theta range
 MOTOR_YAW_LIMITS = MOTOR_YAW_LIMIT / 100  # +-170 deg; +-325 on the 3.5x zoom models
 WIDE_MOTOR_YAW = 325.0
 AT_LIMIT_DEG = 0.5  # within this of a limit counts as "at the limit"
-
-
-def wrap180(angle: float) -> float:
-    """An angle in degrees folded into [-180, 180)."""
-    return (angle + 180.0) % 360.0 - 180.0
-
-
-def difference(axis: str, a: float, b: float) -> float:
-    """a - b, the short way round for yaw."""
-    return wrap180(a - b) if axis in CIRCULAR else a - b
 
 
 @dataclass(frozen=True, slots=True)

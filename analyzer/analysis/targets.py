@@ -6,7 +6,15 @@ import math
 from dataclasses import dataclass
 
 from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN
-from analyzer.analysis.samples import Sample, difference
+from analyzer.analysis.samples import MOTOR_YAW, PITCH, PITCH_LIMITS, Sample
+from analyzer.analysis.yaw_geometry import (
+    angle_error,
+    motor_limit,
+    motor_target,
+    reachable,
+    shortest_difference,
+    travel,
+)
 
 STILL_DEG = 0.2  # two samples closer than this: the gimbal has stopped
 SETTLED_S = 1.0  # still this long before another command: its answer is final
@@ -19,6 +27,14 @@ class AxisGoal:
     axis: str
     target: float
     label: str  # how the detail names it: "pitch", "yaw", "yaw (airframe)"
+
+    def error(self, sample: Sample) -> float:
+        """Target minus the angle (the short way round for yaw)."""
+        return angle_error(self.axis, self.target, sample)
+
+    def travel(self, sample: Sample) -> float:
+        """The signed turn still needed, along the way the axis can turn."""
+        return travel(self.axis, self.target, sample)
 
 
 @dataclass
@@ -54,6 +70,8 @@ def judge_axis(
 
     ``before`` is the last sample before the command. ``cut_short`` names what ended
     the time allowed early (another command, the end of the input), if anything.
+    Errors are the shortest way round for yaw; directions (moved the other way, gone
+    past the target) follow the way the axis can turn.
     """
     axis, target = goal.axis, goal.target
     if not samples:
@@ -61,21 +79,28 @@ def judge_axis(
         return AxisResult(goal, UNKNOWN, f"no attitude feedback came {_after(why)}")
     start = before if before is not None else samples[0]
     start_value = start.value(axis)
-    first_error = difference(axis, target, start_value)
-    errors = [difference(axis, target, s.value(axis)) for s in samples]
+    first_error = goal.error(start)
+    first_travel = goal.travel(start)
+    errors = [goal.error(s) for s in samples]
+    travels = [goal.travel(s) for s in samples]
     last = samples[-1]
     final_error = errors[-1]
     result = AxisResult(
         goal, OBEYED, "", error_deg=final_error, start_deg=start_value, final_deg=last.value(axis)
     )
-    sign = math.copysign(1.0, first_error) if abs(first_error) > tolerance else 0.0
+    sign = math.copysign(1.0, first_travel) if abs(first_error) > tolerance else 0.0
     # Reached: within tolerance, or gone past the target (an overshoot between two samples).
-    reached = next((i for i, e in enumerate(errors) if abs(e) <= tolerance or sign * e < 0), None)
-    limits = last.limits(axis)
-    beyond = limits is not None and not limits[0] <= goal.target <= limits[1]
+    reached = next(
+        (
+            i
+            for i, (e, w) in enumerate(zip(errors, travels, strict=True))
+            if abs(e) <= tolerance or sign * w < 0
+        ),
+        None,
+    )
     if reached is not None:
         result.response_s = samples[reached].time - command_time
-        past = [-sign * e for e in errors[reached:]] if sign else [0.0]
+        past = [-sign * w for w in travels[reached:]] if sign else [0.0]
         result.overshoot_deg = max(0.0, *past)
         text = f"{goal.label} reached {_fmt(target)} in {result.response_s:.1f} s"
         if result.overshoot_deg > tolerance:
@@ -85,9 +110,9 @@ def judge_axis(
             text += f" but then drifted to {_fmt(last.value(axis))} ({_fmt(final_error)} off)"
         result.text = text
         return result
-    moved = difference(axis, last.value(axis), start_value)
+    moved = first_travel - travels[-1]
     where = f"{_fmt(last.value(axis))}, {_fmt(abs(final_error))} deg from the target"
-    if cut_short and not _settled(axis, samples):
+    if cut_short and not _settled(travels, samples):
         result.verdict = UNKNOWN
         result.text = (
             f"{goal.label} not at {_fmt(target)} yet when {cut_short} "
@@ -96,40 +121,75 @@ def judge_axis(
         return result
     within = f"before {cut_short}" if cut_short else f"within {allowed_s:g} s"
     head = f"{goal.label} {_fmt(target)} not reached {within}: "
+    if axis != PITCH and not reachable(axis, target, last):
+        nearest = _nearest_limit(goal, last, tolerance)
+        if nearest is not None:
+            result.verdict = PARTIAL
+            result.limit_deg = nearest
+            result.text = (
+                f"{goal.label} {_fmt(target)} is out of the yaw motor's reach: "
+                f"{_needs(goal, last)}; it went to its limit {_fmt(nearest)}, "
+                f"{_fmt(abs(final_error))} deg from the target, as near as it can get"
+            )
+            return result
     if abs(moved) < tolerance:
         result.verdict = NOT_OBEYED
         text = f"never moved (stayed at {_fmt(start_value)})"
-    elif abs(first_error) > tolerance and math.copysign(1.0, moved) != math.copysign(
-        1.0, first_error
-    ):
+    elif abs(first_error) > tolerance and math.copysign(1.0, moved) != sign:
         result.verdict = NOT_OBEYED
         text = f"moved the other way, to {where}"
     else:
         result.verdict = PARTIAL
-        step = 0.0
-        if len(samples) > 1:
-            step = difference(axis, last.value(axis), samples[-2].value(axis))
+        step = travels[-2] - travels[-1] if len(samples) > 1 else 0.0
         if abs(step) < STILL_DEG:
             text = f"stopped short at {where}"
         else:
             text = f"still on its way, at {where}"
-    limit = last.at_limit(axis)
-    if limit is not None:
-        result.limit_deg = limit
-        text += f"; it is at its {axis.replace('_', ' ')} limit {_fmt(limit)}"
-    elif beyond and limits is not None:
-        text += f"; the target is outside the {axis} range {_fmt(limits[0])}..{_fmt(limits[1])}"
-    result.text = head + text
+    result.text = head + text + _limit_note(goal, last, result)
     return result
 
 
-def _settled(axis: str, samples: list[Sample]) -> bool:
+def _limit_note(goal: AxisGoal, last: Sample, result: AxisResult) -> str:
+    """'; it is at its yaw motor limit 170.0' or why the target cannot be reached, if so."""
+    axis = goal.axis
+    physical = PITCH if axis == PITCH else MOTOR_YAW
+    limit = last.at_limit(physical)
+    if limit is not None:
+        result.limit_deg = limit
+        return f"; it is at its {physical.replace('_', ' ')} limit {_fmt(limit)}"
+    if axis == PITCH:
+        lo, hi = PITCH_LIMITS
+        if not lo <= goal.target <= hi:
+            return f"; the target is outside the pitch range {_fmt(lo)}..{_fmt(hi)}"
+        return ""
+    if not reachable(axis, goal.target, last):
+        return f"; the target is out of the yaw motor's reach: {_needs(goal, last)}"
+    return ""
+
+
+def _needs(goal: AxisGoal, last: Sample) -> str:
+    limit = motor_limit(last)
+    angle = motor_target(goal.axis, goal.target, last)
+    return f"it needs the motor at {_fmt(angle)} from the nose, beyond its range +-{limit:g}"
+
+
+def _nearest_limit(goal: AxisGoal, last: Sample, tolerance: float) -> float | None:
+    """The motor limit the gimbal sits at, when no angle it can reach points nearer."""
+    limit = last.at_limit(MOTOR_YAW)
+    if limit is None:
+        return None
+    wanted = motor_target(goal.axis, goal.target, last)
+    best = min(abs(shortest_difference(wanted, end)) for end in (-limit, limit))
+    return limit if abs(shortest_difference(wanted, limit)) <= best + tolerance else None
+
+
+def _settled(travels: list[float], samples: list[Sample]) -> bool:
     """The last samples span SETTLED_S or more without the angle changing."""
-    last = samples[-1]
-    for s in reversed(samples):
-        if abs(difference(axis, s.value(axis), last.value(axis))) >= STILL_DEG:
+    last, last_time = travels[-1], samples[-1].time
+    for w, s in zip(reversed(travels), reversed(samples), strict=True):
+        if abs(w - last) >= STILL_DEG:
             return False
-        if last.time - s.time >= SETTLED_S:
+        if last_time - s.time >= SETTLED_S:
             return True
     return False
 

@@ -24,9 +24,14 @@ feedback does not allow a judgement.
 
   specified_angle, look_down, forward   time to reach the target within the
         tolerance, overshoot, final error, or what happened instead (never moved,
-        moved the other way, stopped short, still on its way). Yaw is compared
-        modulo 360, from north when the flight controller's attitude (0x0000FF13)
-        is present, else from the airframe's nose (the document's note on 0x08).
+        moved the other way, stopped short, still on its way). Yaw errors are the
+        shortest way round (-180..180]. A yaw target is judged in the frame the
+        command named: on the motor yaw (from the nose) when DATA4 = 1; else on
+        psi (from north) when the flight controller's attitude (0x0000FF13) is
+        present or psi is offset from the motor yaw (the gimbal knows its
+        heading); with neither, on the motor yaw in a CAN capture and on psi in
+        a TCP/UART one (which cannot show FF13). Each finding says which
+        (yaw_reference) and why (reference_reason).
   gimbal_control   measured pan/tilt rate against the commanded speed (ratio,
         lag), still moving after the commands stopped, and commands repeated more
         slowly than the 50 ms the document recommends.

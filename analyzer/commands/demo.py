@@ -12,6 +12,7 @@ from typing import IO, Any
 from analyzer.commands.simulate import (
     add_behaviour_arguments,
     add_fault_arguments,
+    add_heading_argument,
     behaviour,
     fault_config,
     seconds_value,
@@ -37,8 +38,11 @@ UI on a terminal (q quits), plain decoded lines otherwise or with --no-tui
 
 The simulator injects a few faults by default (dropped, corrupted, repeated and
 late feedback segments) so the diagnostics have something to show; --clean
-turns them off. --sluggish, --fall-short, --ignore and --drift make a gimbal
-that does not always obey, for `gimbal-analyzer analyze` and `report` to find. Afterwards:
+turns them off. --sluggish, --fall-short, --ignore, --drift and
+--geodetic-as-airframe make a gimbal that does not always obey, for
+`gimbal-analyzer analyze` and `report` to find. --heading 30 keeps the
+aircraft's nose at 30 deg while it flies, so the gimbal's yaw from north
+(psi) is 30 deg more than its yaw motor angle. Afterwards:
 
   gimbal-analyzer info demo.mcap       what was recorded
   foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
@@ -80,6 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--clean", action="store_true", help="inject no faults")
     add_compression_argument(parser)
+    add_heading_argument(parser)
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
@@ -181,7 +186,13 @@ def run(args: argparse.Namespace) -> int:
     path = str(target)
     spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
     faults = FaultConfig() if args.clean else fault_config(args)
-    config = SimConfig(ranging=True, uav=True, faults=faults, behaviour=behaviour(args))
+    config = SimConfig(
+        ranging=True,
+        uav=True,
+        faults=faults,
+        behaviour=behaviour(args),
+        heading_deg=args.heading,
+    )
 
     source = open_source(str(spec))
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import ipaddress
+import math
 import sys
 import time
 
@@ -23,6 +24,7 @@ attitude feedback every 500 ms as four 8-byte segments with a correct CRC.
   gimbal-analyzer simulate --on tcp:2000 --drop 0.05 --corrupt 0.02 --seed 1
   gimbal-analyzer simulate --stop-feedback-at 10 --stop-feedback-for 3
   gimbal-analyzer simulate --sluggish 0.4 --ignore tracking --drift 2
+  gimbal-analyzer simulate --heading 30 --geodetic-as-airframe
 
 Then, in another terminal, e.g.:
   gimbal-analyzer monitor --source tcp:127.0.0.1:2000
@@ -87,6 +89,29 @@ def add_fault_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--seed", type=int, help="seed of the fault generator (repeatable runs)")
 
 
+def heading_value(text: str) -> float:
+    """``30`` -> 30.0 (degrees clockwise from north, taken modulo 360)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an angle in degrees") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not an angle in degrees")
+    return value % 360.0
+
+
+def add_heading_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--heading",
+        type=heading_value,
+        metavar="DEG",
+        help="the aircraft's heading, degrees from north: the gimbal's yaw from north (psi) "
+        "is then the heading plus its yaw motor angle, as on a real aircraft; with --uav "
+        "the aircraft keeps its nose that way while it flies (default: 0 alone, ahead "
+        "along the orbit with --uav)",
+    )
+
+
 def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("disobedience (what `gimbal-analyzer analyze` finds)")
     group.add_argument(
@@ -115,6 +140,12 @@ def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="S",
         help="keep turning S seconds after gimbal_control commands stop",
     )
+    group.add_argument(
+        "--geodetic-as-airframe",
+        action="store_true",
+        help="take specified_angle yaw targets of the geodetic frame (DATA4 not 1) from the "
+        "airframe's nose instead of from north",
+    )
 
 
 def behaviour(args: argparse.Namespace) -> Behaviour:
@@ -130,6 +161,7 @@ def behaviour(args: argparse.Namespace) -> Behaviour:
         reach=1.0 if args.fall_short is None else args.fall_short,
         ignore=frozenset(args.ignore),
         drift_s=args.drift,
+        geodetic_as_airframe=args.geodetic_as_airframe,
     )
 
 
@@ -158,6 +190,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quiet", action="store_true", help="print only the start and the end, not each command"
     )
+    add_heading_argument(parser)
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
 
@@ -207,6 +240,7 @@ def run(args: argparse.Namespace) -> int:
         uav=args.uav,
         faults=fault_config(args),
         behaviour=behaviour(args),
+        heading_deg=args.heading,
     )
     gimbal = SimulatedGimbal(start, config)
     kind = GIMBAL_TYPES[args.gimbal_type]
@@ -238,6 +272,8 @@ def run(args: argparse.Namespace) -> int:
             else "off (--uav); UAV frames received are used for heading and ranging"
         )
     )
+    if args.heading is not None:
+        say(f"  aircraft heading: {args.heading:g} deg (psi = heading + yaw motor angle)")
     say(f"  faults: {config.faults.describe()}")
     say(f"  behaviour: {config.behaviour.describe()}")
     say(f"  stops after {args.duration:g} s" if args.duration is not None else "  Ctrl-C to stop")

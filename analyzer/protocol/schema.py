@@ -8,6 +8,7 @@ from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
 from analyzer.protocol.ids import COMPONENT_NAMES
+from analyzer.protocol.response_fields import CHECKS, FIELD_ENUMS, OPTIONAL_FIELDS, VERDICTS
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
@@ -124,8 +125,6 @@ def command_schema() -> dict[str, Any]:
 
 def response_schema() -> dict[str, Any]:
     """Findings of the response analysis: did the gimbal do what a command asked?"""
-    from analyzer.analysis.findings import CHECKS, OPTIONAL_FIELDS, VERDICTS
-
     schema = _envelope(
         TOPIC_ANALYSIS_RESPONSE,
         "response finding",
@@ -150,6 +149,8 @@ def response_schema() -> dict[str, Any]:
     )
     for name, (kind, description) in OPTIONAL_FIELDS.items():
         props[name] = {"type": kind, "description": description}
+        if name in FIELD_ENUMS:
+            props[name]["enum"] = list(FIELD_ENUMS[name])
     schema["required"] += ["command", "check", "verdict", "detail"]
     return schema
 

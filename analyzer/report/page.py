@@ -148,12 +148,23 @@ def _responses(data: ReportData) -> str:
                 _verdict(str(f["verdict"])),
                 _e(f["detail"]),
                 _e(f"{f['target_deg']:g}") if "target_deg" in f else "",
+                _yaw_reference(f),
                 _e(f"{f['response_s']:.2f}") if "response_s" in f else "",
                 _e(f"{f['error_deg']:.2f}") if "error_deg" in f else "",
             ]
         )
-    head = ["time", "command", "check", "verdict", "detail", "target °", "response s", "error °"]
-    return _rows(rows, head, frozenset({5, 6, 7}))
+    head = ["time", "command", "check", "verdict", "detail", "target °", "yaw reference"]
+    head += ["response s", "error °"]
+    return _rows(rows, head, frozenset({5, 7, 8}))
+
+
+def _yaw_reference(finding: dict[str, Any]) -> str:
+    """'north' or 'airframe' over the reason, for a yaw target; empty otherwise."""
+    if "yaw_reference" not in finding:
+        return ""
+    reason = finding.get("reference_reason", "")
+    small = f'<br><span class="small">{_e(reason)}</span>' if reason else ""
+    return _e(finding["yaw_reference"]) + small
 
 
 def _diagnostics(data: ReportData) -> str:

@@ -1,4 +1,4 @@
-"""Faults of the gimbal's obedience: sluggish, falls short of targets, ignores commands, drifts."""
+"""How the simulated gimbal disobeys: sluggish, short, ignoring, drifting, wrong yaw frame."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ class Behaviour:
     reach: float = 1.0  # fraction of the way to a target it goes before stopping (short < 1)
     ignore: frozenset[str] = frozenset()  # command names it does not act on
     drift_s: float = 0.0  # keeps turning this much longer after gimbal_control stops
+    geodetic_as_airframe: bool = False  # takes geodetic yaw targets from the airframe's nose
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.speed <= 10.0:
@@ -36,4 +37,6 @@ class Behaviour:
             parts.append("ignores " + ", ".join(sorted(self.ignore)))
         if self.drift_s:
             parts.append(f"keeps turning {self.drift_s:g} s after gimbal_control stops")
+        if self.geodetic_as_airframe:
+            parts.append("takes geodetic yaw targets from the airframe's nose")
         return "; ".join(parts) or "obeys"

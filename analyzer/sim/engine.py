@@ -20,7 +20,7 @@ from analyzer.protocol.types import (
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.faults import FaultConfig, FaultInjector
 from analyzer.sim.model import GimbalModel
-from analyzer.sim.uav import UavPlayer
+from analyzer.sim.uav import FlightPath, UavPlayer
 
 FEEDBACK_PERIOD = 0.5  # chapter 2.2: one full feedback message every 500 ms
 RANGING_PERIOD = 2.0  # a ranging message takes the place of an attitude one this often
@@ -40,6 +40,7 @@ class SimConfig:
     uav: bool = False
     faults: FaultConfig = field(default_factory=FaultConfig)
     behaviour: Behaviour = field(default_factory=Behaviour)
+    heading_deg: float | None = None  # the aircraft's heading (psi = heading + motor yaw)
 
 
 class SimulatedGimbal:
@@ -57,7 +58,10 @@ class SimulatedGimbal:
             start, gimbal_type=self.config.gimbal_type, behaviour=self.config.behaviour
         )
         self.faults = FaultInjector(self.config.faults)
-        self.uav = UavPlayer(start) if self.config.uav else None
+        heading = self.config.heading_deg
+        if heading is not None:
+            self.model.uav.heading_deg = heading
+        self.uav = UavPlayer(start, FlightPath(heading_deg=heading)) if self.config.uav else None
         self.sent: Counter[str] = Counter()
         self._queue: list[tuple[float, int, int, bytes]] = []
         self._seq = 0

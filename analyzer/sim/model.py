@@ -231,7 +231,8 @@ class GimbalModel:
         axis = f.get("axis")
         if axis == "yaw" and "yaw_deg" in f:
             yaw = float(f["yaw_deg"])
-            if f.get("coordinate_system") == "airframe":
+            airframe = f.get("coordinate_system") == "airframe"
+            if airframe or self.behaviour.geodetic_as_airframe:
                 self._turn_to(motor_yaw=wrap180(yaw))
             else:  # geodetic: hold that heading however the aircraft turns
                 self._turn_to(motor_yaw=wrap180(yaw - self.uav.heading_deg))

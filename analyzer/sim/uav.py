@@ -35,6 +35,7 @@ class FlightPath:
     speed_mps: float = 12.0
     cruise_altitude_m: float = 120.0
     climb_mps: float = 6.0
+    heading_deg: float | None = None  # the nose held this way (a multicopter can); None: ahead
 
     def pose(self, t: float) -> tuple[UavPose, float, float]:
         """Position at ``t`` seconds after takeoff -> (pose, pitch_deg, roll_deg)."""
@@ -45,6 +46,8 @@ class FlightPath:
         altitude = min(self.cruise_altitude_m, self.climb_mps * t)
         climbing = altitude < self.cruise_altitude_m
         heading = wrap180(math.degrees(angle) + 90.0)  # tangent of the orbit
+        if self.heading_deg is not None:
+            heading = wrap180(self.heading_deg)
         pitch = math.degrees(math.atan2(self.climb_mps, self.speed_mps)) if climbing else 0.0
         roll = math.degrees(math.atan(self.speed_mps**2 / (GRAVITY * self.radius_m)))
         return UavPose(lat, lon, altitude, heading), pitch, roll

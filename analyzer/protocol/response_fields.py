@@ -1,0 +1,80 @@
+"""The /analysis/response event contract: verdicts, checks and the fields a finding may carry."""
+
+from __future__ import annotations
+
+OBEYED = "obeyed"
+PARTIAL = "partial"
+NOT_OBEYED = "not_obeyed"
+UNKNOWN = "unknown"
+VERDICTS = (OBEYED, PARTIAL, NOT_OBEYED, UNKNOWN)
+
+# What was checked (the ``check`` field).
+CHECK_TARGET = "target"  # specified_angle / look_down / forward: reach an angle
+CHECK_RATE = "rate"  # gimbal_control: measured against commanded speed
+CHECK_STOP = "stop"  # gimbal_control: stopped when the commands stopped
+CHECK_REPEAT = "repeat"  # gimbal_control: repeated often enough to keep moving
+CHECK_TRACKING = "tracking"  # tracking / tracking_stop against the tracking flag
+CHECK_LIMIT = "limit"  # a mechanical limit reached
+CHECK_FEEDBACK = "feedback"  # feedback health over a minute
+CHECK_FEEDBACK_GAP = "feedback_gap"  # a silence in the feedback
+CHECKS = (
+    CHECK_TARGET,
+    CHECK_RATE,
+    CHECK_STOP,
+    CHECK_REPEAT,
+    CHECK_TRACKING,
+    CHECK_LIMIT,
+    CHECK_FEEDBACK,
+    CHECK_FEEDBACK_GAP,
+)
+
+# The two references a yaw target is judged in (the ``yaw_reference`` field).
+REFERENCE_NORTH = "north"  # the gimbal's geomagnetic yaw psi
+REFERENCE_AIRFRAME = "airframe"  # the yaw motor angle Motor_psi, from the airframe's nose
+YAW_REFERENCES = (REFERENCE_NORTH, REFERENCE_AIRFRAME)
+
+# name -> (JSON type, description) of the optional fields a finding may carry.
+OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
+    "axis": ("string", "pitch, yaw (north-referenced), motor_yaw (airframe) or several, '+'"),
+    "target_deg": ("number", "target angle of a target-type command, as the command gave it"),
+    "response_s": ("number", "seconds from the command to the first feedback within tolerance"),
+    "error_deg": (
+        "number",
+        "final error: target minus the last angle in the time allowed (yaw: the shortest way "
+        "round, -180..180)",
+    ),
+    "overshoot_deg": ("number", "how far the angle went past the target"),
+    "start_deg": ("number", "angle in the last feedback before the command"),
+    "final_deg": ("number", "angle in the last feedback judged"),
+    "yaw_reference": (
+        "string",
+        "the reference a yaw target was judged in: north (the feedback's geomagnetic yaw psi) "
+        "or airframe (the yaw motor angle, from the nose)",
+    ),
+    "reference_reason": (
+        "string",
+        "why that reference: 'command DATA4 = 1', 'FF13 present', 'psi offset from motor "
+        "yaw: 30.0 deg', 'capture shows no heading source; psi used', 'no FF13 on the bus; "
+        "psi follows motor yaw'",
+    ),
+    "observed_at": ("number", "time (Unix seconds) of the feedback that decided the finding"),
+    "commanded_pan_dps": ("number", "commanded pan speed, deg/s"),
+    "commanded_tilt_dps": ("number", "commanded tilt speed, deg/s"),
+    "measured_pan_dps": ("number", "pan rate measured from the motor yaw feedback, deg/s"),
+    "measured_tilt_dps": ("number", "tilt rate measured from the pitch feedback, deg/s"),
+    "rate_ratio": ("number", "measured over commanded rate, the axis furthest from 1"),
+    "lag_s": ("number", "estimated delay before the gimbal started moving"),
+    "duration_s": ("number", "how long the commands (or the silence, the drift) lasted"),
+    "command_count": ("integer", "commands in the burst"),
+    "interval_s": ("number", "mean time between repeated commands"),
+    "max_interval_s": ("number", "longest time between repeated commands"),
+    "moved_deg": ("number", "movement seen after the commands stopped"),
+    "limit_deg": ("number", "the mechanical limit reached"),
+    "gap_s": ("number", "length of a silence in the feedback"),
+    "feedback_hz": ("number", "feedback messages per second in the window"),
+    "gaps": ("integer", "silences over 1 s in the window"),
+    "crc_errors": ("integer", "CRC errors and incomplete feedback messages in the window"),
+    "window_s": ("number", "length of the health window"),
+}
+# Optional fields whose value is one of a few words.
+FIELD_ENUMS: dict[str, tuple[str, ...]] = {"yaw_reference": YAW_REFERENCES}
