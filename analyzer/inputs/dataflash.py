@@ -1,0 +1,319 @@
+"""ArduPilot DataFlash logs (.bin): the CAN frames of CANF / CAFD records, on UTC from GPS time.
+
+ArduPilot logs every CAN frame of a bus whose ``CAN_Px_OPTIONS`` has LogAllFrames as a
+``CANF`` record (``CAFD`` for CAN FD); a Lua script logging frames writes its own
+``CANF`` with other columns. Records are found by the column names their FMT record
+gives (message ids differ from build to build), walked directly with one precompiled
+struct per layout. ``TimeUS`` counts from boot: the first GPS record with a week
+number puts it on UTC (leap seconds included); without one the times stay since boot.
+Damage (bytes that are no record, a record cut short) is reported with its byte
+offset and reading resynchronises at the next ``A3 95`` that starts a known record.
+"""
+
+from __future__ import annotations
+
+import mmap
+import struct
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.dataflash_format import FMT_LENGTH, FMT_TYPE, HEAD, Layout, parse_fmt
+from analyzer.inputs.dataflash_gps_time import gps_to_utc
+from analyzer.protocol.types import BAD_FRAME, CanFrame, Event, diagnostic
+
+# AP_HAL::CANFrame flags in the ID word (libraries/AP_HAL/CANIface.h).
+FLAG_EFF, FLAG_RTR, FLAG_ERR = 1 << 31, 1 << 30, 1 << 29
+MASK_EXT = 0x1FFFFFFF
+FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)  # CAN FD DLC -> bytes
+PADDING = frozenset({0x00, 0xFF})  # what the unwritten rest of a block log holds
+PROGRESS_EVERY = 0x3FFF  # records between position updates
+SINCE_BOOT = "time since the autopilot booted (the log holds no GPS time)"
+GPS_UTC = "UTC from the log's GPS time (GPS week and milliseconds, leap seconds applied)"
+
+
+@dataclass(slots=True)
+class CanColumns:
+    """Where a CAN record layout keeps what a frame needs."""
+
+    fields: struct.Struct  # TimeUS, [Bus,] Id, DLC, read in one call
+    has_bus: bool
+    data_at: int  # offset of the first data byte in the record
+    fd: bool  # CAFD: DLC is a CAN FD length code
+
+
+@dataclass
+class DataFlashStats:
+    records: int = 0
+    can_records: int = 0
+    fd_records: int = 0
+    formats: int = 0
+    damaged_spots: int = 0
+    bytes_skipped: int = 0
+
+
+def can_columns(layout: Layout) -> CanColumns | None:
+    """The CAN columns of a CANF / CAFD layout (ArduPilot's or a Lua script's); else None."""
+    if layout.body is None or layout.name not in ("CANF", "CAFD"):
+        return None
+    fd = layout.name == "CAFD"
+    first = "D0" if fd else "B0"
+    wanted = ["TimeUS", "Bus", "Id", "DLC"]
+    if layout.index("Bus") is None:
+        wanted.remove("Bus")
+    indexes = [layout.index(column) for column in [*wanted, first]]
+    if any(i is None for i in indexes):
+        return None
+    chars = _codes(layout)
+    fmt, at = "<", 3
+    for i in indexes[:-1]:
+        assert i is not None
+        fmt += "x" * (layout.offsets[i] - at) + chars[i]
+        at = layout.offsets[i] + struct.calcsize("<" + chars[i])
+    data_index = indexes[-1]
+    assert data_index is not None
+    width = 64 if fd else 8
+    if layout.offsets[data_index] + width > layout.length:
+        return None
+    return CanColumns(struct.Struct(fmt), "Bus" in wanted, layout.offsets[data_index], fd)
+
+
+def _codes(layout: Layout) -> list[str]:
+    """The struct code of each column of a layout."""
+    assert layout.body is not None
+    out: list[str] = []
+    fmt = layout.body.format[1:]
+    i = 0
+    while i < len(fmt):
+        j = i
+        while fmt[j].isdigit():
+            j += 1
+        out.append(fmt[i : j + 1])
+        i = j + 1
+    return out
+
+
+class DataFlashReader(InputReader):
+    """CAN frames of an ArduPilot DataFlash log; channel ``bus<N>`` from the record's Bus
+    (``scripting`` for a Lua script's CANF, which has none)."""
+
+    format_name = "dataflash"
+
+    def __init__(self, path: str) -> None:
+        super().__init__(path)
+        handle = self._open_binary()
+        size = self.size_bytes or 0
+        self._data: bytes | mmap.mmap = (
+            mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) if size else b""
+        )
+        if isinstance(self._data, mmap.mmap):
+            self._closers.append(self._data)
+        self.counts = DataFlashStats()
+        self.time_offset = self._find_time_base()
+        self.time_base = GPS_UTC if self.time_offset is not None else SINCE_BOOT
+        if self.time_offset is None:
+            self.notes.append(
+                f"{self.source} holds no GPS record with a GPS week: frame times are "
+                "seconds since the autopilot booted, not dates"
+            )
+
+    def __iter__(self) -> Iterator[InputItem]:
+        data = self._data
+        size = len(data)
+        counts = self.counts
+        base = self.time_offset or 0.0
+        lengths: dict[int, int] = {FMT_TYPE: FMT_LENGTH}
+        cans: dict[int, CanColumns] = {}
+        pos = records = 0
+        while pos < size:
+            kind = data[pos + 2] if pos + 2 < size else -1
+            length = lengths.get(kind, 0) if data[pos : pos + 2] == HEAD else 0
+            end = pos + length
+            if not length or end > size:
+                found = self._resync(pos, lengths)
+                yield from self._damage(pos, found, size, kind, length, base, records)
+                if found is None:
+                    break
+                pos = found
+                continue
+            records += 1
+            if not records & PROGRESS_EVERY:
+                self.position_bytes = pos
+            columns = cans.get(kind)
+            if columns is not None:
+                if end < size and data[end : end + 2] != HEAD:
+                    found = self._resync(pos + 3, lengths)
+                    if found is not None and found < end:  # damage inside this record
+                        yield from self._damage(pos, found, size, kind, length, base, records)
+                        pos = found
+                        continue
+                yield from self._frame(columns, pos, base)
+            elif kind == FMT_TYPE:
+                layout = parse_fmt(data, pos)
+                if layout is not None:
+                    counts.formats += 1
+                    lengths[layout.type] = layout.length
+                    column = can_columns(layout)
+                    if column is not None:
+                        cans[layout.type] = column
+                    else:
+                        cans.pop(layout.type, None)
+            pos = end
+        counts.records = records
+        self.position_bytes = self.size_bytes or 0
+
+    def _frame(self, columns: CanColumns, pos: int, base: float) -> Iterator[InputItem]:
+        data = self._data
+        counts = self.counts
+        values = columns.fields.unpack_from(data, pos + 3)
+        if columns.has_bus:
+            time_us, bus, ident, dlc = values
+            channel = f"bus{bus}"
+        else:
+            time_us, ident, dlc = values
+            channel = "scripting"
+        counts.can_records += 1
+        time = base + time_us * 1e-6
+        if self.first_time is None:
+            self.first_time = time
+        self.last_time = time
+        if columns.fd:
+            counts.fd_records += 1
+            length = FD_LENGTHS[dlc & 0x0F]
+        elif dlc > 8:
+            yield diagnostic(
+                time,
+                self.source,
+                BAD_FRAME,
+                f"CANF record at byte {pos:,} has a DLC of {dlc} (at most 8): skipped",
+                bytes(data[pos : pos + 24]),
+                can_id=ident & MASK_EXT,
+            )
+            return
+        else:
+            length = dlc
+        remote = bool(ident & FLAG_RTR)
+        at = pos + columns.data_at
+        yield CanFrame(
+            time,
+            ident & MASK_EXT,
+            b"" if remote else bytes(data[at : at + length]),
+            bool(ident & FLAG_EFF),
+            channel,
+            remote,
+            bool(ident & FLAG_ERR),
+            columns.fd,
+            "",
+            length if remote else 0,
+        )
+
+    def _resync(self, start: int, lengths: dict[int, int]) -> int | None:
+        """The next offset after ``start`` where a known record begins and is followed by
+        another record or the end of the file; None when there is none."""
+        data = self._data
+        size = len(data)
+        at = data.find(HEAD, start + 1)
+        while at >= 0:
+            length = lengths.get(data[at + 2] if at + 2 < size else -1, 0)
+            end = at + length
+            if length and (end == size or (end < size and data[end : end + 2] == HEAD)):
+                return at
+            at = data.find(HEAD, at + 1)
+        return None
+
+    def _damage(
+        self,
+        pos: int,
+        found: int | None,
+        size: int,
+        kind: int,
+        length: int,
+        base: float,
+        records: int,
+    ) -> list[Event]:
+        data = self._data
+        counts = self.counts
+        stop = size if found is None else found
+        skipped = stop - pos
+        time = self.last_time if self.last_time is not None else base
+        if found is None and set(data[pos:size]) <= PADDING:
+            self.notes.append(
+                f"{skipped:,} byte(s) of padding after the last record (an unwritten "
+                "block of the log): ignored"
+            )
+            return []
+        counts.damaged_spots += 1
+        counts.bytes_skipped += skipped
+        if data[pos : pos + 2] == HEAD and length and pos + length > size:
+            what = (
+                f"the file ends inside a record of type {kind} at byte {pos:,} "
+                f"({size - pos} of its {length} bytes are there)"
+            )
+        elif data[pos : pos + 2] == HEAD and length:
+            what = (
+                f"the record of type {kind} at byte {pos:,} is cut short by damage "
+                "(the next record starts inside it)"
+            )
+        else:
+            what = f"the bytes at byte {pos:,} are no record (damage after record {records})"
+        where = (
+            "reading stopped"
+            if found is None
+            else f"{skipped:,} byte(s) skipped to the next record at byte {found:,}"
+        )
+        return [
+            diagnostic(
+                time,
+                self.source,
+                BAD_FRAME,
+                f"DataFlash log damaged: {what}; {where}",
+                bytes(data[pos : pos + min(skipped, 64)]),
+                offset=pos,
+                skipped_bytes=skipped,
+            )
+        ]
+
+    def _find_time_base(self) -> float | None:
+        """UTC minus TimeUS of the first GPS record with a week number (None if none).
+
+        FMT and GPS records are found by searching for their header bytes, which is far
+        quicker than walking every record; a candidate counts when a record follows it.
+        """
+        data = self._data
+        size = len(data)
+        at = data.find(HEAD + bytes([FMT_TYPE]))
+        gps: Layout | None = None
+        while at >= 0 and gps is None:
+            if at + FMT_LENGTH <= size:
+                layout = parse_fmt(data, at)
+                if layout is not None and layout.name == "GPS" and layout.body is not None:
+                    gps = layout
+            at = data.find(HEAD + bytes([FMT_TYPE]), at + 1)
+        if gps is None:
+            return None
+        columns = [gps.index(c) for c in ("TimeUS", "GWk", "GMS")]
+        if any(c is None for c in columns):
+            return None
+        time_i, week_i, ms_i = (c for c in columns if c is not None)
+        marker = HEAD + bytes([gps.type])
+        at = data.find(marker)
+        while at >= 0:
+            end = at + gps.length
+            if end == size or (end < size and data[end : end + 2] == HEAD):
+                values = gps.body.unpack_from(data, at + 3) if gps.body else ()
+                if values and values[week_i] > 0:
+                    return gps_to_utc(values[week_i], values[ms_i]) - values[time_i] * 1e-6
+            at = data.find(marker, at + 1)
+        return None
+
+    @property
+    def stats(self) -> dict[str, int]:
+        return dict(vars(self.counts))
+
+
+def looks_like_dataflash(head: bytes) -> bool:
+    """Whether the first bytes of a file are a DataFlash log: it starts with FMT records."""
+    if not head.startswith(HEAD + bytes([FMT_TYPE])) or len(head) < 89:
+        return False
+    layout = parse_fmt(head, 0)
+    return layout is not None and (len(head) < 178 or head[89:91] == HEAD)
