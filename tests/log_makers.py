@@ -83,8 +83,16 @@ class DataFlashWriter:
         return at
 
 
-def _start(writer: DataFlashWriter, kinds: list[int]) -> None:
+def start_log(writer: DataFlashWriter, extra: list[int]) -> None:
     """What AP_Logger writes first: every format, units and multipliers, parameters."""
+    kinds = [
+        UNIT,
+        FMTU,
+        MULT,
+        PARM,
+        MSG,
+        *(k for k in extra if k not in (UNIT, FMTU, MULT, PARM, MSG)),
+    ]
     writer.record(FMT, FMT, 89, b"FMT", b"BBnNZ", b"Type,Length,Name,Format,Columns")
     writer.layouts[FMT] = ("BBnNZ", struct.Struct("<BB4s16s64s"))
     for kind in kinds:
@@ -109,8 +117,7 @@ def ardupilot_log(
     """The frames as CANF records on bus 0, boot at ``boot_utc``; GPS at 5 Hz, the first
     two without a fix (week 0). Returns the log and each frame's record offset."""
     writer = DataFlashWriter()
-    kinds = [UNIT, FMTU, MULT, PARM, GPS, MSG, CANF, CAFD]
-    _start(writer, kinds)
+    start_log(writer, [GPS, CANF, CAFD])
     offsets = []
     next_gps = 0
     for frame in frames:
@@ -147,7 +154,7 @@ def ardupilot_log(
 def lua_log(frames: list[CanFrame], boot_utc: float, kind: int = 254) -> bytes:
     """The frames as a Lua script's CANF records (no GPS in this log)."""
     writer = DataFlashWriter()
-    _start(writer, [UNIT, FMTU, MULT, PARM, MSG])
+    start_log(writer, [])
     for count, frame in enumerate(frames):
         time_us = round((frame.time - boot_utc) * 1e6)
         if count == 0:  # AP_Logger writes the format when the script first logs it
