@@ -124,87 +124,96 @@ class DataFlashReader(InputReader):
         base = self.time_offset or 0.0
         lengths: dict[int, int] = {FMT_TYPE: FMT_LENGTH}
         cans: dict[int, CanColumns] = {}
+        channels: dict[int, str] = {}
         pos = records = 0
+        frames = 0
+        first_time = last_time = None
         while pos < size:
             kind = data[pos + 2] if pos + 2 < size else -1
             length = lengths.get(kind, 0) if data[pos : pos + 2] == HEAD else 0
             end = pos + length
             if not length or end > size:
                 found = self._resync(pos, lengths)
+                self.last_time = last_time
                 yield from self._damage(pos, found, size, kind, length, base, records)
                 if found is None:
                     break
                 pos = found
                 continue
             records += 1
-            if not records & PROGRESS_EVERY:
-                self.position_bytes = pos
             columns = cans.get(kind)
-            if columns is not None:
-                if end < size and data[end : end + 2] != HEAD:
-                    found = self._resync(pos + 3, lengths)
-                    if found is not None and found < end:  # damage inside this record
-                        yield from self._damage(pos, found, size, kind, length, base, records)
-                        pos = found
-                        continue
-                yield from self._frame(columns, pos, base)
-            elif kind == FMT_TYPE:
-                layout = parse_fmt(data, pos)
-                if layout is not None:
-                    counts.formats += 1
-                    lengths[layout.type] = layout.length
-                    column = can_columns(layout)
-                    if column is not None:
-                        cans[layout.type] = column
-                    else:
-                        cans.pop(layout.type, None)
+            if columns is None:
+                if kind == FMT_TYPE:
+                    self._define(parse_fmt(data, pos), lengths, cans)
+                pos = end
+                continue
+            if end < size and data[end : end + 2] != HEAD:
+                found = self._resync(pos + 3, lengths)
+                if found is not None and found < end:  # damage inside this record
+                    self.last_time = last_time
+                    yield from self._damage(pos, found, size, kind, length, base, records)
+                    pos = found
+                    continue
+            # The usual record, inline: one unpack, one slice, one frame.
+            if columns.has_bus:
+                time_us, bus, ident, dlc = columns.fields.unpack_from(data, pos + 3)
+                channel = channels.get(bus) or channels.setdefault(bus, f"bus{bus}")
+            else:
+                time_us, ident, dlc = columns.fields.unpack_from(data, pos + 3)
+                channel = "scripting"
+            time = base + time_us * 1e-6
+            last_time = time
+            if first_time is None:
+                first_time = self.first_time = time
+            frames += 1
+            if not frames & PROGRESS_EVERY:
+                self.position_bytes = pos
+            if columns.fd:
+                counts.fd_records += 1
+                dlc = FD_LENGTHS[dlc & 0x0F]
+            elif dlc > 8:
+                yield self._bad_dlc(pos, time, ident, dlc)
+                pos = end
+                continue
+            at = pos + columns.data_at
+            if ident & FLAG_RTR:
+                yield CanFrame(
+                    time, ident & MASK_EXT, b"", bool(ident & FLAG_EFF), channel, True,
+                    bool(ident & FLAG_ERR), columns.fd, "", dlc,
+                )  # fmt: skip
+            else:
+                yield CanFrame(
+                    time, ident & MASK_EXT, data[at : at + dlc], bool(ident & FLAG_EFF), channel,
+                    False, bool(ident & FLAG_ERR), columns.fd,
+                )  # fmt: skip
             pos = end
         counts.records = records
+        counts.can_records = frames
+        self.last_time = last_time
         self.position_bytes = self.size_bytes or 0
 
-    def _frame(self, columns: CanColumns, pos: int, base: float) -> Iterator[InputItem]:
-        data = self._data
-        counts = self.counts
-        values = columns.fields.unpack_from(data, pos + 3)
-        if columns.has_bus:
-            time_us, bus, ident, dlc = values
-            channel = f"bus{bus}"
-        else:
-            time_us, ident, dlc = values
-            channel = "scripting"
-        counts.can_records += 1
-        time = base + time_us * 1e-6
-        if self.first_time is None:
-            self.first_time = time
-        self.last_time = time
-        if columns.fd:
-            counts.fd_records += 1
-            length = FD_LENGTHS[dlc & 0x0F]
-        elif dlc > 8:
-            yield diagnostic(
-                time,
-                self.source,
-                BAD_FRAME,
-                f"CANF record at byte {pos:,} has a DLC of {dlc} (at most 8): skipped",
-                bytes(data[pos : pos + 24]),
-                can_id=ident & MASK_EXT,
-            )
+    def _define(
+        self, layout: Layout | None, lengths: dict[int, int], cans: dict[int, CanColumns]
+    ) -> None:
+        """Take a new record format in: its length, and its CAN columns if it is CANF/CAFD."""
+        if layout is None:
             return
+        self.counts.formats += 1
+        lengths[layout.type] = layout.length
+        column = can_columns(layout)
+        if column is not None:
+            cans[layout.type] = column
         else:
-            length = dlc
-        remote = bool(ident & FLAG_RTR)
-        at = pos + columns.data_at
-        yield CanFrame(
+            cans.pop(layout.type, None)
+
+    def _bad_dlc(self, pos: int, time: float, ident: int, dlc: int) -> Event:
+        return diagnostic(
             time,
-            ident & MASK_EXT,
-            b"" if remote else bytes(data[at : at + length]),
-            bool(ident & FLAG_EFF),
-            channel,
-            remote,
-            bool(ident & FLAG_ERR),
-            columns.fd,
-            "",
-            length if remote else 0,
+            self.source,
+            BAD_FRAME,
+            f"CANF record at byte {pos:,} has a DLC of {dlc} (at most 8): skipped",
+            bytes(self._data[pos : pos + 24]),
+            can_id=ident & MASK_EXT,
         )
 
     def _resync(self, start: int, lengths: dict[int, int]) -> int | None:
