@@ -8,6 +8,7 @@ is the reference for what the records say.
 from __future__ import annotations
 
 import calendar
+import gzip
 import os
 import subprocess
 import sys
@@ -251,3 +252,20 @@ def test_damaged_logs_never_raise_and_give_only_real_frames(
     frames, events, _ = read(path, "dataflash")
     assert all(e.fields["kind"] == BAD_FRAME for e in events)
     assert len(frames) <= 40 + len(events)
+
+
+def test_a_gzipped_log_is_read_and_a_cut_in_it_reported(
+    ardupilot: tuple[Path, list[int]], tmp_path: Path
+) -> None:
+    packed = gzip.compress(ardupilot[0].read_bytes())
+    whole = tmp_path / "00000042.BIN.gz"
+    whole.write_bytes(packed)
+    frames, events, _ = read(whole)
+    assert events == []
+    same_frames(frames, FRAMES)
+    cut = tmp_path / "cut.BIN.gz"
+    cut.write_bytes(packed[: len(packed) * 3 // 4])
+    frames, events, _ = read(cut)
+    assert 0 < len(frames) < 629
+    same_frames(frames, FRAMES[: len(frames)])
+    assert any("gzip file is cut off" in e.fields["detail"] for e in events)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.dataflash_format import FMT_LENGTH, FMT_TYPE, HEAD, Layout, parse_fmt
 from analyzer.inputs.dataflash_gps_time import gps_to_utc
+from analyzer.inputs.textlines import GZIP_MAGIC, open_lines
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event, diagnostic
 
 # AP_HAL::CANFrame flags in the ID word (libraries/AP_HAL/CANIface.h).
@@ -103,10 +104,14 @@ class DataFlashReader(InputReader):
         super().__init__(path)
         handle = self._open_binary()
         size = self.size_bytes or 0
-        self._data: bytes | mmap.mmap = (
-            mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) if size else b""
-        )
-        if isinstance(self._data, mmap.mmap):
+        self._gzip_problems: list[str] = []
+        self._data: bytes | mmap.mmap = b""
+        if handle.read(2) == GZIP_MAGIC:  # a .BIN.gz: unpacked in memory, damage reported
+            handle.seek(0)
+            blocks, self._gzip_problems = open_lines(handle)
+            self._data = b"".join(blocks)
+        elif size:
+            self._data = mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ)
             self._closers.append(self._data)
         self.counts = DataFlashStats()
         self.time_offset = self._find_time_base()
@@ -190,6 +195,8 @@ class DataFlashReader(InputReader):
         counts.records = records
         counts.can_records = frames
         self.last_time = last_time
+        for problem in self._gzip_problems:
+            yield diagnostic(last_time or base, self.source, BAD_FRAME, problem)
         self.position_bytes = self.size_bytes or 0
 
     def _define(
