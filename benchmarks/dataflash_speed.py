@@ -27,6 +27,7 @@ from tests.log_makers import (
     EFF,
     GPS,
     DataFlashWriter,
+    gps_record,
     start_log,
 )
 
@@ -79,24 +80,7 @@ def write_log(path: Path, frame_count: int) -> int:
             records += 1
         while next_gps * 200_000 <= us:
             ms = 208_818_000 + next_gps * 200
-            writer.record(
-                GPS,
-                next_gps * 200_000,
-                0,
-                3,
-                ms,
-                2314,
-                14,
-                70,
-                473977420 + next_gps,
-                85455940,
-                48812,
-                0.1,
-                0.0,
-                0.0,
-                0.0,
-                1,
-            )
+            gps_record(writer, next_gps * 200_000, 3, 2314, ms, 473977420 + next_gps)
             next_gps += 1
             records += 1
         ident = frame.can_id | (EFF if frame.extended else 0)

@@ -111,6 +111,15 @@ def start_log(writer: DataFlashWriter, extra: list[int]) -> None:
     writer.record(MSG, 1030, b"ArduCopter V4.5.7 (2a3dc4b7)")
 
 
+def gps_record(
+    writer: DataFlashWriter, time_us: int, status: int, week: int, week_ms: int, lat: int
+) -> None:
+    """A GPS record of instance 0 at ``lat`` (degrees x 1e7), 14 satellites, in use."""
+    writer.record(
+        GPS, time_us, 0, status, week_ms, week, 14, 70, lat, 85455940, 48812, 0.1, 0.0, 0.0, 0.0, 1
+    )
+
+
 def ardupilot_log(
     frames: list[CanFrame], boot_utc: float, gps: bool = True
 ) -> tuple[bytes, list[int]]:
@@ -126,24 +135,7 @@ def ardupilot_log(
             gps_us = next_gps * 200_000
             week, week_ms = utc_to_gps(boot_utc + gps_us / 1e6) if next_gps >= 2 else (0, 0)
             status = 3 if next_gps >= 2 else 1
-            writer.record(
-                GPS,
-                gps_us,
-                0,
-                status,
-                week_ms,
-                week,
-                14,
-                70,
-                473977420,
-                85455940,
-                48812,
-                0.1,
-                0.0,
-                0.0,
-                0.0,
-                1,
-            )
+            gps_record(writer, gps_us, status, week, week_ms, 473977420)
             next_gps += 1
         ident = frame.can_id | (EFF if frame.extended else 0) | (RTR if frame.is_remote else 0)
         data = frame.data.ljust(8, b"\0")
