@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import struct
 from pathlib import Path
+from typing import Any
 
 import dpkt
 
@@ -164,10 +165,17 @@ def socketcan_frame(frame: CanFrame, order: str = "<") -> bytes:
     )
 
 
-def sll_pcap(path: Path, frames: list[CanFrame], link: int, ifindex: int = 5) -> Path:
-    """``tcpdump -i any -w path`` on a host where can0 (interface ``ifindex``) carried the frames."""
+def sll_pcap(
+    path: Path, frames: list[CanFrame], link: int, ifindex: int = 5, ng: bool = False
+) -> Path:
+    """``tcpdump -i any -w path`` on a host where can0 (interface ``ifindex``) carried the
+    frames (``ng``: pcapng, as dumpcap / Wireshark write ``-i any``)."""
     with path.open("wb") as handle:
-        writer = dpkt.pcap.Writer(handle, snaplen=262144, linktype=link)
+        writer: Any = (
+            dpkt.pcapng.Writer(handle, snaplen=262144, linktype=link)
+            if ng
+            else dpkt.pcap.Writer(handle, snaplen=262144, linktype=link)
+        )
         for frame in frames:
             packet = socketcan_frame(frame)
             if link == 113:  # packet type, ARPHRD_CAN, address length, address, protocol

@@ -35,9 +35,10 @@ def read(path: Path) -> tuple[list[CanFrame], list[Event], object]:
     return frames, [i for i in items if isinstance(i, Event)], reader
 
 
+@pytest.mark.parametrize("ng", [False, True])
 @pytest.mark.parametrize("link", sorted(LINKS))
-def test_tcpdump_any_capture_gives_exactly_the_frames(tmp_path: Path, link: int) -> None:
-    path = sll_pcap(tmp_path / "any.pcap", FRAMES, link)
+def test_tcpdump_any_capture_gives_exactly_the_frames(tmp_path: Path, link: int, ng: bool) -> None:
+    path = sll_pcap(tmp_path / "any.pcap", FRAMES, link, ng=ng)
     frames, events, reader = read(path)
     assert events == []
     assert [(f.can_id, f.data, f.extended) for f in frames] == [
