@@ -143,3 +143,18 @@ def test_any_bytes_after_a_cooked_can_header_never_raise(
     got, _, _ = read(path)
     assert len(got) <= len(frames)
     assert all(len(f.data) <= 64 for f in got)
+
+
+def test_a_capture_without_tcp_or_can_names_the_protocols_it_holds(tmp_path: Path) -> None:
+    path = tmp_path / "xl.pcap"
+    with path.open("wb") as handle:
+        writer = dpkt.pcap.Writer(handle, linktype=276)
+        header = struct.pack(">HHIHBB8s", 0x000E, 0, 5, 280, 0, 0, b"")  # CAN XL
+        for i in range(3):
+            writer.writepkt(header + bytes(24), ts=1.0 + i)
+    frames, events, reader = read(path)
+    assert frames == [] and events == []
+    assert reader.notes == [  # type: ignore[attr-defined]
+        "no TCP or CAN traffic in xl.pcap; link-layer protocols seen: 0x000E (3 packets) "
+        "(0x000C is CAN, 0x000D CAN FD, 0x000E CAN XL)"
+    ]

@@ -93,6 +93,7 @@ class PcapReader(InputReader):
         self.can = CanCounts()
         self._other_ports: Counter[int] = Counter()  # TCP packets by the lower port number
         self._other_links: Counter[int] = Counter()  # packets of unsupported interfaces
+        self._other_protocols: Counter[int] = Counter()  # neither IP nor CAN, by EtherType
 
     def _probe_link(self) -> int | None:
         probe = CaptureFile(self._raw)
@@ -132,7 +133,14 @@ class PcapReader(InputReader):
 
     def _add_notes(self) -> None:
         self.notes.extend(
-            capture_notes(self.counts, self.port, self.source, self._other_ports, self._other_links)
+            capture_notes(
+                self.counts,
+                self.port,
+                self.source,
+                self._other_ports,
+                self._other_links,
+                self._other_protocols if not self.can.can_frames else Counter(),
+            )
         )
         self.notes.extend(can_notes(self.can))
         given_up = self._flows.given_up
@@ -214,6 +222,10 @@ class PcapReader(InputReader):
             return []
         if not ip:
             self.counts.other_packets += 1
+            kind = _link_protocol(link, packet)
+            seen = self._other_protocols
+            if kind is not None and (len(seen) < MAX_PORTS_SEEN or kind in seen):
+                seen[kind] += 1
             return []
         return self._ip(time, ip, record.snapped)
 
@@ -347,6 +359,14 @@ def _ethernet_payload(packet: bytes) -> bytes | None:
     if ethertype in (ETH_IPV4, ETH_IPV6):
         return packet[offset + 2 :]
     return None
+
+
+def _link_protocol(link: int, packet: bytes) -> int | None:
+    """The EtherType / protocol of an Ethernet or Linux cooked packet (None for others)."""
+    where = {LINK_ETHERNET: 12, LINK_LINUX_SLL: 14, LINK_LINUX_SLL2: 0}.get(link)
+    if where is None or len(packet) < where + 2:
+        return None
+    return int.from_bytes(packet[where : where + 2], "big")
 
 
 def _flow_name(client: tuple[str, int], server: tuple[str, int]) -> str:

@@ -30,10 +30,22 @@ class PcapStats:
 
 
 def capture_notes(
-    counts: PcapStats, port: int, source: str, other_ports: Counter[int], other_links: Counter[int]
+    counts: PcapStats,
+    port: int,
+    source: str,
+    other_ports: Counter[int],
+    other_links: Counter[int],
+    other_protocols: Counter[int],
 ) -> list[str]:
-    """Facts about a capture worth saying: wrong port, TCP offload, unsupported interfaces."""
+    """Facts about a capture worth saying: wrong port, TCP offload, unsupported interfaces,
+    and what a capture without TCP or CAN traffic holds instead (``other_protocols``)."""
     notes: list[str] = []
+    if not counts.tcp_packets and not other_ports and other_protocols:
+        seen = ", ".join(f"0x{p:04X} ({n} packets)" for p, n in other_protocols.most_common(5))
+        notes.append(
+            f"no TCP or CAN traffic in {source}; link-layer protocols seen: {seen} "
+            "(0x000C is CAN, 0x000D CAN FD, 0x000E CAN XL)"
+        )
     if not counts.tcp_packets and other_ports:
         seen = ", ".join(f"{p} ({n} packets)" for p, n in other_ports.most_common(5))
         notes.append(
