@@ -226,8 +226,9 @@ def test_decode_command_reads_the_log_as_the_candump_sample(
     for line in ("/gimbal/command              45", "/uav/gps                    100"):
         assert line in ours and line in sample
     forced = summary(str(ardupilot[0]), "--format", "stream")
-    assert "looks like an ArduPilot DataFlash log, not a raw stream" in forced
-    assert "--format dataflash" in forced
+    assert "looks like an ArduPilot DataFlash log, not a raw TCP/UART stream" in forced
+    assert "read it with --format dataflash" in forced
+    assert "40 of 40 framed messages failed their CRC): it is an ArduPilot DataFlash log" in forced
 
 
 @settings(

@@ -177,9 +177,7 @@ def run(args: argparse.Namespace) -> int:
         )
     from analyzer.inputs.content import raw_stream_mismatch
 
-    mismatch = raw_stream_mismatch(
-        args.file, reader.format_name, decoder_stats, tally.crc_checked, tally.crc_errors
-    )
+    mismatch = raw_stream_mismatch(reader, decoder_stats, tally.crc_checked, tally.crc_errors)
     for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw), *mismatch]:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from analyzer.errors import UsageError
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from analyzer.inputs.base import InputReader
 
 # sniffed format -> (what it is, in words)
 DESCRIPTIONS = {
@@ -45,37 +48,32 @@ def describe(head: bytes) -> tuple[str, str | None] | None:
 
 
 def raw_stream_mismatch(
-    path: str,
-    format_name: str,
-    decoder_stats: dict[str, int],
-    crc_checked: int,
-    crc_errors: int,
+    reader: InputReader, decoder_stats: dict[str, int], crc_checked: int, crc_errors: int
 ) -> list[str]:
     """A note when a file read as a raw TCP/UART stream gave almost nothing but damage,
-    saying what the file looks like instead (a DataFlash log, a capture, text...)."""
+    saying what the file looks like instead (text, an archive...) when the reader has not
+    said so already (it names the formats this tool reads, see RawStreamReader)."""
+    from analyzer.inputs.raw_stream import RawStreamReader
+
+    if not isinstance(reader, RawStreamReader):
+        return []
     fed = decoder_stats.get("bytes_fed", 0)
     discarded = decoder_stats.get("bytes_discarded", 0)
     checked = crc_checked + crc_errors
     mostly_garbage = fed >= MIN_BYTES and discarded >= DAMAGE_SHARE * fed
     mostly_bad_crc = checked >= 4 and crc_errors >= CRC_FAILED_SHARE * checked
-    if format_name != "stream" or not (mostly_garbage or mostly_bad_crc):
+    if not (mostly_garbage or mostly_bad_crc):
         return []
     seen = f"read as a raw TCP/UART stream, {discarded:,} of its {fed:,} bytes were no frame"
     if checked:
         seen += f" and {crc_errors:,} of {checked:,} framed messages failed their CRC"
-    looks = None
-    if path != "-":
-        from analyzer.inputs import _head
-
-        try:
-            looks = describe(_head(path))
-        except UsageError:
-            looks = None
+    looks = reader.looks_like
     if looks is None:
         return [
-            f"{path} is almost all damage ({seen}): it is probably not a dump of the "
-            "gimbal's stream; check the file or give --format"
+            f"{reader.source} is almost all damage ({seen}): it is probably not a dump of "
+            "the gimbal's stream; check the file or give --format"
         ]
     words, fmt = looks
-    how = f"read it with --format {fmt}" if fmt else "this tool does not read it"
-    return [f"{path} looks like {words}, not a raw stream ({seen}): {how}"]
+    if fmt is not None:  # the reader has said what it is and which --format reads it
+        return [f"the damage in {reader.source} is no damage ({seen}): it is {words}"]
+    return [f"{reader.source} looks like {words}, not a raw stream ({seen})"]
