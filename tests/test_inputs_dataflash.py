@@ -270,3 +270,24 @@ def test_a_gzipped_log_is_read_and_a_cut_in_it_reported(
     assert 0 < len(frames) < 629
     same_frames(frames, FRAMES[: len(frames)])
     assert any("gzip file is cut off" in e.fields["detail"] for e in events)
+
+
+@settings(
+    max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    tail=st.lists(
+        st.sampled_from([b"\xa3\x95", b"\xa3\x95\xc8", b"\xa3\x95\x80", b"\x00", b"\xff"])
+        | st.binary(max_size=30),
+        max_size=40,
+    )
+)
+def test_any_bytes_after_the_formats_never_raise(tmp_path: Path, tail: list[bytes]) -> None:
+    writer = DataFlashWriter()
+    start_log(writer, [CANF, CAFD])
+    path = tmp_path / "fuzz.bin"
+    path.write_bytes(bytes(writer.out) + b"".join(tail))
+    frames, events, reader = read(path, "dataflash")
+    assert all(e.fields["kind"] == BAD_FRAME for e in events)
+    assert all(len(f.data) <= 64 for f in frames)
+    assert reader.position_bytes == path.stat().st_size  # type: ignore[attr-defined]
