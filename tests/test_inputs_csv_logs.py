@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from analyzer.inputs import detect_format, open_input
+from analyzer.inputs import InputReader, detect_format, open_input
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event
 from tests.log_makers import flight_frames, savvycan_csv
@@ -21,7 +21,7 @@ from tests.log_makers import flight_frames, savvycan_csv
 FRAMES = flight_frames()
 
 
-def read(path: Path, fmt: str | None = None) -> tuple[list[CanFrame], list[Event], object]:
+def read(path: Path, fmt: str | None = None) -> tuple[list[CanFrame], list[Event], InputReader]:
     reader = open_input(str(path), fmt)
     with reader:
         items = list(reader)
@@ -46,8 +46,8 @@ def test_savvycan_csv_is_recognised_by_its_header_and_gives_the_frames(tmp_path:
     assert events == []
     same(frames, FRAMES)
     assert {(f.channel, f.direction) for f in frames} == {("bus0", "rx")}
-    assert reader.time_base == ABSOLUTE  # type: ignore[attr-defined]
-    assert reader.stats == {"lines": 630, "frames": 629, "bad_lines": 0}  # type: ignore[attr-defined]
+    assert reader.time_base == ABSOLUTE
+    assert reader.stats == {"lines": 630, "frames": 629, "bad_lines": 0}
 
 
 def test_savvycan_times_since_the_capture_started_are_relative(tmp_path: Path) -> None:
@@ -57,7 +57,7 @@ def test_savvycan_times_since_the_capture_started_are_relative(tmp_path: Path) -
     path.write_text(savvycan_csv(shifted))
     frames, _, reader = read(path)
     same(frames, FRAMES[:20], offset=start)
-    assert reader.time_base == RELATIVE_TO_START  # type: ignore[attr-defined]
+    assert reader.time_base == RELATIVE_TO_START
 
 
 def test_a_damaged_savvycan_line_is_reported_and_the_next_is_read(tmp_path: Path) -> None:
@@ -103,7 +103,7 @@ def test_python_can_csv_with_three_bad_lines_keeps_every_other_frame(
     frames, events, reader = read(path, "csv")
     same(frames, [f for i, f in enumerate(FRAMES) if i not in dropped])
     assert [e.fields["line"] for e in events] == [k + 1 for k in bad]
-    assert reader.stats["bad_lines"] == 3  # type: ignore[attr-defined]
+    assert reader.stats["bad_lines"] == 3
 
 
 def test_a_savvycan_file_read_as_python_can_csv_reports_every_line(tmp_path: Path) -> None:

@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pymavlink import DFReader
 
-from analyzer.inputs import detect_format, open_input
+from analyzer.inputs import InputReader, detect_format, open_input
 from analyzer.inputs.dataflash_gps_time import gps_to_utc, leap_seconds, utc_to_gps
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event
 from tests.log_makers import (
@@ -39,7 +39,7 @@ BOOT = T0 - 95.0  # the autopilot booted 95 s before the sample starts
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def read(path: Path, fmt: str | None = None) -> tuple[list[CanFrame], list[Event], object]:
+def read(path: Path, fmt: str | None = None) -> tuple[list[CanFrame], list[Event], InputReader]:
     reader = open_input(str(path), fmt)
     with reader:
         items = list(reader)
@@ -82,9 +82,9 @@ def test_canf_records_give_the_frames_on_utc_from_gps_time(
     assert events == []
     same_frames(frames, FRAMES)
     assert {f.channel for f in frames} == {"bus0"}
-    assert "GPS" in (reader.time_base or "")  # type: ignore[attr-defined]
-    assert reader.first_time == pytest.approx(T0 + 0.01, abs=1e-6)  # type: ignore[attr-defined]
-    assert reader.stats["can_records"] == 629  # type: ignore[attr-defined]
+    assert "GPS" in (reader.time_base or "")
+    assert reader.first_time == pytest.approx(T0 + 0.01, abs=1e-6)
+    assert reader.stats["can_records"] == 629
 
 
 def test_dfreader_reads_the_same_records(ardupilot: tuple[Path, list[int]]) -> None:
@@ -111,8 +111,8 @@ def test_a_lua_script_canf_without_gps_keeps_times_since_boot(tmp_path: Path) ->
     assert events == []
     same_frames(frames, FRAMES, offset=BOOT)
     assert {f.channel for f in frames} == {"scripting"}
-    assert "since the autopilot booted" in (reader.time_base or "")  # type: ignore[attr-defined]
-    assert any("since the autopilot booted" in n for n in reader.notes)  # type: ignore[attr-defined]
+    assert "since the autopilot booted" in (reader.time_base or "")
+    assert any("since the autopilot booted" in n for n in reader.notes)
 
 
 def test_a_log_without_extension_is_recognised_by_its_fmt_header(
@@ -137,7 +137,7 @@ def test_a_record_cut_short_is_reported_and_the_next_ones_read(
     assert len(events) == 1 and events[0].fields["kind"] == BAD_FRAME
     assert f"byte {at:,}" in events[0].fields["detail"]
     assert "cut short" in events[0].fields["detail"]
-    assert reader.stats["damaged_spots"] == 1  # type: ignore[attr-defined]
+    assert reader.stats["damaged_spots"] == 1
 
 
 def test_garbage_between_records_is_skipped_to_the_next_a3_95(
@@ -174,7 +174,7 @@ def test_padding_after_the_last_record_is_only_a_note(
     path.write_bytes(ardupilot[0].read_bytes() + b"\xff" * 200)
     frames, events, reader = read(path)
     assert len(frames) == 629 and events == []
-    assert any("padding" in n for n in reader.notes)  # type: ignore[attr-defined]
+    assert any("padding" in n for n in reader.notes)
 
 
 def test_cafd_records_give_can_fd_frames(tmp_path: Path) -> None:
@@ -290,4 +290,4 @@ def test_any_bytes_after_the_formats_never_raise(tmp_path: Path, tail: list[byte
     frames, events, reader = read(path, "dataflash")
     assert all(e.fields["kind"] == BAD_FRAME for e in events)
     assert all(len(f.data) <= 64 for f in frames)
-    assert reader.position_bytes == path.stat().st_size  # type: ignore[attr-defined]
+    assert reader.position_bytes == path.stat().st_size

@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from analyzer.inputs import open_input
+from analyzer.inputs import InputReader, open_input
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, Event
@@ -28,7 +28,7 @@ FRAMES = flight_frames()
 LINKS = {113: "any", 276: "if5"}  # the channel each link type gives the frames
 
 
-def read(path: Path) -> tuple[list[CanFrame], list[Event], object]:
+def read(path: Path) -> tuple[list[CanFrame], list[Event], InputReader]:
     reader = open_input(str(path))
     with reader:
         items = list(reader)
@@ -49,8 +49,8 @@ def test_tcpdump_any_capture_gives_exactly_the_frames(tmp_path: Path, link: int,
         a.time == pytest.approx(b.time, abs=1e-6) for a, b in zip(frames, FRAMES, strict=True)
     )
     assert {(f.channel, f.direction, f.is_fd) for f in frames} == {(LINKS[link], "rx", False)}
-    assert reader.stats["can_frames"] == 629  # type: ignore[attr-defined]
-    assert reader.notes == []  # type: ignore[attr-defined]
+    assert reader.stats["can_frames"] == 629
+    assert reader.notes == []
 
 
 @pytest.mark.skipif(
@@ -107,8 +107,8 @@ def test_can_fd_frames_of_classic_length_decode_and_longer_ones_are_reported(
     assert decoded[0].topic == TOPIC_COMMAND and decoded[0].fields["name"] == "look_down"
     assert any("CAN FD" in w for w in decoded[0].warnings)
     assert all(isinstance(e, Event) for e in Decoder().feed(frames[1]))  # 48 bytes: no crash
-    assert reader.stats["long_fd_frames"] == 1  # type: ignore[attr-defined]
-    assert any("more than 8" in n for n in reader.notes)  # type: ignore[attr-defined]
+    assert reader.stats["long_fd_frames"] == 1
+    assert any("more than 8" in n for n in reader.notes)
 
 
 def test_can_fd_over_sll2_protocol_000d(tmp_path: Path) -> None:
@@ -158,7 +158,7 @@ def test_a_capture_without_tcp_or_can_names_the_protocols_it_holds(tmp_path: Pat
             writer.writepkt(header + bytes(24), ts=1.0 + i)
     frames, events, reader = read(path)
     assert frames == [] and events == []
-    assert reader.notes == [  # type: ignore[attr-defined]
+    assert reader.notes == [
         "no TCP or CAN traffic in xl.pcap; link-layer protocols seen: 0x000E (3 packets) "
         "(0x000C is CAN, 0x000D CAN FD, 0x000E CAN XL)"
     ]
