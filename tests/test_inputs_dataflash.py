@@ -291,3 +291,27 @@ def test_any_bytes_after_the_formats_never_raise(tmp_path: Path, tail: list[byte
     assert all(e.fields["kind"] == BAD_FRAME for e in events)
     assert all(len(f.data) <= 64 for f in frames)
     assert reader.position_bytes == path.stat().st_size
+
+
+def test_canf_columns_are_taken_by_name_whatever_their_order(tmp_path: Path) -> None:
+    writer = DataFlashWriter()
+    start_log(writer, [])
+    # A build that puts DLC and Id before Bus, under another message id.
+    writer.fmt(77, "CANF", "QBIBBBBBBBBB", "TimeUS,DLC,Id,Bus,B0,B1,B2,B3,B4,B5,B6,B7")
+    for frame in FRAMES[:30]:
+        ident = frame.can_id | (EFF if frame.extended else 0)
+        us = round((frame.time - BOOT) * 1e6)
+        writer.record(77, us, len(frame.data), ident, 2, *frame.data.ljust(8, b"\0"))
+    # A CANF this reader cannot take: no DLC column.
+    writer.fmt(78, "CAFD", "QBI", "TimeUS,Bus,Id")
+    writer.record(78, 5, 0, 0x123)
+    path = tmp_path / "reordered.bin"
+    path.write_bytes(bytes(writer.out))
+    frames, events, reader = read(path)
+    assert events == []
+    same_frames(frames, FRAMES[:30], offset=BOOT)
+    assert {f.channel for f in frames} == {"bus2"}
+    assert (
+        "1 CAFD record(s) (type 78) could not be read as CAN frames: it has no DLC column"
+        in reader.notes
+    )

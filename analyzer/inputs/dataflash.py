@@ -13,12 +13,19 @@ offset and reading resynchronises at the next ``A3 95`` that starts a known reco
 from __future__ import annotations
 
 import mmap
-import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.dataflash_format import FMT_LENGTH, FMT_TYPE, HEAD, Layout, parse_fmt
+from analyzer.inputs.dataflash_format import (
+    FMT_LENGTH,
+    FMT_TYPE,
+    HEAD,
+    CanColumns,
+    Layout,
+    can_columns,
+    parse_fmt,
+)
 from analyzer.inputs.dataflash_gps_time import gps_to_utc
 from analyzer.inputs.textlines import GZIP_MAGIC, open_lines
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event, diagnostic
@@ -33,16 +40,6 @@ SINCE_BOOT = "time since the autopilot booted (the log holds no GPS time)"
 GPS_UTC = "UTC from the log's GPS time (GPS week and milliseconds, leap seconds applied)"
 
 
-@dataclass(slots=True)
-class CanColumns:
-    """Where a CAN record layout keeps what a frame needs."""
-
-    fields: struct.Struct  # TimeUS, [Bus,] Id, DLC, read in one call
-    has_bus: bool
-    data_at: int  # offset of the first data byte in the record
-    fd: bool  # CAFD: DLC is a CAN FD length code
-
-
 @dataclass
 class DataFlashStats:
     records: int = 0
@@ -51,47 +48,6 @@ class DataFlashStats:
     formats: int = 0
     damaged_spots: int = 0
     bytes_skipped: int = 0
-
-
-def can_columns(layout: Layout) -> CanColumns | None:
-    """The CAN columns of a CANF / CAFD layout (ArduPilot's or a Lua script's); else None."""
-    if layout.body is None or layout.name not in ("CANF", "CAFD"):
-        return None
-    fd = layout.name == "CAFD"
-    first = "D0" if fd else "B0"
-    wanted = ["TimeUS", "Bus", "Id", "DLC"]
-    if layout.index("Bus") is None:
-        wanted.remove("Bus")
-    indexes = [layout.index(column) for column in [*wanted, first]]
-    if any(i is None for i in indexes):
-        return None
-    chars = _codes(layout)
-    fmt, at = "<", 3
-    for i in indexes[:-1]:
-        assert i is not None
-        fmt += "x" * (layout.offsets[i] - at) + chars[i]
-        at = layout.offsets[i] + struct.calcsize("<" + chars[i])
-    data_index = indexes[-1]
-    assert data_index is not None
-    width = 64 if fd else 8
-    if layout.offsets[data_index] + width > layout.length:
-        return None
-    return CanColumns(struct.Struct(fmt), "Bus" in wanted, layout.offsets[data_index], fd)
-
-
-def _codes(layout: Layout) -> list[str]:
-    """The struct code of each column of a layout."""
-    assert layout.body is not None
-    out: list[str] = []
-    fmt = layout.body.format[1:]
-    i = 0
-    while i < len(fmt):
-        j = i
-        while fmt[j].isdigit():
-            j += 1
-        out.append(fmt[i : j + 1])
-        i = j + 1
-    return out
 
 
 class DataFlashReader(InputReader):
@@ -114,6 +70,8 @@ class DataFlashReader(InputReader):
             self._data = mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ)
             self._closers.append(self._data)
         self.counts = DataFlashStats()
+        self._unread_layouts: dict[int, tuple[str, str]] = {}  # CAN layouts not understood
+        self._unread_records: dict[int, int] = {}  # their records, by type
         self.time_offset = self._find_time_base()
         self.time_base = GPS_UTC if self.time_offset is not None else SINCE_BOOT
         if self.time_offset is None:
@@ -129,6 +87,7 @@ class DataFlashReader(InputReader):
         base = self.time_offset or 0.0
         lengths: dict[int, int] = {FMT_TYPE: FMT_LENGTH}
         cans: dict[int, CanColumns] = {}
+        unread = self._unread_records
         channels: dict[int, str] = {}
         pos = records = 0
         frames = 0
@@ -150,6 +109,8 @@ class DataFlashReader(InputReader):
             if columns is None:
                 if kind == FMT_TYPE:
                     self._define(parse_fmt(data, pos), lengths, cans)
+                elif kind in unread:
+                    unread[kind] += 1
                 pos = end
                 continue
             if end < size and data[end : end + 2] != HEAD:
@@ -160,11 +121,14 @@ class DataFlashReader(InputReader):
                     pos = found
                     continue
             # The usual record, inline: one unpack, one slice, one frame.
+            values = columns.fields.unpack_from(data, pos + 3)
+            if columns.order is not None:
+                values = tuple(values[i] for i in columns.order)
             if columns.has_bus:
-                time_us, bus, ident, dlc = columns.fields.unpack_from(data, pos + 3)
+                time_us, bus, ident, dlc = values
                 channel = channels.get(bus) or channels.setdefault(bus, f"bus{bus}")
             else:
-                time_us, ident, dlc = columns.fields.unpack_from(data, pos + 3)
+                time_us, ident, dlc = values
                 channel = "scripting"
             time = base + time_us * 1e-6
             last_time = time
@@ -197,6 +161,11 @@ class DataFlashReader(InputReader):
         self.last_time = last_time
         for problem in self._gzip_problems:
             yield diagnostic(last_time or base, self.source, BAD_FRAME, problem)
+        for kind, count in unread.items():
+            name, why = self._unread_layouts[kind]
+            self.notes.append(
+                f"{count:,} {name} record(s) (type {kind}) could not be read as CAN frames: {why}"
+            )
         self.position_bytes = self.size_bytes or 0
 
     def _define(
@@ -208,10 +177,12 @@ class DataFlashReader(InputReader):
         self.counts.formats += 1
         lengths[layout.type] = layout.length
         column = can_columns(layout)
-        if column is not None:
+        cans.pop(layout.type, None)
+        if isinstance(column, CanColumns):
             cans[layout.type] = column
-        else:
-            cans.pop(layout.type, None)
+        elif column is not None:  # a CANF / CAFD this reader does not understand
+            self._unread_layouts[layout.type] = (layout.name, column)
+            self._unread_records.setdefault(layout.type, 0)
 
     def _bad_dlc(self, pos: int, time: float, ident: int, dlc: int) -> Event:
         return diagnostic(

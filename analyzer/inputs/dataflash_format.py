@@ -53,6 +53,7 @@ class Layout:
     columns: tuple[str, ...]
     body: struct.Struct | None  # None when the format has an unknown character
     offsets: tuple[int, ...]  # byte offset of each column in the record (header included)
+    codes: tuple[str, ...] = ()  # struct code of each column
 
     def index(self, column: str) -> int | None:
         try:
@@ -84,11 +85,58 @@ def make_layout(kind: int, length: int, name: str, fmt: str, columns: str) -> La
         size += struct.calcsize("<" + code)
     if size != length or (names and len(names) != len(fmt)):
         return None
-    return Layout(kind, name, length, names, struct.Struct("<" + "".join(codes)), tuple(offsets))
+    body = struct.Struct("<" + "".join(codes))
+    return Layout(kind, name, length, names, body, tuple(offsets), tuple(codes))
 
 
 def _text(raw: bytes) -> str:
     return raw.split(b"\0", 1)[0].decode("ascii", "replace")
+
+
+@dataclass(slots=True)
+class CanColumns:
+    """Where a CANF / CAFD layout keeps what a frame needs."""
+
+    fields: struct.Struct  # TimeUS, [Bus,] Id, DLC, read in one call, in record order
+    order: tuple[int, ...] | None  # puts them into that order when the record has another
+    has_bus: bool
+    data_at: int  # offset of the first data byte in the record
+    fd: bool  # CAFD: DLC is a CAN FD length code, eight 8-byte data words
+
+
+def can_columns(layout: Layout) -> CanColumns | str | None:
+    """The CAN columns of a CANF / CAFD layout (ArduPilot's or a Lua script's).
+
+    None for any other record type; a reason in words for a CANF / CAFD layout whose
+    columns are not understood (its records cannot be read).
+    """
+    if layout.name not in ("CANF", "CAFD"):
+        return None
+    if layout.body is None:
+        return "its format has a character AP_Logger does not define"
+    fd = layout.name == "CAFD"
+    wanted = [c for c in ("TimeUS", "Bus", "Id", "DLC") if c in layout.columns]
+    missing = {"TimeUS", "Id", "DLC"} - set(wanted)
+    if missing:
+        return f"it has no {', '.join(sorted(missing))} column"
+    prefix, code, width = ("D", "Q", 8) if fd else ("B", "B", 1)
+    data = [layout.index(f"{prefix}{k}") for k in range(8)]
+    first = data[0]
+    if first is None or any(
+        i is None
+        or layout.codes[i] != code
+        or layout.offsets[i] != layout.offsets[first] + k * width
+        for k, i in enumerate(data)
+    ):
+        return f"its data columns are not {prefix}0..{prefix}7 of type {code!r} in a row"
+    indexes = [layout.columns.index(c) for c in wanted]
+    by_offset = sorted(indexes, key=lambda i: layout.offsets[i])
+    fmt, at = "<", 3
+    for i in by_offset:
+        fmt += "x" * (layout.offsets[i] - at) + layout.codes[i]
+        at = layout.offsets[i] + struct.calcsize("<" + layout.codes[i])
+    order = None if by_offset == indexes else tuple(by_offset.index(i) for i in indexes)
+    return CanColumns(struct.Struct(fmt), order, "Bus" in wanted, layout.offsets[first], fd)
 
 
 FMT_LAYOUT = make_layout(FMT_TYPE, FMT_LENGTH, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
