@@ -105,6 +105,8 @@ class DataFlashReader(InputReader):
                 pos = found
                 continue
             records += 1
+            if not records & PROGRESS_EVERY:
+                self.position_bytes = pos
             columns = cans.get(kind)
             if columns is None:
                 if kind == FMT_TYPE:
@@ -135,8 +137,6 @@ class DataFlashReader(InputReader):
             if first_time is None:
                 first_time = self.first_time = time
             frames += 1
-            if not frames & PROGRESS_EVERY:
-                self.position_bytes = pos
             if columns.fd:
                 counts.fd_records += 1
                 dlc = FD_LENGTHS[dlc & 0x0F]
