@@ -8,6 +8,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+from hypothesis import given
+from hypothesis import strategies as st
+
 from analyzer.inputs import open_input
 from analyzer.inputs.content import describe
 from tests.log_makers import ardupilot_log, flight_frames, sll_pcap
@@ -54,3 +57,9 @@ def test_text_read_as_a_stream_is_called_text(tmp_path: Path) -> None:
 
 def test_a_real_uart_dump_gets_no_such_note() -> None:
     assert notes_of(ROOT / "samples" / "uart-dump.bin") == ""
+
+
+@given(head=st.binary(max_size=600))
+def test_describing_any_bytes_never_raises(head: bytes) -> None:
+    found = describe(head)
+    assert found is None or (isinstance(found[0], str) and found[0])
