@@ -20,8 +20,9 @@ DESCRIPTION = """\
 Decode a capture file and print one line per decoded message or diagnostic.
 
 The format comes from the file name (.log candump; .asc .blf .trc .csv .mf4
-through python-can, .gz too; .pcap/.pcapng; .bin raw TCP/UART bytes; .mcap)
-or from its content; --format overrides it. Damaged lines, CRC errors, lost
+through python-can, .gz too; SavvyCAN .csv; .pcap/.pcapng; .bin an ArduPilot
+DataFlash log or raw TCP/UART bytes, by content; .mcap) or from its content;
+--format overrides it. Damaged lines, CRC errors, lost
 segments and the like are reported as /diagnostics events and decoding goes
 on: the exit code is 0 whenever the file could be read.
 
@@ -29,6 +30,7 @@ examples:
   gimbal-analyzer decode samples/flight-candump.log
   gimbal-analyzer decode samples/idu-tcp.pcap --json
   gimbal-analyzer decode samples/uart-dump.bin --summary
+  gimbal-analyzer decode 00000042.BIN           # CAN frames an ArduPilot logged
   gimbal-analyzer decode export.txt --format asc --topic /gimbal/command
   gimbal-analyzer decode flight.log --name gimbal_control --name crc_mismatch
   gimbal-analyzer decode flight.log --raw          # also frames of other devices
@@ -173,7 +175,10 @@ def run(args: argparse.Namespace) -> int:
         sys.stderr.write(
             f"{tally.events:,} events ({tally.diagnostics:,} diagnostics) from {args.file}\n"
         )
-    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw)]:
+    from analyzer.inputs.content import raw_stream_mismatch
+
+    mismatch = raw_stream_mismatch(reader, decoder_stats, tally.crc_checked, tally.crc_errors)
+    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw), *mismatch]:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0
 

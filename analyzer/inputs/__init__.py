@@ -9,6 +9,8 @@ from collections.abc import Iterable
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
+from analyzer.inputs.dataflash import looks_like_dataflash
+from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
 from analyzer.protocol.ids import TCP_PORT
 
 __all__ = ["FORMATS", "InputItem", "InputReader", "detect_format", "open_input"]
@@ -23,9 +25,18 @@ FORMATS: dict[str, str] = {
     "mf4": "ASAM MDF4 (.mf4) through python-can (needs asammdf)",
     "pcap": "pcap / pcapng capture of the IDU's TCP link (.pcap, .pcapng)",
     "stream": "raw byte dump of a TCP or UART stream (.bin)",
+    "dataflash": "ArduPilot DataFlash log with CANF / CAFD records (.bin, .BIN)",
+    "savvycan": "SavvyCAN / GVRET native CSV (.csv)",
     "mcap": "MCAP recording of this project (.mcap)",
 }
-ALIASES = {"log": "candump", "pcapng": "pcap", "bin": "stream", "raw": "stream"}
+ALIASES = {
+    "log": "candump",
+    "pcapng": "pcap",
+    "bin": "stream",
+    "raw": "stream",
+    "ardupilot": "dataflash",
+    "gvret": "savvycan",
+}
 EXTENSIONS = {
     ".log": "candump",
     ".candump": "candump",
@@ -41,6 +52,7 @@ EXTENSIONS = {
     ".raw": "stream",
     ".mcap": "mcap",
 }
+AMBIGUOUS = frozenset({".bin", ".csv"})
 SNIFF_BYTES = 4096
 _PCAP_MAGICS = (
     b"\xd4\xc3\xb2\xa1",
@@ -71,6 +83,12 @@ def detect_format(path: str) -> str:
     if name.endswith(".gz"):
         name = name[:-3]
     ext = os.path.splitext(name)[1]
+    if ext in AMBIGUOUS:  # a .bin is a DataFlash log or a raw dump; .csv has two layouts
+        try:
+            head = _head(path)
+        except UsageError:  # unreadable: the reader of the extension's format says why
+            return EXTENSIONS[ext]
+        return sniff_format(head) or EXTENSIONS[ext]
     if ext in EXTENSIONS:
         return EXTENSIONS[ext]
     found = sniff_format(_head(path))
@@ -92,6 +110,8 @@ def sniff_format(head: bytes) -> str | None:
         return "blf"
     if head[:2] == b"\xeb\x90":
         return "stream"
+    if looks_like_dataflash(head):
+        return "dataflash"
     text = head.lstrip(b"\xef\xbb\xbf")
     if _CANDUMP_LOG.search(text) or _CANDUMP_SCREEN.search(text):
         return "candump"
@@ -102,6 +122,8 @@ def sniff_format(head: bytes) -> str | None:
         return "trc"
     if lowered.startswith(b"timestamp,arbitration_id"):
         return "csv"
+    if lowered.startswith(SAVVYCAN_HEADER_START):
+        return "savvycan"
     return None
 
 
@@ -161,6 +183,14 @@ def open_input(
         from analyzer.inputs.raw_stream import RawStreamReader
 
         return RawStreamReader(path)
+    if name == "dataflash":
+        from analyzer.inputs.dataflash import DataFlashReader
+
+        return DataFlashReader(path)
+    if name == "savvycan":
+        from analyzer.inputs.savvycan import SavvyCanReader
+
+        return SavvyCanReader(path)
     if name == "mcap":
         from analyzer.inputs.mcap import McapReader
 

@@ -6,11 +6,12 @@ import socket
 import struct
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.pcap_can import CanCounts, can_notes, sll2_can, sll_can, socketcan_frame
 from analyzer.inputs.pcap_file import CaptureFile, Damage, Packet
+from analyzer.inputs.pcap_notes import PcapStats, capture_notes, capture_problems
 from analyzer.inputs.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
 from analyzer.inputs.tcp_reassembly import Delivered, Result
 from analyzer.protocol.ids import TCP_PORT
@@ -48,36 +49,9 @@ IPV6_SKIPPED_HEADERS = frozenset({0, 43, 60})  # hop-by-hop, routing, destinatio
 IPV6_FRAGMENT = 44
 TCP_FIN, TCP_SYN, TCP_RST = 0x01, 0x02, 0x04
 
-CAN_EFF_FLAG, CAN_RTR_FLAG, CAN_ERR_FLAG = 0x80000000, 0x40000000, 0x20000000
-CANFD_FDF = 0x04
-CAN_HEADER = 8  # id (4, big-endian in captures), length, flags, 2 reserved
-
 
 OVERSIZE_SLACK = 64  # bytes after an IP packet that padding and an FCS can explain
 MAX_PORTS_SEEN = 64  # distinct other TCP ports counted for the "wrong port?" note
-
-
-@dataclass
-class PcapStats:
-    packets: int = 0
-    tcp_packets: int = 0  # TCP segments to or from the port
-    other_packets: int = 0  # not IP/TCP, or another port
-    bad_packets: int = 0  # too short or malformed headers
-    truncated_packets: int = 0  # segments of the port captured shorter than sent
-    fragments: int = 0  # IP fragments (not reassembled)
-    can_frames: int = 0  # SocketCAN captures
-    damaged_records: int = 0  # damage in the file itself (record headers, blocks)
-    offloaded_packets: int = 0  # IP total length 0 or over the packet (TCP offload)
-    oversized_packets: int = 0  # far more bytes than their IP packet: a wrong record length?
-    swapped_can_ids: int = 0  # SocketCAN IDs in little-endian byte order
-    flows: int = 0
-    flows_given_up: int = 0  # connections closed early to stay within MAX_FLOWS
-    bytes_given_up: int = 0  # out-of-order bytes handed on past holes to bound memory
-    bytes_in: int = 0
-    bytes_delivered: int = 0
-    bytes_duplicate: int = 0
-    bytes_missing: int = 0
-    bytes_out_of_window: int = 0
 
 
 class PcapReader(InputReader):
@@ -116,8 +90,10 @@ class PcapReader(InputReader):
             )
         self._flows = FlowTable(max_flows=MAX_FLOWS, max_pending_total=MAX_PENDING_TOTAL)
         self.counts = PcapStats()
+        self.can = CanCounts()
         self._other_ports: Counter[int] = Counter()  # TCP packets by the lower port number
         self._other_links: Counter[int] = Counter()  # packets of unsupported interfaces
+        self._other_protocols: Counter[int] = Counter()  # neither IP nor CAN, by EtherType
 
     def _probe_link(self) -> int | None:
         probe = CaptureFile(self._raw)
@@ -151,39 +127,22 @@ class PcapReader(InputReader):
             yield from self._packet(record)
         yield from self._results_of(self._flows.flush_all(time))
         self._collect()
-        yield from self._capture_problems(time)
+        yield from capture_problems(self.counts, self.port, self.source, time)
         self.position_bytes = self.size_bytes or 0
         self._add_notes()
 
     def _add_notes(self) -> None:
-        counts = self.counts
-        if not counts.tcp_packets and self._other_ports:
-            seen = ", ".join(
-                f"{port} ({n} packets)" for port, n in self._other_ports.most_common(5)
+        self.notes.extend(
+            capture_notes(
+                self.counts,
+                self.port,
+                self.source,
+                self._other_ports,
+                self._other_links,
+                self._other_protocols if not self.can.can_frames else Counter(),
             )
-            self.notes.append(
-                f"no TCP traffic to or from port {self.port} in {self.source}; "
-                f"TCP ports seen: {seen}. Give the IDU's port with --port."
-            )
-        if counts.offloaded_packets:
-            self.notes.append(
-                f"{counts.offloaded_packets:,} IP packet(s) of port {self.port} had a total "
-                "length of 0 or larger than the packet, as a capture on the sending host with "
-                "TCP segmentation offload records them: read with the captured length, as "
-                "Wireshark does"
-            )
-        if counts.swapped_can_ids:
-            self.notes.append(
-                f"{counts.swapped_can_ids:,} SocketCAN frame(s) had their CAN ID in "
-                "little-endian byte order (written by an old libpcap on a little-endian "
-                "host): read byte-swapped"
-            )
-        if self._other_links:
-            links = ", ".join(str(link) for link in sorted(self._other_links))
-            self.notes.append(
-                f"{sum(self._other_links.values()):,} packet(s) of interfaces with an "
-                f"unsupported link type ({links}) were skipped"
-            )
+        )
+        self.notes.extend(can_notes(self.can))
         given_up = self._flows.given_up
         if given_up.flows or given_up.bytes:
             self.notes.append(
@@ -192,48 +151,10 @@ class PcapReader(InputReader):
                 "byte(s) given up to stay within memory; see the incomplete diagnostics"
             )
 
-    def _capture_problems(self, time: float) -> list[InputItem]:
-        counts = self.counts
-        out: list[InputItem] = []
-        if counts.truncated_packets:
-            out.append(
-                diagnostic(
-                    time,
-                    self.source,
-                    INCOMPLETE,
-                    f"{counts.truncated_packets} TCP segment(s) of port {self.port} were captured "
-                    "shorter than sent (snap length or a cut-off file): bytes are missing",
-                    packets=counts.truncated_packets,
-                )
-            )
-        if counts.oversized_packets:
-            out.append(
-                diagnostic(
-                    time,
-                    self.source,
-                    BAD_FRAME,
-                    f"{counts.oversized_packets} packet record(s) hold far more bytes than their "
-                    "IP packet: their captured length may be wrong, and packets that follow "
-                    "them in the file may be hidden inside them",
-                    packets=counts.oversized_packets,
-                )
-            )
-        if counts.bad_packets:
-            out.append(
-                diagnostic(
-                    time,
-                    self.source,
-                    BAD_FRAME,
-                    f"{counts.bad_packets} packet(s) too short or malformed to read",
-                    packets=counts.bad_packets,
-                )
-            )
-        return out
-
     @property
     def stats(self) -> dict[str, int]:
         self._collect()
-        return {**vars(self.counts), "port": self.port}
+        return {**vars(self.counts), **vars(self.can), "port": self.port}
 
     def _collect(self) -> None:
         counts = self.counts
@@ -256,13 +177,39 @@ class PcapReader(InputReader):
         if record.fcs_bytes and not record.snapped:  # the frame check sequence is no payload
             packet = packet[: -record.fcs_bytes]
         if link == LINK_SOCKETCAN:
-            return self._can(time, packet)
+            return self._can(socketcan_frame(time, packet, "pcap", self.can, order="big"))
         ip: bytes | None
         if link == LINK_ETHERNET:
             ip = _ethernet_payload(packet)
         elif link == LINK_LINUX_SLL:
+            sll = sll_can(packet)
+            if sll is not None:  # tcpdump -i any: the ID in host byte order
+                protocol, can, direction = sll
+                frame = socketcan_frame(
+                    time,
+                    can,
+                    "any",
+                    self.can,
+                    order="little",
+                    protocol=protocol,
+                    direction=direction,
+                )
+                return self._can(frame)
             ip = packet[16:] if packet[14:16] in (b"\x08\x00", b"\x86\xdd") else None
         elif link == LINK_LINUX_SLL2:
+            sll2 = sll2_can(packet)
+            if sll2 is not None:
+                protocol, can, direction, ifindex = sll2
+                frame = socketcan_frame(
+                    time,
+                    can,
+                    f"if{ifindex}",
+                    self.can,
+                    order="little",
+                    protocol=protocol,
+                    direction=direction,
+                )
+                return self._can(frame)
             ip = packet[20:] if packet[0:2] in (b"\x08\x00", b"\x86\xdd") else None
         elif link in (LINK_NULL, LINK_LOOP):
             ip = packet[4:]
@@ -275,6 +222,10 @@ class PcapReader(InputReader):
             return []
         if not ip:
             self.counts.other_packets += 1
+            kind = _link_protocol(link, packet)
+            seen = self._other_protocols
+            if kind is not None and (len(seen) < MAX_PORTS_SEEN or kind in seen):
+                seen[kind] += 1
             return []
         return self._ip(time, ip, record.snapped)
 
@@ -392,37 +343,11 @@ class PcapReader(InputReader):
                 )
         return out
 
-    def _can(self, time: float, packet: bytes) -> list[InputItem]:
-        if len(packet) < CAN_HEADER:
+    def _can(self, frame: CanFrame | None) -> list[InputItem]:
+        if frame is None:
             self.counts.bad_packets += 1
             return []
-        raw_id = int.from_bytes(packet[0:4], "big")
-        if not _plausible_can_id(raw_id):
-            swapped = int.from_bytes(packet[0:4], "little")
-            if _plausible_can_id(swapped):  # an old libpcap wrote it in host byte order
-                raw_id = swapped
-                self.counts.swapped_can_ids += 1
-        length = packet[4]
-        data = packet[CAN_HEADER : CAN_HEADER + length]
-        if len(data) < length:
-            self.counts.truncated_packets += 1
-        self.counts.can_frames += 1
-        is_fd = len(packet) > 16 or bool(packet[5] & CANFD_FDF)
-        remote = bool(raw_id & CAN_RTR_FLAG)
-        return [
-            CanFrame(
-                time,
-                raw_id & 0x1FFFFFFF,
-                b"" if remote else data,
-                bool(raw_id & CAN_EFF_FLAG),
-                "pcap",
-                remote,
-                bool(raw_id & CAN_ERR_FLAG),
-                is_fd,
-                "",
-                length if remote else 0,
-            )
-        ]
+        return [frame]
 
 
 def _ethernet_payload(packet: bytes) -> bytes | None:
@@ -436,12 +361,12 @@ def _ethernet_payload(packet: bytes) -> bytes | None:
     return None
 
 
-def _plausible_can_id(raw_id: int) -> bool:
-    """Whether a SocketCAN ID word makes sense: 11 bits unless extended, small error classes."""
-    ident = raw_id & 0x1FFFFFFF
-    if raw_id & CAN_ERR_FLAG:
-        return ident < 0x1000
-    return bool(raw_id & CAN_EFF_FLAG) or ident <= 0x7FF
+def _link_protocol(link: int, packet: bytes) -> int | None:
+    """The EtherType / protocol of an Ethernet or Linux cooked packet (None for others)."""
+    where = {LINK_ETHERNET: 12, LINK_LINUX_SLL: 14, LINK_LINUX_SLL2: 0}.get(link)
+    if where is None or len(packet) < where + 2:
+        return None
+    return int.from_bytes(packet[where : where + 2], "big")
 
 
 def _flow_name(client: tuple[str, int], server: tuple[str, int]) -> str:

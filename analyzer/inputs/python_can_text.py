@@ -23,6 +23,9 @@ _ASC_HEADER = re.compile(r"\s*(date\s|base\s|//|(no\s+)?internal\s+events\s+logg
 _ASC_RELATIVE = re.compile(r"\s*base\s+\w+\s+timestamps\s+relative", re.I)
 _ASC_TRIGGER = re.compile(r"\s*begin\s+triggerblock\b", re.I)
 _ASC_END_OF_HEADER = "no internal events logged\n"  # ends python-can's header scan cleanly
+# python-can's CSVReader skips the first line it is given as the header: a file without
+# one gets this in front, so that no frame line is taken for a header.
+_CSV_HEADER = "timestamp,arbitration_id,extended,remote,error,dlc,data\n"
 
 # Time bases (``InputReader.time_base``).
 ABSOLUTE = "absolute"
@@ -139,6 +142,8 @@ class TextLogReading:
 
     def _replay(self) -> list[str]:
         replay = list(self.header)
+        if self.fmt == "csv" and not replay:
+            replay.append(_CSV_HEADER)
         if self.fmt == "asc":
             replay.append(_ASC_END_OF_HEADER)
             if self.trigger is not None:

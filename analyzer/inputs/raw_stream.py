@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.content import describe
 from analyzer.protocol.types import StreamChunk
 
 CHUNK_SIZE = 1 << 16
@@ -25,6 +26,16 @@ class RawStreamReader(InputReader):
         self.direction = direction
         self.chunk_size = chunk_size
         self.chunks = 0
+        head = self._handle.read(4096)
+        self._handle.seek(0)
+        # What the bytes look like when they are something else (a DataFlash log, a capture).
+        self.looks_like = describe(head)
+        if self.looks_like is not None and self.looks_like[1] is not None:
+            words, fmt = self.looks_like
+            self.notes.append(
+                f"{self.source} looks like {words}, not a raw TCP/UART stream: "
+                f"read it with --format {fmt}"
+            )
 
     def __iter__(self) -> Iterator[InputItem]:
         read = self._handle.read
