@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import struct
 from collections.abc import Iterator
 from typing import IO, Any
@@ -11,6 +12,7 @@ from analyzer.mcapio.chunks import (
     MESSAGE_FIXED,
     OPCODE_CHUNK,
     OPCODE_MESSAGE,
+    OPCODE_METADATA,
     RECORD_HEAD,
     ChunkDamage,
     chunk_payload,
@@ -91,6 +93,28 @@ def messages_in(records: bytes) -> Iterator[tuple[int, int, bytes]]:
                 raise ChunkDamage("a message record is too short")
             channel_id, _, log_time = unpack(records, body)
             yield channel_id, log_time, records[body + MESSAGE_FIXED : end]
+
+
+def indexed_metadata(f: IO[bytes], summary: Any, data_end: int) -> dict[str, dict[str, str]]:
+    """Metadata records by name, found through the summary's metadata index (an index entry
+    pointing outside the data is ignored; a damaged record ends the search)."""
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import Metadata
+
+    out: dict[str, dict[str, str]] = {}
+    try:
+        for index in summary.metadata_indexes:
+            if not 0 < index.offset <= index.offset + index.length <= data_end:
+                continue
+            f.seek(index.offset)
+            raw = f.read(index.length)
+            if len(raw) < 9 or raw[0] != OPCODE_METADATA:
+                continue
+            found = Metadata.read(ReadDataStream(io.BytesIO(raw[9:])))
+            out[found.name] = dict(found.metadata)
+    except Exception:  # keep what was found before the damaged record
+        pass
+    return out
 
 
 def verify_chunks(

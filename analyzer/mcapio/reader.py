@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 import json
 import os
 from collections.abc import Iterator
@@ -12,21 +11,21 @@ from analyzer.mcapio.channels import (
     RAW_TOPICS,
     ROLE_EVENT,
     ROLE_RAW,
-    TOPIC_CAN_FRAMES,
-    TOPIC_STREAM_BYTES,
-    can_frame_from_dict,
-    stream_chunk_from_dict,
 )
-from analyzer.mcapio.chunks import OPCODE_METADATA
 from analyzer.mcapio.file_end import RecordingError, read_file_end
-from analyzer.mcapio.indexed_read import read_indexed, verify_chunks
+from analyzer.mcapio.indexed_read import indexed_metadata, read_indexed, verify_chunks
 from analyzer.mcapio.recover import Damage, Recovery, metadata_before_data
+from analyzer.mcapio.ros_can import ROS_CAN_ROLES
 from analyzer.mcapio.sequential_read import read_sequentially
 from analyzer.mcapio.stored_message import (
     ChannelFilter,
+    ChannelKind,
     MessageTally,
     RawMessage,
+    channel_kind,
     channel_role,
+    raw_item,
+    ros_item,
 )
 from analyzer.pipeline import RawItem
 from analyzer.protocol.types import (
@@ -34,6 +33,7 @@ from analyzer.protocol.types import (
     INCOMPLETE,
     LINK,
     TOPIC_DIAGNOSTICS,
+    CanFrame,
     Event,
     diagnostic,
 )
@@ -49,6 +49,7 @@ __all__ = [
     "read_events",
     "read_items",
     "read_replay",
+    "ros_item",
 ]
 
 T = TypeVar("T")
@@ -79,8 +80,8 @@ class Recording:
         self.recovered = bool(self.problem)
         self.summary_damaged = self.recovered and self._summary_start > 0
         self.recovery: Recovery | None = None
-        # topic -> schema name of channels met by the recover path
-        self.recovered_schemas: dict[str, str] = {}
+        # topic -> kind of the channels met by a sequential read
+        self._kinds_seen: dict[str, ChannelKind] = {}
         # parts of the file that reading skipped
         self.damage: list[Damage] = []
         if end.damaged_magic:
@@ -100,6 +101,32 @@ class Recording:
             return f"unfinished recording, read through the recover path: {self.problem}"
         return self.recovery.describe()
 
+    @property
+    def recovered_schemas(self) -> dict[str, str]:
+        """Topic -> schema name of the channels met by the recover path."""
+        return {topic: kind.schema for topic, kind in self._kinds_seen.items()}
+
+    def channel_kinds(self) -> list[ChannelKind] | None:
+        """The channels of the file, by topic: from the summary of a finished file; for a
+        file read sequentially, those met so far (None before a read)."""
+        summary = self.summary()
+        if summary is not None and summary.channels:
+            return sorted(
+                (
+                    channel_kind(
+                        ch.topic,
+                        dict(ch.metadata),
+                        summary.schemas.get(ch.schema_id),
+                        ch.message_encoding,
+                    )
+                    for ch in summary.channels.values()
+                ),
+                key=lambda kind: kind.topic,
+            )
+        if self._kinds_seen:
+            return sorted(self._kinds_seen.values(), key=lambda kind: kind.topic)
+        return None
+
     def summary(self) -> Any:
         """The mcap Summary of a finished file (None when recovered or written without one)."""
         return None if self.recovered else self._summary
@@ -108,27 +135,14 @@ class Recording:
 
     def metadata(self) -> dict[str, dict[str, str]]:
         """Metadata records by name. A recovered file gives the ones before its first chunk."""
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Metadata
-
-        out: dict[str, dict[str, str]] = {}
         try:
             with open(self.path, "rb") as f:
                 summary = self.summary()
                 if summary is None:
                     return metadata_before_data(f, self.size)
-                for index in summary.metadata_indexes:
-                    if not 0 < index.offset <= index.offset + index.length <= self._data_end():
-                        continue  # an index pointing outside the data: ignore it
-                    f.seek(index.offset)
-                    raw = f.read(index.length)
-                    if len(raw) < 9 or raw[0] != OPCODE_METADATA:
-                        continue
-                    found = Metadata.read(ReadDataStream(io.BytesIO(raw[9:])))
-                    out[found.name] = dict(found.metadata)
-        except Exception:  # a damaged record ends the search; keep what was found
-            pass
-        return out
+                return indexed_metadata(f, summary, self._data_end())
+        except Exception:  # a damaged record ends the search (found before it: kept there)
+            return {}
 
     def _data_end(self) -> int:
         return self._summary_start or self.size
@@ -164,6 +178,11 @@ class Recording:
         def wanted(topic: str, role: str) -> bool:
             return (topics is None or topic in topics) and (roles is None or role in roles)
 
+        return self._entries_where(wanted, tally)
+
+    def _entries_where(
+        self, wanted: ChannelFilter, tally: MessageTally | None = None
+    ) -> Iterator[RawMessage | Damage]:
         source = self._recover(wanted, tally) if self.recovered else self._read_finished(wanted)
         for entry in source:
             if isinstance(entry, Damage):
@@ -176,10 +195,19 @@ class Recording:
         if summary is None or not summary.chunk_indexes:
             yield from self._read_with_library(wanted)
             return
-        chosen = {
-            channel_id: (ch.topic, channel_role(ch.topic, ch.metadata))
+        roles = {
+            channel_id: channel_role(
+                ch.topic,
+                ch.metadata,
+                getattr(summary.schemas.get(ch.schema_id), "name", ""),
+                ch.message_encoding,
+            )
             for channel_id, ch in summary.channels.items()
-            if wanted(ch.topic, channel_role(ch.topic, ch.metadata))
+        }
+        chosen = {
+            channel_id: (ch.topic, roles[channel_id])
+            for channel_id, ch in summary.channels.items()
+            if wanted(ch.topic, roles[channel_id])
         }
         if not chosen:
             return
@@ -227,17 +255,25 @@ class Recording:
             tally,
             channels,
             report,
-            schemas_seen=self.recovered_schemas,
+            kinds_seen=self._kinds_seen,
             damage=self.damage,
         )
 
     # -- typed views -----------------------------------------------------------------------------
 
     def items(self) -> Iterator[RawItem]:
-        """Raw CAN frames and stream chunks, for decoding again."""
-        for message in self.messages(topics=set(RAW_TOPICS), roles={ROLE_RAW}):
+        """Raw CAN frames and stream chunks, for decoding again (also the CAN frames of
+        ROS bag channels; one that cannot be decoded is skipped: ``replay`` reports it)."""
+        for entry in self._entries_where(_raw_or_ros):
+            if not isinstance(entry, RawMessage):
+                continue
+            if entry.role in ROS_CAN_ROLES:
+                frame = ros_item(entry)
+                if isinstance(frame, CanFrame):
+                    yield frame
+                continue
             try:
-                item = raw_item(message.topic, json.loads(message.data))
+                item = raw_item(entry.topic, json.loads(entry.data))
             except (ValueError, KeyError, TypeError):
                 continue  # not one of ours: nothing to decode
             if item is not None:
@@ -247,13 +283,15 @@ class Recording:
         """Raw items plus the stored diagnostics a decoder cannot re-create (link changes,
         unreadable input lines), in file order: what to feed a Decoder to decode again.
         A lost part of the file becomes an ``incomplete`` diagnostic where it was."""
-        wanted = {*RAW_TOPICS, TOPIC_DIAGNOSTICS}
         last = 0
-        for entry in self.entries(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
+        for entry in self._entries_where(_replayed):
             if isinstance(entry, Damage):
                 yield self._damage_event(entry, last)
                 continue
             last = entry.log_time
+            if entry.role in ROS_CAN_ROLES:
+                yield ros_item(entry)
+                continue
             try:
                 obj = json.loads(entry.data)
                 item = raw_item(entry.topic, obj)
@@ -296,6 +334,19 @@ class Recording:
         return diagnostic(when, self.path, INCOMPLETE, f"damaged recording: {damage.detail}")
 
 
+def _raw_or_ros(topic: str, role: str) -> bool:
+    return (role == ROLE_RAW and topic in RAW_TOPICS) or role in ROS_CAN_ROLES
+
+
+def _replayed(topic: str, role: str) -> bool:
+    if role in ROS_CAN_ROLES:
+        return True
+    return topic in _REPLAYED_TOPICS and role in (ROLE_RAW, ROLE_EVENT)
+
+
+_REPLAYED_TOPICS = frozenset({*RAW_TOPICS, TOPIC_DIAGNOSTICS})
+
+
 class RecordingIterator(Generic[T]):
     """An iterator that also says whether its recording was recovered."""
 
@@ -322,15 +373,6 @@ class RecordingIterator(Generic[T]):
     def note(self) -> str:
         """'' for a finished file; else what the recover path read (complete after iterating)."""
         return self.recording.recovery_note
-
-
-def raw_item(topic: str, obj: Any) -> RawItem | None:
-    """The frame or chunk of a raw-channel message (None for other topics)."""
-    if topic == TOPIC_CAN_FRAMES:
-        return can_frame_from_dict(obj)
-    if topic == TOPIC_STREAM_BYTES:
-        return stream_chunk_from_dict(obj)
-    return None
 
 
 def read_items(path: str | os.PathLike[str]) -> RecordingIterator[RawItem]:

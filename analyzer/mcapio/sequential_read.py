@@ -6,7 +6,13 @@ from collections.abc import Iterator
 from typing import Any
 
 from analyzer.mcapio.recover import Damage, Recovery, Scan, scan_records
-from analyzer.mcapio.stored_message import ChannelFilter, MessageTally, RawMessage, channel_role
+from analyzer.mcapio.stored_message import (
+    ChannelFilter,
+    ChannelKind,
+    MessageTally,
+    RawMessage,
+    channel_kind,
+)
 
 
 def read_sequentially(
@@ -17,13 +23,13 @@ def read_sequentially(
     channels: dict[int, Any],
     report: Recovery,
     *,
-    schemas_seen: dict[str, str],
+    kinds_seen: dict[str, ChannelKind],
     damage: list[Damage],
 ) -> Iterator[RawMessage | Damage]:
     """Messages of the wanted channels and the damaged parts, in file order.
 
     ``channels`` are the channel records known beforehand (from a summary); the others are
-    learnt on the way. ``schemas_seen`` gets topic -> schema name of every channel met;
+    learnt on the way. ``kinds_seen`` gets topic -> kind of every channel met;
     ``damage`` is the list of damaged parts the caller keeps (already yielded ones included)."""
     scan = Scan(size, report, channels=channels)
     roles: dict[int, tuple[str, str, bool]] = {}  # channel id -> topic, role, wanted
@@ -39,10 +45,10 @@ def read_sequentially(
                     report.unknown_channel += 1
                     continue
                 topic = channel.topic
-                role = channel_role(topic, dict(channel.metadata))
                 schema = scan.schemas.get(channel.schema_id)
-                schemas_seen[topic] = schema.name if schema is not None else ""
-                known = roles[entry.channel_id] = (topic, role, wanted(topic, role))
+                kind = channel_kind(topic, dict(channel.metadata), schema, channel.message_encoding)
+                kinds_seen[topic] = kind
+                known = roles[entry.channel_id] = (topic, kind.role, wanted(topic, kind.role))
             report.messages += 1
             if tally is not None:
                 tally(known[0], known[1], entry.log_time)
