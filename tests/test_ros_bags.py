@@ -1,0 +1,225 @@
+"""ROS 2 bags: ros2_socketcan's can_msgs/msg/Frame in a rosbag2 MCAP decodes like the CAN log."""
+
+from __future__ import annotations
+
+import json
+import struct
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from analyzer.cli import main
+from analyzer.inputs import open_input
+from analyzer.mcapio.info import recording_info
+from analyzer.mcapio.ros_can import RosFrameError, frame_from_cdr
+from analyzer.protocol.types import BAD_FRAME, CanFrame, Event
+from tests.rosbag2_files import (
+    FRAME_DEFINITION,
+    FRAME_TYPE,
+    TYPE_HASH,
+    cdr_frames,
+    rosbag2_mcap,
+    write,
+)
+
+SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "flight-candump.log"
+TOPIC = "/from_can_bus"
+
+
+@pytest.fixture(scope="module")
+def log_frames() -> list[CanFrame]:
+    frames = [item for item in open_input(str(SAMPLE)) if isinstance(item, CanFrame)]
+    assert len(frames) == 629
+    return frames
+
+
+def _as_on_topic(frames: list[CanFrame]) -> list[CanFrame]:
+    return [replace(frame, channel=TOPIC) for frame in frames]
+
+
+def _read(path: Path) -> list[CanFrame | Event]:
+    return [item for item in open_input(str(path)) if isinstance(item, CanFrame | Event)]
+
+
+def test_rosbag2_mcap_holds_the_frames_of_the_log(tmp_path: Path, log_frames: list) -> None:
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames))
+    items = _read(path)
+    # every frame, in order, its time the driver's header stamp, its channel the topic
+    assert items == _as_on_topic(log_frames)
+
+
+def test_frames_agree_with_mcap_ros2_support(tmp_path: Path, log_frames: list) -> None:
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames))
+    reference = []
+    with path.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        decoded = list(reader.iter_decoded_messages())
+    for _, channel, _, ros in decoded:
+        stamp = ros.header.stamp.sec * 10**9 + ros.header.stamp.nanosec
+        assert channel.topic == TOPIC and ros.header.frame_id == "can"
+        reference.append(
+            CanFrame(stamp / 10**9, ros.id, bytes(ros.data)[: ros.dlc], ros.is_extended, TOPIC)
+        )
+    assert _read(path) == reference
+
+
+def test_decode_gives_the_events_of_the_log(
+    tmp_path: Path, log_frames: list, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames))
+
+    def events(source: str) -> list[dict]:
+        assert main(["decode", source, "--json"]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        out = [json.loads(line) for line in lines]
+        for event in out:
+            event.pop("source")
+        return [e for e in out if e.get("kind") != "bad_line"]
+
+    from_bag = events(str(path))
+    assert len(from_bag) > 300
+    assert from_bag == events(str(SAMPLE))
+
+
+def test_info_calls_a_finished_bag_finished(
+    tmp_path: Path, log_frames: list, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames, extra_topics=["/rosout"]))
+    info = recording_info(path)
+    assert info.closed and not info.recovered and not info.damage
+    topics = {t.topic: (t.schema, t.count) for t in info.topics}
+    assert topics[TOPIC] == (FRAME_TYPE, 629)
+    assert info.tally.frames == 629  # the figures come from the frames, decoded again
+    assert "decoded again" in info.stats_from
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "finished)" in out.splitlines()[0]
+    assert "NOT CLOSED" not in out
+    assert f"{TOPIC}" in out and FRAME_TYPE in out
+
+
+def test_unfinished_bag_is_recovered(tmp_path: Path, log_frames: list) -> None:
+    # rosbag2 killed: the chunks written so far, no summary and no footer
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames, finished=False))
+    info = recording_info(path)
+    assert info.recovered
+    assert _read(path)[:-1] == _as_on_topic(log_frames)  # then an `incomplete` note
+    # cut in the middle of its only chunk: nothing readable, and that is said
+    whole = path.read_bytes()
+    cut = write(tmp_path / "cut.mcap", whole[: len(whole) // 2])
+    (note,) = _read(cut)
+    assert isinstance(note, Event) and note.fields["kind"] == "incomplete"
+
+
+def test_message_that_is_not_a_frame_becomes_a_diagnostic(tmp_path: Path, log_frames: list) -> None:
+    messages = cdr_frames(log_frames[:5])
+    log_time, data = messages[2]
+    bad = bytearray(data)
+    bad[len(bad) - 9] = 9  # dlc 9
+    messages[2] = (log_time, bytes(bad))
+    path = write(tmp_path / "bad.mcap", rosbag2_mcap([], messages=messages))
+    items = _read(path)
+    assert items[:2] + items[3:] == _as_on_topic(log_frames[:2] + log_frames[3:5])
+    assert isinstance(items[2], Event)
+    assert items[2].fields["kind"] == BAD_FRAME
+    assert "dlc 9 is over 8" in items[2].fields["detail"]
+
+
+def test_mcap_without_usable_channel_lists_its_channels(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(
+        tmp_path / "chat.mcap",
+        rosbag2_mcap([], messages=[], topic=None, extra_topics=["/chatter", "/rosout"]),
+    )
+    assert main(["decode", str(path)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("gimbal-analyzer decode: error: ")
+    assert "no channel this tool can read" in lines[0]
+    assert lines[1:] == [
+        "  /chatter  std_msgs/msg/String (ros2msg/cdr)",
+        "  /rosout  std_msgs/msg/String (ros2msg/cdr)",
+    ]
+
+
+def test_stored_events_of_a_bag_are_refused(
+    tmp_path: Path, log_frames: list, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path / "flight_0.mcap", rosbag2_mcap(log_frames[:3]))
+    assert main(["decode", "--stored", str(path)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert "--stored reads the events this tool records" in lines[0]
+    assert lines[1] == f"  {TOPIC}  {FRAME_TYPE} (ros2msg/cdr)"
+
+
+def rosbags_bag(directory: Path, frames: list[CanFrame], plugin: str) -> Path:
+    """A rosbag2 bag written by rosbags (another writer of both storages)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    storage = StoragePlugin.MCAP if plugin == "mcap" else StoragePlugin.SQLITE3
+    with Writer(directory, version=9, storage_plugin=storage) as writer:
+        connection = writer.add_connection(
+            TOPIC, FRAME_TYPE, msgdef=FRAME_DEFINITION, rihs01=TYPE_HASH
+        )
+        for log_time, data in cdr_frames(frames):
+            writer.write(connection, log_time, data)
+    (path,) = directory.glob(f"*.{plugin}")
+    return path
+
+
+def test_bag_written_by_rosbags_decodes_too(tmp_path: Path, log_frames: list) -> None:
+    path = rosbags_bag(tmp_path / "bag", log_frames[:50], "mcap")
+    assert _read(path) == _as_on_topic(log_frames[:50])
+
+
+# -- the CDR layout, against arbitrary bytes and against mcap-ros2-support's encoder ----------
+
+_frames = st.builds(
+    lambda ext, can_id, data, sec, ns, remote: CanFrame(
+        (sec * 10**9 + ns) / 10**9,
+        can_id & (0x1FFFFFFF if ext else 0x7FF),
+        b"" if remote else data,
+        ext,
+        TOPIC,
+        remote,
+        remote_dlc=len(data) if remote else 0,
+    ),
+    st.booleans(),
+    st.integers(0, 0x1FFFFFFF),
+    st.binary(max_size=8),
+    st.integers(1, 2**31 - 1),
+    st.integers(0, 10**9 - 1),
+    st.booleans(),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(_frames, min_size=1, max_size=5))
+def test_cdr_frames_round_trip(frames: list[CanFrame]) -> None:
+    decoded = [frame_from_cdr(data, TOPIC, 0) for _, data in cdr_frames(frames)]
+    assert decoded == frames
+
+
+@settings(max_examples=500, deadline=None)
+@given(st.binary(max_size=64))
+def test_any_bytes_give_a_frame_or_a_reason(data: bytes) -> None:
+    try:
+        frame = frame_from_cdr(data, TOPIC, 5)
+    except RosFrameError as exc:
+        assert str(exc)
+        return
+    assert len(frame.data) <= 8 and 0 <= frame.can_id <= 0x1FFFFFFF
+
+
+def test_big_endian_cdr_is_read() -> None:
+    body = struct.pack(">iII4s", 7, 5, 4, b"can\0") + struct.pack(
+        ">I4B8s", 0x123, 0, 0, 0, 2, b"\1\2"
+    )
+    frame = frame_from_cdr(b"\x00\x00\x00\x00" + body, TOPIC, 0)
+    assert frame == CanFrame(7.000000005, 0x123, b"\1\2", False, TOPIC)
