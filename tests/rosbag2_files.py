@@ -219,3 +219,37 @@ def clear_chunk_crcs(data: bytes) -> bytes:
 def write(path: Path, data: bytes) -> Path:
     path.write_bytes(data)
     return path
+
+
+# ROS 1: ros_canopen's can_msgs/Frame (Header is std_msgs/Header with seq) as its
+# socketcan_bridge publishes it on "received_messages": empty frame_id, seq counting up, a
+# new message per frame (data past dlc zero); written by rosbags' ROS 1 bag writer.
+ROS1_FRAME_MSG = FRAME_MSG.replace("std_msgs/Header", "Header")
+
+
+def ros1_bag(path: Path, frames: Sequence[CanFrame], topic: str = "/received_messages") -> Path:
+    import numpy as np
+    from rosbags.rosbag1 import Writer as Ros1Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    store.register(get_types_from_msg(ROS1_FRAME_MSG, FRAME_TYPE))
+    frame_type = store.types[FRAME_TYPE]
+    header = store.types["std_msgs/msg/Header"]
+    time = store.types["builtin_interfaces/msg/Time"]
+    with Ros1Writer(path) as writer:
+        connection = writer.add_connection(topic, FRAME_TYPE, typestore=store)
+        for seq, frame in enumerate(frames):
+            stamp = stamp_ns(frame.time)
+            message = frame_type(
+                header=header(seq=seq, stamp=time(stamp // 10**9, stamp % 10**9), frame_id=""),
+                id=frame.can_id,
+                is_rtr=frame.is_remote,
+                is_extended=frame.extended,
+                is_error=frame.is_error,
+                dlc=frame.dlc,
+                data=np.frombuffer(frame.data.ljust(8, b"\0"), dtype=np.uint8),
+            )
+            data = store.serialize_ros1(message, FRAME_TYPE)
+            writer.write(connection, stamp + RECEIVE_DELAY_NS, bytes(data))
+    return path

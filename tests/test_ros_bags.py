@@ -21,6 +21,7 @@ from tests.rosbag2_files import (
     FRAME_TYPE,
     TYPE_HASH,
     cdr_frames,
+    ros1_bag,
     rosbag2_mcap,
     write,
 )
@@ -176,6 +177,58 @@ def rosbags_bag(directory: Path, frames: list[CanFrame], plugin: str) -> Path:
 def test_bag_written_by_rosbags_decodes_too(tmp_path: Path, log_frames: list) -> None:
     path = rosbags_bag(tmp_path / "bag", log_frames[:50], "mcap")
     assert _read(path) == _as_on_topic(log_frames[:50])
+
+
+def test_rosbag2_sqlite3_storage_decodes_too(tmp_path: Path, log_frames: list) -> None:
+    path = rosbags_bag(tmp_path / "bag", log_frames, "db3")
+    assert _read(path) == _as_on_topic(log_frames)
+
+
+def test_ros1_bag_holds_the_frames_of_the_log(tmp_path: Path, log_frames: list) -> None:
+    path = ros1_bag(tmp_path / "flight.bag", log_frames)
+    on_topic = [replace(frame, channel="/received_messages") for frame in log_frames]
+    assert _read(path) == on_topic
+
+
+def test_bag_without_can_topic_lists_its_topics(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from rosbags.rosbag1 import Writer as Ros1Writer
+
+    path = tmp_path / "chat.bag"
+    with Ros1Writer(path) as writer:
+        writer.add_connection("/chatter", "std_msgs/msg/String", msgdef="string data", md5sum="x")
+    assert main(["decode", str(path)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert "no can_msgs/Frame topic to read" in lines[0]
+    assert lines[1:] == ["  /chatter  std_msgs/msg/String"]
+
+
+def test_damaged_ros1_bag_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "bad.bag"
+    path.write_bytes(b"#ROSBAG V2.0\n" + bytes(range(256)) * 4)
+    assert main(["decode", str(path)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("gimbal-analyzer decode: error: ") and "not a readable ROS bag" in line
+
+
+def test_ros1_bag_cut_short_or_with_a_hole(
+    tmp_path: Path, log_frames: list, capsys: pytest.CaptureFixture[str]
+) -> None:
+    whole = ros1_bag(tmp_path / "flight.bag", log_frames).read_bytes()
+    # killed recorder: no index at the end, which rosbag reindex would rebuild
+    cut = write(tmp_path / "cut.bag", whole[: len(whole) * 2 // 3])
+    assert main(["decode", str(cut)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert "not a readable ROS bag" in line and "rosbag reindex" in line
+    # zeroed bytes in the middle: the frames before, then a note where reading stopped
+    holed = bytearray(whole)
+    holed[len(whole) // 2 : len(whole) // 2 + 40] = bytes(40)
+    items = _read(write(tmp_path / "hole.bag", bytes(holed)))
+    frames = [item for item in items if isinstance(item, CanFrame)]
+    assert 0 < len(frames) < len(log_frames)
+    assert frames == [replace(f, channel="/received_messages") for f in log_frames[: len(frames)]]
+    assert isinstance(items[-1], Event) and items[-1].fields["kind"] == "incomplete"
 
 
 # -- the CDR layout, against arbitrary bytes and against mcap-ros2-support's encoder ----------
