@@ -53,9 +53,8 @@ class RosbagReader(InputReader):
                 self._reader = Ros2Reader(Path(path))
             self._reader.open()
         except ImportError as exc:
-            raise UsageError(
-                f"cannot read {path}: ROS bag support is not available ({exc})"
-            ) from None
+            missing = f"ROS bag support is not available ({exc}; pip install '.[ros]')"
+            raise UsageError(f"cannot read {path}: {missing}") from None
         except Exception as exc:  # rosbags' ReaderError and what a bad header raises
             hint = ""
             if self.ros1 and "index" in str(exc).lower():
