@@ -147,6 +147,14 @@ def test_mcap_without_usable_channel_lists_its_channels(
         "  /chatter  std_msgs/msg/String (ros2msg/cdr)",
         "  /rosout  std_msgs/msg/String (ros2msg/cdr)",
     ]
+    # unfinished (no summary): the channels are known once the file was read through
+    unfinished = rosbag2_mcap(
+        [], messages=[], topic=None, extra_topics=["/chatter"], finished=False
+    )
+    assert main(["decode", str(write(tmp_path / "chat_0.mcap", unfinished))]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert "no channel this tool can read" in lines[0]
+    assert lines[1:] == ["  /chatter  std_msgs/msg/String (ros2msg/cdr)"]
 
 
 def test_stored_events_of_a_bag_are_refused(
