@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import json
 import struct
+import tempfile
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.cli import main
+from analyzer.errors import InputError
 from analyzer.inputs import open_input
 from analyzer.mcapio.info import recording_info
 from analyzer.mcapio.ros_can import RosFrameError, frame_from_cdr
@@ -237,6 +239,41 @@ def test_ros1_bag_cut_short_or_with_a_hole(
     assert 0 < len(frames) < len(log_frames)
     assert frames == [replace(f, channel="/received_messages") for f in log_frames[: len(frames)]]
     assert isinstance(items[-1], Event) and items[-1].fields["kind"] == "incomplete"
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    cut=st.one_of(st.none(), st.integers(0, 60_000)),
+    flips=st.lists(st.tuples(st.integers(0, 60_000), st.integers(1, 255)), max_size=4),
+)
+def test_damaged_bags_give_frames_and_diagnostics_never_a_traceback(
+    cut: int | None, flips: list[tuple[int, int]]
+) -> None:
+    data = bytearray(_BAG)
+    for at, mask in flips:
+        if at < len(data):
+            data[at] ^= mask
+    if cut is not None:
+        data = data[:cut]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bag.mcap"
+        path.write_bytes(bytes(data))
+        try:
+            items = _read(path)
+        except InputError:  # not recognisable as MCAP, or no usable channel left
+            return
+    frames = [item for item in items if isinstance(item, CanFrame)]
+    assert len(frames) <= len(_BAG_FRAMES)
+    if not flips:  # cut short only: a prefix of the frames, then the cut is said
+        assert frames == _BAG_FRAMES[: len(frames)]
+        if len(frames) < len(_BAG_FRAMES):
+            assert any(isinstance(i, Event) and i.fields["kind"] == "incomplete" for i in items)
+
+
+_BAG_FRAMES = [
+    replace(f, channel=TOPIC) for f in open_input(str(SAMPLE)) if isinstance(f, CanFrame)
+]
+_BAG = rosbag2_mcap(_BAG_FRAMES)
 
 
 # -- the CDR layout, against arbitrary bytes and against mcap-ros2-support's encoder ----------
