@@ -105,6 +105,7 @@ def test_info_calls_a_finished_bag_finished(
     assert "finished)" in out.splitlines()[0]
     assert "NOT CLOSED" not in out
     assert f"{TOPIC}" in out and FRAME_TYPE in out
+    assert "written by  libmcap 1.4.1, profile ros2" in out  # its header record
 
 
 def test_unfinished_bag_is_recovered(tmp_path: Path, log_frames: list) -> None:

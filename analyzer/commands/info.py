@@ -103,6 +103,8 @@ def render(info: RecordingInfo) -> str:
         lines.append(f"source      {meta['source']}")
     if meta.get("tool_version"):
         lines.append(f"recorded by gimbal-analyzer {meta['tool_version']}")
+    elif info.writer:  # another writer's file (a ROS bag): what its header says
+        lines.append(f"written by  {info.writer}")
     if meta.get("protocol_document"):
         lines.append(f"protocol    {meta['protocol_document']}")
     if info.start_ns is None or info.end_ns is None:

@@ -52,6 +52,27 @@ def read_file_end(path: str) -> FileEnd:
     return FileEnd(size, damaged_magic, problem, start, summary)
 
 
+def read_header(path: str) -> tuple[str, str]:
+    """(profile, library) of the file's header record; ('', '') when it cannot be read."""
+    with open(path, "rb") as f:
+        head = f.read(len(MAGIC) + 9 + 1024)
+    at = len(MAGIC)
+    if len(head) < at + 9 or head[at] != 0x01:
+        return "", ""
+    out = []
+    at += 9
+    for _ in range(2):
+        if at + 4 > len(head):
+            return "", ""
+        (length,) = struct.unpack_from("<I", head, at)
+        text = head[at + 4 : at + 4 + length]
+        if len(text) < length:
+            return "", ""
+        out.append(text.decode("utf-8", "replace"))
+        at += 4 + length
+    return out[0], out[1]
+
+
 def _ends_with_magic(f: IO[bytes], size: int) -> bool:
     if size < 2 * len(MAGIC) + FOOTER_RECORD_SIZE:
         return False

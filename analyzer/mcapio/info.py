@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.mcapio.channels import METADATA_NAME, ROLE_EVENT, ROLE_RAW, STATS_METADATA_NAME
+from analyzer.mcapio.file_end import read_header
 from analyzer.mcapio.reader import RawMessage, Recording, channel_role, raw_item, ros_item
 from analyzer.mcapio.ros_can import ROS_CAN_ROLES
 from analyzer.pipeline import Decoding, default_decoder
@@ -47,6 +48,7 @@ class RecordingInfo:
     extra: dict[str, Any] = field(default_factory=dict)
     damage: list[str] = field(default_factory=list)  # parts of the file that cannot be read
     summary_damaged: bool = False  # a finished file whose summary failed its checks
+    writer: str = ""  # the library and profile of the header record ("libmcap 1.4.1, profile ros2")
     # False for a live recording of this tool whose recorder never closed it (killed, power
     # lost): its provisional summary makes it complete up to the last flush, the closing stats
     # are absent. A finished file of another writer (a ROS bag) is closed.
@@ -79,6 +81,7 @@ class RecordingInfo:
             "stats_from": self.stats_from,
             "scanned_messages": self.scanned_messages,
             "summary_damaged": self.summary_damaged,
+            "writer": self.writer,
             "damage": self.damage,
         }
 
@@ -147,6 +150,13 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     (unfinished) file has no summary: its readable part is scanned once, sequentially.
     """
     recording = Recording(path)
+    info = _summarise(recording, scan)
+    profile, library = read_header(recording.path)
+    info.writer = ", ".join(part for part in (library, profile and f"profile {profile}") if part)
+    return info
+
+
+def _summarise(recording: Recording, scan: bool) -> RecordingInfo:
     metadata = recording.metadata()
     base = dict(metadata.get(METADATA_NAME, {}))
     if recording.recovered:
