@@ -227,9 +227,9 @@ def write(path: Path, data: bytes) -> Path:
 ROS1_FRAME_MSG = FRAME_MSG.replace("std_msgs/Header", "Header")
 
 
-def ros1_bag(path: Path, frames: Sequence[CanFrame], topic: str = "/received_messages") -> Path:
+def ros1_messages(frames: Sequence[CanFrame]) -> tuple[object, list[tuple[int, bytes]]]:
+    """(rosbags typestore with can_msgs/Frame, [(receive time ns, ROS 1 bytes)])."""
     import numpy as np
-    from rosbags.rosbag1 import Writer as Ros1Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.ROS1_NOETIC)
@@ -237,19 +237,47 @@ def ros1_bag(path: Path, frames: Sequence[CanFrame], topic: str = "/received_mes
     frame_type = store.types[FRAME_TYPE]
     header = store.types["std_msgs/msg/Header"]
     time = store.types["builtin_interfaces/msg/Time"]
+    out = []
+    for seq, frame in enumerate(frames):
+        stamp = stamp_ns(frame.time)
+        message = frame_type(
+            header=header(seq=seq, stamp=time(stamp // 10**9, stamp % 10**9), frame_id=""),
+            id=frame.can_id,
+            is_rtr=frame.is_remote,
+            is_extended=frame.extended,
+            is_error=frame.is_error,
+            dlc=frame.dlc,
+            data=np.frombuffer(frame.data.ljust(8, b"\0"), dtype=np.uint8),
+        )
+        out.append((stamp + RECEIVE_DELAY_NS, bytes(store.serialize_ros1(message, FRAME_TYPE))))
+    return store, out
+
+
+def ros1_bag(path: Path, frames: Sequence[CanFrame], topic: str = "/received_messages") -> Path:
+    from rosbags.rosbag1 import Writer as Ros1Writer
+
+    store, messages = ros1_messages(frames)
     with Ros1Writer(path) as writer:
-        connection = writer.add_connection(topic, FRAME_TYPE, typestore=store)
-        for seq, frame in enumerate(frames):
-            stamp = stamp_ns(frame.time)
-            message = frame_type(
-                header=header(seq=seq, stamp=time(stamp // 10**9, stamp % 10**9), frame_id=""),
-                id=frame.can_id,
-                is_rtr=frame.is_remote,
-                is_extended=frame.extended,
-                is_error=frame.is_error,
-                dlc=frame.dlc,
-                data=np.frombuffer(frame.data.ljust(8, b"\0"), dtype=np.uint8),
-            )
-            data = store.serialize_ros1(message, FRAME_TYPE)
-            writer.write(connection, stamp + RECEIVE_DELAY_NS, bytes(data))
+        connection = writer.add_connection(topic, FRAME_TYPE, typestore=store)  # type: ignore[arg-type]
+        for log_time, data in messages:
+            writer.write(connection, log_time, data)
     return path
+
+
+def ros1_mcap(frames: Sequence[CanFrame], topic: str = "/received_messages") -> bytes:
+    """A ROS 1 bag as ``mcap convert`` makes an MCAP of it (foxglove/mcap go/ros/bag2mcap.go):
+    profile ros1, zstd chunks of 4 MiB with CRCs, schema named by the bag's type
+    (can_msgs/Frame) holding its message definition, message encoding ros1, md5sum as
+    channel metadata, log and publish time the bag record's time, bytes unchanged."""
+    store, messages = ros1_messages(frames)
+    definition, md5sum = store.generate_msgdef(FRAME_TYPE)  # type: ignore[attr-defined]
+    out = io.BytesIO()
+    writer = Writer(out, chunk_size=4 * 1024 * 1024, compression=CompressionType.ZSTD)
+    writer.start(profile="ros1", library="golang-mcap-v0")
+    schema = writer.register_schema("can_msgs/Frame", "ros1msg", definition.encode())
+    metadata = {"md5sum": md5sum}
+    channel = writer.register_channel(topic, "ros1", schema, metadata)
+    for sequence, (log_time, data) in enumerate(messages):
+        writer.add_message(channel, log_time, data, log_time, sequence)
+    writer.finish()
+    return out.getvalue()

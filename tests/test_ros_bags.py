@@ -24,6 +24,7 @@ from tests.rosbag2_files import (
     TYPE_HASH,
     cdr_frames,
     ros1_bag,
+    ros1_mcap,
     rosbag2_mcap,
     write,
 )
@@ -199,6 +200,11 @@ def test_ros1_bag_holds_the_frames_of_the_log(tmp_path: Path, log_frames: list) 
     path = ros1_bag(tmp_path / "flight.bag", log_frames)
     on_topic = [replace(frame, channel="/received_messages") for frame in log_frames]
     assert _read(path) == on_topic
+
+
+def test_ros1_bag_converted_to_mcap_decodes_too(tmp_path: Path, log_frames: list) -> None:
+    path = write(tmp_path / "flight.mcap", ros1_mcap(log_frames))
+    assert _read(path) == [replace(f, channel="/received_messages") for f in log_frames]
 
 
 def test_bag_without_can_topic_lists_its_topics(
