@@ -115,6 +115,40 @@ def cdr_frames(frames: Sequence[CanFrame]) -> list[tuple[int, bytes]]:
     return out
 
 
+FD_FRAME_TYPE = "ros2_socketcan_msgs/msg/FdFrame"
+FD_FRAME_MSG = """\
+std_msgs/Header header
+uint32 id
+bool is_extended
+bool is_error
+uint8 len
+uint8[<=64] data
+"""
+FD_FRAME_DEFINITION = FRAME_DEFINITION.replace(FRAME_MSG, FD_FRAME_MSG)
+
+
+def cdr_fd_frames(frames: Sequence[CanFrame]) -> list[tuple[int, bytes]]:
+    """(receive time ns, CDR bytes) of ros2_socketcan's FdFrame for each frame (CAN FD
+    enabled: published on from_can_bus_fd, data resized to the frame's length)."""
+    encode = serialize_dynamic(FD_FRAME_TYPE, FD_FRAME_DEFINITION)[FD_FRAME_TYPE]
+    out = []
+    for frame in frames:
+        stamp = stamp_ns(frame.time)
+        message = {
+            "header": {
+                "stamp": {"sec": stamp // 10**9, "nanosec": stamp % 10**9},
+                "frame_id": "can",
+            },
+            "id": frame.can_id,
+            "is_extended": frame.extended,
+            "is_error": frame.is_error,
+            "len": len(frame.data),
+            "data": frame.data,
+        }
+        out.append((stamp + RECEIVE_DELAY_NS, bytes(encode(message))))
+    return out
+
+
 def bag_metadata_yaml(topic: str, count: int, start_ns: int, end_ns: int) -> str:
     """The ``serialized_metadata`` rosbag2 stores in its ``rosbag2`` metadata record."""
     qos = QOS_PROFILES.replace("\n", "\n        ")
@@ -158,6 +192,7 @@ def rosbag2_mcap(
     extra_topics: Sequence[str] = (),
     messages: Sequence[tuple[int, bytes]] | None = None,
     finished: bool = True,
+    schema: tuple[str, str] = (FRAME_TYPE, FRAME_DEFINITION),
 ) -> bytes:
     """An MCAP file as ``ros2 bag record -s mcap`` writes it for ros2_socketcan's topic.
 
@@ -175,7 +210,7 @@ def rosbag2_mcap(
     writer.start(profile="ros2", library="libmcap 1.4.1")
     metadata = {"offered_qos_profiles": QOS_PROFILES, "topic_type_hash": TYPE_HASH}
     if topic is not None:
-        schema_id = writer.register_schema(FRAME_TYPE, "ros2msg", FRAME_DEFINITION.encode())
+        schema_id = writer.register_schema(schema[0], "ros2msg", schema[1].encode())
         channel_id = writer.register_channel(topic, "cdr", schema_id, metadata)
         for sequence, (log_time, data) in enumerate(records, 1):
             writer.add_message(channel_id, log_time, data, log_time - RECEIVE_DELAY_NS, sequence)

@@ -19,9 +19,12 @@ from analyzer.mcapio.info import recording_info
 from analyzer.mcapio.ros_can import RosFrameError, frame_from_cdr
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event
 from tests.rosbag2_files import (
+    FD_FRAME_DEFINITION,
+    FD_FRAME_TYPE,
     FRAME_DEFINITION,
     FRAME_TYPE,
     TYPE_HASH,
+    cdr_fd_frames,
     cdr_frames,
     ros1_bag,
     ros1_mcap,
@@ -120,6 +123,23 @@ def test_unfinished_bag_is_recovered(tmp_path: Path, log_frames: list) -> None:
     cut = write(tmp_path / "cut.mcap", whole[: len(whole) // 2])
     (note,) = _read(cut)
     assert isinstance(note, Event) and note.fields["kind"] == "incomplete"
+
+
+def test_can_fd_frames_of_ros2_socketcan(tmp_path: Path, log_frames: list) -> None:
+    fd = [
+        CanFrame(1715680800.5 + k / 100, 0x18FEF100 + k, bytes(range(n)), True, TOPIC, is_fd=True)
+        for k, n in enumerate((0, 8, 12, 64))
+    ]
+    messages = cdr_fd_frames(fd)
+    bag = rosbag2_mcap([], messages=messages, schema=(FD_FRAME_TYPE, FD_FRAME_DEFINITION))
+    assert _read(write(tmp_path / "fd.mcap", bag)) == fd
+    log_time, data = messages[3]
+    too_long = data[: -(4 + 64)] + struct.pack("<I", 65) + bytes(65)  # 65 data bytes
+    bag = rosbag2_mcap(
+        [], messages=[(log_time, too_long)], schema=(FD_FRAME_TYPE, FD_FRAME_DEFINITION)
+    )
+    (note,) = _read(write(tmp_path / "fd_bad.mcap", bag))
+    assert isinstance(note, Event) and "at most 64" in note.fields["detail"]
 
 
 def test_message_that_is_not_a_frame_becomes_a_diagnostic(tmp_path: Path, log_frames: list) -> None:
