@@ -191,16 +191,15 @@ def test_stored_events_of_a_bag_are_refused(
     assert lines[1] == f"  {TOPIC}  {FRAME_TYPE} (ros2msg/cdr)"
 
 
-def rosbags_bag(directory: Path, frames: list[CanFrame], plugin: str) -> Path:
+def rosbags_bag(directory: Path, frames: list[CanFrame], plugin: str, *, fd: bool = False) -> Path:
     """A rosbag2 bag written by rosbags (another writer of both storages)."""
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     storage = StoragePlugin.MCAP if plugin == "mcap" else StoragePlugin.SQLITE3
+    msgtype, msgdef = (FD_FRAME_TYPE, FD_FRAME_DEFINITION) if fd else (FRAME_TYPE, FRAME_DEFINITION)
     with Writer(directory, version=9, storage_plugin=storage) as writer:
-        connection = writer.add_connection(
-            TOPIC, FRAME_TYPE, msgdef=FRAME_DEFINITION, rihs01=TYPE_HASH
-        )
-        for log_time, data in cdr_frames(frames):
+        connection = writer.add_connection(TOPIC, msgtype, msgdef=msgdef, rihs01=TYPE_HASH)
+        for log_time, data in (cdr_fd_frames if fd else cdr_frames)(frames):
             writer.write(connection, log_time, data)
     (path,) = directory.glob(f"*.{plugin}")
     return path
@@ -214,6 +213,8 @@ def test_bag_written_by_rosbags_decodes_too(tmp_path: Path, log_frames: list) ->
 def test_rosbag2_sqlite3_storage_decodes_too(tmp_path: Path, log_frames: list) -> None:
     path = rosbags_bag(tmp_path / "bag", log_frames, "db3")
     assert _read(path) == _as_on_topic(log_frames)
+    fd = [replace(f, is_fd=True, data=f.data * 2) for f in _as_on_topic(log_frames[:20])]
+    assert _read(rosbags_bag(tmp_path / "fd", fd, "db3", fd=True)) == fd
 
 
 def test_ros1_bag_holds_the_frames_of_the_log(tmp_path: Path, log_frames: list) -> None:

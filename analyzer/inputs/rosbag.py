@@ -19,7 +19,9 @@ from analyzer.errors import InputError, NothingReadable, UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
 from analyzer.mcapio.ros_can import (
     ROS2_CAN_FRAME,
+    ROS2_CANFD_FRAME,
     RosFrameError,
+    fd_frame_from_cdr,
     frame_from_cdr,
     frame_from_ros1,
 )
@@ -32,7 +34,8 @@ Decode = Callable[[bytes, str, int], CanFrame]
 
 
 class RosbagReader(InputReader):
-    """CAN frames of the can_msgs/Frame topics of a ROS 1 bag or a rosbag2 .db3 file."""
+    """CAN frames of the can_msgs/Frame topics of a ROS 1 bag or a rosbag2 .db3 file (and of
+    ros2_socketcan's FdFrame topics in a .db3)."""
 
     format_name = "rosbag"
 
@@ -62,7 +65,9 @@ class RosbagReader(InputReader):
             raise InputError(f"{path}: not a readable ROS bag ({_why(exc)}){hint}") from None
         self._closers.append(self._reader)
         connections = list(self._reader.connections)
-        self._wanted = [c for c in connections if c.msgtype == ROS2_CAN_FRAME]
+        # rosbags names ROS 1 types the ROS 2 way (can_msgs/msg/Frame)
+        wanted = {ROS2_CAN_FRAME} if self.ros1 else {ROS2_CAN_FRAME, ROS2_CANFD_FRAME}
+        self._wanted = [c for c in connections if c.msgtype in wanted]
         if not self._wanted:
             kinds = sorted({f"{c.topic}  {c.msgtype}" for c in connections})
             raise NothingReadable(
@@ -73,13 +78,17 @@ class RosbagReader(InputReader):
         self.bad_messages = 0
 
     def __iter__(self) -> Iterator[InputItem]:
-        decode: Decode = frame_from_ros1 if self.ros1 else frame_from_cdr
+        decoders: dict[str, Decode] = {
+            ROS2_CAN_FRAME: frame_from_ros1 if self.ros1 else frame_from_cdr,
+            ROS2_CANFD_FRAME: fd_frame_from_cdr,
+        }
         messages = self._reader.messages(connections=self._wanted)
         last_ns = 0
         try:
             for connection, log_time, data in messages:
                 last_ns = log_time
                 try:
+                    decode = decoders[connection.msgtype]
                     frame = decode(bytes(data), connection.topic, log_time)
                 except RosFrameError as exc:
                     self.bad_messages += 1
