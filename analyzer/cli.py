@@ -142,6 +142,8 @@ def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -
         return result
     except UsageError as exc:
         print(f"{name}: error: {printable(str(exc))}", file=sys.stderr)
+        for line in getattr(exc, "details", ()):
+            print(f"  {printable(line)}", file=sys.stderr)
         return EXIT_USAGE
     except SourceError as exc:
         print(f"{name}: error: {printable(str(exc))}", file=sys.stderr)

@@ -41,6 +41,15 @@ class InputError(UsageError):
     """An input file that cannot be read or is not what it claims to be: exit code 2."""
 
 
+class NothingReadable(InputError):
+    """An input that holds nothing this tool can read: the message says so in one line and
+    ``details`` lists what the input holds instead (exit code 2)."""
+
+    def __init__(self, message: str, details: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.details = details
+
+
 class SourceError(Exception):
     """A capture source could not be opened or failed for good: exit code 1."""
 

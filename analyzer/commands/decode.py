@@ -21,8 +21,10 @@ Decode a capture file and print one line per decoded message or diagnostic.
 
 The format comes from the file name (.log candump; .asc .blf .trc .csv .mf4
 through python-can, .gz too; SavvyCAN .csv; .pcap/.pcapng; .bin an ArduPilot
-DataFlash log or raw TCP/UART bytes, by content; .mcap) or from its content;
---format overrides it. Damaged lines, CRC errors, lost
+DataFlash log or raw TCP/UART bytes, by content; .mcap recordings and ROS 2
+bags; .bag ROS 1 bags; .db3 rosbag2 SQLite files: the can_msgs/Frame topics of
+a bag, each topic as the frames' channel) or from its content; --format
+overrides it. Damaged lines, CRC errors, lost
 segments and the like are reported as /diagnostics events and decoding goes
 on: the exit code is 0 whenever the file could be read.
 
@@ -35,6 +37,7 @@ examples:
   gimbal-analyzer decode flight.log --name gimbal_control --name crc_mismatch
   gimbal-analyzer decode flight.log --raw          # also frames of other devices
   candump -L can0 | gimbal-analyzer decode -       # live from a CAN interface
+  gimbal-analyzer decode flight_0.mcap --summary   # ros2 bag record of /from_can_bus
 
 --topic takes a topic (/gimbal/command), a prefix (/uav) or a last part
 (attitude, diagnostics); --name a command name (gimbal_control) or a

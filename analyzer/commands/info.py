@@ -28,7 +28,9 @@ each damaged one is listed. A live recording carries a provisional summary
 after every flush: if its recorder was killed, `info` says NOT CLOSED and
 counts its messages again. One cut in the middle of a write has no summary
 (and one whose summary fails its CRC check is not believed): its readable part
-is scanned and `info` says that the file was recovered.
+is scanned and `info` says that the file was recovered. A ROS 2 bag (rosbag2's
+MCAP storage) is read the same way; its figures come from decoding the frames of
+its can_msgs/msg/Frame topics.
 
   gimbal-analyzer info flight.mcap
   gimbal-analyzer info flight.mcap --json
@@ -101,6 +103,8 @@ def render(info: RecordingInfo) -> str:
         lines.append(f"source      {meta['source']}")
     if meta.get("tool_version"):
         lines.append(f"recorded by gimbal-analyzer {meta['tool_version']}")
+    elif info.writer:  # another writer's file (a ROS bag): what its header says
+        lines.append(f"written by  {info.writer}")
     if meta.get("protocol_document"):
         lines.append(f"protocol    {meta['protocol_document']}")
     if info.start_ns is None or info.end_ns is None:

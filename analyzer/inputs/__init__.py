@@ -23,11 +23,12 @@ FORMATS: dict[str, str] = {
     "trc": "PCAN-View TRC (.trc) through python-can",
     "csv": "python-can CSV (.csv)",
     "mf4": "ASAM MDF4 (.mf4) through python-can (needs asammdf)",
-    "pcap": "pcap / pcapng capture of the IDU's TCP link (.pcap, .pcapng)",
+    "pcap": "pcap / pcapng capture of the IDU's TCP link or of a CAN bus (.pcap, .pcapng)",
     "stream": "raw byte dump of a TCP or UART stream (.bin)",
     "dataflash": "ArduPilot DataFlash log with CANF / CAFD records (.bin, .BIN)",
     "savvycan": "SavvyCAN / GVRET native CSV (.csv)",
-    "mcap": "MCAP recording of this project (.mcap)",
+    "mcap": "MCAP recording of this project, or a ROS 2 bag's can_msgs/msg/Frame topics (.mcap)",
+    "rosbag": "ROS 1 bag (.bag) or rosbag2 sqlite3 storage (.db3): can_msgs/Frame topics",
 }
 ALIASES = {
     "log": "candump",
@@ -51,6 +52,8 @@ EXTENSIONS = {
     ".bin": "stream",
     ".raw": "stream",
     ".mcap": "mcap",
+    ".bag": "rosbag",
+    ".db3": "rosbag",
 }
 AMBIGUOUS = frozenset({".bin", ".csv"})
 SNIFF_BYTES = 4096
@@ -106,6 +109,8 @@ def sniff_format(head: bytes) -> str | None:
         return "pcap"
     if head[:5] == b"\x89MCAP":
         return "mcap"
+    if head.startswith((b"#ROSBAG V2.0\n", b"SQLite format 3\0")):
+        return "rosbag"
     if head[:4] == b"LOGG":
         return "blf"
     if head[:2] == b"\xeb\x90":
@@ -195,6 +200,10 @@ def open_input(
         from analyzer.inputs.mcap import McapReader
 
         return McapReader(path, stored=stored)
+    if name == "rosbag":
+        from analyzer.inputs.rosbag import RosbagReader
+
+        return RosbagReader(path)
     from analyzer.inputs.python_can import PythonCanReader
 
     return PythonCanReader(path, name)

@@ -1,4 +1,4 @@
-"""MCAP recordings of this project: their raw CAN frames and stream chunks, for decoding again."""
+"""MCAP files: this project's recordings (raw frames and chunks) and ROS bags' CAN frames."""
 
 from __future__ import annotations
 
@@ -6,9 +6,23 @@ import os
 from collections.abc import Iterator
 from typing import Any
 
-from analyzer.errors import UsageError
+from analyzer.errors import NothingReadable, UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
-from analyzer.protocol.types import INCOMPLETE, diagnostic
+from analyzer.mcapio.channels import RAW_TOPICS, ROLE_EVENT, ROLE_RAW
+from analyzer.mcapio.ros_can import ROS2_CAN_FRAME, ROS_CAN_ROLES
+from analyzer.mcapio.stored_message import ChannelKind
+from analyzer.protocol.types import INCOMPLETE, TOPIC_DIAGNOSTICS, diagnostic
+
+
+def readable(kind: ChannelKind, *, stored: bool) -> bool:
+    """Whether a channel gives something to decode (``stored``: events as recorded)."""
+    if stored:
+        return kind.ours and kind.role == ROLE_EVENT
+    if kind.role in ROS_CAN_ROLES:
+        return True
+    if kind.role == ROLE_RAW:
+        return kind.topic in RAW_TOPICS
+    return kind.ours and kind.topic == TOPIC_DIAGNOSTICS
 
 
 class McapReader(InputReader):
@@ -17,7 +31,10 @@ class McapReader(InputReader):
     Besides the raw items, ``read_replay`` gives back the diagnostics a new decode cannot
     re-create (link state, bad lines of the original input). A recording whose writer was
     killed is recovered as far as it can be read; a diagnostic then says
-    so at the end.
+    so at the end. The CAN frames of a ROS bag (``can_msgs/msg/Frame`` channels) are read
+    like raw frames, each topic becoming the frame's channel. A file with channels but none
+    this tool can read raises ``NothingReadable`` listing them (before reading when the file
+    has a summary, else once the read found nothing).
     """
 
     format_name = "mcap"
@@ -34,6 +51,22 @@ class McapReader(InputReader):
         self._items: Any = read_events(path) if stored else read_replay(path)
         self.stored = stored
         self.items = 0
+        self._check_readable()
+
+    def _check_readable(self) -> None:
+        """NothingReadable when the channels known so far are all of no use here."""
+        recording = getattr(self._items, "recording", None)
+        kinds = None if recording is None else recording.channel_kinds()
+        if not kinds or any(readable(kind, stored=self.stored) for kind in kinds):
+            return
+        if self.stored:
+            why = "--stored reads the events this tool records, and it holds none"
+        else:
+            why = f"no channel this tool can read (its own recordings, {ROS2_CAN_FRAME} in CDR)"
+        raise NothingReadable(
+            f"{self.path}: {why}; its {len(kinds)} channel(s):",
+            tuple(kind.describe() for kind in kinds),
+        )
 
     def __iter__(self) -> Iterator[InputItem]:
         for item in self._items:
@@ -42,6 +75,8 @@ class McapReader(InputReader):
                 self.first_time = item.time
             self.last_time = item.time
             yield item
+        if not self.items:
+            self._check_readable()  # a file read sequentially: its channels are known now
         self.position_bytes = self.size_bytes or 0
         note = getattr(self._items, "note", "")
         if getattr(self._items, "recovered", False) and note:

@@ -10,11 +10,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.mcapio.channels import METADATA_NAME, ROLE_EVENT, ROLE_RAW, STATS_METADATA_NAME
-from analyzer.mcapio.reader import RawMessage, Recording, channel_role, raw_item
+from analyzer.mcapio.file_end import read_header
+from analyzer.mcapio.reader import RawMessage, Recording, channel_role, raw_item, ros_item
+from analyzer.mcapio.ros_can import ROS_CAN_ROLES
+from analyzer.pipeline import Decoding, default_decoder
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally
 
-SCANNED_ROLES = {ROLE_RAW, ROLE_EVENT}  # everything but the Foxglove views
+SCANNED_ROLES = {ROLE_RAW, ROLE_EVENT, *ROS_CAN_ROLES}  # everything but the Foxglove views
 
 
 @dataclass
@@ -45,8 +48,10 @@ class RecordingInfo:
     extra: dict[str, Any] = field(default_factory=dict)
     damage: list[str] = field(default_factory=list)  # parts of the file that cannot be read
     summary_damaged: bool = False  # a finished file whose summary failed its checks
-    # False for a live recording whose recorder never closed it (killed, power lost): its
-    # provisional summary makes it complete up to the last flush, the closing stats are absent.
+    writer: str = ""  # the library and profile of the header record ("libmcap 1.4.1, profile ros2")
+    # False for a live recording of this tool whose recorder never closed it (killed, power
+    # lost): its provisional summary makes it complete up to the last flush, the closing stats
+    # are absent. A finished file of another writer (a ROS bag) is closed.
     closed: bool = True
 
     @property
@@ -76,8 +81,40 @@ class RecordingInfo:
             "stats_from": self.stats_from,
             "scanned_messages": self.scanned_messages,
             "summary_damaged": self.summary_damaged,
+            "writer": self.writer,
             "damage": self.damage,
         }
+
+
+class _Fold:
+    """Counts recorded messages into a tally: raw frames / chunks and events as recorded;
+    the CAN frames of a ROS bag, which holds no decoded events, are decoded here."""
+
+    def __init__(self, tally: Tally) -> None:
+        self.tally = tally
+        self.decoded = 0  # ROS frames decoded
+        self._decoder: Decoding | None = None
+
+    def __call__(self, message: RawMessage) -> None:
+        if message.role in ROS_CAN_ROLES:
+            frame = ros_item(message)
+            if isinstance(frame, Event):
+                self.tally.add_events((frame,))
+                return
+            self.tally.add_items((frame,))
+            if self._decoder is None:
+                self._decoder = default_decoder()
+            self.tally.add_events(self._decoder.feed_can(frame))
+            self.decoded += 1
+            return
+        _fold(self.tally, message)
+
+    def finish(self) -> str:
+        """Close the decoder; what the figures came from beyond the messages themselves."""
+        if self._decoder is None:
+            return ""
+        self.tally.add_events(self._decoder.close())
+        return f", the {self.decoded} CAN frames of ROS channels decoded again"
 
 
 def _fold(tally: Tally, message: RawMessage) -> None:
@@ -113,6 +150,13 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     (unfinished) file has no summary: its readable part is scanned once, sequentially.
     """
     recording = Recording(path)
+    info = _summarise(recording, scan)
+    profile, library = read_header(recording.path)
+    info.writer = ", ".join(part for part in (library, profile and f"profile {profile}") if part)
+    return info
+
+
+def _summarise(recording: Recording, scan: bool) -> RecordingInfo:
     metadata = recording.metadata()
     base = dict(metadata.get(METADATA_NAME, {}))
     if recording.recovered:
@@ -128,10 +172,13 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     for channel in sorted(summary.channels.values(), key=lambda c: c.topic):
         count = int(counts.get(channel.id, 0))
         schema = summary.schemas.get(channel.schema_id)
+        schema_name = schema.name if schema is not None else ""
         topics.append(
             TopicInfo(
                 channel.topic,
-                channel_role(channel.topic, channel.metadata),
+                channel_role(
+                    channel.topic, channel.metadata, schema_name, channel.message_encoding
+                ),
                 schema.name if schema is not None else "",
                 count,
                 count / duration if duration > 0 else None,
@@ -155,7 +202,9 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     )
     stored = metadata.get(STATS_METADATA_NAME)
     malformed = ""
-    info.closed = stored is not None
+    # Only this tool's own recordings end with the stats record: its absence there means
+    # the recorder was killed; another writer's file with a footer and summary is finished.
+    info.closed = stored is not None or METADATA_NAME not in metadata
     if stored is not None and not scan:
         try:
             info.tally = Tally.from_metadata(stored)
@@ -164,13 +213,17 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
         except (ValueError, KeyError, TypeError, AttributeError, OverflowError):
             malformed = " (the stats record written at the end is malformed)"
     tally = Tally()
+    fold = _Fold(tally)
     scanned = 0
     for message in recording.messages(roles=SCANNED_ROLES):
         scanned += 1
-        _fold(tally, message)
+        fold(message)
+    decoded = fold.finish()
     info.tally = tally
     info.scanned_messages = scanned
-    info.stats_from = f"a scan of the recorded frames and events, {scanned} messages{malformed}"
+    info.stats_from = (
+        f"a scan of the recorded frames and events, {scanned} messages{decoded}{malformed}"
+    )
     info.damage = [d.detail for d in recording.damage]
     return info
 
@@ -192,6 +245,7 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
             span[1] = log_time
 
     figures = Tally()
+    fold = _Fold(figures)
     if recording.recovered:
         messages = recording.messages(roles=SCANNED_ROLES, tally=tally)
     else:  # a finished file without statistics: count while reading everything
@@ -199,7 +253,8 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
             m for m in recording.messages() if _tallied(tally, m) and m.role in SCANNED_ROLES
         )
     for message in messages:
-        _fold(figures, message)
+        fold(message)
+    decoded = fold.finish()
     scanned = sum(counts.values())
     start = min((span[0] for span in times.values()), default=None)
     end = max((span[1] for span in times.values()), default=None)
@@ -227,7 +282,7 @@ def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInf
         metadata=base,
         tally=figures,
         counts_from=f"a full sequential scan: {why}",
-        stats_from=f"the same scan: {why}",
+        stats_from=f"the same scan: {why}{decoded}",
         scanned_messages=scanned,
         damage=[d.detail for d in recording.damage],
         summary_damaged=recording.summary_damaged,

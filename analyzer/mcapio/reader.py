@@ -2,89 +2,61 @@
 
 from __future__ import annotations
 
-import io
 import json
 import os
-import struct
-import zlib
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import IO, Any, Generic, TypeVar
+from collections.abc import Iterator
+from typing import Any, Generic, TypeVar
 
-from analyzer.errors import InputError
 from analyzer.mcapio.channels import (
     RAW_TOPICS,
     ROLE_EVENT,
-    ROLE_KEY,
     ROLE_RAW,
-    ROLE_VIEW,
-    TOPIC_CAN_FRAMES,
-    TOPIC_STREAM_BYTES,
-    can_frame_from_dict,
-    stream_chunk_from_dict,
 )
-from analyzer.mcapio.chunks import (
-    MAX_RECORD,
-    MESSAGE_FIXED,
-    OPCODE_CHUNK,
-    OPCODE_DATA_END,
-    OPCODE_MESSAGE,
-    OPCODE_METADATA,
-    RECORD_HEAD,
-    ChunkDamage,
-    chunk_payload,
-    walk,
+from analyzer.mcapio.file_end import RecordingError, read_file_end
+from analyzer.mcapio.indexed_read import indexed_metadata, read_indexed, verify_chunks
+from analyzer.mcapio.recover import Damage, Recovery, metadata_before_data
+from analyzer.mcapio.ros_can import ROS_CAN_ROLES
+from analyzer.mcapio.sequential_read import read_sequentially
+from analyzer.mcapio.stored_message import (
+    ChannelFilter,
+    ChannelKind,
+    MessageTally,
+    RawMessage,
+    channel_kind,
+    channel_role,
+    raw_item,
+    ros_item,
 )
-from analyzer.mcapio.foxglove import VIEW_SCHEMAS
-from analyzer.mcapio.recover import Damage, Recovery, Scan, metadata_before_data, scan_records
 from analyzer.pipeline import RawItem
 from analyzer.protocol.types import (
     BAD_LINE,
     INCOMPLETE,
     LINK,
     TOPIC_DIAGNOSTICS,
+    CanFrame,
     Event,
     diagnostic,
 )
 
-MAGIC = b"\x89MCAP0\r\n"
-_MESSAGE_HEAD = struct.Struct("<HIQ")  # channel id, sequence, log time
-FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary start, offset start, crc
-_FOOTER = struct.Struct("<BQQQI")
-OPCODE_FOOTER = 0x02
+__all__ = [
+    "SOURCE_KINDS",
+    "RawMessage",
+    "Recording",
+    "RecordingError",
+    "RecordingIterator",
+    "channel_role",
+    "raw_item",
+    "read_events",
+    "read_items",
+    "read_replay",
+    "ros_item",
+]
 
 T = TypeVar("T")
-Tally = Callable[[str, str, int], None]
 
 # Diagnostics that come from the source or the file reader, not from the decoder: decoding
 # the raw channels again cannot re-create them, so a replay carries them over.
 SOURCE_KINDS = frozenset({LINK, BAD_LINE})
-
-
-class RecordingError(InputError):
-    """The file is not an MCAP recording, or is damaged beyond its readable part (exit 2)."""
-
-
-@dataclass(frozen=True, slots=True)
-class RawMessage:
-    """One message as stored: channel topic and role, log time (ns) and the JSON bytes."""
-
-    topic: str
-    role: str
-    log_time: int
-    data: bytes
-
-
-def channel_role(topic: str, metadata: dict[str, str]) -> str:
-    """Role of a channel: from its metadata, else guessed from the topic (other writers)."""
-    role = metadata.get(ROLE_KEY)
-    if role:
-        return role
-    if topic in RAW_TOPICS:
-        return ROLE_RAW
-    if topic in VIEW_SCHEMAS:
-        return ROLE_VIEW
-    return ROLE_EVENT
 
 
 class Recording:
@@ -100,80 +72,22 @@ class Recording:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = str(path)
-        self._summary_start = 0
-        self._summary_crc = 0
-        self._summary: Any = None
-        try:
-            self.size = os.path.getsize(self.path)
-            with open(self.path, "rb") as f:
-                head = f.read(len(MAGIC))
-                damaged_magic = head != MAGIC and self._ends_with_magic(f)
-                if head != MAGIC and not damaged_magic:
-                    what = "an empty file" if not head else "not an MCAP file"
-                    raise RecordingError(f"{self.path}: {what}")
-                self.problem = self._check_end(f)
-                if not self.problem:
-                    self.problem = self._load_summary(f)
-        except OSError as exc:
-            raise RecordingError(f"cannot read {self.path}: {exc.strerror or exc}") from None
+        end = read_file_end(self.path)
+        self.size = end.size
+        self.problem = end.problem
+        self._summary_start = end.summary_start
+        self._summary: Any = end.summary
         self.recovered = bool(self.problem)
         self.summary_damaged = self.recovered and self._summary_start > 0
         self.recovery: Recovery | None = None
-        # topic -> schema name of channels met by the recover path
-        self.recovered_schemas: dict[str, str] = {}
+        # topic -> kind of the channels met by a sequential read
+        self._kinds_seen: dict[str, ChannelKind] = {}
         # parts of the file that reading skipped
         self.damage: list[Damage] = []
-        if damaged_magic:
+        if end.damaged_magic:
             self.damage.append(Damage(0, "the file's leading magic bytes are damaged"))
         self._damaged_chunks: set[int] = set()  # offsets of chunks already in ``damage``
         self._verified = False
-
-    # -- opening ---------------------------------------------------------------------------------
-
-    def _ends_with_magic(self, f: IO[bytes]) -> bool:
-        if self.size < 2 * len(MAGIC) + FOOTER_RECORD_SIZE:
-            return False
-        f.seek(-len(MAGIC), os.SEEK_END)
-        return f.read(len(MAGIC)) == MAGIC
-
-    def _check_end(self, f: IO[bytes]) -> str:
-        """'' when the file ends with a footer and magic, else what is missing."""
-        if self.size < 2 * len(MAGIC) + FOOTER_RECORD_SIZE:
-            return "the file has no footer (recording not finished)"
-        f.seek(-len(MAGIC), os.SEEK_END)
-        if f.read(len(MAGIC)) != MAGIC:
-            return "the file has no footer (recording not finished)"
-        f.seek(-(len(MAGIC) + FOOTER_RECORD_SIZE), os.SEEK_END)
-        footer = f.read(FOOTER_RECORD_SIZE)
-        opcode, length, start, _, crc = _FOOTER.unpack(footer)
-        if opcode != OPCODE_FOOTER or length != 20:
-            return "the file has no valid footer"
-        footer_at = self.size - len(MAGIC) - FOOTER_RECORD_SIZE
-        if start and not len(MAGIC) < start <= footer_at:
-            self._summary_start = 0
-            return "the footer points outside the file"
-        self._summary_start, self._summary_crc = start, crc
-        return ""
-
-    def _load_summary(self, f: IO[bytes]) -> str:
-        """Read and check the summary section; '' when it can be believed, else why not."""
-        if not self._summary_start:
-            self._summary = None
-            return ""
-        footer_at = self.size - len(MAGIC) - FOOTER_RECORD_SIZE
-        f.seek(self._summary_start)
-        section = f.read(footer_at - self._summary_start)
-        f.seek(footer_at)
-        footer = f.read(FOOTER_RECORD_SIZE)
-        if self._summary_crc and zlib.crc32(footer[:-4], zlib.crc32(section)) != self._summary_crc:
-            return (
-                "the summary section fails its CRC check, so its statistics and index are not used"
-            )
-        try:
-            self._summary = _parse_summary(section + footer + MAGIC)
-        except Exception as exc:  # any parse failure of the summary means: read sequentially
-            return f"the summary is unreadable ({_why(exc)})"
-        return ""
 
     @property
     def recovery_note(self) -> str:
@@ -187,6 +101,32 @@ class Recording:
             return f"unfinished recording, read through the recover path: {self.problem}"
         return self.recovery.describe()
 
+    @property
+    def recovered_schemas(self) -> dict[str, str]:
+        """Topic -> schema name of the channels met by the recover path."""
+        return {topic: kind.schema for topic, kind in self._kinds_seen.items()}
+
+    def channel_kinds(self) -> list[ChannelKind] | None:
+        """The channels of the file, by topic: from the summary of a finished file; for a
+        file read sequentially, those met so far (None before a read)."""
+        summary = self.summary()
+        if summary is not None and summary.channels:
+            return sorted(
+                (
+                    channel_kind(
+                        ch.topic,
+                        dict(ch.metadata),
+                        summary.schemas.get(ch.schema_id),
+                        ch.message_encoding,
+                    )
+                    for ch in summary.channels.values()
+                ),
+                key=lambda kind: kind.topic,
+            )
+        if self._kinds_seen:
+            return sorted(self._kinds_seen.values(), key=lambda kind: kind.topic)
+        return None
+
     def summary(self) -> Any:
         """The mcap Summary of a finished file (None when recovered or written without one)."""
         return None if self.recovered else self._summary
@@ -195,27 +135,14 @@ class Recording:
 
     def metadata(self) -> dict[str, dict[str, str]]:
         """Metadata records by name. A recovered file gives the ones before its first chunk."""
-        from mcap.data_stream import ReadDataStream
-        from mcap.records import Metadata
-
-        out: dict[str, dict[str, str]] = {}
         try:
             with open(self.path, "rb") as f:
                 summary = self.summary()
                 if summary is None:
                     return metadata_before_data(f, self.size)
-                for index in summary.metadata_indexes:
-                    if not 0 < index.offset <= index.offset + index.length <= self._data_end():
-                        continue  # an index pointing outside the data: ignore it
-                    f.seek(index.offset)
-                    raw = f.read(index.length)
-                    if len(raw) < 9 or raw[0] != OPCODE_METADATA:
-                        continue
-                    found = Metadata.read(ReadDataStream(io.BytesIO(raw[9:])))
-                    out[found.name] = dict(found.metadata)
-        except Exception:  # a damaged record ends the search; keep what was found
-            pass
-        return out
+                return indexed_metadata(f, summary, self._data_end())
+        except Exception:  # a damaged record ends the search (found before it: kept there)
+            return {}
 
     def _data_end(self) -> int:
         return self._summary_start or self.size
@@ -227,7 +154,7 @@ class Recording:
         topics: set[str] | None = None,
         roles: set[str] | None = None,
         *,
-        tally: Tally | None = None,
+        tally: MessageTally | None = None,
     ) -> Iterator[RawMessage]:
         """Messages in file order (= arrival order), filtered by topic and/or channel role.
 
@@ -244,78 +171,47 @@ class Recording:
         topics: set[str] | None = None,
         roles: set[str] | None = None,
         *,
-        tally: Tally | None = None,
+        tally: MessageTally | None = None,
     ) -> Iterator[RawMessage | Damage]:
         """Like ``messages``, with a ``Damage`` entry where a part of the file was lost."""
 
         def wanted(topic: str, role: str) -> bool:
             return (topics is None or topic in topics) and (roles is None or role in roles)
 
+        return self._entries_where(wanted, tally)
+
+    def _entries_where(
+        self, wanted: ChannelFilter, tally: MessageTally | None = None
+    ) -> Iterator[RawMessage | Damage]:
         source = self._recover(wanted, tally) if self.recovered else self._read_finished(wanted)
         for entry in source:
             if isinstance(entry, Damage):
                 self.damage.append(entry)
             yield entry
 
-    def _unique_chunk_indexes(self) -> list[Any]:
-        """The summary's chunk indexes, each chunk once, in file order."""
-        seen: set[int] = set()
-        out = []
-        indexes = [] if self._summary is None else self._summary.chunk_indexes
-        for index in sorted(indexes, key=lambda i: i.chunk_start_offset):
-            if index.chunk_start_offset not in seen:
-                seen.add(index.chunk_start_offset)
-                out.append(index)
-        return out
-
-    def _read_finished(self, wanted: Callable[[str, str], bool]) -> Iterator[RawMessage | Damage]:
+    def _read_finished(self, wanted: ChannelFilter) -> Iterator[RawMessage | Damage]:
         """Through the summary's chunk index, reading only chunks that hold wanted channels."""
         summary = self._summary
         if summary is None or not summary.chunk_indexes:
             yield from self._read_with_library(wanted)
             return
-        chosen = {
-            channel_id: (ch.topic, channel_role(ch.topic, ch.metadata))
+        roles = {
+            channel_id: channel_role(
+                ch.topic,
+                ch.metadata,
+                getattr(summary.schemas.get(ch.schema_id), "name", ""),
+                ch.message_encoding,
+            )
             for channel_id, ch in summary.channels.items()
-            if wanted(ch.topic, channel_role(ch.topic, ch.metadata))
+        }
+        chosen = {
+            channel_id: (ch.topic, roles[channel_id])
+            for channel_id, ch in summary.channels.items()
+            if wanted(ch.topic, roles[channel_id])
         }
         if not chosen:
             return
-        indexes = [
-            index
-            for index in self._unique_chunk_indexes()
-            if not index.message_index_offsets or chosen.keys() & index.message_index_offsets
-        ]
-        with open(self.path, "rb") as f:
-            for index in indexes:
-                try:
-                    records = self._chunk_records(f, index)
-                    found = [
-                        RawMessage(*chosen[channel_id], log_time, data)
-                        for channel_id, log_time, data in _messages_in(records)
-                        if channel_id in chosen
-                    ]
-                except ChunkDamage as exc:  # skip it, keep reading, tell the caller
-                    self._damaged_chunks.add(index.chunk_start_offset)
-                    yield Damage(
-                        index.message_start_time,
-                        f"damaged chunk at byte {index.chunk_start_offset} skipped: {exc}",
-                    )
-                    continue
-                yield from found
-
-    def _chunk_records(self, f: IO[bytes], index: Any) -> bytes:
-        """The records of the chunk an index entry points to (ChunkDamage when unusable)."""
-        offset, length = index.chunk_start_offset, index.chunk_length
-        if not len(MAGIC) <= offset < offset + length <= self._data_end() or length > MAX_RECORD:
-            raise ChunkDamage("its index entry points outside the data section")
-        f.seek(offset)
-        raw = f.read(length)
-        if len(raw) < 9 or raw[0] != OPCODE_CHUNK:
-            raise ChunkDamage("no chunk where its index entry points")
-        if RECORD_HEAD.unpack_from(raw)[1] != length - 9:
-            raise ChunkDamage("its record length does not match its index entry")
-        return chunk_payload(memoryview(raw)[9:])
+        yield from read_indexed(self.path, summary, self._data_end(), chosen, self._damaged_chunks)
 
     def verify(self) -> list[Damage]:
         """Check every chunk of a finished file (the data section CRC first: when it matches,
@@ -324,66 +220,20 @@ class Recording:
         if self.recovered or self._summary is None or self._verified:
             return []
         self._verified = True
-        found: list[Damage] = []
-        with open(self.path, "rb") as f:
-            stored = self._data_section_crc(f)
-            if stored is not None and stored[0] and stored[0] == stored[1]:
-                return []
-            for index in self._unique_chunk_indexes():
-                if index.chunk_start_offset in self._damaged_chunks:
-                    continue
-                try:
-                    self._chunk_records(f, index)
-                except ChunkDamage as exc:
-                    self._damaged_chunks.add(index.chunk_start_offset)
-                    found.append(
-                        Damage(
-                            index.message_start_time,
-                            f"damaged chunk at byte {index.chunk_start_offset}: {exc}",
-                        )
-                    )
-        if not found and not self._damaged_chunks and stored is not None and stored[0]:
-            found.append(
-                Damage(
-                    0,
-                    "the data section fails its CRC check outside the chunks (an index "
-                    "or metadata record is damaged; the messages are intact)",
-                )
-            )
+        found = verify_chunks(
+            self.path, self._summary, self._summary_start, self._data_end(), self._damaged_chunks
+        )
         self.damage.extend(found)
         return found
 
-    def _data_section_crc(self, f: IO[bytes]) -> tuple[int, int] | None:
-        """(stored, computed) CRC of the data section, None when there is no DataEnd."""
-        end = self._summary_start - (9 + 4)
-        if end < len(MAGIC):
-            return None
-        f.seek(end)
-        record = f.read(13)
-        opcode, length = RECORD_HEAD.unpack_from(record)
-        if opcode != OPCODE_DATA_END or length != 4:
-            return None
-        stored = int.from_bytes(record[9:13], "little")
-        crc, f_pos = 0, 0
-        f.seek(0)
-        while f_pos < end:
-            block = f.read(min(1 << 20, end - f_pos))
-            if not block:
-                break
-            crc = zlib.crc32(block, crc)
-            f_pos += len(block)
-        return stored, crc
-
-    def _read_with_library(
-        self, wanted: Callable[[str, str], bool]
-    ) -> Iterator[RawMessage | Damage]:
+    def _read_with_library(self, wanted: ChannelFilter) -> Iterator[RawMessage | Damage]:
         """Files without a chunk index (other writers): read sequentially."""
         summary = self._summary
         channels = {} if summary is None else dict(summary.channels)
         yield from self._scan(wanted, None, channels, Recovery(total_bytes=self.size))
 
     def _recover(
-        self, wanted: Callable[[str, str], bool], tally: Tally | None
+        self, wanted: ChannelFilter, tally: MessageTally | None
     ) -> Iterator[RawMessage | Damage]:
         report = Recovery(total_bytes=self.size)
         if self.summary_damaged:
@@ -393,48 +243,37 @@ class Recording:
 
     def _scan(
         self,
-        wanted: Callable[[str, str], bool],
-        tally: Tally | None,
+        wanted: ChannelFilter,
+        tally: MessageTally | None,
         channels: dict[int, Any],
         report: Recovery,
     ) -> Iterator[RawMessage | Damage]:
-        scan = Scan(self.size, report, channels=channels)
-        roles: dict[int, tuple[str, str, bool]] = {}  # channel id -> topic, role, wanted
-        with open(self.path, "rb") as f:
-            for entry in scan_records(f, scan):
-                if isinstance(entry, Damage):
-                    yield entry
-                    continue
-                known = roles.get(entry.channel_id)
-                if known is None:
-                    channel = scan.channels.get(entry.channel_id)
-                    if channel is None:
-                        report.unknown_channel += 1
-                        continue
-                    topic = channel.topic
-                    role = channel_role(topic, dict(channel.metadata))
-                    schema = scan.schemas.get(channel.schema_id)
-                    self.recovered_schemas[topic] = schema.name if schema is not None else ""
-                    known = roles[entry.channel_id] = (topic, role, wanted(topic, role))
-                report.messages += 1
-                if tally is not None:
-                    tally(known[0], known[1], entry.log_time)
-                if known[2]:
-                    yield RawMessage(known[0], known[1], entry.log_time, entry.data)
-        if report.unknown_channel and not any("definition" in d.detail for d in self.damage):
-            yield Damage(
-                0,
-                f"{report.unknown_channel} messages skipped: the record defining their "
-                "channel was lost",
-            )
+        return read_sequentially(
+            self.path,
+            self.size,
+            wanted,
+            tally,
+            channels,
+            report,
+            kinds_seen=self._kinds_seen,
+            damage=self.damage,
+        )
 
     # -- typed views -----------------------------------------------------------------------------
 
     def items(self) -> Iterator[RawItem]:
-        """Raw CAN frames and stream chunks, for decoding again."""
-        for message in self.messages(topics=set(RAW_TOPICS), roles={ROLE_RAW}):
+        """Raw CAN frames and stream chunks, for decoding again (also the CAN frames of
+        ROS bag channels; one that cannot be decoded is skipped: ``replay`` reports it)."""
+        for entry in self._entries_where(_raw_or_ros):
+            if not isinstance(entry, RawMessage):
+                continue
+            if entry.role in ROS_CAN_ROLES:
+                frame = ros_item(entry)
+                if isinstance(frame, CanFrame):
+                    yield frame
+                continue
             try:
-                item = raw_item(message.topic, json.loads(message.data))
+                item = raw_item(entry.topic, json.loads(entry.data))
             except (ValueError, KeyError, TypeError):
                 continue  # not one of ours: nothing to decode
             if item is not None:
@@ -444,13 +283,15 @@ class Recording:
         """Raw items plus the stored diagnostics a decoder cannot re-create (link changes,
         unreadable input lines), in file order: what to feed a Decoder to decode again.
         A lost part of the file becomes an ``incomplete`` diagnostic where it was."""
-        wanted = {*RAW_TOPICS, TOPIC_DIAGNOSTICS}
         last = 0
-        for entry in self.entries(topics=wanted, roles={ROLE_RAW, ROLE_EVENT}):
+        for entry in self._entries_where(_replayed):
             if isinstance(entry, Damage):
                 yield self._damage_event(entry, last)
                 continue
             last = entry.log_time
+            if entry.role in ROS_CAN_ROLES:
+                yield ros_item(entry)
+                continue
             try:
                 obj = json.loads(entry.data)
                 item = raw_item(entry.topic, obj)
@@ -493,55 +334,17 @@ class Recording:
         return diagnostic(when, self.path, INCOMPLETE, f"damaged recording: {damage.detail}")
 
 
-def _parse_summary(section: bytes) -> Any:
-    """The records of a summary section (already CRC-checked, followed by the footer and
-    the closing magic) as an mcap Summary."""
-    from mcap.records import (
-        AttachmentIndex,
-        Channel,
-        ChunkIndex,
-        MetadataIndex,
-        Schema,
-        Statistics,
-    )
-    from mcap.stream_reader import StreamReader
-    from mcap.summary import Summary
-
-    summary = Summary()
-    reader = StreamReader(io.BytesIO(section), skip_magic=True, record_size_limit=len(section))
-    for record in reader.records:
-        if isinstance(record, Statistics):
-            summary.statistics = record
-        elif isinstance(record, Schema):
-            summary.schemas[record.id] = record
-        elif isinstance(record, Channel):
-            summary.channels[record.id] = record
-        elif isinstance(record, ChunkIndex):
-            summary.chunk_indexes.append(record)
-        elif isinstance(record, MetadataIndex):
-            summary.metadata_indexes.append(record)
-        elif isinstance(record, AttachmentIndex):
-            summary.attachment_indexes.append(record)
-    return summary
+def _raw_or_ros(topic: str, role: str) -> bool:
+    return (role == ROLE_RAW and topic in RAW_TOPICS) or role in ROS_CAN_ROLES
 
 
-def _messages_in(records: bytes) -> Iterator[tuple[int, int, bytes]]:
-    """(channel id, log time, data) of every message in a chunk's records."""
-    unpack = _MESSAGE_HEAD.unpack_from
-    for opcode, body, end in walk(records):
-        if opcode == OPCODE_MESSAGE:
-            if end - body < MESSAGE_FIXED:
-                raise ChunkDamage("a message record is too short")
-            channel_id, _, log_time = unpack(records, body)
-            yield channel_id, log_time, records[body + MESSAGE_FIXED : end]
+def _replayed(topic: str, role: str) -> bool:
+    if role in ROS_CAN_ROLES:
+        return True
+    return topic in _REPLAYED_TOPICS and role in (ROLE_RAW, ROLE_EVENT)
 
 
-def _why(exc: BaseException) -> str:
-    text = str(exc)
-    name = type(exc).__name__
-    if name == "EndOfFile" or not text:
-        return "end of file inside a record (recording not finished)"
-    return f"{name}: {text}"
+_REPLAYED_TOPICS = frozenset({*RAW_TOPICS, TOPIC_DIAGNOSTICS})
 
 
 class RecordingIterator(Generic[T]):
@@ -570,15 +373,6 @@ class RecordingIterator(Generic[T]):
     def note(self) -> str:
         """'' for a finished file; else what the recover path read (complete after iterating)."""
         return self.recording.recovery_note
-
-
-def raw_item(topic: str, obj: Any) -> RawItem | None:
-    """The frame or chunk of a raw-channel message (None for other topics)."""
-    if topic == TOPIC_CAN_FRAMES:
-        return can_frame_from_dict(obj)
-    if topic == TOPIC_STREAM_BYTES:
-        return stream_chunk_from_dict(obj)
-    return None
 
 
 def read_items(path: str | os.PathLike[str]) -> RecordingIterator[RawItem]:

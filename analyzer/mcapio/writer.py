@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import itertools
-import json
-import operator
 import os
 import threading
 import time
@@ -13,32 +10,27 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from analyzer import PROTOCOL_DOCUMENT, __version__, timefmt
+from analyzer import PROTOCOL_DOCUMENT, __version__
 from analyzer.errors import SourceError
-from analyzer.mcapio.channels import (
-    CAN_FRAME_SCHEMA,
-    METADATA_NAME,
-    ROLE_EVENT,
-    ROLE_KEY,
-    ROLE_RAW,
-    ROLE_VIEW,
-    STATS_METADATA_NAME,
-    STREAM_BYTES_SCHEMA,
-    TOPIC_CAN_FRAMES,
-    TOPIC_STREAM_BYTES,
-    can_frame_json,
-    permissive_schema,
-    schema_name,
-    stream_chunk_json,
-    time_ns,
-)
+from analyzer.mcapio.channel_registry import ChannelRegistry, default_schemas
+from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME
 from analyzer.mcapio.chunked_writer import ChunkedWriter
-from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
+from analyzer.mcapio.foxglove import FoxgloveViews
+from analyzer.mcapio.message_writer import MessageWriter
 from analyzer.mcapio.options import DEFAULT_COMPRESSION
+from analyzer.mcapio.write_failure import format_clock, keep_complete_chunks
 from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
-from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, CanFrame, Event
+from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
 from analyzer.tally import Tally
+
+__all__ = [
+    "DEFAULT_CHUNK_SIZE",
+    "DEFAULT_FLUSH_INTERVAL",
+    "McapSink",
+    "format_clock",
+    "recording_metadata",
+]
 
 # Small chunks: a crash loses at most the chunk being built, and the time-based flush
 # closes chunks long before they fill up in live use.
@@ -46,36 +38,6 @@ DEFAULT_CHUNK_SIZE = 128 * 1024
 # Live recording: close the open chunk and flush this often (seconds), so that after a
 # crash everything older than about a second is on disk.
 DEFAULT_FLUSH_INTERVAL = 0.5
-
-
-def _default_schemas() -> dict[str, dict[str, Any]]:
-    try:
-        from analyzer.protocol.schema import topic_schemas
-    except ImportError:
-        return {}
-    return topic_schemas()
-
-
-def _json_default(value: Any) -> Any:
-    if isinstance(value, (bytes, bytearray, memoryview)):
-        return bytes(value).hex(" ").upper()
-    if isinstance(value, (set, frozenset, tuple)):
-        return list(value)
-    return str(value)
-
-
-# One encoder for every message (json.dumps with options builds a new one per call).
-# Events never hold reference cycles, so the cycle check is skipped.
-_ENCODE = json.JSONEncoder(
-    separators=(",", ":"), default=_json_default, check_circular=False
-).encode
-
-
-_time_of = operator.attrgetter("time")
-
-
-def _is_event(value: object) -> bool:
-    return isinstance(value, Event)
 
 
 class McapSink:
@@ -123,21 +85,13 @@ class McapSink:
         self.kept_messages = 0  # after a write error: messages the file still holds
         self.kept_until: float | None = None  # ... and the newest log time among them
         self.tally = Tally()  # the run's figures, written as a metadata record at the end
-        self.items_written = 0
-        self.events_written = 0
-        self.messages_written = 0
-        self.last_time: float | None = None
-        self._schemas = _default_schemas() if schemas is None else dict(schemas)
+        self._schemas = default_schemas() if schemas is None else dict(schemas)
         self._views = FoxgloveViews() if foxglove_views else None
         self._clock = clock
         self._flush_interval = flush_interval
         self._lock = threading.Lock()
         self._closed = False
         self._reported = False  # the write error was raised to a caller once
-        self._channels: dict[str, int] = {}
-        self._schema_ids: dict[str, int] = {}
-        self._sequence: dict[int, int] = {}
-        self._dirty = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         # Unbuffered: every chunk is one write, so a failed write leaves whole chunks before it.
@@ -157,6 +111,9 @@ class McapSink:
                 chunk_size=chunk_size,
                 compression=compression,
                 live_summary=flush_interval is not None,
+            )
+            self._messages = MessageWriter(
+                self._writer, ChannelRegistry(self._writer, self._schemas), self.tally, self._views
             )
             self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
             self._writer.add_metadata(METADATA_NAME, info)
@@ -180,7 +137,7 @@ class McapSink:
                 self._raise_pending()
                 return
             try:
-                self._write_batch(batch.items, batch.events)
+                self._messages.write_batch(batch.items, batch.events)
                 if (
                     self._flush_interval is not None
                     and self._clock() - self._last_flush >= self._flush_interval
@@ -196,7 +153,7 @@ class McapSink:
             if self._closed:
                 return
             try:
-                self._write_items([item])
+                self._messages.write_items([item])
             except OSError as exc:
                 self._stop_after(exc)
                 self._raise_pending()
@@ -207,7 +164,7 @@ class McapSink:
             if self._closed:
                 return
             try:
-                self._write_events([event])
+                self._messages.write_events([event])
             except OSError as exc:
                 self._stop_after(exc)
                 self._raise_pending()
@@ -280,103 +237,32 @@ class McapSink:
     def closed(self) -> bool:
         return self._closed
 
-    # -- writing ---------------------------------------------------------------------------------
+    @property
+    def items_written(self) -> int:
+        return self._messages.items_written
 
-    def _channel(self, topic: str, role: str) -> int:
-        channel_id = self._channels.get(topic)
-        if channel_id is not None:
-            return channel_id
-        if role == ROLE_RAW:
-            schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
-            name = str(schema["title"])
-        elif role == ROLE_VIEW:
-            name, schema = VIEW_SCHEMAS[topic]
-        else:
-            name = schema_name(topic)
-            schema = self._schemas.get(topic) or permissive_schema(topic)
-        schema_id = self._schema_ids.get(name)
-        if schema_id is None:
-            data = json.dumps(schema, separators=(",", ":")).encode()
-            schema_id = self._writer.register_schema(name, "jsonschema", data)
-            self._schema_ids[name] = schema_id
-        channel_id = self._writer.register_channel(topic, "json", schema_id, {ROLE_KEY: role})
-        self._channels[topic] = channel_id
-        self._sequence[channel_id] = 0
-        return channel_id
+    @property
+    def events_written(self) -> int:
+        return self._messages.events_written
 
-    def _write_batch(self, items: list[RawItem], events: list[Event]) -> None:
-        """Items and events of one batch, merged in time order (an item before its events)."""
-        if not events or (items and items[-1].time <= events[0].time):
-            self._write_items(items)
-            self._write_events(events)
-            return
-        if not items:
-            self._write_events(events)
-            return
-        merged: list[RawItem | Event] = sorted([*items, *events], key=_time_of)
-        for is_event, run in itertools.groupby(merged, key=_is_event):
-            if is_event:
-                self._write_events(list(run))  # type: ignore[arg-type]
-            else:
-                self._write_items(list(run))  # type: ignore[arg-type]
+    @property
+    def messages_written(self) -> int:
+        """Messages given to the file (views included), written or still in the open chunk."""
+        return self._messages.messages_written
 
-    def _write_items(self, items: list[RawItem]) -> None:
-        add = self._writer.add_message
-        sequence = self._sequence
-        can_id = self._channels.get(TOPIC_CAN_FRAMES, 0)
-        stream_id = self._channels.get(TOPIC_STREAM_BYTES, 0)
-        for item in items:
-            if isinstance(item, CanFrame):
-                channel_id = can_id or self._channel(TOPIC_CAN_FRAMES, ROLE_RAW)
-                can_id = channel_id
-                data = can_frame_json(item)
-            else:
-                channel_id = stream_id or self._channel(TOPIC_STREAM_BYTES, ROLE_RAW)
-                stream_id = channel_id
-                data = stream_chunk_json(item)
-            log_time = time_ns(item.time)
-            number = sequence[channel_id] + 1
-            sequence[channel_id] = number
-            add(channel_id, log_time, data, log_time, number)
-            self.messages_written += 1
-            self.items_written += 1
-        self.tally.add_items(items)
-        if items:
-            self._dirty = True
-            self.last_time = items[-1].time
+    @property
+    def last_time(self) -> float | None:
+        """Time of the newest item or event written."""
+        return self._messages.last_time
 
-    def _write_events(self, events: list[Event]) -> None:
-        add = self._writer.add_message
-        sequence = self._sequence
-        channels = self._channels
-        views = self._views
-        for event in events:
-            topic = event.topic
-            channel_id = channels.get(topic) or self._channel(topic, ROLE_EVENT)
-            log_time = time_ns(event.time)
-            number = sequence[channel_id] + 1
-            sequence[channel_id] = number
-            add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
-            self.messages_written += 1
-            self.events_written += 1
-            if views is not None and topic in VIEW_INPUT_TOPICS:
-                for view_topic, message in views.views(event):
-                    view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW)
-                    number = sequence[view_id] + 1
-                    sequence[view_id] = number
-                    add(view_id, log_time, _ENCODE(message).encode(), log_time, number)
-                    self.messages_written += 1
-        self.tally.add_events(events)
-        if events:
-            self._dirty = True
-            self.last_time = events[-1].time
+    # -- flushing --------------------------------------------------------------------------------
 
     def _flush_locked(self) -> None:
         self._last_flush = self._clock()
-        if not self._dirty:
+        if not self._messages.dirty:
             return
         self._writer.flush()
-        self._dirty = False
+        self._messages.dirty = False
 
     def _flush_loop(self) -> None:
         interval = self._flush_interval or DEFAULT_FLUSH_INTERVAL
@@ -387,7 +273,7 @@ class McapSink:
                     return
                 if self._clock() - self._last_flush >= interval:
                     try:
-                        flushed = self._dirty
+                        flushed = self._messages.dirty
                         self._flush_locked()
                     except OSError as exc:
                         self._stop_after(exc)  # the next handle() raises it to the capture
@@ -419,30 +305,7 @@ class McapSink:
         self.error_reason = reason
         self._closed = True
         self._stop.set()
-        good = writer.position
-        writer.drop_open_chunk()
-        fd = self._file.fileno()
-        try:
-            os.ftruncate(fd, good)
-            os.lseek(fd, good, os.SEEK_SET)
-            if writer.message_count:
-                writer.add_metadata(STATS_METADATA_NAME, self.tally.to_metadata())
-                writer.finish()
-            os.fsync(fd)
-        except OSError:
-            # No room for the closing records: try the summary alone (what a live flush
-            # writes), so the file still opens indexed; else leave the complete chunks.
-            end = writer.position
-            try:
-                os.ftruncate(fd, end)
-                os.lseek(fd, end, os.SEEK_SET)
-                if writer.message_count:
-                    writer.finish()
-            except OSError:
-                with contextlib.suppress(OSError):
-                    os.ftruncate(fd, end)
-            with contextlib.suppress(OSError):
-                os.fsync(fd)
+        keep_complete_chunks(writer, self._file.fileno(), self.tally.to_metadata)
         self.kept_messages = writer.message_count
         self.kept_until = writer.end_time / 1e9 if writer.message_count else None
         what = "disk full: cannot write" if is_disk_full(exc) else "cannot write"
@@ -458,15 +321,6 @@ class McapSink:
             self._output.discard()
             kept = f"nothing was kept ({self.path} removed)"
         self.error = f"{what} {self.path} ({reason}); {kept}"
-
-
-def format_clock(seconds: float | None) -> str:
-    """HH:MM:SS.mmmZ (UTC) of a Unix time; seconds for small (relative) times."""
-    if seconds is None:
-        return "-"
-    if not timefmt.is_absolute(seconds):  # a relative time, not a date
-        return f"{seconds:.3f} s"
-    return timefmt.format_clock(seconds)
 
 
 def recording_metadata(source: str, **extra: str) -> dict[str, str]:
