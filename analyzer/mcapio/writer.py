@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import itertools
-import json
 import operator
 import os
 import threading
@@ -16,24 +15,23 @@ from typing import Any
 from analyzer import PROTOCOL_DOCUMENT, __version__, timefmt
 from analyzer.errors import SourceError
 from analyzer.mcapio.channels import (
-    CAN_FRAME_SCHEMA,
     METADATA_NAME,
     ROLE_EVENT,
     ROLE_KEY,
     ROLE_RAW,
     ROLE_VIEW,
     STATS_METADATA_NAME,
-    STREAM_BYTES_SCHEMA,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
+    MessageTee,
     can_frame_json,
-    permissive_schema,
-    schema_name,
+    channel_spec,
     stream_chunk_json,
     time_ns,
 )
+from analyzer.mcapio.channels import encode_json as _ENCODE
 from analyzer.mcapio.chunked_writer import ChunkedWriter
-from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, VIEW_SCHEMAS, FoxgloveViews
+from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
 from analyzer.mcapio.options import DEFAULT_COMPRESSION
 from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
@@ -54,21 +52,6 @@ def _default_schemas() -> dict[str, dict[str, Any]]:
     except ImportError:
         return {}
     return topic_schemas()
-
-
-def _json_default(value: Any) -> Any:
-    if isinstance(value, (bytes, bytearray, memoryview)):
-        return bytes(value).hex(" ").upper()
-    if isinstance(value, (set, frozenset, tuple)):
-        return list(value)
-    return str(value)
-
-
-# One encoder for every message (json.dumps with options builds a new one per call).
-# Events never hold reference cycles, so the cycle check is skipped.
-_ENCODE = json.JSONEncoder(
-    separators=(",", ":"), default=_json_default, check_circular=False
-).encode
 
 
 _time_of = operator.attrgetter("time")
@@ -115,6 +98,7 @@ class McapSink:
         inputs: Iterable[str | os.PathLike[str]] = (),
         replaceable: Callable[[Path], bool] | None = None,
         atomic: bool = False,
+        tee: MessageTee | None = None,
     ) -> None:
 
         self.path = str(path)
@@ -129,6 +113,7 @@ class McapSink:
         self.last_time: float | None = None
         self._schemas = _default_schemas() if schemas is None else dict(schemas)
         self._views = FoxgloveViews() if foxglove_views else None
+        self._tee = tee  # gets every channel and message written (the live server)
         self._clock = clock
         self._flush_interval = flush_interval
         self._lock = threading.Lock()
@@ -286,20 +271,14 @@ class McapSink:
         channel_id = self._channels.get(topic)
         if channel_id is not None:
             return channel_id
-        if role == ROLE_RAW:
-            schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
-            name = str(schema["title"])
-        elif role == ROLE_VIEW:
-            name, schema = VIEW_SCHEMAS[topic]
-        else:
-            name = schema_name(topic)
-            schema = self._schemas.get(topic) or permissive_schema(topic)
-        schema_id = self._schema_ids.get(name)
+        spec = channel_spec(topic, role, self._schemas)
+        schema_id = self._schema_ids.get(spec.schema_name)
         if schema_id is None:
-            data = json.dumps(schema, separators=(",", ":")).encode()
-            schema_id = self._writer.register_schema(name, "jsonschema", data)
-            self._schema_ids[name] = schema_id
+            schema_id = self._writer.register_schema(spec.schema_name, "jsonschema", spec.schema)
+            self._schema_ids[spec.schema_name] = schema_id
         channel_id = self._writer.register_channel(topic, "json", schema_id, {ROLE_KEY: role})
+        if self._tee is not None:
+            self._tee.add_channel(channel_id, spec)
         self._channels[topic] = channel_id
         self._sequence[channel_id] = 0
         return channel_id
@@ -321,7 +300,7 @@ class McapSink:
                 self._write_items(list(run))  # type: ignore[arg-type]
 
     def _write_items(self, items: list[RawItem]) -> None:
-        add = self._writer.add_message
+        add = self._writer.add_message if self._tee is None else self._add_teed
         sequence = self._sequence
         can_id = self._channels.get(TOPIC_CAN_FRAMES, 0)
         stream_id = self._channels.get(TOPIC_STREAM_BYTES, 0)
@@ -346,7 +325,7 @@ class McapSink:
             self.last_time = items[-1].time
 
     def _write_events(self, events: list[Event]) -> None:
-        add = self._writer.add_message
+        add = self._writer.add_message if self._tee is None else self._add_teed
         sequence = self._sequence
         channels = self._channels
         views = self._views
@@ -370,6 +349,12 @@ class McapSink:
         if events:
             self._dirty = True
             self.last_time = events[-1].time
+
+    def _add_teed(
+        self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int
+    ) -> None:
+        self._writer.add_message(channel_id, log_time, data, publish_time, sequence)
+        self._tee.add_message(channel_id, log_time, data)  # type: ignore[union-attr]
 
     def _flush_locked(self) -> None:
         self._last_flush = self._clock()
