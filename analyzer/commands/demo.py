@@ -17,6 +17,7 @@ from analyzer.commands.simulate import (
     seconds_value,
 )
 from analyzer.errors import SourceError, UsageError
+from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import (
@@ -42,6 +43,8 @@ that does not always obey, for `gimbal-analyzer analyze` and `report` to find. A
 
   gimbal-analyzer info demo.mcap       what was recorded
   foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
+
+With --foxglove the stream is also served live to Foxglove (ws://127.0.0.1:8765).
 """
 
 CHANNEL = "gimbal-demo"
@@ -80,6 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--clean", action="store_true", help="inject no faults")
     add_compression_argument(parser)
+    add_foxglove_options(parser)
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
@@ -159,6 +163,7 @@ def written_by_demo(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import OUTPUT_CLOSED, Capture
+    from analyzer.live.attach import foxglove_summary, start_foxglove, with_foxglove
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
@@ -183,6 +188,7 @@ def run(args: argparse.Namespace) -> int:
     faults = FaultConfig() if args.clean else fault_config(args)
     config = SimConfig(ranging=True, uav=True, faults=faults, behaviour=behaviour(args))
 
+    live = start_foxglove(args)
     source = open_source(str(spec))
     try:
         sink = McapSink(
@@ -193,14 +199,16 @@ def run(args: argparse.Namespace) -> int:
             compression=args.compression,
             force=args.force,
             replaceable=written_by_demo,
+            tee=live,
         )
     except SourceError:
         source.close()
+        if live is not None:
+            live.close()
         raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    capture = Capture(
-        source, [sink] if printer is None else [sink, printer], stages=analysis_stages()
-    )
+    sinks = [s for s in (sink, printer, live) if s is not None]
+    capture = Capture(source, sinks, stages=analysis_stages())
     try:
         scene = Scene(spec, config)
     except BaseException:
@@ -226,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
                 run_app(
                     capture,
                     recording=path,
-                    source_label=f"demo on {spec}",
+                    source_label=with_foxglove(f"demo on {spec}", live),
                     exit_when_done=args.duration is not None,
                 )
             )
@@ -273,6 +281,8 @@ def run(args: argparse.Namespace) -> int:
         f"diagnostics in {stats.elapsed_s:.1f} s; recorded to {path}",
         file=sys.stderr if tui else sys.stdout,
     )
+    if live is not None:
+        print(f"  {foxglove_summary(live)}", file=sys.stderr if tui else sys.stdout)
     if hidden:
         print(f"  ({hidden} repeated commands / UAV status lines not shown; --all shows them)")
     if not tui:

@@ -1,0 +1,241 @@
+"""FoxgloveLive: a sink serving the decoded stream to Foxglove with the foxglove-sdk server.
+
+It advertises the channels a recording has, as the recording gets them (same topics, schema
+names, JSON Schemas and role metadata: ``analyzer.mcapio.channels.channel_spec``), and
+sends every message as it is written. Fed by a recording (``McapSink(..., tee=live)``) it
+sends the very bytes written to the file; without one (``monitor``) it encodes batches
+itself with the same encoders. Sending never waits for a client: the SDK queues at most
+``backlog`` messages per client and drops the oldest when a client falls behind.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import foxglove
+from foxglove import Channel, Context, Schema
+from foxglove._foxglove_py import BaseChannel
+from foxglove.websocket import ChannelView, Client, ServerListener, WebSocketServer
+
+from analyzer.errors import UsageError
+from analyzer.live.options import ListenAddress
+from analyzer.live.sdk_log import sdk_reports
+from analyzer.mcapio.channels import (
+    ROLE_EVENT,
+    ROLE_KEY,
+    ROLE_RAW,
+    ROLE_VIEW,
+    TOPIC_CAN_FRAMES,
+    TOPIC_STREAM_BYTES,
+    ChannelSpec,
+    can_frame_json,
+    channel_spec,
+    encode_json,
+    stream_chunk_json,
+    time_ns,
+)
+from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
+from analyzer.pipeline import Batch
+from analyzer.protocol.types import CanFrame
+from analyzer.sources.netutil import address
+
+SERVER_NAME = "gimbal-analyzer"
+DEFAULT_BACKLOG = 1024  # messages queued per client before the oldest are dropped (SDK default)
+SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.sdk.v1.1")  # what the installed SDK accepts
+
+
+def _default_schemas() -> dict[str, dict[str, Any]]:
+    from analyzer.protocol.schema import topic_schemas
+
+    return topic_schemas()
+
+
+@dataclass(frozen=True, slots=True)
+class LiveStatus:
+    """What the live server is doing, for status lines."""
+
+    url: str
+    clients: int  # clients subscribed to at least one channel
+    subscriptions: int
+    channels: int
+    messages: int  # messages handed to the SDK
+    drop_reports: int  # SDK reports of a slow client's messages dropped (not a count of them)
+    last_drop: float  # time.time() of the last such report, 0 if none
+    refused: int  # connections refused by the SDK (a client with another subprotocol)
+    errors: int  # messages the SDK refused (the server goes on)
+
+
+class _Subscriptions(ServerListener):
+    """SDK server listener: who is subscribed to which channel (called from SDK threads)."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.pairs: set[tuple[int, int]] = set()  # (client id, SDK channel id)
+
+    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
+        with self.lock:
+            self.pairs.add((client.id, channel.id))
+
+    def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
+        with self.lock:
+            self.pairs.discard((client.id, channel.id))
+
+    def counts(self) -> tuple[int, int]:
+        with self.lock:
+            return len({client for client, _ in self.pairs}), len(self.pairs)
+
+
+class FoxgloveLive:
+    """Sink and ``MessageTee`` (``analyzer.mcapio.channels``) serving Foxglove live.
+
+    Starts listening at once (``UsageError`` with one line when it cannot, e.g. the port is
+    taken). ``add_channel`` / ``add_message`` are called by a recording for every channel
+    and message it writes (then ``handle`` does nothing: ``fed`` is set by the first
+    channel); ``close`` stops the server and disconnects the clients. Nothing here raises
+    into the recording: a message the SDK refuses is counted in ``errors``.
+    """
+
+    def __init__(
+        self,
+        listen: ListenAddress,
+        *,
+        schemas: dict[str, dict[str, Any]] | None = None,
+        backlog: int = DEFAULT_BACKLOG,
+    ) -> None:
+        self.listen = listen
+        self.fed = False
+        self.messages = 0
+        self.errors = 0
+        self._schemas = _default_schemas() if schemas is None else dict(schemas)
+        self._channels: list[BaseChannel | None] = []  # by the recording's channel id
+        self._own_ids: dict[str, int] = {}  # topic -> channel id, when encoding itself
+        self._views = FoxgloveViews()
+        self._subscriptions = _Subscriptions()
+        self._reports_at_start = sdk_reports()  # also starts forwarding the SDK's log
+        self._context = Context()
+        try:
+            self._server: WebSocketServer | None = foxglove.start_server(
+                name=SERVER_NAME,
+                host=listen.host,
+                port=listen.port,
+                context=self._context,
+                server_listener=self._subscriptions,
+                message_backlog_size=backlog,
+            )
+        except Exception as exc:
+            where = address(listen.host, listen.port)
+            raise UsageError(f"--foxglove: cannot listen on {where} ({exc})") from None
+        self.port = self._server.port
+        self.url = f"ws://{address(listen.host, self.port)}"
+
+    # -- MessageTee: fed by a recording ---------------------------------------------------------
+
+    def add_channel(self, channel_id: int, spec: ChannelSpec) -> None:
+        self.fed = True
+        schema = Schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema)
+        try:
+            channel = Channel(
+                spec.topic,
+                schema=schema,
+                message_encoding=spec.message_encoding,
+                context=self._context,
+                metadata={ROLE_KEY: spec.role},
+            ).base  # the SDK's own channel: logging bytes through it skips a Python layer
+        except Exception:
+            self.errors += 1
+            return
+        channels = self._channels
+        if len(channels) <= channel_id:
+            channels.extend([None] * (channel_id + 1 - len(channels)))
+        channels[channel_id] = channel
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
+        try:
+            channel = self._channels[channel_id]
+            if channel is not None:
+                channel.log(data, log_time)
+                self.messages += 1
+        except Exception:  # never into the recording
+            self.errors += 1
+
+    # -- Sink ------------------------------------------------------------------------------------
+
+    def handle(self, batch: Batch) -> None:
+        """Without a recording to feed it: encode the batch as a recording would."""
+        if self.fed or self._server is None:
+            return
+        send = self._send
+        for item in batch.items:
+            if isinstance(item, CanFrame):
+                send(TOPIC_CAN_FRAMES, ROLE_RAW, item.time, can_frame_json(item))
+            else:
+                send(TOPIC_STREAM_BYTES, ROLE_RAW, item.time, stream_chunk_json(item))
+        views = self._views
+        for event in batch.events:
+            topic = event.topic
+            send(topic, ROLE_EVENT, event.time, encode_json(event.to_dict()).encode())
+            if topic in VIEW_INPUT_TOPICS:
+                for view_topic, message in views.views(event):
+                    send(view_topic, ROLE_VIEW, event.time, encode_json(message).encode())
+
+    def _send(self, topic: str, role: str, seconds: float, data: bytes) -> None:
+        channel_id = self._own_ids.get(topic)
+        if channel_id is None:
+            channel_id = self._own_ids[topic] = len(self._own_ids) + 1
+            self.add_channel(channel_id, channel_spec(topic, role, self._schemas))
+            self.fed = False  # add_channel marks a recording's feed
+        self.add_message(channel_id, time_ns(seconds), data)
+
+    def close(self) -> None:
+        server, self._server = self._server, None
+        if server is not None:
+            server.stop()
+
+    # -- what it is doing ------------------------------------------------------------------------
+
+    @property
+    def everywhere(self) -> bool:
+        return self.listen.everywhere
+
+    def describe(self) -> str:
+        """Where it listens, in words: all interfaces is said so, with the address."""
+        if self.everywhere:
+            return (
+                f"serving the live stream to Foxglove on all interfaces ({self.url}): "
+                f"reachable from other machines; --foxglove 127.0.0.1:{self.port} keeps it "
+                "on this one"
+            )
+        return f"serving the live stream to Foxglove on {self.url}"
+
+    def status(self) -> LiveStatus:
+        clients, subscriptions = self._subscriptions.counts()
+        now = sdk_reports()
+        start = self._reports_at_start
+        return LiveStatus(
+            url=self.url,
+            clients=clients,
+            subscriptions=subscriptions,
+            channels=sum(channel is not None for channel in self._channels),
+            messages=self.messages,
+            drop_reports=now.outbox_full - start.outbox_full,
+            last_drop=now.last_outbox_full if now.outbox_full > start.outbox_full else 0.0,
+            refused=now.refused - start.refused,
+            errors=self.errors,
+        )
+
+
+def status_words(live: FoxgloveLive, now: float | None = None) -> str:
+    """The live server in a few words for a status line: clients, and slow-client drops."""
+    status = live.status()
+    now = time.time() if now is None else now
+    plural = "" if status.clients == 1 else "s"
+    parts = [f"foxglove :{live.port} {status.clients} client{plural}"]
+    if status.drop_reports:
+        ago = now - status.last_drop
+        parts.append(f"SLOW CLIENT, messages to it dropped ({ago:.0f} s ago)")
+    if status.refused:
+        parts.append(f"{status.refused} refused (old protocol?)")
+    return " ".join(parts)
