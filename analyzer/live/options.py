@@ -61,3 +61,15 @@ def add_foxglove_options(parser: argparse.ArgumentParser) -> None:
         f"is {DEFAULT_HOST}:{DEFAULT_PORT} (this machine only), 0.0.0.0:{DEFAULT_PORT} lets "
         "other machines connect, port 0 picks a free one",
     )
+
+
+def listen_words(listen: ListenAddress, port: int) -> str:
+    """Where the live server listens, in words: all interfaces is said so, with the address
+    (``port`` is the one it got, when port 0 asked for a free one)."""
+    where = f"[{listen.host}]:{port}" if ":" in listen.host else f"{listen.host}:{port}"
+    if listen.everywhere:
+        return (
+            f"serving the live stream to Foxglove on all interfaces (ws://{where}): reachable "
+            f"from other machines; --foxglove 127.0.0.1:{port} keeps it on this one"
+        )
+    return f"serving the live stream to Foxglove on ws://{where}"

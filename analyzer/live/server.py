@@ -1,11 +1,16 @@
 """FoxgloveLive: a sink serving the decoded stream to Foxglove with the foxglove-sdk server.
 
-It advertises the channels a recording has, as the recording gets them (same topics, schema
-names, JSON Schemas and role metadata: ``analyzer.mcapio.channels.channel_spec``), and
-sends every message as it is written. Fed by a recording (``McapSink(..., tee=live)``) it
-sends the very bytes written to the file; without one (``monitor``) it encodes batches
-itself with the same encoders. Sending never waits for a client: the SDK queues at most
-``backlog`` messages per client and drops the oldest when a client falls behind.
+It advertises the channels of a recording (same topics, schema names, JSON Schemas and role
+metadata: ``analyzer.mcapio.channels.channel_spec``), every one a recording can hold from the
+start, and sends every message as it is written. Advertising them all before any client
+connects is deliberate: foxglove-sdk 0.30 may answer a client that subscribes at once to a
+channel created while it is connected with "Unknown channel ID" (the panel would stay empty
+until it reconnects); channels that exist when a client connects are advertised safely.
+
+Fed by a recording (``McapSink(..., tee=live)``) it sends the very bytes written to the
+file; without one (``monitor``) it encodes batches itself with the same encoders. Sending
+never waits for a client: the SDK queues at most ``backlog`` messages per client and drops
+the oldest when a client falls behind.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from foxglove._foxglove_py import BaseChannel
 from foxglove.websocket import ChannelView, Client, ServerListener, WebSocketServer
 
 from analyzer.errors import UsageError
-from analyzer.live.options import ListenAddress
+from analyzer.live.options import ListenAddress, listen_words
 from analyzer.live.sdk_log import sdk_reports
 from analyzer.mcapio.channels import (
     ROLE_EVENT,
@@ -34,6 +39,7 @@ from analyzer.mcapio.channels import (
     can_frame_json,
     channel_spec,
     encode_json,
+    known_channel_specs,
     stream_chunk_json,
     time_ns,
 )
@@ -44,6 +50,7 @@ from analyzer.sources.netutil import address
 
 SERVER_NAME = "gimbal-analyzer"
 DEFAULT_BACKLOG = 1024  # messages queued per client before the oldest are dropped (SDK default)
+STOP_WAIT_S = 1.0  # how long close() waits for the SDK server to stop
 SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.sdk.v1.1")  # what the installed SDK accepts
 
 
@@ -60,7 +67,7 @@ class LiveStatus:
     url: str
     clients: int  # clients subscribed to at least one channel
     subscriptions: int
-    channels: int
+    channels: int  # advertised
     messages: int  # messages handed to the SDK
     drop_reports: int  # SDK reports of a slow client's messages dropped (not a count of them)
     last_drop: float  # time.time() of the last such report, 0 if none
@@ -111,6 +118,7 @@ class FoxgloveLive:
         self.errors = 0
         self._schemas = _default_schemas() if schemas is None else dict(schemas)
         self._channels: list[BaseChannel | None] = []  # by the recording's channel id
+        self._by_topic: dict[str, tuple[ChannelSpec, BaseChannel]] = {}  # advertised ones
         self._own_ids: dict[str, int] = {}  # topic -> channel id, when encoding itself
         self._views = FoxgloveViews()
         self._subscriptions = _Subscriptions()
@@ -130,11 +138,23 @@ class FoxgloveLive:
             raise UsageError(f"--foxglove: cannot listen on {where} ({exc})") from None
         self.port = self._server.port
         self.url = f"ws://{address(listen.host, self.port)}"
+        for spec in known_channel_specs(self._schemas):
+            self._advertise(spec)
 
     # -- MessageTee: fed by a recording ---------------------------------------------------------
 
     def add_channel(self, channel_id: int, spec: ChannelSpec) -> None:
         self.fed = True
+        known = self._by_topic.get(spec.topic)
+        channel = known[1] if known is not None and known[0] == spec else self._advertise(spec)
+        if channel is None:
+            return
+        channels = self._channels
+        if len(channels) <= channel_id:
+            channels.extend([None] * (channel_id + 1 - len(channels)))
+        channels[channel_id] = channel
+
+    def _advertise(self, spec: ChannelSpec) -> BaseChannel | None:
         schema = Schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema)
         try:
             channel = Channel(
@@ -146,11 +166,9 @@ class FoxgloveLive:
             ).base  # the SDK's own channel: logging bytes through it skips a Python layer
         except Exception:
             self.errors += 1
-            return
-        channels = self._channels
-        if len(channels) <= channel_id:
-            channels.extend([None] * (channel_id + 1 - len(channels)))
-        channels[channel_id] = channel
+            return None
+        self._by_topic[spec.topic] = (spec, channel)
+        return channel
 
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
         try:
@@ -190,9 +208,14 @@ class FoxgloveLive:
         self.add_message(channel_id, time_ns(seconds), data)
 
     def close(self) -> None:
+        """Stop serving. The SDK's stop waits for every connection to close, which a client
+        that stopped reading delays until its own timeout: that wait runs in a thread of
+        its own, given ``STOP_WAIT_S`` before the caller goes on."""
         server, self._server = self._server, None
         if server is not None:
-            server.stop()
+            stopper = threading.Thread(target=server.stop, name="foxglove-stop", daemon=True)
+            stopper.start()
+            stopper.join(STOP_WAIT_S)
 
     # -- what it is doing ------------------------------------------------------------------------
 
@@ -202,13 +225,7 @@ class FoxgloveLive:
 
     def describe(self) -> str:
         """Where it listens, in words: all interfaces is said so, with the address."""
-        if self.everywhere:
-            return (
-                f"serving the live stream to Foxglove on all interfaces ({self.url}): "
-                f"reachable from other machines; --foxglove 127.0.0.1:{self.port} keeps it "
-                "on this one"
-            )
-        return f"serving the live stream to Foxglove on {self.url}"
+        return listen_words(self.listen, self.port)
 
     def status(self) -> LiveStatus:
         clients, subscriptions = self._subscriptions.counts()
@@ -218,7 +235,7 @@ class FoxgloveLive:
             url=self.url,
             clients=clients,
             subscriptions=subscriptions,
-            channels=sum(channel is not None for channel in self._channels),
+            channels=len(self._by_topic),
             messages=self.messages,
             drop_reports=now.outbox_full - start.outbox_full,
             last_drop=now.last_outbox_full if now.outbox_full > start.outbox_full else 0.0,

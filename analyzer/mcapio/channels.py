@@ -219,3 +219,15 @@ class MessageTee(Protocol):
     def add_channel(self, channel_id: int, spec: ChannelSpec) -> None: ...
 
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None: ...
+
+
+def known_channel_specs(schemas: dict[str, dict[str, Any]]) -> list[ChannelSpec]:
+    """Every channel a recording can hold: the raw ones, one per event topic with a schema
+    and the Foxglove views (a recording holds those that got messages, as they come)."""
+    from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
+
+    return [
+        *(channel_spec(topic, ROLE_RAW, schemas) for topic in RAW_TOPICS),
+        *(channel_spec(topic, ROLE_EVENT, schemas) for topic in schemas),
+        *(channel_spec(topic, ROLE_VIEW, schemas) for topic in VIEW_SCHEMAS),
+    ]
