@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
-from analyzer.live.server import FoxgloveLive, status_words
+from analyzer.errors import UsageError
+
+if TYPE_CHECKING:
+    from analyzer.live.server import FoxgloveLive
 
 
 def start_foxglove(args: argparse.Namespace, stream: IO[str] | None = None) -> FoxgloveLive | None:
@@ -15,6 +18,12 @@ def start_foxglove(args: argparse.Namespace, stream: IO[str] | None = None) -> F
     listen = getattr(args, "foxglove", None)
     if listen is None:
         return None
+    try:
+        from analyzer.live.server import FoxgloveLive
+    except ImportError as exc:
+        raise UsageError(
+            f"--foxglove needs the foxglove-sdk package (pip install foxglove-sdk): {exc}"
+        ) from None
     live = FoxgloveLive(listen)
     print(f"foxglove: {live.describe()}", file=stream or sys.stderr, flush=True)
     return live
@@ -27,7 +36,11 @@ def with_foxglove(label: str, live: FoxgloveLive | None) -> str:
 
 def foxglove_note(live: FoxgloveLive | None) -> str:
     """The live server's part of a status line ('' without one)."""
-    return "" if live is None else status_words(live)
+    if live is None:
+        return ""
+    from analyzer.live.server import status_words
+
+    return status_words(live)
 
 
 def foxglove_summary(live: FoxgloveLive | None) -> str:
