@@ -27,7 +27,7 @@ from analyzer.inputs import open_input
 from analyzer.live.options import ListenAddress, listen_words, parse_listen_address
 from analyzer.live.server import FoxgloveLive, status_words
 from analyzer.mcapio.writer import McapSink
-from analyzer.pipeline import Pipeline, run_items
+from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.types import CanFrame
 from tests.foxglove_client import FoxgloveClient
 from tests.test_record_command import FakeIdu
@@ -78,11 +78,32 @@ def advertised(channel: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def record(path: Path, items: list[Any], live: FoxgloveLive | None, **kw: Any) -> None:
+class Drained:
+    """A sink put before the server: at the end it waits until ``client`` has every
+    message the server sent, so that stopping the server loses none of them."""
+
+    def __init__(self, live: FoxgloveLive, client: FoxgloveClient) -> None:
+        self.live = live
+        self.client = client
+
+    def handle(self, batch: Batch) -> None:
+        pass
+
+    def close(self) -> None:
+        sent = self.live.status().messages
+        assert self.client.wait_for(lambda: len(self.client.messages) >= sent, 20)
+
+
+def record(
+    path: Path, items: list[Any], live: FoxgloveLive | None, client: FoxgloveClient | None = None
+) -> None:
     """Record ``items`` as ``convert`` does (fixed batches), teeing to ``live`` if given."""
     sink = McapSink(path, metadata=METADATA, flush_interval=None, tee=live)
-    pipeline = Pipeline([sink] if live is None else [sink, live])
-    run_items(items, pipeline, **kw)
+    sinks: list[Any] = [sink]
+    if live is not None:
+        sinks += [Drained(live, client), live] if client is not None else [live]
+    pipeline = Pipeline(sinks)
+    run_items(items, pipeline)
     assert not pipeline.failures
 
 
@@ -123,7 +144,7 @@ def test_live_messages_equal_the_recorded_ones_and_the_file_does_not_change(
     try:
         # subscribed to every channel (all are advertised when a client connects)
         assert client.wait_for(lambda: live.status().subscriptions == len(client.channels) > 0)
-        record(tmp_path / "client.mcap", items, live)
+        record(tmp_path / "client.mcap", items, live, client)
         assert client.closed.wait(10)  # the server stopped with the recording
     finally:
         client.close()
@@ -149,7 +170,7 @@ def test_without_a_recording_it_sends_what_a_recording_holds(tmp_path: Path) -> 
     client = FoxgloveClient(live.url)
     try:
         assert client.wait_for(lambda: live.status().subscriptions == len(client.channels) > 0)
-        run_items(items, Pipeline([live]))
+        run_items(items, Pipeline([Drained(live, client), live]))
         assert client.closed.wait(10)
     finally:
         client.close()

@@ -51,6 +51,7 @@ from analyzer.sources.netutil import address
 SERVER_NAME = "gimbal-analyzer"
 DEFAULT_BACKLOG = 1024  # messages queued per client before the oldest are dropped (SDK default)
 STOP_WAIT_S = 1.0  # how long close() waits for the SDK server to stop
+LINGER_S = 0.25  # time watching clients get for the last messages before the server stops
 SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.sdk.v1.1")  # what the installed SDK accepts
 
 
@@ -208,11 +209,14 @@ class FoxgloveLive:
         self.add_message(channel_id, time_ns(seconds), data)
 
     def close(self) -> None:
-        """Stop serving. The SDK's stop waits for every connection to close, which a client
-        that stopped reading delays until its own timeout: that wait runs in a thread of
-        its own, given ``STOP_WAIT_S`` before the caller goes on."""
+        """Stop serving. Watching clients get ``LINGER_S`` to receive the last messages (the
+        SDK's stop drops what is still queued). The SDK's stop waits for every connection to
+        close, which a client that stopped reading delays until its own timeout: that wait
+        runs in a thread of its own, given ``STOP_WAIT_S`` before the caller goes on."""
         server, self._server = self._server, None
         if server is not None:
+            if self._subscriptions.counts()[0]:
+                time.sleep(LINGER_S)
             stopper = threading.Thread(target=server.stop, name="foxglove-stop", daemon=True)
             stopper.start()
             stopper.join(STOP_WAIT_S)
