@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import json
 import signal
 import subprocess
@@ -19,6 +20,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from mcap.reader import make_reader
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
@@ -117,6 +120,16 @@ def test_listen_address_grammar() -> None:
     for bad in ("", "x", "host:", ":80", "70000", "::1:9000"):
         with pytest.raises(argparse.ArgumentTypeError):
             parse_listen_address(bad)
+
+
+@given(st.text(max_size=40))
+def test_any_address_text_is_an_address_or_one_clear_error(text: str) -> None:
+    try:
+        listen = parse_listen_address(text)
+    except argparse.ArgumentTypeError as exc:
+        assert repr(text.strip()) in str(exc)
+    else:
+        assert 0 <= listen.port <= 65535 and listen.host
 
 
 def test_all_interfaces_is_said_with_the_address() -> None:
@@ -238,6 +251,26 @@ def test_a_client_that_stops_reading_does_not_hold_the_recording_back(tmp_path: 
     assert "1 client SLOW CLIENT, messages to it dropped" in words[0]
     alone_s, slow_s = timings
     assert slow_s < 3 * alone_s + 2.0, timings  # generous: a stalled one would never finish
+
+
+def test_record_status_line_names_the_server_and_its_clients(tmp_path: Path) -> None:
+    from analyzer.capture import Capture
+    from analyzer.commands.record import StatusLine
+    from analyzer.live.attach import foxglove_note
+    from analyzer.sources import open_source
+
+    live = FoxgloveLive(LOCAL)
+    client = FoxgloveClient(live.url)
+    try:
+        assert client.wait_for(lambda: live.status().watching == 1)
+        status = StatusLine(io.StringIO(), str(tmp_path / "x.mcap"))
+        status.capture = Capture(open_source(f"file:{SAMPLE}"), [])
+        status.notes.append(lambda: foxglove_note(live))
+        assert f"foxglove :{live.port} 1 client" in status.line()
+    finally:
+        client.close()
+        live.close()
+        status.capture.source.close()
 
 
 def test_the_old_subprotocol_is_refused_and_counted() -> None:

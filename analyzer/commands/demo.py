@@ -214,6 +214,8 @@ def run(args: argparse.Namespace) -> int:
     except BaseException:
         source.close()
         sink.close()
+        if live is not None:
+            live.close()
         raise
 
     def finish() -> None:

@@ -66,7 +66,8 @@ class LiveStatus:
     """What the live server is doing, for status lines."""
 
     url: str
-    clients: int  # clients subscribed to at least one channel
+    clients: int  # clients connected (as the SDK's log tells), at least those watching
+    watching: int  # clients subscribed to at least one channel
     subscriptions: int
     channels: int  # advertised
     messages: int  # messages handed to the SDK
@@ -232,12 +233,14 @@ class FoxgloveLive:
         return listen_words(self.listen, self.port)
 
     def status(self) -> LiveStatus:
-        clients, subscriptions = self._subscriptions.counts()
+        watching, subscriptions = self._subscriptions.counts()
         now = sdk_reports()
         start = self._reports_at_start
+        connected = (now.connected - start.connected) - (now.disconnected - start.disconnected)
         return LiveStatus(
             url=self.url,
-            clients=clients,
+            clients=max(connected, watching),
+            watching=watching,
             subscriptions=subscriptions,
             channels=len(self._by_topic),
             messages=self.messages,
