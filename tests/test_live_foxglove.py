@@ -179,7 +179,7 @@ def test_without_a_recording_it_sends_what_a_recording_holds(tmp_path: Path) -> 
     """monitor records nothing: the server encodes the batches itself, to the same bytes."""
     items = sample_items(2)
     record(tmp_path / "reference.mcap", items, None)
-    live = FoxgloveLive(LOCAL, backlog=BIG_BACKLOG)
+    live = FoxgloveLive(LOCAL, backlog=BIG_BACKLOG, encode=True)
     client = FoxgloveClient(live.url)
     try:
         assert client.wait_for(lambda: live.status().subscriptions == len(client.channels) > 0)

@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.live.attach import start_foxglove, with_foxglove
     from analyzer.tui.app import run_app
 
-    live = start_foxglove(args)
+    live = start_foxglove(args, encode=True)  # no recording to feed it
     source = open_source(args.source, replay_speed=speed)
     capture = Capture(source, [] if live is None else [live], stages=analysis_stages())
     label = str(getattr(source, "description", args.source))

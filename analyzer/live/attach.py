@@ -12,9 +12,12 @@ if TYPE_CHECKING:
     from analyzer.live.server import FoxgloveLive
 
 
-def start_foxglove(args: argparse.Namespace, stream: IO[str] | None = None) -> FoxgloveLive | None:
+def start_foxglove(
+    args: argparse.Namespace, *, encode: bool = False, stream: IO[str] | None = None
+) -> FoxgloveLive | None:
     """The live server ``--foxglove`` asks for (None without it), listening at once; where it
-    listens is said on ``stream`` (standard error by default), all interfaces included."""
+    listens is said on ``stream`` (standard error by default), all interfaces included.
+    ``encode``: no recording feeds it (``McapSink(..., tee=live)``), it encodes batches."""
     listen = getattr(args, "foxglove", None)
     if listen is None:
         return None
@@ -24,7 +27,7 @@ def start_foxglove(args: argparse.Namespace, stream: IO[str] | None = None) -> F
         raise UsageError(
             f"--foxglove needs the foxglove-sdk package (pip install foxglove-sdk): {exc}"
         ) from None
-    live = FoxgloveLive(listen)
+    live = FoxgloveLive(listen, encode=encode)
     print(f"foxglove: {live.describe()}", file=stream or sys.stderr, flush=True)
     return live
 

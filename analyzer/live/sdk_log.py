@@ -9,6 +9,7 @@ here, kept out of the root logger (nothing is printed) and counted.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import threading
 import time
@@ -61,16 +62,11 @@ def sdk_reports() -> SdkReports:
         if _counter is None:
             _counter = _install()
         counter = _counter
-    with counter.lock or threading.Lock():
-        reports = counter.reports
-        return SdkReports(
-            reports.outbox_full,
-            reports.last_outbox_full,
-            reports.slow_client,
-            reports.refused,
-            reports.connected,
-            reports.disconnected,
-        )
+    counter.acquire()  # the lock logging holds around emit()
+    try:
+        return dataclasses.replace(counter.reports)
+    finally:
+        counter.release()
 
 
 def _install() -> _Counter:

@@ -52,7 +52,6 @@ SERVER_NAME = "gimbal-analyzer"
 DEFAULT_BACKLOG = 1024  # messages queued per client before the oldest are dropped (SDK default)
 STOP_WAIT_S = 1.0  # how long close() waits for the SDK server to stop
 LINGER_S = 0.25  # time watching clients get for the last messages before the server stops
-SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.sdk.v1.1")  # what the installed SDK accepts
 
 
 def _default_schemas() -> dict[str, dict[str, Any]]:
@@ -102,9 +101,9 @@ class FoxgloveLive:
 
     Starts listening at once (``UsageError`` with one line when it cannot, e.g. the port is
     taken). ``add_channel`` / ``add_message`` are called by a recording for every channel
-    and message it writes (then ``handle`` does nothing: ``fed`` is set by the first
-    channel); ``close`` stops the server and disconnects the clients. Nothing here raises
-    into the recording: a message the SDK refuses is counted in ``errors``.
+    and message it writes; with ``encode`` (no recording to feed it) ``handle`` encodes each
+    batch itself. ``close`` stops the server and disconnects the clients. Nothing here
+    raises into the recording: a message the SDK refuses is counted in ``errors``.
     """
 
     def __init__(
@@ -113,15 +112,16 @@ class FoxgloveLive:
         *,
         schemas: dict[str, dict[str, Any]] | None = None,
         backlog: int = DEFAULT_BACKLOG,
+        encode: bool = False,
     ) -> None:
         self.listen = listen
-        self.fed = False
+        self.encode = encode
         self.messages = 0
         self.errors = 0
         self._schemas = _default_schemas() if schemas is None else dict(schemas)
         self._channels: list[BaseChannel | None] = []  # by the recording's channel id
         self._by_topic: dict[str, tuple[ChannelSpec, BaseChannel]] = {}  # advertised ones
-        self._own_ids: dict[str, int] = {}  # topic -> channel id, when encoding itself
+        self._own: dict[str, BaseChannel | None] = {}  # by topic, when encoding itself
         self._views = FoxgloveViews()
         self._subscriptions = _Subscriptions()
         self._reports_at_start = sdk_reports()  # also starts forwarding the SDK's log
@@ -146,15 +146,20 @@ class FoxgloveLive:
     # -- MessageTee: fed by a recording ---------------------------------------------------------
 
     def add_channel(self, channel_id: int, spec: ChannelSpec) -> None:
-        self.fed = True
-        known = self._by_topic.get(spec.topic)
-        channel = known[1] if known is not None and known[0] == spec else self._advertise(spec)
-        if channel is None:
-            return
         channels = self._channels
         if len(channels) <= channel_id:
             channels.extend([None] * (channel_id + 1 - len(channels)))
-        channels[channel_id] = channel
+        channels[channel_id] = self._channel_for(spec)
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
+        channel = self._channels[channel_id] if channel_id < len(self._channels) else None
+        if channel is not None:
+            self._log(channel, log_time, data)
+
+    def _channel_for(self, spec: ChannelSpec) -> BaseChannel | None:
+        """The advertised channel of ``spec`` (advertised now if it is a new one)."""
+        known = self._by_topic.get(spec.topic)
+        return known[1] if known is not None and known[0] == spec else self._advertise(spec)
 
     def _advertise(self, spec: ChannelSpec) -> BaseChannel | None:
         schema = Schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema)
@@ -172,20 +177,19 @@ class FoxgloveLive:
         self._by_topic[spec.topic] = (spec, channel)
         return channel
 
-    def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
+    def _log(self, channel: BaseChannel, log_time: int, data: bytes) -> None:
         try:
-            channel = self._channels[channel_id]
-            if channel is not None:
-                channel.log(data, log_time)
-                self.messages += 1
+            channel.log(data, log_time)
         except Exception:  # never into the recording
             self.errors += 1
+        else:
+            self.messages += 1
 
     # -- Sink ------------------------------------------------------------------------------------
 
     def handle(self, batch: Batch) -> None:
-        """Without a recording to feed it: encode the batch as a recording would."""
-        if self.fed or self._server is None:
+        """With ``encode`` (no recording feeds it): encode the batch as a recording would."""
+        if not self.encode or self._server is None:
             return
         send = self._send
         for item in batch.items:
@@ -202,12 +206,12 @@ class FoxgloveLive:
                     send(view_topic, ROLE_VIEW, event.time, encode_json(message).encode())
 
     def _send(self, topic: str, role: str, seconds: float, data: bytes) -> None:
-        channel_id = self._own_ids.get(topic)
-        if channel_id is None:
-            channel_id = self._own_ids[topic] = len(self._own_ids) + 1
-            self.add_channel(channel_id, channel_spec(topic, role, self._schemas))
-            self.fed = False  # add_channel marks a recording's feed
-        self.add_message(channel_id, time_ns(seconds), data)
+        if topic in self._own:
+            channel = self._own[topic]
+        else:
+            channel = self._own[topic] = self._channel_for(channel_spec(topic, role, self._schemas))
+        if channel is not None:
+            self._log(channel, time_ns(seconds), data)
 
     def close(self) -> None:
         """Stop serving. Watching clients get ``LINGER_S`` to receive the last messages (the

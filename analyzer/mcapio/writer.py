@@ -274,9 +274,13 @@ class McapSink:
         spec = channel_spec(topic, role, self._schemas)
         schema_id = self._schema_ids.get(spec.schema_name)
         if schema_id is None:
-            schema_id = self._writer.register_schema(spec.schema_name, "jsonschema", spec.schema)
+            schema_id = self._writer.register_schema(
+                spec.schema_name, spec.schema_encoding, spec.schema
+            )
             self._schema_ids[spec.schema_name] = schema_id
-        channel_id = self._writer.register_channel(topic, "json", schema_id, {ROLE_KEY: role})
+        channel_id = self._writer.register_channel(
+            topic, spec.message_encoding, schema_id, {ROLE_KEY: role}
+        )
         if self._tee is not None:
             self._tee.add_channel(channel_id, spec)
         self._channels[topic] = channel_id
