@@ -8,6 +8,12 @@ it. Reported: frames sent vs captured vs written, the recorder's CPU use (CPU ti
 capture and MCAP flush threads, measured per thread) and ratios against the targets of
 issue 4 (none lost, under 25% of one core).
 
+With an MCAP sink the same load is then recorded a second time while serving it live to
+one Foxglove WebSocket client (``--foxglove``, issue 25): a client in a process of its own
+(``benchmarks/live_client.py``) subscribes to every channel. The extra CPU of the recorder
+(capture and flush threads plus the SDK's server threads) is compared with the recording
+alone of the same run (target: a few percent of one core); ``--no-live`` skips it.
+
 The virtual bus only connects buses in one process, so sender and recorder share the
 interpreter; the sender's own CPU time is measured separately and not counted.
 
@@ -34,6 +40,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 RATE_FPS = 7600  # 1e6 / 131 bits per extended 8-byte frame, rounded down
 TARGET_CPU_PCT = 25.0
+TARGET_LIVE_EXTRA_PCT = 5.0  # "a few percent of one core" more with one live client
+SDK_THREADS = "tokio"  # the foxglove-sdk server's threads (Rust): /proc/self/task/*/comm
 
 
 def gimbal_frames() -> dict[str, list[tuple[int, bytes]]]:
@@ -175,12 +183,35 @@ def thread_cpu(thread: threading.Thread | None) -> float:
         return 0.0
 
 
+def native_threads_cpu(prefix: str) -> dict[int, float]:
+    """CPU seconds of this process's threads whose name starts with ``prefix`` (Linux)."""
+    out: dict[int, float] = {}
+    tick = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    try:
+        tasks = os.listdir("/proc/self/task")
+    except OSError:
+        return out
+    for tid in tasks:
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as stat:
+                fields = stat.read()
+        except OSError:
+            continue
+        name = fields[fields.index("(") + 1 : fields.rindex(")")]
+        if name.startswith(prefix):
+            rest = fields[fields.rindex(")") + 2 :].split()
+            out[int(tid)] = (int(rest[11]) + int(rest[12])) / tick  # utime + stime
+    return out
+
+
 class CpuMeter:
-    """Samples the CPU time of named threads while they run (their clocks vanish on exit)."""
+    """Samples the CPU time of named threads while they run (their clocks vanish on exit),
+    and of the SDK's native server threads (``native`` holds them by thread id)."""
 
     def __init__(self, names: tuple[str, ...]) -> None:
         self.names = names
         self.last: dict[int, float] = {}
+        self.native: dict[int, float] = {}
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._run, name="cpu-meter", daemon=True)
 
@@ -188,20 +219,27 @@ class CpuMeter:
         for thread in threading.enumerate():
             if thread.name in self.names and thread.ident is not None:
                 self.last[thread.ident] = max(self.last.get(thread.ident, 0.0), thread_cpu(thread))
+        for tid, cpu in native_threads_cpu(SDK_THREADS).items():
+            self.native[tid] = max(self.native.get(tid, 0.0), cpu)
 
     def _run(self) -> None:
         while not self._stop.wait(0.05):
             self.sample()
 
     def total(self) -> float:
-        return sum(self.last.values())
+        return sum(self.last.values()) + sum(self.native.values())
+
+    def sdk(self) -> float:
+        return sum(self.native.values())
 
     def stop(self) -> None:
         self._stop.set()
         self.thread.join()
 
 
-def run(seconds: float, rate: int, sink_kind: str, out_dir: str) -> dict[str, Any]:
+def run(
+    seconds: float, rate: int, sink_kind: str, out_dir: str, live: bool = False
+) -> dict[str, Any]:
     from analyzer.capture import Capture
     from analyzer.sources import open_source
 
@@ -215,10 +253,21 @@ def run(seconds: float, rate: int, sink_kind: str, out_dir: str) -> dict[str, An
         except ImportError:
             sink_kind = "count"
         else:
-            sink = McapSink(path, metadata=recording_metadata(source.description, command="bench"))
+            server = client = None
+            if live:
+                from live_client import LiveClient
+
+                from analyzer.live.options import ListenAddress
+                from analyzer.live.server import FoxgloveLive
+
+                server = FoxgloveLive(ListenAddress("127.0.0.1", 0))
+                client = LiveClient(server.url)
+            meta = recording_metadata(source.description, command="bench")
+            sink = McapSink(path, metadata=meta, tee=server)
     if sink_kind == "count":
         sink = CountingSink()
-    capture = Capture(source, [sink])
+        server = client = None
+    capture = Capture(source, [sink] if server is None else [sink, server])
     sender = Sender(channel, rate, seconds)
     meter = CpuMeter(("capture", "mcap-flush"))
     capture.start()
@@ -239,8 +288,15 @@ def run(seconds: float, rate: int, sink_kind: str, out_dir: str) -> dict[str, An
     sender.bus.shutdown()
     stats = capture.stats
     size = os.path.getsize(path) if sink_kind == "mcap" and os.path.exists(path) else 0
+    served = server.status() if server is not None else None
+    client_got = client.received() if client is not None else (0, 0)
     return {
-        "sink": sink_kind,
+        "sink": sink_kind + (" + foxglove client" if live else ""),
+        "live_sent": served.messages if served is not None else 0,
+        "live_drop_reports": served.drop_reports if served is not None else 0,
+        "client_received": client_got[0],
+        "client_bytes": client_got[1],
+        "sdk_cpu_s": meter.sdk(),
         "seconds": seconds,
         "wall_s": wall,
         "send_wall_s": send_wall,
@@ -279,6 +335,12 @@ def report(result: dict[str, Any]) -> list[str]:
     ]
     if result["mcap_bytes"]:
         lines.append(f"recording size:   {result['mcap_bytes'] / 1e6:.1f} MB")
+    if result["live_sent"]:
+        lines.append(
+            f"served live:      {result['live_sent']} messages, the client received "
+            f"{result['client_received']} ({result['client_bytes'] / 1e6:.1f} MB); SDK "
+            f"threads {result['sdk_cpu_s']:.2f} s CPU; drop reports {result['live_drop_reports']}"
+        )
     if result["sender_late_s"] > 0.1:
         lines.append(f"note: the sender fell behind by up to {result['sender_late_s']:.2f} s")
     if result["error"]:
@@ -286,6 +348,23 @@ def report(result: dict[str, Any]) -> list[str]:
     verdict = "PASS" if captured == sent == written and cpu_pct < TARGET_CPU_PCT else "FAIL"
     lines.append(f"verdict: {verdict} (none lost, CPU under {TARGET_CPU_PCT:.0f}% of one core)")
     return lines
+
+
+def live_report(alone: dict[str, Any], served: dict[str, Any]) -> list[str]:
+    """Recording alone vs recording while serving one live client, same run."""
+    pct = [100.0 * r["recorder_cpu_s"] / r["send_wall_s"] for r in (alone, served)]
+    extra = pct[1] - pct[0]
+    ok = extra < TARGET_LIVE_EXTRA_PCT and served["captured"] == served["sent"]
+    return [
+        "== recording alone vs recording + one Foxglove client (same run)",
+        f"recorder CPU:     {pct[0]:.1f}% alone, {pct[1]:.1f}% with the client "
+        f"(ratio {pct[1] / pct[0]:.2f}); extra {extra:.1f}% of one core "
+        f"(target < {TARGET_LIVE_EXTRA_PCT:.0f}%: ratio {extra / TARGET_LIVE_EXTRA_PCT:.2f})",
+        f"client got:       {served['client_received']} of {served['live_sent']} messages "
+        f"served ({served['client_received'] / max(1, served['live_sent']):.4f})",
+        f"verdict: {'PASS' if ok else 'FAIL'} (none lost, extra CPU under "
+        f"{TARGET_LIVE_EXTRA_PCT:.0f}% of one core)",
+    ]
 
 
 def convert_report(frames: int) -> list[str]:
@@ -311,12 +390,20 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--keep", metavar="DIR", help="keep the recording in DIR")
     parser.add_argument("--no-convert", action="store_true", help="skip the convert hook")
+    parser.add_argument(
+        "--no-live", action="store_true", help="skip the run with a live Foxglove client"
+    )
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         out_dir = args.keep or tmp
         result = run(args.seconds, args.rate, args.sink, out_dir)
         for line in report(result):
             print(line)
+        if args.sink == "mcap" and not args.no_live:
+            print("== the same, recorded while serving one Foxglove WebSocket client")
+            served = run(args.seconds, args.rate, args.sink, out_dir, live=True)
+            for line in report(served) + live_report(result, served):
+                print(line)
         if not args.no_convert:
             for line in convert_report(result["sent"]):
                 print(line)

@@ -18,6 +18,7 @@ from analyzer.commands.simulate import (
     seconds_value,
 )
 from analyzer.errors import SourceError, UsageError
+from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import (
@@ -46,6 +47,8 @@ aircraft's nose at 30 deg while it flies, so the gimbal's yaw from north
 
   gimbal-analyzer info demo.mcap       what was recorded
   foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
+
+With --foxglove the stream is also served live to Foxglove (ws://127.0.0.1:8765).
 """
 
 CHANNEL = "gimbal-demo"
@@ -85,6 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--clean", action="store_true", help="inject no faults")
     add_compression_argument(parser)
     add_heading_argument(parser)
+    add_foxglove_options(parser)
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
@@ -164,6 +168,7 @@ def written_by_demo(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import OUTPUT_CLOSED, Capture
+    from analyzer.live.attach import foxglove_summary, start_foxglove, with_foxglove
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
@@ -194,6 +199,7 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
 
+    live = start_foxglove(args)
     source = open_source(str(spec))
     try:
         sink = McapSink(
@@ -204,19 +210,23 @@ def run(args: argparse.Namespace) -> int:
             compression=args.compression,
             force=args.force,
             replaceable=written_by_demo,
+            tee=live,
         )
     except SourceError:
         source.close()
+        if live is not None:
+            live.close()
         raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    capture = Capture(
-        source, [sink] if printer is None else [sink, printer], stages=analysis_stages()
-    )
+    sinks = [s for s in (sink, printer, live) if s is not None]
+    capture = Capture(source, sinks, stages=analysis_stages())
     try:
         scene = Scene(spec, config)
     except BaseException:
         source.close()
         sink.close()
+        if live is not None:
+            live.close()
         raise
 
     def finish() -> None:
@@ -237,7 +247,7 @@ def run(args: argparse.Namespace) -> int:
                 run_app(
                     capture,
                     recording=path,
-                    source_label=f"demo on {spec}",
+                    source_label=with_foxglove(f"demo on {spec}", live),
                     exit_when_done=args.duration is not None,
                 )
             )
@@ -284,6 +294,8 @@ def run(args: argparse.Namespace) -> int:
         f"diagnostics in {stats.elapsed_s:.1f} s; recorded to {path}",
         file=sys.stderr if tui else sys.stdout,
     )
+    if live is not None:
+        print(f"  {foxglove_summary(live)}", file=sys.stderr if tui else sys.stdout)
     if hidden:
         print(f"  ({hidden} repeated commands / UAV status lines not shown; --all shows them)")
     if not tui:

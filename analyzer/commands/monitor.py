@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from analyzer.errors import SourceError, UsageError
+from analyzer.live.options import add_foxglove_options
 
 HELP = "watch a live source (or replay a capture file) in a terminal UI"
 DESCRIPTION = """\
@@ -23,7 +24,8 @@ interfaces are opened passive, the TCP proxy forwards bytes unchanged.
 
 Keys: q quit, p pause, f filter, / search, c clear counters, r raw bytes,
 v all topics, enter event details, ? help. To record at the same time use
-`gimbal-analyzer record --source ... -o flight.mcap --tui`.
+`gimbal-analyzer record --source ... -o flight.mcap --tui`. With --foxglove the
+same stream is served live to Foxglove too (ws://127.0.0.1:8765).
 """
 
 
@@ -55,6 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="file sources: replay speed as a multiple of recorded speed (default 1), "
         "or 'max' for as fast as possible",
     )
+    add_foxglove_options(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,12 +74,14 @@ def run(args: argparse.Namespace) -> int:
 
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
+    from analyzer.live.attach import start_foxglove, with_foxglove
     from analyzer.tui.app import run_app
 
+    live = start_foxglove(args, encode=True)  # no recording to feed it
     source = open_source(args.source, replay_speed=speed)
-    capture = Capture(source, [], stages=analysis_stages())
+    capture = Capture(source, [] if live is None else [live], stages=analysis_stages())
     label = str(getattr(source, "description", args.source))
-    result = run_app(capture, source_label=label)
+    result = run_app(capture, source_label=with_foxglove(label, live))
     if capture.error is not None:
         raise capture.error  # a SourceError: one line, exit 1
     stats = capture.stats

@@ -9,10 +9,12 @@ import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import IO, Any
 
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
+from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 
@@ -40,6 +42,8 @@ Examples:
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap
   gimbal-analyzer record --source tcp:192.168.42.200:2000 -o bench.mcap --duration 600
   gimbal-analyzer record --source proxy:2000->192.168.42.200:2000 -o gs.mcap --tui
+  gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap --foxglove
+                                watch it live in Foxglove too (ws://127.0.0.1:8765)
 """
 
 STATUS_INTERVAL_TTY = 0.5
@@ -64,6 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
     add_compression_argument(parser)
+    add_foxglove_options(parser)
     parser.add_argument(
         "-f",
         "--force",
@@ -134,6 +139,7 @@ class StatusLine:
         self.tty = stream.isatty()
         self.interval = STATUS_INTERVAL_TTY if self.tty else STATUS_INTERVAL_LOG
         self.capture: Any = None
+        self.notes: list[Callable[[], str]] = []  # more parts (the live server's)
         self._next = time.monotonic() + self.interval
         self._width = 0
         self._link_shown = ""
@@ -151,6 +157,7 @@ class StatusLine:
         parts.append(f"{stats.diagnostics} diagnostics")
         if stats.dropped:  # the capture fell behind: say so where the user looks
             parts.append(f"{stats.dropped} DROPPED")
+        parts += [text for note in self.notes if (text := note())]
         parts.append(_megabytes(self.path))
         return "  ".join(parts)
 
@@ -204,6 +211,12 @@ def _input_files(spec: str) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture, run_until_interrupted
+    from analyzer.live.attach import (
+        foxglove_note,
+        foxglove_summary,
+        start_foxglove,
+        with_foxglove,
+    )
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
@@ -224,6 +237,7 @@ def run(args: argparse.Namespace) -> int:
             from analyzer.tui.app import run_app
         except ImportError as exc:
             raise UsageError(f"the monitor UI is not available ({exc})") from None
+    live = start_foxglove(args)  # said on start, like the proxy's address
     source = open_source(args.source, replay_speed=args.speed)
     description = str(getattr(source, "description", args.source))
     note = getattr(source, "listen_note", None)
@@ -236,17 +250,21 @@ def run(args: argparse.Namespace) -> int:
             compression=args.compression,
             force=args.force,
             inputs=inputs,
+            tee=live,
         )
     except SourceError:
         source.close()
+        if live is not None:
+            live.close()
         raise
     link = LinkWatch()
-    sinks: list[Any] = [sink, link]
+    sinks: list[Any] = [sink, link] if live is None else [sink, link, live]
     status = None
     if not args.quiet and not args.tui:
         address = getattr(source, "address", None)
         waiting = f"connecting to {address}" if address else "waiting for data"
         status = StatusLine(sys.stderr, path, link, waiting)
+        status.notes.append(lambda: foxglove_note(live))
         sinks.append(status)
     if args.print and not args.tui:
         sinks.append(EventPrinter(sys.stdout))
@@ -265,7 +283,7 @@ def run(args: argparse.Namespace) -> int:
                 run_app(
                     capture,
                     recording=path,
-                    source_label=description,
+                    source_label=with_foxglove(description, live),
                     exit_when_done=args.duration is not None,
                 )
             )
@@ -301,6 +319,8 @@ def run(args: argparse.Namespace) -> int:
             f"to {path} ({_megabytes(path)}); ended: {reason}",
             file=sys.stderr,
         )
+        if live is not None:
+            print(foxglove_summary(live), file=sys.stderr)
     if nothing_received:
         # A live source that delivered nothing is a failed capture (exit 1), not a
         # success: say why we think nothing came (the last link message).

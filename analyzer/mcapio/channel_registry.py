@@ -2,21 +2,10 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
-from analyzer.mcapio.channels import (
-    CAN_FRAME_SCHEMA,
-    ROLE_KEY,
-    ROLE_RAW,
-    ROLE_VIEW,
-    STREAM_BYTES_SCHEMA,
-    TOPIC_CAN_FRAMES,
-    permissive_schema,
-    schema_name,
-)
+from analyzer.mcapio.channels import ROLE_KEY, MessageTee, channel_spec
 from analyzer.mcapio.chunked_writer import ChunkedWriter
-from analyzer.mcapio.foxglove import VIEW_SCHEMAS
 
 
 def default_schemas() -> dict[str, dict[str, Any]]:
@@ -32,11 +21,18 @@ class ChannelRegistry:
     """Topic -> channel id of one file, each channel registered with its schema at first use.
 
     ``ids`` and ``sequence`` (channel id -> number of the last message) are plain dicts for
-    the per-message path to read directly."""
+    the per-message path to read directly. A ``tee`` (the live server) is told of every
+    channel registered."""
 
-    def __init__(self, writer: ChunkedWriter, schemas: dict[str, dict[str, Any]]) -> None:
+    def __init__(
+        self,
+        writer: ChunkedWriter,
+        schemas: dict[str, dict[str, Any]],
+        tee: MessageTee | None = None,
+    ) -> None:
         self._writer = writer
         self._schemas = schemas
+        self._tee = tee
         self._schema_ids: dict[str, int] = {}
         self.ids: dict[str, int] = {}
         self.sequence: dict[int, int] = {}
@@ -46,20 +42,18 @@ class ChannelRegistry:
         channel_id = self.ids.get(topic)
         if channel_id is not None:
             return channel_id
-        if role == ROLE_RAW:
-            schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
-            name = str(schema["title"])
-        elif role == ROLE_VIEW:
-            name, schema = VIEW_SCHEMAS[topic]
-        else:
-            name = schema_name(topic)
-            schema = self._schemas.get(topic) or permissive_schema(topic)
-        schema_id = self._schema_ids.get(name)
+        spec = channel_spec(topic, role, self._schemas)
+        schema_id = self._schema_ids.get(spec.schema_name)
         if schema_id is None:
-            data = json.dumps(schema, separators=(",", ":")).encode()
-            schema_id = self._writer.register_schema(name, "jsonschema", data)
-            self._schema_ids[name] = schema_id
-        channel_id = self._writer.register_channel(topic, "json", schema_id, {ROLE_KEY: role})
+            schema_id = self._writer.register_schema(
+                spec.schema_name, spec.schema_encoding, spec.schema
+            )
+            self._schema_ids[spec.schema_name] = schema_id
+        channel_id = self._writer.register_channel(
+            topic, spec.message_encoding, schema_id, {ROLE_KEY: role}
+        )
+        if self._tee is not None:
+            self._tee.add_channel(channel_id, spec)
         self.ids[topic] = channel_id
         self.sequence[channel_id] = 0
         return channel_id

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
 
@@ -162,3 +163,71 @@ def permissive_schema(topic: str) -> dict[str, Any]:
         },
         "required": ["topic", "time"],
     }
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value).hex(" ").upper()
+    if isinstance(value, (set, frozenset, tuple)):
+        return list(value)
+    return str(value)
+
+
+# One encoder for every event and view message (json.dumps with options builds a new one per
+# call). Events never hold reference cycles, so the cycle check is skipped.
+encode_json = json.JSONEncoder(
+    separators=(",", ":"), default=_json_default, check_circular=False
+).encode
+
+
+@dataclass(frozen=True, slots=True)
+class ChannelSpec:
+    """What a channel of a recording is: topic, role, schema name and JSON Schema (as bytes).
+
+    The MCAP writer registers exactly these, and the live Foxglove server advertises them.
+    """
+
+    topic: str
+    role: str
+    schema_name: str
+    schema: bytes
+    message_encoding: str = "json"
+    schema_encoding: str = "jsonschema"
+
+
+def channel_spec(topic: str, role: str, schemas: dict[str, dict[str, Any]]) -> ChannelSpec:
+    """The channel of ``topic`` with role raw / view / event; ``schemas`` are the event
+    topics' JSON Schemas (``analyzer.protocol.schema.topic_schemas``)."""
+    if role == ROLE_RAW:
+        schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
+        name = str(schema["title"])
+    elif role == ROLE_VIEW:
+        from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
+
+        name, schema = VIEW_SCHEMAS[topic]
+    else:
+        name = schema_name(topic)
+        schema = schemas.get(topic) or permissive_schema(topic)
+    data = json.dumps(schema, separators=(",", ":")).encode()
+    return ChannelSpec(topic, role, name, data)
+
+
+class MessageTee(Protocol):
+    """Gets every channel and message a recording writes, with the very bytes written
+    (the live Foxglove server, ``analyzer.live.server``)."""
+
+    def add_channel(self, channel_id: int, spec: ChannelSpec) -> None: ...
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes) -> None: ...
+
+
+def known_channel_specs(schemas: dict[str, dict[str, Any]]) -> list[ChannelSpec]:
+    """Every channel a recording can hold: the raw ones, one per event topic with a schema
+    and the Foxglove views (a recording holds those that got messages, as they come)."""
+    from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
+
+    return [
+        *(channel_spec(topic, ROLE_RAW, schemas) for topic in RAW_TOPICS),
+        *(channel_spec(topic, ROLE_EVENT, schemas) for topic in schemas),
+        *(channel_spec(topic, ROLE_VIEW, schemas) for topic in VIEW_SCHEMAS),
+    ]

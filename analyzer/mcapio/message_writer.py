@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import itertools
-import json
 import operator
-from typing import Any
 
 from analyzer.mcapio.channel_registry import ChannelRegistry
 from analyzer.mcapio.channels import (
@@ -14,31 +12,17 @@ from analyzer.mcapio.channels import (
     ROLE_VIEW,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
+    MessageTee,
     can_frame_json,
     stream_chunk_json,
     time_ns,
 )
+from analyzer.mcapio.channels import encode_json as _ENCODE
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
 from analyzer.pipeline import RawItem
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.tally import Tally
-
-
-def _json_default(value: Any) -> Any:
-    if isinstance(value, (bytes, bytearray, memoryview)):
-        return bytes(value).hex(" ").upper()
-    if isinstance(value, (set, frozenset, tuple)):
-        return list(value)
-    return str(value)
-
-
-# One encoder for every message (json.dumps with options builds a new one per call).
-# Events never hold reference cycles, so the cycle check is skipped.
-_ENCODE = json.JSONEncoder(
-    separators=(",", ":"), default=_json_default, check_circular=False
-).encode
-
 
 _time_of = operator.attrgetter("time")
 
@@ -49,7 +33,8 @@ def _is_event(value: object) -> bool:
 
 class MessageWriter:
     """Writes items to the lossless raw channels and events to their topic's JSON channel
-    (plus their Foxglove views), counting what it wrote and adding it to ``tally``."""
+    (plus their Foxglove views), counting what it wrote and adding it to ``tally``; a
+    ``tee`` (the live server) gets every message with the very bytes written."""
 
     def __init__(
         self,
@@ -57,8 +42,10 @@ class MessageWriter:
         channels: ChannelRegistry,
         tally: Tally,
         views: FoxgloveViews | None,
+        tee: MessageTee | None = None,
     ) -> None:
         self._writer = writer
+        self._tee = tee
         self._registry = channels
         self._views = views
         self.tally = tally
@@ -85,7 +72,7 @@ class MessageWriter:
                 self.write_items(list(run))  # type: ignore[arg-type]
 
     def write_items(self, items: list[RawItem]) -> None:
-        add = self._writer.add_message
+        add = self._writer.add_message if self._tee is None else self._add_teed
         registry = self._registry
         sequence = registry.sequence
         can_id = registry.ids.get(TOPIC_CAN_FRAMES, 0)
@@ -111,7 +98,7 @@ class MessageWriter:
             self.last_time = items[-1].time
 
     def write_events(self, events: list[Event]) -> None:
-        add = self._writer.add_message
+        add = self._writer.add_message if self._tee is None else self._add_teed
         registry = self._registry
         sequence = registry.sequence
         channels = registry.ids
@@ -136,3 +123,9 @@ class MessageWriter:
         if events:
             self.dirty = True
             self.last_time = events[-1].time
+
+    def _add_teed(
+        self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int
+    ) -> None:
+        self._writer.add_message(channel_id, log_time, data, publish_time, sequence)
+        self._tee.add_message(channel_id, log_time, data)  # type: ignore[union-attr]

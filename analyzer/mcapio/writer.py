@@ -13,7 +13,7 @@ from typing import Any
 from analyzer import PROTOCOL_DOCUMENT, __version__
 from analyzer.errors import SourceError
 from analyzer.mcapio.channel_registry import ChannelRegistry, default_schemas
-from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME
+from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME, MessageTee
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import FoxgloveViews
 from analyzer.mcapio.message_writer import MessageWriter
@@ -77,6 +77,7 @@ class McapSink:
         inputs: Iterable[str | os.PathLike[str]] = (),
         replaceable: Callable[[Path], bool] | None = None,
         atomic: bool = False,
+        tee: MessageTee | None = None,
     ) -> None:
 
         self.path = str(path)
@@ -87,6 +88,7 @@ class McapSink:
         self.tally = Tally()  # the run's figures, written as a metadata record at the end
         self._schemas = default_schemas() if schemas is None else dict(schemas)
         self._views = FoxgloveViews() if foxglove_views else None
+        self._tee = tee  # gets every channel and message written (the live server)
         self._clock = clock
         self._flush_interval = flush_interval
         self._lock = threading.Lock()
@@ -113,7 +115,11 @@ class McapSink:
                 live_summary=flush_interval is not None,
             )
             self._messages = MessageWriter(
-                self._writer, ChannelRegistry(self._writer, self._schemas), self.tally, self._views
+                self._writer,
+                ChannelRegistry(self._writer, self._schemas, self._tee),
+                self.tally,
+                self._views,
+                self._tee,
             )
             self._writer.start(profile="", library=f"gimbal-analyzer {__version__}")
             self._writer.add_metadata(METADATA_NAME, info)

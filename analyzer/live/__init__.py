@@ -1,0 +1,1 @@
+"""Live view in Foxglove: the decoded stream served over the Foxglove WebSocket protocol."""
