@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from analyzer.protocol.codec import COMMAND_MEMO, decode_command, remember_command
+from analyzer.protocol.codec import decode_command
+from analyzer.protocol.command_decoders import COMMAND_DECODERS
 from analyzer.protocol.feedback import decode_feedback
 from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.ids import (
@@ -100,7 +101,7 @@ class Decoder:
         """
         add_raw = raw.append
         add_event = events.append
-        memo = COMMAND_MEMO
+        command_decoders = COMMAND_DECODERS
         status_decoders = EIGHT_BYTE_DECODERS
         status_topics = STATUS_TOPICS
         frames = protocol = 0
@@ -113,21 +114,22 @@ class Decoder:
                 if frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
                     can_id = frame.can_id
                     if can_id == CONTROL_ID:
-                        try:
-                            fields, warnings = memo[frame.data]
-                        except (KeyError, TypeError):  # not decoded yet (or not bytes)
-                            fields, warnings = remember_command(frame.data)
-                        add_event(
-                            Event(
-                                TOPIC_COMMAND,
-                                frame.time,
-                                frame.channel or "can",
-                                dict(fields),
-                                list(warnings),
-                            )
-                        )
-                        protocol += 1
-                        continue
+                        data = frame.data
+                        if len(data) == 8:
+                            decode = command_decoders.get(data[0] << 8 | data[1])
+                            if decode is not None:
+                                fields, warnings = decode(data)
+                                add_event(
+                                    Event(
+                                        TOPIC_COMMAND,
+                                        frame.time,
+                                        frame.channel or "can",
+                                        fields,
+                                        warnings,
+                                    )
+                                )
+                                protocol += 1
+                                continue
                     if can_id == FEEDBACK_ID:
                         source = frame.channel or "can"
                         reassembler = self._recent if source == self._recent_source else None
