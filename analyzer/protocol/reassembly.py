@@ -39,21 +39,10 @@ def _is_header(data: bytes) -> bool:
     return len(data) >= 3 and data[:2] == HEADER and data[2] in FRAME_SIZES
 
 
-# Messages whose CRC was checked, and the outcome: a gimbal at rest sends the same message
-# again and again. Bounded: the memo starts over when it is full.
-_CRC_MEMO: dict[bytes, bool] = {}
-CRC_MEMO_SIZE = 4096
-
-
 def _crc_ok(data: bytes) -> bool:
-    known = _CRC_MEMO.get(data)
-    if known is None:
-        size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
-        known = size is not None and len(data) >= size and check_crc(data[:size])
-        if len(_CRC_MEMO) >= CRC_MEMO_SIZE:
-            _CRC_MEMO.clear()
-        _CRC_MEMO[data] = known
-    return known
+    """Whether ``data`` is a feedback message (by its length byte) whose CRC checks."""
+    size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
+    return size is not None and len(data) >= size and check_crc(data[:size])
 
 
 class FeedbackReassembler:
