@@ -8,8 +8,8 @@ for the two feedback segments that hold only what the protocol fixes.
 from __future__ import annotations
 
 import json
-from collections import Counter
 import random
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
