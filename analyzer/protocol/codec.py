@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from analyzer.protocol.command_decoders import CAN_DATA_SIZE, COMMAND_DECODERS, unused_warning
+from analyzer.protocol.command_decoders import CAN_DATA_SIZE, decoder_for, unused_warning
 from analyzer.protocol.command_table import BY_CODE, BY_NAME, COMMANDS, Command
 from analyzer.protocol.fields import EncodeError, Field, pad
 from analyzer.protocol.ids import COMPONENT_NAMES
@@ -20,7 +20,7 @@ def decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:
     frame (8 bytes, a command of the table) goes through that command's generated decoder,
     any other through ``decode_command_fields``, field by field, with the same result."""
     if len(data) == CAN_DATA_SIZE:
-        decode = COMMAND_DECODERS.get(data[0] << 8 | data[1])
+        decode = decoder_for(data[0] << 8 | data[1])
         if decode is not None:
             return decode(data)
     return decode_command_fields(data)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from analyzer.protocol.command_table import COMMANDS, Command
+from analyzer.protocol.command_table import BY_CODE, Command
 from analyzer.protocol.compiled import Code
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import COMPONENT_NAMES
@@ -76,14 +76,19 @@ def compile_command(row: Command) -> CommandDecoder | None:
         return None
 
 
-def _table() -> dict[int, CommandDecoder]:
-    decoders = {}
-    for row in COMMANDS:
-        decoder = compile_command(row)
-        if decoder is not None:
-            decoders[row.s_id << 8 | row.cmd] = decoder
-    return decoders
-
-
 # Decoders by ``S_ID << 8 | CMD`` (the first two data bytes), for exactly 8 data bytes.
-COMMAND_DECODERS: dict[int, CommandDecoder] = _table()
+# Made on first use by ``decoder_for``: a log holds a few kinds of command, and generating
+# the decoder of every row would cost each start-up more than most logs gain from them.
+COMMAND_DECODERS: dict[int, CommandDecoder] = {}
+
+
+def decoder_for(key: int) -> CommandDecoder | None:
+    """The decoder of the command ``S_ID << 8 | CMD`` (made now if need be); None for a
+    command the table does not have or that has no generated decoder."""
+    decoder = COMMAND_DECODERS.get(key)
+    if decoder is None:
+        row = BY_CODE.get((key >> 8, key & 0xFF))
+        decoder = None if row is None else compile_command(row)
+        if decoder is not None:
+            COMMAND_DECODERS[key] = decoder
+    return decoder

@@ -99,18 +99,16 @@ class Decoder:
         The usual frame of a protocol ID (extended, no flags, 8 bytes of a status frame)
         is decoded right here; any other goes through ``_can_any``, with the same result.
         """
-        add_raw = raw.append
+        items = items if type(items) is list else list(items)
         add_event = events.append
         command_decoders = COMMAND_DECODERS
         status_decoders = EIGHT_BYTE_DECODERS
         status_topics = STATUS_TOPICS
-        frames = protocol = 0
+        protocol = 0
+        mixed = False  # anything but CAN frames in the batch
         for item in items:
-            kind = type(item)
-            if kind is CanFrame:
-                frame: CanFrame = item  # type: ignore[assignment]
-                add_raw(frame)
-                frames += 1
+            if type(item) is CanFrame:
+                frame: CanFrame = item
                 if frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
                     can_id = frame.can_id
                     if can_id == CONTROL_ID:
@@ -161,11 +159,18 @@ class Decoder:
                         continue
                 self.last_time = frame.time
                 events.extend(self._can_any(frame, frame.channel or "can", _NO_EXTRA))
-            elif kind is StreamChunk:
-                add_raw(item)  # type: ignore[arg-type]
-                events.extend(self.feed_stream(item))  # type: ignore[arg-type]
-            elif isinstance(item, Event):
-                add_event(item)
+            else:
+                mixed = True
+                if type(item) is StreamChunk:
+                    events.extend(self.feed_stream(item))
+                elif isinstance(item, Event):
+                    add_event(item)
+        if mixed:
+            raw_items = [i for i in items if type(i) is CanFrame or type(i) is StreamChunk]
+            frames = sum(1 for i in raw_items if type(i) is CanFrame)
+        else:
+            raw_items, frames = items, len(items)  # type: ignore[assignment]
+        raw.extend(raw_items)
         self.frames += frames
         self.protocol_frames += protocol
         if raw:
