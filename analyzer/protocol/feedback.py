@@ -183,7 +183,8 @@ def _message_decoder(layout: FeedbackLayout) -> MessageDecoder:
         f"        warnings.append({note}(data, {layout.frame_size}, 32, 'padding'))",
     ]
     if layout.length_byte == FRAME_ATTITUDE:
-        kind, motor = raws[0], raws[5]
+        names = [f.name for f in fields]
+        kind, motor = raws[names.index("gimbal_type")], raws[names.index("motor_yaw_deg")]
         wide = code.constant(WIDE_MOTOR_YAW_TYPES)
         code.lines += [
             f"    if ({motor} > {MOTOR_YAW_LIMIT} or {motor} < -{MOTOR_YAW_LIMIT})"
