@@ -96,8 +96,9 @@ class Decoder:
         """Decode a batch in order: frames and chunks go to ``raw``, what they give to
         ``events``; ready-made events (diagnostics of a reader) go to ``events`` as they are.
 
-        The usual frame of a protocol ID (extended, no flags, 8 bytes of a status frame)
-        is decoded right here; any other goes through ``_can_any``, with the same result.
+        The usual frame of a protocol ID (extended, no flags; 8 bytes of a command whose
+        decoder was made or of a status frame) is decoded right here; any other goes
+        through ``_can_any``, with the same result.
         """
         items = items if type(items) is list else list(items)
         add_event = events.append
