@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.protocol.command_decoders import CAN_DATA_SIZE, decoder_for, unused_warning
 from analyzer.protocol.command_table import BY_CODE, BY_NAME, COMMANDS, Command
 from analyzer.protocol.fields import EncodeError, Field, pad
 from analyzer.protocol.ids import COMPONENT_NAMES
@@ -11,38 +12,22 @@ from analyzer.protocol.types import hexstr
 
 __all__ = ["COMMANDS", "EncodeError", "decode_command", "encode_command", "find_command"]
 
-CAN_DATA_SIZE = 8
-
-
-# Decoded commands by their data bytes: a ground station repeats the same bytes again and
-# again (a held stick sends one gimbal_control every 50 ms), so most commands are decoded
-# once. Bounded: the memo starts over when it is full. Its entries are shared: never
-# change one (``decode_command`` hands out copies).
-COMMAND_MEMO: dict[bytes, tuple[dict[str, Any], tuple[str, ...]]] = {}
-MEMO_SIZE = 4096
-
-
-def remember_command(data: bytes) -> tuple[dict[str, Any], tuple[str, ...]]:
-    """The shared memo entry (fields, warnings) of a control frame's data."""
-    key = bytes(data)
-    known = COMMAND_MEMO.get(key)
-    if known is None:
-        if len(COMMAND_MEMO) >= MEMO_SIZE:
-            COMMAND_MEMO.clear()
-        fields, warnings = _decode_command(key)
-        known = COMMAND_MEMO[key] = (fields, tuple(warnings))
-    return known
-
 
 def decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:
     """CAN data of a control frame -> (fields, warnings). Never raises.
 
-    Returns a new dict and list on every call (callers add fields of their own)."""
-    fields, warnings = remember_command(data)
-    return dict(fields), list(warnings)
+    Returns a new dict and list on every call (callers add fields of their own). The usual
+    frame (8 bytes, a command of the table) goes through that command's generated decoder,
+    any other through ``decode_command_fields``, field by field, with the same result."""
+    if len(data) == CAN_DATA_SIZE:
+        decode = decoder_for(data[0] << 8 | data[1])
+        if decode is not None:
+            return decode(data)
+    return decode_command_fields(data)
 
 
-def _decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:
+def decode_command_fields(data: bytes) -> tuple[dict[str, Any], list[str]]:
+    """``decode_command`` the long way: any data, field by field as the table lists them."""
     warnings: list[str] = []
     raw = bytes(data)
     data = pad(raw, CAN_DATA_SIZE, "command frame", warnings)
@@ -78,10 +63,9 @@ def _decode_command(data: bytes) -> tuple[dict[str, Any], list[str]]:
     for f in fields:
         f.decode_into(data, out, warnings)
         used.update(range(f.offset, f.end))
-    unused = [i for i in range(CAN_DATA_SIZE) if i not in used and data[i] != 0]
-    if unused:
-        listed = ", ".join(f"DATA{i - 1}=0x{data[i]:02X}" for i in unused)
-        warnings.append(f"bytes not used by {row.name} are not zero: {listed}")
+    unused = unused_warning(row.name, data, [i for i in range(CAN_DATA_SIZE) if i not in used])
+    if unused is not None:
+        warnings.append(unused)
     return out, warnings
 
 

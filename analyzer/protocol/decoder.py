@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from analyzer.protocol.codec import COMMAND_MEMO, decode_command, remember_command
+from analyzer.protocol.codec import decode_command
+from analyzer.protocol.command_decoders import COMMAND_DECODERS
 from analyzer.protocol.feedback import decode_feedback
 from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.ids import (
@@ -95,39 +96,39 @@ class Decoder:
         """Decode a batch in order: frames and chunks go to ``raw``, what they give to
         ``events``; ready-made events (diagnostics of a reader) go to ``events`` as they are.
 
-        The usual frame of a protocol ID (extended, no flags, 8 bytes of a status frame)
-        is decoded right here; any other goes through ``_can_any``, with the same result.
+        The usual frame of a protocol ID (extended, no flags; 8 bytes of a command whose
+        decoder was made or of a status frame) is decoded right here; any other goes
+        through ``_can_any``, with the same result.
         """
-        add_raw = raw.append
+        items = items if type(items) is list else list(items)
         add_event = events.append
-        memo = COMMAND_MEMO
+        command_decoders = COMMAND_DECODERS
         status_decoders = EIGHT_BYTE_DECODERS
         status_topics = STATUS_TOPICS
-        frames = protocol = 0
+        protocol = 0
+        mixed = False  # anything but CAN frames in the batch
         for item in items:
-            kind = type(item)
-            if kind is CanFrame:
-                frame: CanFrame = item  # type: ignore[assignment]
-                add_raw(frame)
-                frames += 1
+            if type(item) is CanFrame:
+                frame: CanFrame = item
                 if frame.extended and not (frame.is_error or frame.is_remote or frame.is_fd):
                     can_id = frame.can_id
                     if can_id == CONTROL_ID:
-                        try:
-                            fields, warnings = memo[frame.data]
-                        except (KeyError, TypeError):  # not decoded yet (or not bytes)
-                            fields, warnings = remember_command(frame.data)
-                        add_event(
-                            Event(
-                                TOPIC_COMMAND,
-                                frame.time,
-                                frame.channel or "can",
-                                dict(fields),
-                                list(warnings),
-                            )
-                        )
-                        protocol += 1
-                        continue
+                        data = frame.data
+                        if len(data) == 8:
+                            decode = command_decoders.get(data[0] << 8 | data[1])
+                            if decode is not None:
+                                fields, warnings = decode(data)
+                                add_event(
+                                    Event(
+                                        TOPIC_COMMAND,
+                                        frame.time,
+                                        frame.channel or "can",
+                                        fields,
+                                        warnings,
+                                    )
+                                )
+                                protocol += 1
+                                continue
                     if can_id == FEEDBACK_ID:
                         source = frame.channel or "can"
                         reassembler = self._recent if source == self._recent_source else None
@@ -159,11 +160,18 @@ class Decoder:
                         continue
                 self.last_time = frame.time
                 events.extend(self._can_any(frame, frame.channel or "can", _NO_EXTRA))
-            elif kind is StreamChunk:
-                add_raw(item)  # type: ignore[arg-type]
-                events.extend(self.feed_stream(item))  # type: ignore[arg-type]
-            elif isinstance(item, Event):
-                add_event(item)
+            else:
+                mixed = True
+                if type(item) is StreamChunk:
+                    events.extend(self.feed_stream(item))
+                elif isinstance(item, Event):
+                    add_event(item)
+        if mixed:
+            raw_items = [i for i in items if type(i) is CanFrame or type(i) is StreamChunk]
+            frames = sum(1 for i in raw_items if type(i) is CanFrame)
+        else:
+            raw_items, frames = items, len(items)  # type: ignore[assignment]
+        raw.extend(raw_items)
         self.frames += frames
         self.protocol_frames += protocol
         if raw:

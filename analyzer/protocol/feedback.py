@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from analyzer.protocol.compiled import Code
 from analyzer.protocol.crc import crc_bytes
 from analyzer.protocol.fields import Field, Layout
 from analyzer.protocol.ids import (
@@ -29,6 +31,7 @@ MOTOR_YAW_LIMIT = 17000
 
 # Bytes 12-15 of every feedback message: CMD+DID 0x21 0xFE, C_ID 0x0F, Data_id 0x01.
 FEEDBACK_ID_BYTES = b"\x21\xfe\x0f\x01"
+MessageDecoder = Callable[[bytes], tuple[dict[str, Any], list[str]]]
 
 
 @dataclass(frozen=True)
@@ -159,27 +162,82 @@ LAYOUTS: dict[int, FeedbackLayout] = {ATTITUDE.length_byte: ATTITUDE, RANGING.le
 FRAME_SIZES: dict[int, int] = {k: v.frame_size for k, v in LAYOUTS.items()}
 
 
-# Decoded feedback messages by their bytes: a gimbal at rest sends the same message again
-# and again. Bounded: the memo starts over when it is full.
-_MEMO: dict[bytes, tuple[FeedbackLayout | None, dict[str, Any], tuple[str, ...]]] = {}
-MEMO_SIZE = 4096
+def _message_decoder(layout: FeedbackLayout) -> MessageDecoder:
+    """A 32-byte message of ``layout`` -> (fields, warnings) in one generated function,
+    with the checks of ``decode_feedback_fields`` in the same order."""
+    code = Code()
+    code.lines.append("    warnings = []")
+    fields = layout.layout.fields
+    raws = code.unpack(fields)
+    for f, r in zip(fields, raws, strict=True):
+        code.field(f, r)
+    zeros9, ids = code.constant(bytes(9)), code.constant(FEEDBACK_ID_BYTES)
+    padding = code.constant(bytes(FEEDBACK_MESSAGE_SIZE - layout.frame_size))
+    note = code.constant(_note)
+    code.lines += [
+        f"    if data[3:12] != {zeros9}:",
+        f"        warnings.append({note}(data, 3, 12, 'reserved'))",
+        f"    if data[12:16] != {ids}:",
+        f"        warnings.append({note}(data, 12, 16, 'id'))",
+        f"    if data[{layout.frame_size}:] != {padding}:",
+        f"        warnings.append({note}(data, {layout.frame_size}, 32, 'padding'))",
+    ]
+    if layout.length_byte == FRAME_ATTITUDE:
+        names = [f.name for f in fields]
+        kind, motor = raws[names.index("gimbal_type")], raws[names.index("motor_yaw_deg")]
+        wide = code.constant(WIDE_MOTOR_YAW_TYPES)
+        code.lines += [
+            f"    if ({motor} > {MOTOR_YAW_LIMIT} or {motor} < -{MOTOR_YAW_LIMIT})"
+            f" and {kind} not in {wide}:",
+            f"        warnings.append({code.constant(_motor_note)}({motor}))",
+        ]
+    decode: MessageDecoder = code.define(
+        "decode(data)", [*code.lines, f"    return {code.result()}, warnings"]
+    )
+    return decode
+
+
+def _note(data: bytes, start: int, end: int, what: str) -> str:
+    """The warning about bytes ``start``..``end`` of a message that are not as they should."""
+    text = data[start:end].hex(" ").upper()
+    if what == "reserved":
+        return "reserved bytes 3-11 are not zero: " + text
+    if what == "id":
+        return "bytes 12-15 are " + text + ", expected 21 FE 0F 01"
+    return "padding after the CRC is not zero: " + text
+
+
+def _motor_note(raw_motor: int) -> str:
+    return (
+        f"motor_yaw_deg: {raw_motor / 100:.2f} deg out of range [-170.00, 170.00] deg "
+        "for this gimbal type"
+    )
+
+
+# The usual message: 32 bytes, padding included. By the length byte.
+MESSAGE_DECODERS: dict[int, MessageDecoder] = {
+    length: _message_decoder(layout) for length, layout in LAYOUTS.items()
+}
 
 
 def decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
     """A CRC-checked feedback message (27 / 31 bytes, padding optional) -> fields.
 
-    Returns a new dict and list on every call (callers add fields of their own)."""
-    key = bytes(message)
-    known = _MEMO.get(key)
-    if known is None:
-        if len(_MEMO) >= MEMO_SIZE:
-            _MEMO.clear()
-        layout, fields, warnings = _decode_feedback(key)
-        known = _MEMO[key] = (layout, fields, tuple(warnings))
-    return known[0], dict(known[1]), list(known[2])
+    Returns a new dict and list on every call (callers add fields of their own). The usual
+    message (32 bytes) goes through its layout's generated decoder, any other through
+    ``decode_feedback_fields``, with the same result."""
+    if len(message) == FEEDBACK_MESSAGE_SIZE:
+        decode = MESSAGE_DECODERS.get(message[2])
+        if decode is not None:
+            fields, warnings = decode(message)
+            return LAYOUTS[message[2]], fields, warnings
+    return decode_feedback_fields(message)
 
 
-def _decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
+def decode_feedback_fields(
+    message: bytes,
+) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
+    """``decode_feedback`` the long way: any message, field by field."""
     warnings: list[str] = []
     layout = LAYOUTS.get(message[2]) if len(message) >= 3 else None
     if layout is None or len(message) < layout.frame_size:
@@ -187,24 +245,19 @@ def _decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, A
     data = bytes(message[:FEEDBACK_MESSAGE_SIZE]).ljust(FEEDBACK_MESSAGE_SIZE, b"\0")
     fields = layout.layout.decode(data, warnings)
     if any(data[3:12]):
-        warnings.append("reserved bytes 3-11 are not zero: " + data[3:12].hex(" ").upper())
+        warnings.append(_note(data, 3, 12, "reserved"))
     if data[12:16] != FEEDBACK_ID_BYTES:
-        warnings.append(
-            "bytes 12-15 are " + data[12:16].hex(" ").upper() + ", expected 21 FE 0F 01"
-        )
+        warnings.append(_note(data, 12, 16, "id"))
     padding = bytes(message[layout.frame_size : FEEDBACK_MESSAGE_SIZE])
     if any(padding):
-        warnings.append("padding after the CRC is not zero: " + padding.hex(" ").upper())
+        warnings.append(_note(padding, 0, len(padding), "padding"))
     if layout is ATTITUDE:
         raw_motor = ATTITUDE.layout.fields[5].read_raw(data)
         if (
             abs(raw_motor) > MOTOR_YAW_LIMIT
             and fields["gimbal_type_code"] not in WIDE_MOTOR_YAW_TYPES
         ):
-            warnings.append(
-                f"motor_yaw_deg: {raw_motor / 100:.2f} deg out of range [-170.00, 170.00] deg "
-                "for this gimbal type"
-            )
+            warnings.append(_motor_note(raw_motor))
     return layout, fields, warnings
 
 

@@ -5,9 +5,11 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
+
+from analyzer.protocol.compiled import compile_decoder, layout_struct
 
 # kind -> (struct format, size, minimum raw, maximum raw)
 _KINDS: dict[str, tuple[str, int, int, int]] = {
@@ -99,6 +101,11 @@ class Field:
         return _KINDS[self.kind][1]
 
     @property
+    def struct_code(self) -> str:
+        """The struct module's format character of this field's kind."""
+        return _KINDS[self.kind][0][1:]
+
+    @property
     def end(self) -> int:
         return self.offset + self.size
 
@@ -130,22 +137,39 @@ class Field:
     def decode_raw(self, raw: int, out: dict[str, Any], warnings: list[str]) -> None:
         """Put the value of the raw number ``raw`` into ``out``; doubts go to ``warnings``."""
         if self.labels is not None:
-            label = self.labels.get(raw, self.other_label)
-            if label is None:
-                warnings.append(f"{self.name}: unknown value {raw} (0x{raw:02X})")
-                label = self.unknown_label(raw)
-            out[self.name] = label
+            out[self.name] = self.label_of(raw, warnings)
             out[self.name + CODE_SUFFIX] = raw
             return
         if self.boolean:
-            out[self.name] = raw != 0
-            if raw not in (0, 1):
-                warnings.append(f"{self.name}: flag value {raw}, expected 0 or 1")
+            out[self.name] = self.flag_of(raw, warnings)
             return
         out[self.name] = self.scale(raw)
-        self._check(raw, warnings)
+        self.check(raw, warnings)
 
-    def _check(self, raw: int, warnings: list[str]) -> None:
+    def label_of(self, raw: int, warnings: list[str]) -> str:
+        """The label of a labelled field's raw number (``unknown_0x..`` with a warning)."""
+        label = (self.labels or {}).get(raw, self.other_label)
+        if label is None:
+            warnings.append(f"{self.name}: unknown value {raw} (0x{raw:02X})")
+            label = self.unknown_label(raw)
+        return label
+
+    def label_table(self) -> tuple[str | None, ...] | dict[int, str | None]:
+        """Labels by raw number, None where ``label_of`` must be asked: a tuple indexed by
+        the raw number for u8 fields, else a dict."""
+        labels, other = self.labels or {}, self.other_label
+        if self.kind == "u8":
+            return tuple(labels.get(raw, other) for raw in range(256))
+        return dict(labels)
+
+    def flag_of(self, raw: int, warnings: list[str]) -> bool:
+        """A flag's value; a warning when it is neither 0 nor 1."""
+        if raw not in (0, 1):
+            warnings.append(f"{self.name}: flag value {raw}, expected 0 or 1")
+        return raw != 0
+
+    def check(self, raw: int, warnings: list[str]) -> None:
+        """Warn about a plain number that is not what the document prescribes or allows."""
         if self.expected is not None and raw != self.expected:
             warnings.append(
                 f"{self.name}: raw value {raw}, the document prescribes {self.expected}"
@@ -258,9 +282,7 @@ class Layout:
     def __post_init__(self) -> None:
         whole = layout_struct(self.fields)
         object.__setattr__(self, "_struct", whole)
-        object.__setattr__(
-            self, "_decode", None if whole is None else compile_decoder(self.fields, whole)
-        )
+        object.__setattr__(self, "_decode", compile_decoder(self.fields))
 
     def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
         whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
@@ -279,92 +301,6 @@ class Layout:
             value = values.get(f.name, f.default if f.default is not None else 0)
             f.write(buffer, value, check_range=check_range)
         return buffer
-
-
-def layout_struct(fields: tuple[Field, ...]) -> struct.Struct | None:
-    """One little-endian struct.Struct reading every field (in the given order), skipping the
-    bytes between them; None when fields overlap or are not in offset order."""
-    fmt = "<"
-    position = 0
-    for f in fields:
-        if f.offset < position:
-            return None
-        fmt += "x" * (f.offset - position) + _KINDS[f.kind][0][1:]
-        position = f.offset + f.size
-    return struct.Struct(fmt)
-
-
-def compile_decoder(
-    fields: tuple[Field, ...], whole: struct.Struct
-) -> Callable[[bytes, list[str]], dict[str, Any]]:
-    """A function made for ``fields``: data (read by ``whole``, from ``layout_struct``) ->
-    values.
-
-    Plain numbers are scaled and range-checked inline; labels, flags and anything that
-    needs a warning go through the field's own ``decode_raw``, so the result is exactly
-    what decoding field by field gives, only faster.
-    """
-    body, env = _decoder_body(fields, whole)
-    decode: Callable[[bytes, list[str]], dict[str, Any]] = _define(
-        ["def decode(data, warnings):", *body, "    return out"], env
-    )
-    return decode
-
-
-def compile_frame_decoder(
-    fields: tuple[Field, ...],
-    whole: struct.Struct,
-    zero_from: int,
-    size: int,
-    on_nonzero: Callable[[bytes, list[str]], None],
-) -> Callable[[bytes], tuple[dict[str, Any], list[str]]]:
-    """Like ``compile_decoder``, for a whole frame of ``size`` bytes in one call: data ->
-    (values, warnings); bytes from ``zero_from`` on that are not zero go to
-    ``on_nonzero``."""
-    body, env = _decoder_body(fields, whole)
-    lines = ["def decode(data):", "    warnings = []", *body]
-    if zero_from < size:
-        env["ZEROS"], env["on_nonzero"] = bytes(size - zero_from), on_nonzero
-        lines += [f"    if data[{zero_from}:] != ZEROS:", "        on_nonzero(data, warnings)"]
-    decode: Callable[[bytes], tuple[dict[str, Any], list[str]]] = _define(
-        [*lines, "    return out, warnings"], env
-    )
-    return decode
-
-
-def _decoder_body(
-    fields: tuple[Field, ...], whole: struct.Struct
-) -> tuple[list[str], dict[str, Any]]:
-    """The lines that unpack ``data`` and fill ``out`` (doubts go to ``warnings``)."""
-    names = [f"r{i}" for i in range(len(fields))]
-    lines = [f"    {', '.join(names)}, = unpack_from(data)", "    out = {}"]
-    env: dict[str, Any] = {"unpack_from": whole.unpack_from}
-    for i, f in enumerate(fields):
-        r, fv = f"r{i}", f"F{i}"
-        env[fv] = f
-        plain = f.labels is None and not f.boolean and f.expected is None
-        if not plain or f.soft_maximum is not None:
-            lines.append(f"    {fv}.decode_raw({r}, out, warnings)")
-            continue
-        if f.div == 1:
-            value = r if f.mul == 1 else f"{r} * {f.mul}"
-        else:
-            value = f"{r} * {f.mul} / {f.div}"
-        lines.append(f"    out[{f.name!r}] = {value}")
-        tests = []
-        if f.minimum is not None:
-            tests.append(f"{r} < {f.minimum}")
-        if f.maximum is not None:
-            tests.append(f"{r} > {f.maximum}")
-        if tests:
-            lines.append(f"    if {' or '.join(tests)}:")
-            lines.append(f"        {fv}._check({r}, warnings)")
-    return lines, env
-
-
-def _define(lines: list[str], env: dict[str, Any]) -> Any:
-    exec("\n".join(lines), env)
-    return env["decode"]
 
 
 def pad(data: bytes, size: int, what: str, warnings: list[str]) -> bytes:

@@ -6,7 +6,7 @@ import functools
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from analyzer.protocol.crc import check_crc, crc16
+from analyzer.protocol.crc import crc16
 from analyzer.protocol.feedback import FRAME_SIZES
 from analyzer.protocol.ids import HEADER
 from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, diagnostic
@@ -39,21 +39,12 @@ def _is_header(data: bytes) -> bool:
     return len(data) >= 3 and data[:2] == HEADER and data[2] in FRAME_SIZES
 
 
-# Messages whose CRC was checked, and the outcome: a gimbal at rest sends the same message
-# again and again. Bounded: the memo starts over when it is full.
-_CRC_MEMO: dict[bytes, bool] = {}
-CRC_MEMO_SIZE = 4096
-
-
 def _crc_ok(data: bytes) -> bool:
-    known = _CRC_MEMO.get(data)
-    if known is None:
-        size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
-        known = size is not None and len(data) >= size and check_crc(data[:size])
-        if len(_CRC_MEMO) >= CRC_MEMO_SIZE:
-            _CRC_MEMO.clear()
-        _CRC_MEMO[data] = known
-    return known
+    """Whether ``data`` is a feedback message (by its length byte) whose CRC checks."""
+    size = FRAME_SIZES.get(data[2]) if len(data) >= 3 else None
+    if size is None or len(data) < size:
+        return False
+    return crc16(data[: size - 2]) == data[size - 2] | data[size - 1] << 8
 
 
 class FeedbackReassembler:
@@ -98,24 +89,23 @@ class FeedbackReassembler:
     def feed(self, data: bytes, time: float) -> list[Message | Event]:
         self.bytes_fed += len(data)
         pending = self._pending
-        if self._fast:
-            if self._open:
-                if time - pending[-1].time <= self.stale_after:
-                    if len(pending) < SEGMENTS_PER_MESSAGE - 1:
-                        pending.append(_segment((time, bytes(data))))
-                        return []
-                    message = pending[0].data + pending[1].data + pending[2].data + data
-                    if _crc_ok(message):
-                        segs = [*pending, _segment((time, bytes(data)))]
-                        pending.clear()
-                        self._open = False
-                        out: list[Message | Event] = []
-                        self._emit(out, segs, data=message)
-                        return out
-            elif not pending and _is_header(data) and not self._repeats_tail(data, time):
-                pending.append(_segment((time, bytes(data))))
-                self._open = True
-                return []
+        if self._open:  # the short way: a header is pending (never set when not fast)
+            if time - pending[-1][0] <= self.stale_after:
+                if len(pending) < SEGMENTS_PER_MESSAGE - 1:
+                    pending.append(_segment((time, bytes(data))))
+                    return []
+                message = pending[0][1] + pending[1][1] + pending[2][1] + data
+                if _crc_ok(message):
+                    segs = [*pending, _segment((time, bytes(data)))]
+                    pending.clear()
+                    self._open = False
+                    out: list[Message | Event] = []
+                    self._emit(out, segs, data=message)
+                    return out
+        elif self._fast and not pending and _is_header(data) and not self._repeats_tail(data, time):
+            pending.append(_segment((time, bytes(data))))
+            self._open = True
+            return []
         out = []
         if pending and time - pending[-1].time > self.stale_after:
             self._resolve(out, final=True, time=time)
@@ -177,7 +167,8 @@ class FeedbackReassembler:
         self._settle(out, final=final, time=time)
         pending = self._pending
         self._open = (
-            0 < len(pending) < SEGMENTS_PER_MESSAGE
+            self._fast
+            and 0 < len(pending) < SEGMENTS_PER_MESSAGE
             and _is_header(pending[0].data)
             and not self._repeats_tail(pending[0].data, pending[0].time)
         )

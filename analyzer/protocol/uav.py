@@ -6,7 +6,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from analyzer.protocol.fields import Field, Layout, compile_frame_decoder, layout_struct
+from analyzer.protocol.compiled import compile_frame_decoder
+from analyzer.protocol.fields import Field, Layout
 from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID, TEXT_END_ID, TEXT_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import (
     TEXT_UNTERMINATED,
@@ -99,9 +100,7 @@ def _eight_byte_decoder(can_id: int) -> StatusDecoder:
     def unused_not_zero(data: bytes, warnings: list[str]) -> None:
         warnings.append(f"unused bytes {used}-7 are not zero: {data[used:].hex(' ').upper()}")
 
-    whole = layout_struct(layout.fields)
-    assert whole is not None  # status layouts have no overlapping fields
-    return compile_frame_decoder(layout.fields, whole, used, 8, unused_not_zero)
+    return compile_frame_decoder(layout.fields, used, 8, unused_not_zero)
 
 
 # The usual frame of each ID: exactly 8 data bytes.

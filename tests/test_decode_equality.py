@@ -1,0 +1,129 @@
+"""``decode --json`` gives, byte for byte, what it gave before the decoder was made faster.
+
+``tests/data/decode_json.json.gz`` holds the output of every sample and of the fault logs
+of ``tests/fault_logs.py`` (with and without ``--raw``), as the decoder wrote it before
+its hot paths were rewritten, and the SHA-256 of each input file (so that a change of
+the input is told apart from a change of the decoder). Regenerate it only when the
+output is meant to change:
+
+    python tests/test_decode_equality.py --store
+"""
+
+from __future__ import annotations
+
+import contextlib
+import difflib
+import gzip
+import hashlib
+import io
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT))
+
+from analyzer.cli import main  # noqa: E402
+from tests.fault_logs import CANDUMP_NAME, STREAM_NAME, write_fault_logs  # noqa: E402
+
+STORED = ROOT / "tests" / "data" / "decode_json.json.gz"
+SAMPLES = ROOT / "samples"
+# (file, extra options): every sample, and the fault logs, which the test writes.
+CASES = [
+    ("flight-candump.log", ()),
+    ("flight-candump.log", ("--raw",)),
+    ("idu-tcp.pcap", ()),
+    ("uart-dump.bin", ()),
+    (CANDUMP_NAME, ()),
+    (CANDUMP_NAME, ("--raw",)),
+    (STREAM_NAME, ()),
+]
+
+
+def case_name(name: str, options: tuple[str, ...]) -> str:
+    return " ".join([name, *options])
+
+
+def decode_json(path: Path, options: tuple[str, ...]) -> str:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["decode", str(path), "--json", *options]) == 0
+    return out.getvalue()
+
+
+def input_path(name: str, folder: Path) -> Path:
+    return SAMPLES / name if (SAMPLES / name).exists() else folder / name
+
+
+def outputs(folder: Path) -> dict[str, dict[str, str]]:
+    """Each case's input hash and ``decode --json`` output (fault logs written to folder)."""
+    write_fault_logs(folder)
+    found = {}
+    for name, options in CASES:
+        path = input_path(name, folder)
+        found[case_name(name, options)] = {
+            "input_sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+            "output": decode_json(path, options),
+        }
+    return found
+
+
+def stored() -> dict[str, dict[str, str]]:
+    data: dict[str, dict[str, str]] = json.loads(gzip.decompress(STORED.read_bytes()))
+    return data
+
+
+@pytest.fixture(scope="module")
+def current(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, str]]:
+    return outputs(tmp_path_factory.mktemp("faults"))
+
+
+@pytest.mark.parametrize("case", [case_name(n, o) for n, o in CASES])
+def test_decode_json_is_byte_for_byte_the_stored_copy(
+    case: str, current: dict[str, dict[str, str]]
+) -> None:
+    want = stored()[case]
+    got = current[case]
+    assert got["input_sha256"] == want["input_sha256"], f"{case}: the input file changed"
+    if got["output"] != want["output"]:
+        diff = difflib.unified_diff(
+            want["output"].splitlines(), got["output"].splitlines(), "stored", "now", lineterm=""
+        )
+        pytest.fail(f"{case}: decode --json differs\n" + "\n".join(list(diff)[:40]))
+
+
+def test_the_fault_logs_hold_every_kind_of_trouble(current: dict[str, dict[str, str]]) -> None:
+    events = [json.loads(line) for line in current[CANDUMP_NAME]["output"].splitlines()]
+    kinds = {e["kind"] for e in events if e["topic"] == "/diagnostics"}
+    assert kinds >= {
+        "bad_frame",
+        "bad_line",
+        "bus_error",
+        "crc_mismatch",
+        "duplicate",
+        "incomplete",
+    }
+    commands = [e for e in events if e["topic"] == "/gimbal/command"]
+    warned = [w for e in commands for w in e["warnings"]]
+    for words in ("out of range", "unknown value", "not zero", "unknown command", "CAN FD"):
+        assert any(words in w for w in warned), words
+    assert len({e["raw"] for e in commands}) > 0.9 * len(commands)  # hardly any repeats
+
+
+def store() -> None:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        text = json.dumps(outputs(Path(folder)), indent=0, sort_keys=True)
+    STORED.parent.mkdir(parents=True, exist_ok=True)
+    STORED.write_bytes(gzip.compress(text.encode(), compresslevel=9, mtime=0))
+    print(f"wrote {STORED} ({STORED.stat().st_size:,} bytes)")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] != ["--store"]:
+        raise SystemExit(__doc__)
+    store()
