@@ -27,11 +27,14 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from analyzer.inputs import open_input
+from analyzer.live.attach import foxglove_status
 from analyzer.live.options import ListenAddress, listen_words, parse_listen_address
 from analyzer.live.server import FoxgloveLive, status_words
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.types import CanFrame
+from analyzer.tui.state import MonitorState
+from analyzer.tui.status_bar import StatusInfo, render_status
 from tests.foxglove_client import FoxgloveClient
 from tests.test_record_command import FakeIdu
 
@@ -236,12 +239,22 @@ def test_a_client_that_stops_reading_does_not_hold_the_recording_back(tmp_path: 
         if live is not None:
             statuses.append(live.status())
             words.append(status_words(live))  # what record's status line shows
+            shown = foxglove_status(live)  # and what the monitor's status bar shows
+            assert shown is not None
+            bars.append(
+                render_status(
+                    MonitorState(), StatusInfo(source="x", live=shown()[0], live_alert=shown()[1])
+                ).plain
+            )
+            alerts.append(shown()[1])
             client.close()
         return pipeline
 
     timings: list[float] = []
     statuses: list[Any] = []
     words: list[str] = []
+    bars: list[str] = []
+    alerts: list[bool] = []
     record_in_two(tmp_path / "alone.mcap", None)
     record_in_two(tmp_path / "slow.mcap", FoxgloveLive(LOCAL, backlog=256))
     assert (tmp_path / "slow.mcap").read_bytes() == (tmp_path / "alone.mcap").read_bytes()
@@ -249,6 +262,7 @@ def test_a_client_that_stops_reading_does_not_hold_the_recording_back(tmp_path: 
     assert status.messages > 100_000
     assert status.drop_reports >= 1  # the SDK said it dropped messages to the slow client
     assert "1 client SLOW CLIENT, messages to it dropped" in words[0]
+    assert "SLOW CLIENT, messages to it dropped" in bars[0] and alerts == [True]
     alone_s, slow_s = timings
     assert slow_s < 3 * alone_s + 2.0, timings  # generous: a stalled one would never finish
 

@@ -168,7 +168,12 @@ def written_by_demo(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import OUTPUT_CLOSED, Capture
-    from analyzer.live.attach import foxglove_summary, start_foxglove, with_foxglove
+    from analyzer.live.attach import (
+        foxglove_status,
+        foxglove_summary,
+        start_foxglove,
+        with_foxglove,
+    )
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
@@ -249,6 +254,7 @@ def run(args: argparse.Namespace) -> int:
                     recording=path,
                     source_label=with_foxglove(f"demo on {spec}", live),
                     exit_when_done=args.duration is not None,
+                    live_status=foxglove_status(live),
                 )
             )
         else:

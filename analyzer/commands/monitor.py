@@ -74,14 +74,16 @@ def run(args: argparse.Namespace) -> int:
 
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
-    from analyzer.live.attach import start_foxglove, with_foxglove
+    from analyzer.live.attach import foxglove_status, start_foxglove, with_foxglove
     from analyzer.tui.app import run_app
 
     live = start_foxglove(args, encode=True)  # no recording to feed it
     source = open_source(args.source, replay_speed=speed)
     capture = Capture(source, [] if live is None else [live], stages=analysis_stages())
     label = str(getattr(source, "description", args.source))
-    result = run_app(capture, source_label=with_foxglove(label, live))
+    result = run_app(
+        capture, source_label=with_foxglove(label, live), live_status=foxglove_status(live)
+    )
     if capture.error is not None:
         raise capture.error  # a SourceError: one line, exit 1
     stats = capture.stats

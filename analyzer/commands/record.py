@@ -213,6 +213,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.capture import Capture, run_until_interrupted
     from analyzer.live.attach import (
         foxglove_note,
+        foxglove_status,
         foxglove_summary,
         start_foxglove,
         with_foxglove,
@@ -285,6 +286,7 @@ def run(args: argparse.Namespace) -> int:
                     recording=path,
                     source_label=with_foxglove(description, live),
                     exit_when_done=args.duration is not None,
+                    live_status=foxglove_status(live),
                 )
             )
         else:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from typing import IO, TYPE_CHECKING
 
 from analyzer.errors import UsageError
@@ -44,6 +45,21 @@ def foxglove_note(live: FoxgloveLive | None) -> str:
     from analyzer.live.server import status_words
 
     return status_words(live)
+
+
+def foxglove_status(live: FoxgloveLive | None) -> Callable[[], tuple[str, bool]] | None:
+    """For the monitor's status bar: a call giving the live server's words and whether a
+    client lost messages (None without a server)."""
+    if live is None:
+        return None
+    from analyzer.live.server import status_words
+
+    server = live
+
+    def words() -> tuple[str, bool]:
+        return status_words(server), server.status().drop_reports > 0
+
+    return words
 
 
 def foxglove_summary(live: FoxgloveLive | None) -> str:

@@ -179,8 +179,10 @@ class MonitorApp(App[int]):
         file_size: Callable[[str], int | None] = _file_size,
         handle_sigterm: bool = False,
         exit_when_done: bool = False,
+        live_status: Callable[[], tuple[str, bool]] | None = None,
     ) -> None:
         super().__init__()
+        self.live_status = live_status  # the live Foxglove server's words, and whether to alert
         self.bridge = bridge
         self.capture = capture
         self.clock = clock
@@ -326,6 +328,8 @@ class MonitorApp(App[int]):
             info.recording_size = self.file_size(info.recording)
         source = getattr(self.capture, "source", None)
         info.dropped = int(getattr(source, "dropped_items", 0) or 0)
+        if self.live_status is not None:
+            info.live, info.live_alert = self.live_status()
         info.paused = self.paused
         info.paused_new = state.seq - self._paused_seq if self.paused else 0
         info.filter_text = self.filter.text
@@ -490,6 +494,7 @@ def run_app(
     recording: str | None = None,
     source_label: str = "",
     exit_when_done: bool = False,
+    live_status: Callable[[], tuple[str, bool]] | None = None,
 ) -> int:
     """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
 
@@ -510,6 +515,7 @@ def run_app(
         capture=capture,
         handle_sigterm=True,
         exit_when_done=exit_when_done,
+        live_status=live_status,
     )
     capture.start()
     try:

@@ -25,6 +25,8 @@ class StatusInfo:
     view: str = "commands"
     raw: bool = False
     dropped: int = 0  # frames / chunks the source dropped because the capture fell behind
+    live: str = ""  # the live Foxglove server: clients, slow-client drops ('' without one)
+    live_alert: bool = False  # a client too slow for the stream lost messages
 
 
 def link_text(state: MonitorState) -> tuple[str, str]:
@@ -67,6 +69,13 @@ def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
     cells.append(rates)
     if info.dropped:
         cells.append(Text(f" {info.dropped:,} DROPPED ", "bold white on red"))
+    if info.live:
+        cells.append(
+            Text(
+                f" {info.live} " if info.live_alert else info.live,
+                "bold white on red" if info.live_alert else "bold cyan",
+            )
+        )
     if info.view != "commands" or info.raw:  # the default view goes without saying
         view = Text(f"view {info.view}", "dim")
         if info.raw:
