@@ -1,0 +1,132 @@
+"""Where the per-file tasks run: in this process, a local process pool, or a Dask cluster."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Iterable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from analyzer.errors import UsageError
+from analyzer.fleet.dataset import content_hash, unreadable_hash
+from analyzer.fleet.rows import FileRows, FileWork, error_text, file_rows
+from analyzer.inputs import EXTENSIONS
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+CONNECT_TIMEOUT_S = 30
+
+
+def walk_inputs(inputs: Sequence[str]) -> list[str]:
+    """Files named, and the capture files found under folders named (by extension), sorted.
+
+    URLs (``s3://...``) are taken as they are: the workers read them through fsspec.
+    """
+    found: list[str] = []
+    for name in inputs:
+        if "://" in name:
+            found.append(name)
+        elif os.path.isdir(name):
+            for root, dirs, files in os.walk(name):
+                dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+                for file in sorted(files):
+                    if _capture_name(file):
+                        found.append(os.path.join(root, file))
+        elif os.path.exists(name) or os.path.islink(name):
+            found.append(name)
+        else:
+            raise UsageError(f"no such file or folder: {name}")
+    return found
+
+
+def _capture_name(name: str) -> bool:
+    lowered = name.lower()
+    if lowered.endswith(".gz"):
+        lowered = lowered[:-3]
+    return not name.startswith(".") and os.path.splitext(lowered)[1] in EXTENSIONS
+
+
+def plan(path: str, tags: dict[str, str], **settings: object) -> FileWork:
+    """The task of one file: its name, size and content hash (or why it cannot be read)."""
+    recording = Path(path.rstrip("/")).name or path
+    try:
+        digest = content_hash(path)
+        size = _size(path)
+        error = None
+    except OSError as exc:
+        digest, size, error = unreadable_hash(path), 0, f"cannot read {path}: {error_text(exc)}"
+    return FileWork(
+        path=path,
+        recording=recording,
+        content_hash=digest,
+        size_bytes=size,
+        tags=tuple(sorted(tags.items())),
+        error=error,
+        **settings,  # type: ignore[arg-type]
+    )
+
+
+def _size(path: str) -> int:
+    if "://" in path:
+        import fsspec
+
+        fs, _, paths = fsspec.get_fs_token_paths(path)
+        return int(fs.size(paths[0]) or 0)
+    return os.path.getsize(path)
+
+
+def run_local(works: Iterable[FileWork], workers: int) -> Iterator[FileRows]:
+    """The tasks in ``workers`` processes (1: in this process), results as they finish."""
+    works = list(works)
+    if workers <= 1 or len(works) <= 1:
+        for work in works:
+            yield file_rows(work)
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        # A few tasks ahead per worker, so results are written while others decode.
+        pending: set[Future[FileRows]] = set()
+        queue = iter(works)
+        for work in queue:
+            pending.add(pool.submit(file_rows, work))
+            if len(pending) >= 2 * workers:
+                break
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield future.result()
+                nxt = next(queue, None)
+                if nxt is not None:
+                    pending.add(pool.submit(file_rows, nxt))
+
+
+def run_dask(works: Iterable[FileWork], address: str) -> Iterator[FileRows]:
+    """The same tasks on a Dask cluster (``dask.distributed``); results as they finish."""
+    client = connect(address)
+    try:
+        from distributed import as_completed
+
+        works = list(works)
+        keys = [f"fleet-rows-{hashlib.sha256(repr(w).encode()).hexdigest()[:24]}" for w in works]
+        futures = client.map(file_rows, works, key=keys)
+        for future in as_completed(futures):
+            yield future.result()
+    finally:
+        client.close()
+
+
+def connect(address: str) -> Client:
+    """A Dask client of the scheduler at ``address``; UsageError when it is not reachable."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError(
+            "--dask needs dask.distributed: pip install 'gimbal-analyzer[cluster]'"
+        ) from None
+    try:
+        client: Client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise UsageError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    return client
