@@ -98,6 +98,7 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.rows import FileWork
     from analyzer.fleet.runner import plan, run_dask, run_local, walk_inputs
 
     tags = parse_tags(args.tag)
@@ -112,14 +113,15 @@ def run(args: argparse.Namespace) -> int:
     out = sys.stdout
     removed = dataset.remove_partial()
     if removed:
-        out.write(f"removed {removed} unfinished file(s) an interrupted run left in {args.output}\n")
+        out.write(f"removed {removed} unfinished file(s) of an interrupted run in {args.output}\n")
     settings = {
         "fmt": args.format,
         "port": args.port,
         "tolerance_deg": args.tolerance,
         "time_allowed_s": args.time_allowed,
     }
-    todo, seen = [], {}
+    todo: list[FileWork] = []
+    seen: dict[str, str] = {}
     skipped = 0
     for path in paths:
         work = plan(path, tags, **settings)

@@ -1,4 +1,4 @@
-"""Arrow schemas of the fleet tables, made from the topic schemas (the command table and layouts)."""
+"""Arrow schemas of the fleet tables, from the topic schemas (command table and layouts)."""
 
 from __future__ import annotations
 

@@ -34,7 +34,7 @@ def content_hash(path: str) -> str:
         import fsspec
 
         with fsspec.open(path, "rb") as handle:
-            while block := handle.read(HASH_BLOCK):  # type: ignore[attr-defined]
+            while block := handle.read(HASH_BLOCK):
                 digest.update(block)
         return digest.hexdigest()
     with open(path, "rb") as handle:

@@ -11,7 +11,7 @@ import os
 import socket
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
@@ -123,7 +123,9 @@ class TableColumns:
         for i, value in enumerate(values):
             if value is None or (isinstance(value, wanted) and not _bool_as_number(value, kind)):
                 continue
-            extra = self.extra[i] if self.extra[i] is not None else {}
+            extra = self.extra[i]
+            if extra is None:
+                extra = {}
             extra[name] = value
             self.extra[i] = extra
             values[i] = None
@@ -134,7 +136,7 @@ def _bool_as_number(value: Any, kind: pa.DataType) -> bool:
     return isinstance(value, bool) and kind != pa.bool_()
 
 
-def timestamps(seconds: list[float | None]) -> pa.Array:
+def timestamps(seconds: Sequence[float | None]) -> pa.Array:
     """Unix seconds -> UTC timestamps in microseconds."""
     micros = [None if s is None else round(s * 1_000_000) for s in seconds]
     return pa.array(micros, pa.int64()).cast(TIME)
@@ -281,6 +283,8 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
         figures = run["figures"]
         feedback = list(figures["feedback"].values())
         first, last = figures["first_time"], figures["last_time"]
+        if last is None or last <= 0:  # no clock (a raw byte dump): "no timestamps"
+            first = last = None
         kinds = figures["diagnostics_by_kind"]
         rates = [f["rate_hz"] for f in feedback if f["rate_hz"] is not None]
         gaps = [f["longest_gap_s"] for f in feedback if f["longest_gap_s"] is not None]
@@ -320,9 +324,7 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
         value = row.get(name)
         row[name] = None if value is None else round(float(value) * 1_000_000)
     columns = {
-        f.name: pa.array(
-            [row.get(f.name)], pa.int64() if f.type == TIME else f.type
-        ).cast(f.type)
+        f.name: pa.array([row.get(f.name)], pa.int64() if f.type == TIME else f.type).cast(f.type)
         for f in schema
     }
     return pa.Table.from_pydict(columns, schema=schema)
@@ -343,5 +345,5 @@ def local_file(path: str) -> Iterator[str]:
     with tempfile.TemporaryDirectory(prefix="gimbal-fleet-") as tmp:
         local = os.path.join(tmp, "input" + ("." + suffix.lstrip(".") if suffix else ""))
         with fsspec.open(path, "rb") as remote, open(local, "wb") as out:
-            shutil.copyfileobj(remote, out, 1 << 20)  # type: ignore[misc]
+            shutil.copyfileobj(remote, out, 1 << 20)
         yield local
