@@ -49,6 +49,14 @@
     var painted = 0;
     for (var i = 3; i < pixels.length; i += 4 * 7) { if (pixels[i]) { painted++; } }
     canvas.setAttribute("data-painted", String(painted));
+    var drawn = Chart.getChart(canvas);
+    var count = 0;
+    if (drawn) {
+      drawn.data.datasets.forEach(function (d) {
+        count += d.data.filter(function (v) { return v !== null; }).length;
+      });
+    }
+    canvas.setAttribute("data-points", String(count));
   });
   document.body.setAttribute("data-plots-ready", "yes");
 })();

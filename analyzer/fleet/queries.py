@@ -148,12 +148,15 @@ def _worst(con: duckdb.DuckDBPyConnection, tags: Sequence[str]) -> Answer:
         "r.findings_not_obeyed || ' command(s) not obeyed' END, "
         "CASE WHEN r.findings_partial > 0 THEN r.findings_partial || ' partly obeyed' END, "
         "CASE WHEN r.gaps > 0 THEN r.gaps || ' feedback gap(s), longest ' || "
-        "round(r.longest_gap_s, 1) || ' s' END)"
+        "round(r.longest_gap_s, 1) || ' s' END, "
+        "CASE WHEN r.diagnostics > r.crc_errors THEN (r.diagnostics - r.crc_errors) || "
+        "' other diagnostic(s)' END)"
     )
     score = (
         "(CASE WHEN r.error IS NOT NULL THEN 1000 ELSE 0 END"
         " + coalesce(r.crc_error_rate, 0) * 1000 + coalesce(r.findings_not_obeyed, 0) * 10"
-        " + coalesce(r.findings_partial, 0) * 3 + coalesce(r.gaps, 0) * 5)"
+        " + coalesce(r.findings_partial, 0) * 3 + coalesce(r.gaps, 0) * 5"
+        " + coalesce(r.diagnostics - r.crc_errors, 0))"
     )
     return _ask(
         con,

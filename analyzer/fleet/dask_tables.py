@@ -1,0 +1,71 @@
+"""``fleet --dask``: the tables read and cut down by dask.dataframe on a cluster's workers.
+
+The workers read the Parquet files (they must reach the dataset by the same path), keep
+only the columns and rows the questions need, and send back that much; DuckDB then
+answers here exactly as it does from the files.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from analyzer.fleet.columns import RECORDINGS, TABLES
+from analyzer.fleet.dataset import Dataset
+from analyzer.fleet.runner import connect
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+# The columns of each table the standard questions read (None: every column).
+QUESTION_COLUMNS: dict[str, list[str] | None] = {
+    RECORDINGS: None,
+    "findings": ["recording", "content_hash", "time", "command", "verdict", "response_s"],
+}
+
+
+def read_part(path: str, columns: Sequence[str], schema: pa.Schema) -> pd.DataFrame:
+    """One Parquet file as a frame with every column of ``schema`` (null where absent)."""
+    import pandas as pd
+
+    table = pq.read_table(path, columns=[c for c in columns if c in pq.read_schema(path).names])
+    for field in schema:
+        if field.name not in table.column_names:
+            table = table.append_column(field, pa.nulls(table.num_rows, field.type))
+    frame: pd.DataFrame = table.select(list(columns)).to_pandas(types_mapper=pd.ArrowDtype)
+    return frame
+
+
+def dask_tables(root: str, address: str, *, whole: bool = False) -> dict[str, pa.Table]:
+    """The tables (all of them with ``whole``, else what the questions read) via the cluster."""
+    import dask.dataframe as dd
+
+    dataset = Dataset(root)
+    wanted = {name: None for name in TABLES} if whole else QUESTION_COLUMNS
+    client = connect(address)
+    out: dict[str, pa.Table] = {}
+    try:
+        for name, columns in wanted.items():
+            files = [str(p) for p in dataset.files(name)]
+            if not files:
+                continue
+            schema = pa.unify_schemas([pq.read_schema(f) for f in files])
+            names = list(columns) if columns is not None else schema.names
+            schema = pa.schema([schema.field(n) for n in names])
+            meta = read_meta(schema)
+            frame = dd.from_map(read_part, files, columns=names, schema=schema, meta=meta)
+            computed = client.compute(frame).result()
+            out[name] = pa.Table.from_pandas(computed, schema=schema, preserve_index=False)
+    finally:
+        client.close()
+    return out
+
+
+def read_meta(schema: pa.Schema) -> pd.DataFrame:
+    import pandas as pd
+
+    empty: pd.DataFrame = schema.empty_table().to_pandas(types_mapper=pd.ArrowDtype)
+    return empty
