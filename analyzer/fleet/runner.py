@@ -111,8 +111,9 @@ def run_dask(works: Iterable[FileWork], address: str) -> Iterator[FileRows]:
         works = list(works)
         keys = [f"fleet-rows-{hashlib.sha256(repr(w).encode()).hexdigest()[:24]}" for w in works]
         futures = client.map(file_rows, works, key=keys)
-        for future in as_completed(futures):
-            yield future.result()
+        with client.as_current():
+            for future in as_completed(futures):
+                yield future.result()
     finally:
         client.close()
 
