@@ -293,6 +293,20 @@ def test_an_interrupted_run_leaves_whole_files_that_the_next_run_tidies(
     assert not orphan.exists() and not list(dataset.rglob(".partial-*"))
 
 
+def test_an_fsspec_url_gives_the_rows_of_the_file(fleet: dict[str, Any], tmp_path: Path) -> None:
+    """Workers may read inputs by URL (s3://... through fsspec); file:// is the local case."""
+    path = fleet["files"]["b-crc.log"]
+    dataset = tmp_path / "by-url"
+    code, out, err = cli("table", path.as_uri(), "-o", str(dataset), "--workers", "1")
+    assert code == 0, err
+    (row,) = rows(dataset, "recordings")
+    mine = recording(fleet["dataset"], "b-crc.log")
+    assert row["path"] == path.as_uri() and row["recording"] == "b-crc.log"
+    same = ("content_hash", "frames", "crc_errors", "crc_error_rate", "gaps", "findings", "start")
+    assert {k: row[k] for k in same} == {k: mine[k] for k in same}
+    assert len(rows(dataset, "findings")) == mine["findings"]
+
+
 def test_bad_usage_is_one_line(fleet: dict[str, Any], tmp_path: Path) -> None:
     code, _, err = cli(
         "table", str(fleet["files"]["a-clean.log"]), "-o", str(tmp_path / "d"), "--tag", "frames=3"

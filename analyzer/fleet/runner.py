@@ -28,6 +28,12 @@ def walk_inputs(inputs: Sequence[str]) -> list[str]:
     found: list[str] = []
     for name in inputs:
         if "://" in name:
+            try:
+                import fsspec  # noqa: F401
+            except ImportError:
+                raise UsageError(
+                    f"{name}: reading URLs needs fsspec: pip install 'gimbal-analyzer[cluster]'"
+                ) from None
             found.append(name)
         elif os.path.isdir(name):
             for root, dirs, files in os.walk(name):
