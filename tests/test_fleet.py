@@ -207,7 +207,7 @@ def test_text_output_shows_the_same_answers(fleet: dict[str, Any]) -> None:
     code, out, _ = cli("fleet", str(fleet["dataset"]))
     assert code == 0
     assert "CRC error rate and feedback gaps per gimbal" in out
-    assert re.search(r"^  b-cut\.pcap\s+1\.3\s+B\s+-\s+1000\s+unreadable: cannot read ", out, re.M)
+    assert re.search(r"^  b-cut\.pcap\s+B\s+1\.3\s+-\s+1000\s+unreadable: cannot read ", out, re.M)
 
 
 def test_second_run_adds_nothing(fleet: dict[str, Any]) -> None:
@@ -297,7 +297,7 @@ def test_an_fsspec_url_gives_the_rows_of_the_file(fleet: dict[str, Any], tmp_pat
     """Workers may read inputs by URL (s3://... through fsspec); file:// is the local case."""
     path = fleet["files"]["b-crc.log"]
     dataset = tmp_path / "by-url"
-    code, out, err = cli("table", path.as_uri(), "-o", str(dataset), "--workers", "1")
+    code, _, err = cli("table", path.as_uri(), "-o", str(dataset), "--workers", "1")
     assert code == 0, err
     (row,) = rows(dataset, "recordings")
     mine = recording(fleet["dataset"], "b-crc.log")

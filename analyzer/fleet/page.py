@@ -62,6 +62,10 @@ def plot_data(answers: Sequence[Answer], tag: str) -> dict[str, Any]:
     }
 
 
+def _caption(text: str) -> str:
+    return f'<p class="small">{_e(text)}</p>'
+
+
 def _table(answer: Answer) -> str:
     if not answer.rows:
         return '<p class="empty">no rows</p>'
@@ -109,10 +113,14 @@ def render_fleet(
         '<table class="kv">' + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in kv),
         "</table>",
         "<h2>CRC errors and feedback gaps</h2>",
+        _caption(f"CRC error rate per week (ISO weeks, UTC), by {tag}"),
         _plot("plot-crc-week", bool(plots["crc_week"]), "no timed recordings"),
+        _caption(f"Feedback gaps over 1 s, by {tag}"),
         _plot("plot-gaps", bool(plots["tag_values"]), "no readable recordings"),
         "<h2>Obedience</h2>",
+        _caption("Findings per command, by verdict (feedback health not included)"),
         _plot("plot-verdicts", bool(plots["commands"]), "no command with a visible effect"),
+        _caption(f"Median response time per command, by {tag}"),
         _plot("plot-response", bool(plots["response"]), "no timed responses"),
     ]
     for answer in answers:

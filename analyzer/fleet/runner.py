@@ -69,7 +69,7 @@ def plan(path: str, tags: dict[str, str], **settings: object) -> FileWork:
         recording=recording,
         content_hash=digest,
         size_bytes=size,
-        tags=tuple(sorted(tags.items())),
+        tags=tuple(tags.items()),  # in the order given: the first is the report's grouping
         error=error,
         **settings,  # type: ignore[arg-type]
     )
