@@ -24,6 +24,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -177,55 +178,71 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=240.0, help="length of each flight")
     parser.add_argument("--rows", type=int, default=10_000_000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--only", choices=("table", "fleet"), help="run one half only")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="fleet-bench-") as tmp:
         folder = Path(tmp)
-        print(f"writing {args.recordings} recordings of {args.seconds:g} s flights ...", flush=True)
-        paths = make_recordings(folder, args.recordings, args.seconds)
-        size = sum(p.stat().st_size for p in paths)
-        messages, bare = bare_mcap(paths)
-        bare_rate = messages / bare
-        print(f"  {size / 1e6:.1f} MB, {messages:,} MCAP messages")
-        print(f"bare mcap read loop     {bare:6.2f} s  {bare_rate:12,.0f} messages/s")
-        results = {}
-        for workers in (1, 2):
-            rows, seconds = run_table(folder, workers, f"w{workers}")
-            results[workers] = seconds
-            rate = rows / seconds
-            print(
-                f"table --workers {workers}       {seconds:6.2f} s  {rate:12,.0f} rows/s "
-                f"({rows:,} rows; {rate / bare_rate:.3f} x the bare loop's messages/s)"
-            )
-        print(f"scaling 1 -> 2 workers: {results[1] / results[2]:.2f} x faster")
-
-        print(f"writing a fleet attitude table of {args.rows:,} rows ...", flush=True)
-        big = make_big_fleet(folder, args.rows)
-        from analyzer.fleet.queries import connect, run_sql
-
-        con = connect(str(big))
-        for name, sql in (
-            ("group-by per gimbal (join)", GROUP_BY),
-            ("per flight and hour", BY_FLIGHT),
-        ):
-            times = []
-            for _ in range(args.repeat):
-                started = time.perf_counter()
-                run_sql(con, sql)
-                times.append(time.perf_counter() - started)
-            print(f"fleet {name:<27} {best(times)}")
-        env = {**os.environ, "PYTHONPATH": str(ROOT)}
-        times = []
-        for _ in range(args.repeat):
-            started = time.perf_counter()
-            subprocess.run(
-                [sys.executable, "-m", "analyzer", "fleet", str(big), "--sql", GROUP_BY, "--csv"],
-                check=True,
-                env=env,
-                stdout=subprocess.DEVNULL,
-            )
-            times.append(time.perf_counter() - started)
-        print(f"fleet --sql end to end (new process) {best(times)}")
+        if args.only != "fleet":
+            bench_table(folder, args.recordings, args.seconds)
+        if args.only != "table":
+            bench_fleet(folder, args.rows, args.repeat)
     return 0
+
+
+def bench_table(folder: Path, recordings: int, seconds: float) -> None:
+    print(f"writing {recordings} recordings of {seconds:g} s flights ...", flush=True)
+    paths = make_recordings(folder, recordings, seconds)
+    size = sum(p.stat().st_size for p in paths)
+    messages, bare = bare_mcap(paths)
+    bare_rate = messages / bare
+    print(f"  {size / 1e6:.1f} MB, {messages:,} MCAP messages")
+    print(f"bare mcap read loop      {bare:6.2f} s  {bare_rate:10,.0f} messages/s")
+    took = {}
+    for workers in (1, 2):
+        rows, took[workers] = run_table(folder, workers, f"w{workers}")
+        rate = messages / took[workers]
+        print(
+            f"table --workers {workers}        {took[workers]:6.2f} s  {rate:10,.0f} messages/s "
+            f"({rate / bare_rate:.2f} x the bare loop), {rows / took[workers]:,.0f} rows/s "
+            f"({rows:,} rows)"
+        )
+    print(f"scaling 1 -> 2 workers: {took[1] / took[2]:.2f} x faster")
+
+
+def timed(run: Callable[[], object], repeat: int) -> list[float]:
+    times = []
+    for _ in range(repeat):
+        started = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - started)
+    return times
+
+
+def bench_fleet(folder: Path, rows: int, repeat: int) -> None:
+    import duckdb
+    import pyarrow.parquet as pq
+
+    from analyzer.fleet.queries import connect, run_sql
+
+    print(f"writing a fleet attitude table of {rows:,} rows ...", flush=True)
+    big = make_big_fleet(folder, rows)
+    con = connect(str(big))
+    # The reference: the same queries over the same rows held in memory by DuckDB.
+    memory = duckdb.connect()
+    memory.execute("SET TimeZone = 'UTC'")
+    memory.register("attitude", pq.read_table(big / "attitude"))
+    memory.register("recordings", pq.read_table(big / "recordings"))
+    for name, sql in (("group-by per gimbal (join)", GROUP_BY), ("per flight and hour", BY_FLIGHT)):
+        mine = timed(lambda sql=sql: run_sql(con, sql), repeat)
+        reference = timed(lambda sql=sql: memory.execute(sql).fetchall(), repeat)
+        print(f"fleet {name:<27} {best(mine)}")
+        print(f"  same in memory           {best(reference)}: {min(mine) / min(reference):.2f} x")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    command = [sys.executable, "-m", "analyzer", "fleet", str(big), "--sql", GROUP_BY, "--csv"]
+    end_to_end = timed(
+        lambda: subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL), repeat
+    )
+    print(f"fleet --sql end to end (new process) {best(end_to_end)}")
 
 
 if __name__ == "__main__":
