@@ -140,6 +140,11 @@ def test_table_on_a_dask_cluster_gives_the_local_dataset(tmp_path: Path) -> None
         # The questions, with the tables read by dask.dataframe on the workers.
         code, on_cluster, err = cli("fleet", str(remote), "--json", "--dask", address)
         assert code == 0, err
+        sql = "SELECT f.verdict, count(*) AS n FROM findings f GROUP BY 1 ORDER BY 1"
+        code, sql_on_cluster, err = cli(
+            "fleet", str(remote), "--sql", sql, "--csv", "--dask", address
+        )
+        assert code == 0, err
     mine, theirs = dataset_tables(local), dataset_tables(remote)
     assert set(mine) == set(theirs)
     for name in mine:
@@ -149,3 +154,5 @@ def test_table_on_a_dask_cluster_gives_the_local_dataset(tmp_path: Path) -> None
         json.loads(x) for x in here.splitlines()
     ]
     assert len(here.splitlines()) > 10
+    code, sql_here, _ = cli("fleet", str(local), "--sql", sql, "--csv")
+    assert sql_on_cluster == sql_here and sql_here.startswith("verdict,n\nnot_obeyed,")

@@ -29,8 +29,9 @@ with plots, in the style of `report`.
   gimbal-analyzer fleet fleet/ --dask tcp://scheduler:8786
 
 --dask reads the tables with dask.dataframe on the cluster's workers (they must
-reach DIR), reduces them there to the columns the questions need, and answers
-from that. Times are UTC.
+reach DIR by the same path), cuts them there to the columns the questions need,
+and answers from that here; with --sql it brings the tables the query names.
+Times are UTC.
 """
 
 
@@ -56,9 +57,10 @@ def run(args: argparse.Namespace) -> int:
         check_output(args.html, force=args.force)
     tables = None
     if args.dask:
-        from analyzer.fleet.dask_tables import dask_tables
+        from analyzer.fleet.dask_tables import dask_tables, tables_named
 
-        tables = dask_tables(args.dataset, args.dask, whole=args.sql is not None)
+        wanted = tables_named(args.sql) if args.sql else None
+        tables = dask_tables(args.dataset, args.dask, wanted)
     con = connect(args.dataset, tables)
     answers = [run_sql(con, args.sql)] if args.sql else standard_questions(con)
     out = sys.stdout

@@ -135,11 +135,14 @@ def run(args: argparse.Namespace) -> int:
         seen[work.content_hash] = path
         todo.append(work)
     out.flush()
-    results = run_dask(todo, args.dask) if args.dask else run_local(todo, args.workers)
+    # Local workers write their files themselves; Dask workers send the rows to be written here.
+    local = not args.dask
+    results = run_local(todo, args.workers, args.output) if local else run_dask(todo, args.dask)
     added = rows = errors = 0
     where: Counter[str] = Counter()
     for n, result in enumerate(results, 1):
-        dataset.write(result.work.content_hash, result.tables)
+        if not result.written:
+            dataset.write(result.work.content_hash, result.tables)
         where[result.worker] += 1
         if result.error is not None:
             errors += 1

@@ -7,12 +7,14 @@ answers here exactly as it does from the files.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analyzer.errors import UsageError
 from analyzer.fleet.columns import RECORDINGS, TABLES
 from analyzer.fleet.dataset import Dataset
 from analyzer.fleet.runner import connect
@@ -39,12 +41,23 @@ def read_part(path: str, columns: Sequence[str], schema: pa.Schema) -> pd.DataFr
     return frame
 
 
-def dask_tables(root: str, address: str, *, whole: bool = False) -> dict[str, pa.Table]:
-    """The tables (all of them with ``whole``, else what the questions read) via the cluster."""
+def tables_named(sql: str) -> dict[str, list[str] | None]:
+    """The tables a query names (whole), for ``fleet --sql ... --dask``."""
+    words = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", sql.lower()))
+    return {name: None for name in TABLES if name in words}
+
+
+def dask_tables(
+    root: str, address: str, wanted: dict[str, list[str] | None] | None = None
+) -> dict[str, pa.Table]:
+    """The tables ``wanted`` (name -> columns, None for all; default: what the standard
+    questions read), read and cut down on the cluster's workers."""
     import dask.dataframe as dd
 
     dataset = Dataset(root)
-    wanted = {name: None for name in TABLES} if whole else QUESTION_COLUMNS
+    if not dataset.hashes():
+        raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
+    wanted = QUESTION_COLUMNS if wanted is None else wanted
     client = connect(address)
     out: dict[str, pa.Table] = {}
     try:

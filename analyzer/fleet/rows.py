@@ -66,10 +66,12 @@ class FileRows:
     error: str | None = None
     worker: str = ""
     seconds: float = 0.0
+    written: bool = False  # the tables are in the dataset already (written by the worker)
+    row_count: int = 0
 
     @property
     def rows(self) -> int:
-        return sum(t.num_rows for t in self.tables.values())
+        return self.row_count or sum(t.num_rows for t in self.tables.values())
 
 
 class TableColumns:

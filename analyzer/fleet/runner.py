@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from analyzer.errors import UsageError
-from analyzer.fleet.dataset import content_hash, unreadable_hash
+from analyzer.fleet.dataset import Dataset, content_hash, unreadable_hash
 from analyzer.fleet.rows import FileRows, FileWork, error_text, file_rows
 from analyzer.inputs import EXTENSIONS
 
@@ -84,19 +84,30 @@ def _size(path: str) -> int:
     return os.path.getsize(path)
 
 
-def run_local(works: Iterable[FileWork], workers: int) -> Iterator[FileRows]:
+def rows_written(work: FileWork, root: str) -> FileRows:
+    """A local worker's task: the rows of one file, written into the dataset at ``root``
+    by the worker itself (so writing runs in parallel too); the result keeps only counts."""
+    result = file_rows(work)
+    Dataset(root).write(work.content_hash, result.tables)
+    result.row_count = result.rows
+    result.tables = {}
+    result.written = True
+    return result
+
+
+def run_local(works: Iterable[FileWork], workers: int, root: str) -> Iterator[FileRows]:
     """The tasks in ``workers`` processes (1: in this process), results as they finish."""
     works = list(works)
     if workers <= 1 or len(works) <= 1:
         for work in works:
-            yield file_rows(work)
+            yield rows_written(work, root)
         return
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        # A few tasks ahead per worker, so results are written while others decode.
+        # A few tasks ahead per worker, so no worker waits for the next one.
         pending: set[Future[FileRows]] = set()
         queue = iter(works)
         for work in queue:
-            pending.add(pool.submit(file_rows, work))
+            pending.add(pool.submit(rows_written, work, root))
             if len(pending) >= 2 * workers:
                 break
         while pending:
@@ -105,7 +116,7 @@ def run_local(works: Iterable[FileWork], workers: int) -> Iterator[FileRows]:
                 yield future.result()
                 nxt = next(queue, None)
                 if nxt is not None:
-                    pending.add(pool.submit(file_rows, nxt))
+                    pending.add(pool.submit(rows_written, nxt, root))
 
 
 def run_dask(works: Iterable[FileWork], address: str) -> Iterator[FileRows]:
