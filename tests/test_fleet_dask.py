@@ -40,13 +40,13 @@ def free_port() -> int:
 
 def dask_command() -> list[str]:
     found = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
-    return [found] if found else [sys.executable, "-m", "distributed.cli.dask_spec"]
+    return [found] if found else [sys.executable, "-m", "dask"]
 
 
 @contextlib.contextmanager
 def cluster(tmp_path: Path) -> Iterator[tuple[str, list[str]]]:
     """A scheduler and two single-threaded workers (no nanny: the worker is the process)."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
     port = free_port()
     address = f"tcp://127.0.0.1:{port}"
     workers = [f"tcp://127.0.0.1:{free_port()}" for _ in range(2)]
