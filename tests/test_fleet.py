@@ -372,3 +372,25 @@ def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     assert "b-cut.pcap" in dom and "Obedience per command and gimbal" in dom
     code, _, err = cli("fleet", str(fleet["dataset"]), "--html", str(page))
     assert code == 2 and "--force" in err
+
+
+def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path) -> None:
+    """A tag one run gave and another did not is a column, null where it was not given."""
+    dataset = str(tmp_path / "mixed")
+    files = fleet["files"]
+    assert cli("table", str(files["a-clean.log"]), "-o", dataset, "--tag", "gimbal=A")[0] == 0
+    assert cli("table", str(files["b-crc.log"]), "-o", dataset, "--tag", "aircraft=K9")[0] == 0
+    sql = "SELECT recording, gimbal, aircraft FROM recordings ORDER BY 1"
+    code, out, _ = cli("fleet", dataset, "--sql", sql, "--json")
+    assert code == 0
+    assert [json.loads(line) for line in out.splitlines()] == [
+        {"recording": "a-clean.log", "gimbal": "A", "aircraft": None},
+        {"recording": "b-crc.log", "gimbal": None, "aircraft": "K9"},
+    ]
+    page = tmp_path / "mixed.html"
+    code, out, _ = cli("fleet", dataset, "--sql", sql, "--html", str(page))
+    assert code == 0 and out.startswith(f"Query: {sql}\n")
+    text = page.read_text()
+    assert (
+        f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
+    )

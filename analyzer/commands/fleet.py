@@ -19,7 +19,7 @@ with DuckDB inside this process (no server):
 --sql runs any query over views named after the tables (recordings, commands,
 attitude, ranging, uav_gps, uav_altitude, uav_attitude, uav_text, diagnostics,
 findings); join them on content_hash. --html writes the answers as a report
-with plots, in the style of `report`.
+with plots, in the style of `report` (with --sql, the query's answer at its end).
 
   gimbal-analyzer fleet fleet/
   gimbal-analyzer fleet fleet/ --json
@@ -62,7 +62,9 @@ def run(args: argparse.Namespace) -> int:
         wanted = tables_named(args.sql) if args.sql else None
         tables = dask_tables(args.dataset, args.dask, wanted)
     con = connect(args.dataset, tables)
-    answers = [run_sql(con, args.sql)] if args.sql else standard_questions(con)
+    answers = (
+        [run_sql(con, args.sql, f"Query: {args.sql}")] if args.sql else standard_questions(con)
+    )
     out = sys.stdout
     if args.json:
         write_json(out, answers, named=not args.sql)
@@ -73,7 +75,10 @@ def run(args: argparse.Namespace) -> int:
     if args.html:
         from analyzer.fleet.page import render_fleet
 
-        page = render_fleet(con, args.dataset, answers if not args.sql else None).encode()
+        if args.sql:  # the standard page, with the query's answer at the end
+            page = render_fleet(con, args.dataset, extra=answers).encode()
+        else:
+            page = render_fleet(con, args.dataset, answers).encode()
         with OutputFile(args.html, force=args.force) as handle:
             cast("IO[bytes]", handle.file).write(page)
         sys.stderr.write(f"wrote {args.html} ({len(page) / 1024:,.0f} KiB)\n")

@@ -79,9 +79,12 @@ def _table(answer: Answer) -> str:
 
 
 def render_fleet(
-    con: duckdb.DuckDBPyConnection, dataset: str, answers: Sequence[Answer] | None = None
+    con: duckdb.DuckDBPyConnection,
+    dataset: str,
+    answers: Sequence[Answer] | None = None,
+    extra: Sequence[Answer] = (),
 ) -> str:
-    """The whole page."""
+    """The whole page: the standard ``answers`` (asked when not given), then ``extra`` ones."""
     answers = list(answers) if answers is not None else standard_questions(con)
     tags = tag_columns(con)
     tag = tags[0] if tags else "fleet"
@@ -123,7 +126,7 @@ def render_fleet(
         _caption(f"Median response time per command, by {tag}"),
         _plot("plot-response", bool(plots["response"]), "no timed responses"),
     ]
-    for answer in answers:
+    for answer in [*answers, *extra]:
         sections += [f"<h2>{_e(answer.title)}</h2>", _table(answer)]
     return "\n".join(
         [
