@@ -6,7 +6,11 @@ import contextlib
 import csv
 import io
 import json
+import os
 import re
+import signal
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -394,3 +398,57 @@ def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path)
     assert (
         f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
     )
+
+
+def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
+    tmp_path: Path,
+) -> None:
+    from analyzer.sim.engine import SimConfig
+    from analyzer.sim.offline import run_offline
+    from tests.fleet_flights import SCRIPT, SECONDS, candump
+
+    flights = tmp_path / "flights"
+    flights.mkdir()
+    for n in range(12):
+        frames, _ = run_offline(SCRIPT, SECONDS, SimConfig(), start=START + n * 3600)
+        candump(flights / f"f{n:02d}.log", frames)
+    dataset = tmp_path / "dataset"
+    root = Path(__file__).resolve().parent.parent
+    command = [sys.executable, "-m", "analyzer", "table", str(flights), "-o", str(dataset)]
+    child = subprocess.Popen(
+        [*command, "--workers", "1"],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )
+    assert child.stdout is not None
+    try:
+        for line in child.stdout:
+            if line.startswith("[3/12] added"):
+                child.send_signal(signal.SIGKILL)
+                break
+    finally:
+        child.kill()
+        child.wait(30)
+    assert child.returncode == -signal.SIGKILL
+    for path in dataset.rglob("*.parquet"):
+        if not path.name.startswith("."):
+            pq.read_table(path)  # every file in place is whole
+    done = len(list((dataset / "recordings").glob("*.parquet")))
+    assert 3 <= done < 12
+    code, out, err = cli("table", str(flights), "-o", str(dataset), "--workers", "1")
+    assert code == 0, err
+    assert f"12 input(s), {12 - done} added" in out and f"{done} skipped" in out
+    assert not list(dataset.rglob(".partial-*"))
+    code, out, _ = cli(
+        "fleet", str(dataset), "--sql", "SELECT count(*) AS n FROM recordings", "--csv"
+    )
+    assert out == "n\n12\n"
+    code, out, _ = cli(
+        "fleet",
+        str(dataset),
+        "--sql",
+        "SELECT count(DISTINCT content_hash) AS n FROM attitude",
+        "--csv",
+    )
+    assert out == "n\n12\n"
