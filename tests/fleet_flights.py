@@ -1,4 +1,4 @@
-"""A small fleet of simulated flights with known faults, as the tests of `table` and `fleet` use.
+"""A small fleet of simulated flights with known faults, and the helpers the fleet tests share.
 
 Each flight is a session of the simulated gimbal in virtual time, written as the capture
 tools write it: a candump -L log, or an MCAP recording made from one by `convert`.
@@ -6,8 +6,16 @@ tools write it: a candump -L log, or an MCAP recording made from one by `convert
 
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
 
 from analyzer.cli import main
 from analyzer.protocol.types import CanFrame
@@ -86,3 +94,57 @@ def make_fleet(root: Path) -> dict[str, Path]:
     cut.write_bytes(b"\xd4\xc3\xb2\xa1\x02\x00")
     made[UNREADABLE] = cut
     return made
+
+
+TAGS = {
+    "A": ("--tag", "gimbal=A", "--tag", "firmware=1.2"),
+    "B": ("--tag", "gimbal=B", "--tag", "firmware=1.3"),
+}
+
+
+def cli(*args: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(args))
+    return code, out.getvalue(), err.getvalue()
+
+
+def built_fleet(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The fleet above in two `table` runs (A with one worker, B with two), for a fixture."""
+    root = tmp_path_factory.mktemp("fleet")
+    files = make_fleet(root)
+    dataset = root / "dataset"
+    runs = {}
+    for folder, workers in (("A", "1"), ("B", "2")):
+        code, out, err = cli(
+            "table", str(root / "flights" / folder), "-o", str(dataset), *TAGS[folder],
+            "--workers", workers,
+        )  # fmt: skip
+        assert code == 0, err
+        runs[folder] = out
+    return {"root": root, "files": files, "dataset": dataset, "runs": runs}
+
+
+def rows(dataset: Path, table: str) -> list[dict[str, Any]]:
+    """Every row of a table, read with pyarrow as a user would."""
+    files = sorted((dataset / table).glob("*.parquet"))
+    if not files:
+        return []
+    return pa.concat_tables(
+        [pq.read_table(f) for f in files], promote_options="default"
+    ).to_pylist()
+
+
+def recording(dataset: Path, name: str) -> dict[str, Any]:
+    (row,) = [r for r in rows(dataset, "recordings") if r["recording"] == name]
+    return row
+
+
+def questions(dataset: Path) -> dict[str, list[dict[str, Any]]]:
+    code, out, err = cli("fleet", str(dataset), "--json")
+    assert code == 0, err
+    found: dict[str, list[dict[str, Any]]] = {}
+    for line in out.splitlines():
+        obj = json.loads(line)
+        found.setdefault(obj.pop("question"), []).append(obj)
+    return found

@@ -2,15 +2,10 @@
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
 import json
-import os
 import re
-import signal
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,65 +16,26 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from analyzer.cli import main
 from analyzer.fleet.columns import TOPIC_TABLES
 from analyzer.fleet.rows import FileWork, file_rows
 from analyzer.protocol.command_table import COMMANDS
 from analyzer.protocol.feedback import ATTITUDE
-from tests.fleet_flights import DAMAGED, START, UNREADABLE, WEEK, make_fleet
-
-TAGS = {
-    "A": ("--tag", "gimbal=A", "--tag", "firmware=1.2"),
-    "B": ("--tag", "gimbal=B", "--tag", "firmware=1.3"),
-}
-
-
-def cli(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
+from tests.fleet_flights import (
+    DAMAGED,
+    START,
+    UNREADABLE,
+    WEEK,
+    built_fleet,
+    cli,
+    questions,
+    recording,
+    rows,
+)
 
 
 @pytest.fixture(scope="module")
 def fleet(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    root = tmp_path_factory.mktemp("fleet")
-    files = make_fleet(root)
-    dataset = root / "dataset"
-    runs = {}
-    for folder, workers in (("A", "1"), ("B", "2")):
-        code, out, err = cli(
-            "table", str(root / "flights" / folder), "-o", str(dataset), *TAGS[folder],
-            "--workers", workers,
-        )  # fmt: skip
-        assert code == 0, err
-        runs[folder] = out
-    return {"root": root, "files": files, "dataset": dataset, "runs": runs}
-
-
-def rows(dataset: Path, table: str) -> list[dict[str, Any]]:
-    """Every row of a table, read with pyarrow as a user would."""
-    files = sorted((dataset / table).glob("*.parquet"))
-    if not files:
-        return []
-    return pa.concat_tables(
-        [pq.read_table(f) for f in files], promote_options="default"
-    ).to_pylist()
-
-
-def recording(dataset: Path, name: str) -> dict[str, Any]:
-    (row,) = [r for r in rows(dataset, "recordings") if r["recording"] == name]
-    return row
-
-
-def questions(dataset: Path) -> dict[str, list[dict[str, Any]]]:
-    code, out, err = cli("fleet", str(dataset), "--json")
-    assert code == 0, err
-    found: dict[str, list[dict[str, Any]]] = {}
-    for line in out.splitlines():
-        obj = json.loads(line)
-        found.setdefault(obj.pop("question"), []).append(obj)
-    return found
+    return built_fleet(tmp_path_factory)
 
 
 def test_every_input_is_a_row_and_the_summary_counts_them(fleet: dict[str, Any]) -> None:
@@ -214,19 +170,6 @@ def test_text_output_shows_the_same_answers(fleet: dict[str, Any]) -> None:
     assert re.search(r"^  b-cut\.pcap\s+B\s+1\.3\s+-\s+1000\s+unreadable: cannot read ", out, re.M)
 
 
-def test_second_run_adds_nothing(fleet: dict[str, Any]) -> None:
-    dataset: Path = fleet["dataset"]
-    before = {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")}
-    code, out, _ = cli(
-        "table", str(fleet["root"] / "flights" / "A"), "-o", str(dataset), *TAGS["A"]
-    )
-    assert code == 0
-    assert "2 input(s), 0 added (0 rows), 2 skipped" in out
-    assert f"skipped {fleet['files']['a-clean.log']}: already in {dataset}" in out
-    after = {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")}
-    assert after == before
-
-
 def test_sql_csv_and_json(fleet: dict[str, Any]) -> None:
     dataset = str(fleet["dataset"])
     sql = "SELECT gimbal, count(*) AS flights, sum(frames) AS frames FROM recordings GROUP BY 1 ORDER BY 1"
@@ -276,39 +219,6 @@ def test_columns_are_typed_from_the_command_table_and_layouts(fleet: dict[str, A
     assert findings.field("yaw_reference").type == pa.string()
     assert findings.field("reference_reason").type == pa.string()
     assert set(TOPIC_TABLES.values()) >= {"commands", "attitude", "diagnostics", "findings"}
-
-
-def test_an_interrupted_run_leaves_whole_files_that_the_next_run_tidies(
-    fleet: dict[str, Any], tmp_path: Path
-) -> None:
-    dataset = tmp_path / "dataset"
-    code, _, _ = cli(
-        "table", str(fleet["files"]["a-clean.log"]), "-o", str(dataset), "--workers", "1"
-    )
-    assert code == 0
-    # What a run killed half way leaves: a temporary file, and tables of an input whose
-    # recordings row was never written.
-    (dataset / "commands" / ".partial-99-x.parquet").write_bytes(b"PAR1")
-    orphan = dataset / "attitude" / ("0" * 64 + ".parquet")
-    orphan.write_bytes((next((dataset / "attitude").glob("*.parquet"))).read_bytes())
-    code, out, _ = cli("table", str(fleet["files"]["a-clean.log"]), "-o", str(dataset))
-    assert code == 0
-    assert "removed 2 unfinished file(s) of an interrupted run" in out
-    assert not orphan.exists() and not list(dataset.rglob(".partial-*"))
-
-
-def test_an_fsspec_url_gives_the_rows_of_the_file(fleet: dict[str, Any], tmp_path: Path) -> None:
-    """Workers may read inputs by URL (s3://... through fsspec); file:// is the local case."""
-    path = fleet["files"]["b-crc.log"]
-    dataset = tmp_path / "by-url"
-    code, _, err = cli("table", path.as_uri(), "-o", str(dataset), "--workers", "1")
-    assert code == 0, err
-    (row,) = rows(dataset, "recordings")
-    mine = recording(fleet["dataset"], "b-crc.log")
-    assert row["path"] == path.as_uri() and row["recording"] == "b-crc.log"
-    same = ("content_hash", "frames", "crc_errors", "crc_error_rate", "gaps", "findings", "start")
-    assert {k: row[k] for k in same} == {k: mine[k] for k in same}
-    assert len(rows(dataset, "findings")) == mine["findings"]
 
 
 def test_bad_usage_is_one_line(fleet: dict[str, Any], tmp_path: Path) -> None:
@@ -376,79 +286,3 @@ def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     assert "b-cut.pcap" in dom and "Obedience per command and gimbal" in dom
     code, _, err = cli("fleet", str(fleet["dataset"]), "--html", str(page))
     assert code == 2 and "--force" in err
-
-
-def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path) -> None:
-    """A tag one run gave and another did not is a column, null where it was not given."""
-    dataset = str(tmp_path / "mixed")
-    files = fleet["files"]
-    assert cli("table", str(files["a-clean.log"]), "-o", dataset, "--tag", "gimbal=A")[0] == 0
-    assert cli("table", str(files["b-crc.log"]), "-o", dataset, "--tag", "aircraft=K9")[0] == 0
-    sql = "SELECT recording, gimbal, aircraft FROM recordings ORDER BY 1"
-    code, out, _ = cli("fleet", dataset, "--sql", sql, "--json")
-    assert code == 0
-    assert [json.loads(line) for line in out.splitlines()] == [
-        {"recording": "a-clean.log", "gimbal": "A", "aircraft": None},
-        {"recording": "b-crc.log", "gimbal": None, "aircraft": "K9"},
-    ]
-    page = tmp_path / "mixed.html"
-    code, out, _ = cli("fleet", dataset, "--sql", sql, "--html", str(page))
-    assert code == 0 and out.startswith(f"Query: {sql}\n")
-    text = page.read_text()
-    assert (
-        f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
-    )
-
-
-def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
-    tmp_path: Path,
-) -> None:
-    from analyzer.sim.engine import SimConfig
-    from analyzer.sim.offline import run_offline
-    from tests.fleet_flights import SCRIPT, SECONDS, candump
-
-    flights = tmp_path / "flights"
-    flights.mkdir()
-    for n in range(12):
-        frames, _ = run_offline(SCRIPT, SECONDS, SimConfig(), start=START + n * 3600)
-        candump(flights / f"f{n:02d}.log", frames)
-    dataset = tmp_path / "dataset"
-    root = Path(__file__).resolve().parent.parent
-    command = [sys.executable, "-m", "analyzer", "table", str(flights), "-o", str(dataset)]
-    child = subprocess.Popen(
-        [*command, "--workers", "1"],
-        stdout=subprocess.PIPE,
-        text=True,
-        env={**os.environ, "PYTHONPATH": str(root)},
-    )
-    assert child.stdout is not None
-    try:
-        for line in child.stdout:
-            if line.startswith("[3/12] added"):
-                child.send_signal(signal.SIGKILL)
-                break
-    finally:
-        child.kill()
-        child.wait(30)
-    assert child.returncode == -signal.SIGKILL
-    for path in dataset.rglob("*.parquet"):
-        if not path.name.startswith("."):
-            pq.read_table(path)  # every file in place is whole
-    done = len(list((dataset / "recordings").glob("*.parquet")))
-    assert 3 <= done < 12
-    code, out, err = cli("table", str(flights), "-o", str(dataset), "--workers", "1")
-    assert code == 0, err
-    assert f"12 input(s), {12 - done} added" in out and f"{done} skipped" in out
-    assert not list(dataset.rglob(".partial-*"))
-    code, out, _ = cli(
-        "fleet", str(dataset), "--sql", "SELECT count(*) AS n FROM recordings", "--csv"
-    )
-    assert out == "n\n12\n"
-    code, out, _ = cli(
-        "fleet",
-        str(dataset),
-        "--sql",
-        "SELECT count(DISTINCT content_hash) AS n FROM attitude",
-        "--csv",
-    )
-    assert out == "n\n12\n"
