@@ -39,6 +39,8 @@ COMMANDS: dict[str, str] = {
     "schemas": "analyzer.commands.schemas",
     "layout": "analyzer.commands.layout",
     "export": "analyzer.commands.export",
+    "table": "analyzer.commands.table",
+    "fleet": "analyzer.commands.fleet",
 }
 
 DESCRIPTION = """\

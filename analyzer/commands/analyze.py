@@ -122,6 +122,12 @@ def open_reader(args: argparse.Namespace) -> Any:
     return open_input(args.file, args.format, args.port, wanted_ids=PROTOCOL_IDS)
 
 
+def untimed(tally: Any, findings: list[Any]) -> bool:
+    """True when findings were made of an input without a clock (a raw byte dump): every
+    "0.0 s later" would be nonsense, so they are not reported."""
+    return bool(findings) and (tally.first_time is None or tally.first_time == tally.last_time)
+
+
 def settings_from(args: argparse.Namespace) -> Any:
     from analyzer.analysis.response import Settings
 
@@ -146,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     tally = pipeline.tally
     commands = tally.topics.get("/gimbal/command", 0)
     notes = list(reader.notes)
-    if (tally.first_time is None or tally.first_time == tally.last_time) and findings:
+    if untimed(tally, findings):
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         findings = []
         analyzer.verdicts.clear()

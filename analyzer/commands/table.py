@@ -1,0 +1,165 @@
+"""``gimbal-analyzer table``: many inputs into one Parquet dataset, one table per kind."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+import time
+from collections import Counter
+
+from analyzer.errors import UsageError
+
+HELP = "add recordings and capture files to a fleet dataset (Parquet, one table per kind)"
+
+DESCRIPTION = """\
+Decodes and analyses every input exactly as `decode`, `info` and `analyze` do
+(folders are walked for capture files and recordings) and adds the rows to a
+Parquet dataset in DIR, one folder per table:
+
+  recordings     one row per input: its tags, source, format, start and end
+                 (UTC), frames, feedback messages, CRC errors and rate, gaps,
+                 diagnostics by kind, findings by verdict, content hash, error
+  commands, attitude, ranging, uav_gps, uav_altitude, uav_attitude,
+  uav_text, diagnostics
+                 every decoded event, typed from the command table and layouts
+  findings       every finding of the response analysis (`analyze`)
+
+An input whose content is already in DIR is skipped, so a nightly job adds only
+new flights. Every file is written under a temporary name and renamed: a killed
+run leaves whole files only, and the next run removes what it left unfinished.
+A damaged or unreadable input becomes a row with its error; the rest goes on.
+
+  gimbal-analyzer table flights/ -o fleet --tag gimbal=G-104 --tag aircraft=A7
+  gimbal-analyzer table new/*.mcap -o fleet --workers 2
+  gimbal-analyzer table /shared/flights -o fleet --dask tcp://scheduler:8786
+
+--workers N runs N processes (default: the cores). --dask sends the same
+per-file tasks to an existing Dask cluster (pip install 'gimbal-analyzer[cluster]');
+its workers read the inputs by the same path or URL (shared storage, s3://...).
+Ask the dataset with `gimbal-analyzer fleet DIR`.
+"""
+
+_TAG = re.compile(r"^[a-z][a-z0-9_]{0,62}$")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from analyzer.commands.analyze import add_settings_arguments
+    from analyzer.inputs import FORMATS
+
+    parser.add_argument("inputs", nargs="+", metavar="INPUT", help="files or folders")
+    parser.add_argument("-o", "--output", required=True, metavar="DIR", help="dataset folder")
+    parser.add_argument(
+        "--tag",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a column of the recordings table with this value for these inputs (repeatable)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        metavar="N",
+        help="local processes (default: the cores, here %(default)s)",
+    )
+    parser.add_argument(
+        "--dask", metavar="ADDRESS", help="run the tasks on this Dask scheduler (tcp://HOST:8786)"
+    )
+    parser.add_argument(
+        "-f", "--format", metavar="FORMAT", help="read every input as " + "/".join(FORMATS)
+    )
+    parser.add_argument(
+        "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
+    )
+    add_settings_arguments(parser)
+    parser.add_argument("-q", "--quiet", action="store_true", help="only the closing summary")
+
+
+def parse_tags(values: list[str]) -> dict[str, str]:
+    """``KEY=VALUE`` options -> a dict; UsageError for a bad or reserved key."""
+    from analyzer.fleet.columns import recordings_schema
+
+    reserved = set(recordings_schema([]).names)
+    tags: dict[str, str] = {}
+    for value in values:
+        key, sep, text = value.partition("=")
+        key = key.strip()
+        if not sep or not _TAG.match(key):
+            raise UsageError(
+                f"--tag {value!r}: give KEY=VALUE, KEY in lower case letters, digits and _"
+            )
+        if key in reserved:
+            raise UsageError(f"--tag {key}: that name is a column of the recordings table")
+        tags[key] = text
+    return tags
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.rows import FileWork
+    from analyzer.fleet.runner import plan, run_dask, run_local, walk_inputs
+
+    tags = parse_tags(args.tag)
+    if args.workers < 1:
+        raise UsageError(f"--workers must be 1 or more, not {args.workers}")
+    if not 0 < args.port < 65536:
+        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    started = time.monotonic()
+    paths = walk_inputs(args.inputs)
+    dataset = Dataset(args.output)
+    dataset.create()
+    out = sys.stdout
+    removed = dataset.remove_partial()
+    if removed:
+        out.write(f"removed {removed} unfinished file(s) of an interrupted run in {args.output}\n")
+    settings = {
+        "fmt": args.format,
+        "port": args.port,
+        "tolerance_deg": args.tolerance,
+        "time_allowed_s": args.time_allowed,
+    }
+    todo: list[FileWork] = []
+    seen: dict[str, str] = {}
+    skipped = 0
+    for path in paths:
+        work = plan(path, tags, **settings)
+        if dataset.holds(work.content_hash) or work.content_hash in seen:
+            skipped += 1
+            if not args.quiet:
+                same = seen.get(work.content_hash)
+                why = f"same content as {same}" if same else f"already in {args.output}"
+                out.write(f"skipped {path}: {why}\n")
+            continue
+        seen[work.content_hash] = path
+        todo.append(work)
+    out.flush()
+    # Local workers write their files themselves; Dask workers send the rows to be written here.
+    local = not args.dask
+    results = run_local(todo, args.workers, args.output) if local else run_dask(todo, args.dask)
+    added = rows = errors = 0
+    where: Counter[str] = Counter()
+    for n, result in enumerate(results, 1):
+        if not result.written:
+            dataset.write(result.work.content_hash, result.tables)
+        where[result.worker] += 1
+        if result.error is not None:
+            errors += 1
+            line = f"error {result.work.path}: {result.error}"
+        else:
+            added += 1
+            rows += result.rows
+            line = f"added {result.work.path}: {result.rows:,} rows ({result.seconds:.2f} s)"
+        if not args.quiet:
+            out.write(f"[{n}/{len(todo)}] {line}\n")
+            out.flush()
+    seconds = time.monotonic() - started
+    out.write(
+        f"{args.output}: {len(paths)} input(s), {added} added ({rows:,} rows), "
+        f"{skipped} skipped (content already there), {errors} with errors; {seconds:.1f} s\n"
+    )
+    if where:
+        runners = ", ".join(f"{name} ({count})" for name, count in sorted(where.items()))
+        out.write(f"tasks ran on: {runners}\n")
+    return 0

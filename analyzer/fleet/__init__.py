@@ -1,0 +1,1 @@
+"""The fleet: many recordings as one Parquet dataset, asked with DuckDB or Dask."""

@@ -1,0 +1,145 @@
+"""The fleet report: the standard answers as one offline HTML page, in the style of `report`."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Sequence
+from importlib import resources
+from typing import TYPE_CHECKING, Any
+
+from analyzer import __version__
+from analyzer.analysis.findings import VERDICTS
+from analyzer.fleet.output import cell
+from analyzer.fleet.queries import Answer, run_sql, standard_questions, tag_columns
+from analyzer.report.page import CHART_JS, CSS, _e, _plot, _rows
+
+if TYPE_CHECKING:
+    import duckdb
+
+
+def _by_name(answers: Sequence[Answer], prefix: str) -> Answer | None:
+    return next((a for a in answers if a.name.startswith(prefix)), None)
+
+
+def _dicts(answer: Answer | None) -> list[dict[str, Any]]:
+    if answer is None:
+        return []
+    return [dict(zip(answer.columns, row, strict=True)) for row in answer.rows]
+
+
+def plot_data(answers: Sequence[Answer], tag: str) -> dict[str, Any]:
+    """What the plots draw, from the answers (grouped by the first tag)."""
+    weekly = _dicts(_by_name(answers, f"link_by_week_{tag}"))
+    links = _dicts(_by_name(answers, f"link_by_{tag}"))
+    obedience = _dicts(_by_name(answers, f"obedience_by_{tag}"))
+    weeks = sorted({str(r["week"]) for r in weekly if r["week"] is not None})
+    crc_week: dict[str, dict[str, float]] = {}
+    for r in weekly:
+        if r["week"] is not None and r["crc_error_rate"] is not None:
+            crc_week.setdefault(str(r[tag]), {})[str(r["week"])] = round(
+                float(r["crc_error_rate"]) * 100, 4
+            )
+    tag_values = [str(r[tag]) for r in links]
+    gaps = {"gaps over 1 s": {str(r[tag]): int(r["gaps"] or 0) for r in links}}
+    commands = sorted({str(r["command"]) for r in obedience})
+    verdicts: dict[str, dict[str, int]] = {v: {} for v in VERDICTS}
+    response: dict[str, dict[str, float]] = {}
+    for r in obedience:
+        command = str(r["command"])
+        for v in VERDICTS:
+            verdicts[v][command] = verdicts[v].get(command, 0) + int(r[v] or 0)
+        if r["median_response_s"] is not None:
+            response.setdefault(str(r[tag]), {})[command] = float(r["median_response_s"])
+    return {
+        "weeks": weeks,
+        "crc_week": crc_week,
+        "tag_values": tag_values,
+        "gaps": gaps,
+        "commands": commands,
+        "verdicts": verdicts,
+        "response": response,
+    }
+
+
+def _caption(text: str) -> str:
+    return f'<p class="small">{_e(text)}</p>'
+
+
+def _table(answer: Answer) -> str:
+    if not answer.rows:
+        return '<p class="empty">no rows</p>'
+    numeric = frozenset(
+        i
+        for i in range(len(answer.columns))
+        if all(isinstance(row[i], (int, float)) or row[i] is None for row in answer.rows)
+    )
+    rows = [["" if (v := cell(x)) is None else _e(v) for x in row] for row in answer.rows]
+    return _rows(rows, answer.columns, numeric)
+
+
+def render_fleet(
+    con: duckdb.DuckDBPyConnection,
+    dataset: str,
+    answers: Sequence[Answer] | None = None,
+    extra: Sequence[Answer] = (),
+) -> str:
+    """The whole page: the standard ``answers`` (asked when not given), then ``extra`` ones."""
+    answers = list(answers) if answers is not None else standard_questions(con)
+    tags = tag_columns(con)
+    tag = tags[0] if tags else "fleet"
+    plots = plot_data(answers, tag)
+    chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
+    script = (resources.files("analyzer.fleet") / "fleet.js").read_text("utf-8")
+    payload = json.dumps(plots, separators=(",", ":")).replace("</", "<\\/")
+    overview = run_sql(
+        con,
+        "SELECT count(*), count(*) FILTER (error IS NOT NULL), sum(frames), sum(findings), "
+        "strftime(min(start), '%Y-%m-%d %H:%M:%SZ'), strftime(max(\"end\"), '%Y-%m-%d %H:%M:%SZ') "
+        "FROM recordings",
+    ).rows[0]
+    flights, failed, frames, findings, first, last = overview
+    generated = time.strftime("%Y-%m-%d %H:%M:%SZ", time.gmtime())
+    kv = [
+        ("dataset", _e(dataset)),
+        ("recordings", f"{flights:,} ({failed:,} unreadable or damaged)"),
+        ("time range", f"{_e(first or '-')} to {_e(last or '-')}"),
+        ("CAN frames", f"{frames or 0:,}"),
+        ("findings", f"{findings or 0:,}"),
+        ("tags", _e(", ".join(tags) or "none")),
+    ]
+    sections = [
+        f"<h1>Fleet report: {_e(dataset)}</h1>",
+        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. Times are UTC. '
+        f"Plots are grouped by the first tag ({_e(tag)}).</p>",
+        "<h2>Overview</h2>",
+        '<table class="kv">' + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in kv),
+        "</table>",
+        "<h2>CRC errors and feedback gaps</h2>",
+        _caption(f"CRC error rate per week (ISO weeks, UTC), by {tag}"),
+        _plot("plot-crc-week", bool(plots["crc_week"]), "no timed recordings"),
+        _caption(f"Feedback gaps over 1 s, by {tag}"),
+        _plot("plot-gaps", bool(plots["tag_values"]), "no readable recordings"),
+        "<h2>Obedience</h2>",
+        _caption("Findings per command, by verdict (feedback health not included)"),
+        _plot("plot-verdicts", bool(plots["commands"]), "no command with a visible effect"),
+        _caption(f"Median response time per command, by {tag}"),
+        _plot("plot-response", bool(plots["response"]), "no timed responses"),
+    ]
+    for answer in [*answers, *extra]:
+        sections += [f"<h2>{_e(answer.title)}</h2>", _table(answer)]
+    return "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html lang="en"><head><meta charset="utf-8">',
+            '<meta name="viewport" content="width=device-width, initial-scale=1">',
+            f"<title>Fleet report: {_e(dataset)}</title>",
+            f"<style>{CSS}</style>",
+            "</head><body>",
+            *sections,
+            f'<script id="fleet-data" type="application/json">{payload}</script>',
+            f"<script>{chart_js}</script>",
+            f"<script>{script}</script>",
+            "</body></html>",
+        ]
+    )

@@ -1,0 +1,150 @@
+"""`table` runs one after another: known content skipped, killed runs tidied, URLs, new tags."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pyarrow.parquet as pq
+import pytest
+
+from tests.fleet_flights import (
+    START,
+    TAGS,
+    built_fleet,
+    cli,
+    recording,
+    rows,
+)
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    return built_fleet(tmp_path_factory)
+
+
+def test_second_run_adds_nothing(fleet: dict[str, Any]) -> None:
+    dataset: Path = fleet["dataset"]
+    before = {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")}
+    code, out, _ = cli(
+        "table", str(fleet["root"] / "flights" / "A"), "-o", str(dataset), *TAGS["A"]
+    )
+    assert code == 0
+    assert "2 input(s), 0 added (0 rows), 2 skipped" in out
+    assert f"skipped {fleet['files']['a-clean.log']}: already in {dataset}" in out
+    after = {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")}
+    assert after == before
+
+
+def test_an_interrupted_run_leaves_whole_files_that_the_next_run_tidies(
+    fleet: dict[str, Any], tmp_path: Path
+) -> None:
+    dataset = tmp_path / "dataset"
+    code, _, _ = cli(
+        "table", str(fleet["files"]["a-clean.log"]), "-o", str(dataset), "--workers", "1"
+    )
+    assert code == 0
+    # What a run killed half way leaves: a temporary file, and tables of an input whose
+    # recordings row was never written.
+    (dataset / "commands" / ".partial-99-x.parquet").write_bytes(b"PAR1")
+    orphan = dataset / "attitude" / ("0" * 64 + ".parquet")
+    orphan.write_bytes((next((dataset / "attitude").glob("*.parquet"))).read_bytes())
+    code, out, _ = cli("table", str(fleet["files"]["a-clean.log"]), "-o", str(dataset))
+    assert code == 0
+    assert "removed 2 unfinished file(s) of an interrupted run" in out
+    assert not orphan.exists() and not list(dataset.rglob(".partial-*"))
+
+
+def test_an_fsspec_url_gives_the_rows_of_the_file(fleet: dict[str, Any], tmp_path: Path) -> None:
+    """Workers may read inputs by URL (s3://... through fsspec); file:// is the local case."""
+    path = fleet["files"]["b-crc.log"]
+    dataset = tmp_path / "by-url"
+    code, _, err = cli("table", path.as_uri(), "-o", str(dataset), "--workers", "1")
+    assert code == 0, err
+    (row,) = rows(dataset, "recordings")
+    mine = recording(fleet["dataset"], "b-crc.log")
+    assert row["path"] == path.as_uri() and row["recording"] == "b-crc.log"
+    same = ("content_hash", "frames", "crc_errors", "crc_error_rate", "gaps", "findings", "start")
+    assert {k: row[k] for k in same} == {k: mine[k] for k in same}
+    assert len(rows(dataset, "findings")) == mine["findings"]
+
+
+def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path) -> None:
+    """A tag one run gave and another did not is a column, null where it was not given."""
+    dataset = str(tmp_path / "mixed")
+    files = fleet["files"]
+    assert cli("table", str(files["a-clean.log"]), "-o", dataset, "--tag", "gimbal=A")[0] == 0
+    assert cli("table", str(files["b-crc.log"]), "-o", dataset, "--tag", "aircraft=K9")[0] == 0
+    sql = "SELECT recording, gimbal, aircraft FROM recordings ORDER BY 1"
+    code, out, _ = cli("fleet", dataset, "--sql", sql, "--json")
+    assert code == 0
+    assert [json.loads(line) for line in out.splitlines()] == [
+        {"recording": "a-clean.log", "gimbal": "A", "aircraft": None},
+        {"recording": "b-crc.log", "gimbal": None, "aircraft": "K9"},
+    ]
+    page = tmp_path / "mixed.html"
+    code, out, _ = cli("fleet", dataset, "--sql", sql, "--html", str(page))
+    assert code == 0 and out.startswith(f"Query: {sql}\n")
+    text = page.read_text()
+    assert (
+        f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
+    )
+
+
+def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
+    tmp_path: Path,
+) -> None:
+    from analyzer.sim.engine import SimConfig
+    from analyzer.sim.offline import run_offline
+    from tests.fleet_flights import SCRIPT, SECONDS, candump
+
+    flights = tmp_path / "flights"
+    flights.mkdir()
+    for n in range(12):
+        frames, _ = run_offline(SCRIPT, SECONDS, SimConfig(), start=START + n * 3600)
+        candump(flights / f"f{n:02d}.log", frames)
+    dataset = tmp_path / "dataset"
+    root = Path(__file__).resolve().parent.parent
+    command = [sys.executable, "-m", "analyzer", "table", str(flights), "-o", str(dataset)]
+    child = subprocess.Popen(
+        [*command, "--workers", "1"],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )
+    assert child.stdout is not None
+    try:
+        for line in child.stdout:
+            if line.startswith("[3/12] added"):
+                child.send_signal(signal.SIGKILL)
+                break
+    finally:
+        child.kill()
+        child.wait(30)
+    assert child.returncode == -signal.SIGKILL
+    for path in dataset.rglob("*.parquet"):
+        if not path.name.startswith("."):
+            pq.read_table(path)  # every file in place is whole
+    done = len(list((dataset / "recordings").glob("*.parquet")))
+    assert 3 <= done < 12
+    code, out, err = cli("table", str(flights), "-o", str(dataset), "--workers", "1")
+    assert code == 0, err
+    assert f"12 input(s), {12 - done} added" in out and f"{done} skipped" in out
+    assert not list(dataset.rglob(".partial-*"))
+    code, out, _ = cli(
+        "fleet", str(dataset), "--sql", "SELECT count(*) AS n FROM recordings", "--csv"
+    )
+    assert out == "n\n12\n"
+    code, out, _ = cli(
+        "fleet",
+        str(dataset),
+        "--sql",
+        "SELECT count(DISTINCT content_hash) AS n FROM attitude",
+        "--csv",
+    )
+    assert out == "n\n12\n"
