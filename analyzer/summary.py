@@ -112,6 +112,9 @@ class Summary:
         self.input_stats: dict[str, int] = {}
         self.decoder_stats: dict[str, int] = {}
         self.time_base: str | None = None
+        # Set when a file read as a raw stream was almost all damage: what it is instead.
+        # The CRC figures are then no verdict on a gimbal, and the summary says so.
+        self.not_a_stream: str | None = None
 
     def add(self, event: Event) -> None:
         """Count one event (the pipeline counts whole batches itself)."""
@@ -190,6 +193,7 @@ class Summary:
             **tally.figures(),
             "figures": tally.figures(),  # as `info --json` has them
             "time_base": self.time_base,
+            "not_a_stream": self.not_a_stream,
             "input": self.input_stats,
             "decoder": self.decoder_stats,
         }
@@ -213,7 +217,10 @@ class Summary:
         lines.append(f"  {'input':<15}{self._input_words()}")
         lines.extend(event_lines(tally, alarm))
         lines.extend(feedback_lines(tally, alarm))
-        lines.append(crc_line(tally, alarm))
+        if self.not_a_stream is None:
+            lines.append(crc_line(tally, alarm))
+        else:
+            lines.append(f"  {'CRC errors':<15}not judged: {alarm(printable(self.not_a_stream))}")
         stream = self.decoder_stats
         if stream.get("bytes_fed"):
             lines.append(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import random
 import subprocess
@@ -53,6 +54,38 @@ def test_text_read_as_a_stream_is_called_text(tmp_path: Path) -> None:
     path.write_text("This is a text file, not a dump of a UART.\n" * 40)
     assert "readme.bin looks like text, not a raw stream" in notes_of(path)
     assert describe(b"\x1f\x8b\x08\x00") == ("gzip-compressed data", None)
+
+
+def summary_of(path: Path) -> tuple[str, dict[str, object]]:
+    command = [sys.executable, "-m", "analyzer", "decode", "--summary", "--format", "stream"]
+    runs = [
+        subprocess.run(
+            [*command, *extra, str(path)],
+            capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
+            cwd=ROOT, timeout=60, check=True,
+        ).stdout
+        for extra in ([], ["--json"])
+    ]  # fmt: skip
+    return runs[0], json.loads(runs[1])
+
+
+def test_a_dataflash_log_read_as_a_stream_is_no_100_percent_crc_verdict(tmp_path: Path) -> None:
+    frames = flight_frames()
+    path = tmp_path / "00000042.BIN"
+    path.write_bytes(ardupilot_log(frames, frames[0].time - 10)[0])
+    text, figures = summary_of(path)
+    crc = next(line for line in text.splitlines() if "CRC errors" in line)
+    assert "100.00 %" not in crc
+    assert "CRC errors     not judged: the damage in 00000042.BIN is no damage" in crc
+    assert crc.endswith("it is an ArduPilot DataFlash log")
+    assert str(figures["not_a_stream"]).endswith("it is an ArduPilot DataFlash log")
+    assert figures["crc_errors"] == 40  # the figures stay what they are, as everywhere
+
+
+def test_a_real_uart_dump_keeps_its_crc_verdict() -> None:
+    text, figures = summary_of(ROOT / "samples" / "uart-dump.bin")
+    assert "CRC errors     1 of 27 CRC-protected messages (3.70 %)" in text
+    assert figures["not_a_stream"] is None
 
 
 def test_a_real_uart_dump_gets_no_such_note() -> None:

@@ -160,8 +160,12 @@ def run(args: argparse.Namespace) -> int:
         raise failure.error
     decoder_stats: dict[str, int] = getattr(pipeline.decoder, "stats", {})
     tally = pipeline.tally
+    from analyzer.inputs.content import raw_stream_mismatch
+
+    mismatch = raw_stream_mismatch(reader, decoder_stats, tally.crc_checked, tally.crc_errors)
     if args.summary:
         summary = Summary(args.file, reader.format_name, tally)
+        summary.not_a_stream = mismatch[0] if mismatch else None
         summary.finish(
             input_stats=reader.stats,
             decoder_stats=decoder_stats,
@@ -178,9 +182,6 @@ def run(args: argparse.Namespace) -> int:
         sys.stderr.write(
             f"{tally.events:,} events ({tally.diagnostics:,} diagnostics) from {args.file}\n"
         )
-    from analyzer.inputs.content import raw_stream_mismatch
-
-    mismatch = raw_stream_mismatch(reader, decoder_stats, tally.crc_checked, tally.crc_errors)
     for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw), *mismatch]:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0
