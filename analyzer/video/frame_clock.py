@@ -1,0 +1,79 @@
+"""Capture times of video frames on the telemetry's clock, from RTCP or anchored arrival times."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+T = TypeVar("T")
+
+# While a stream opens, a camera often sends what it has buffered in one burst: arrival
+# times then say nothing about capture. Frames are held this long (seconds of arrival)
+# before the clock is anchored, unless an RTCP sender report gives the mapping first.
+SETTLE_S = 2.0
+TIME_SOURCE_RTCP = "rtcp"
+TIME_SOURCE_ARRIVAL = "arrival"
+
+
+@dataclass(slots=True)
+class Stamp:
+    """A frame's stream time (seconds, from its pts), arrival time and, when the camera
+    sent RTCP sender reports, its capture time from them (Unix seconds)."""
+
+    stream_s: float
+    arrival: float
+    wallclock: float | None = None
+
+
+class FrameClock(Generic[T]):
+    """Turns stream timestamps into capture times on the local (telemetry) clock.
+
+    With RTCP sender reports, a frame's time is the sender's wallclock for its RTP
+    timestamp (FFmpeg's producer reference time). Without them, time is the stream time
+    plus an offset: the smallest ``arrival - stream time`` seen, i.e. the frame that came
+    with the least delay anchors the stream's own spacing to the local clock. Frames of
+    the first ``settle_s`` seconds are held back (``add`` returns nothing) until the
+    anchor is known, so the burst a camera sends when a stream opens keeps its spacing.
+    Times never go backwards.
+    """
+
+    def __init__(self, settle_s: float = SETTLE_S) -> None:
+        self.settle_s = settle_s
+        self.offset: float | None = None
+        self.source = ""
+        self._held: list[tuple[Stamp, T]] = []
+        self._last = float("-inf")
+
+    def add(self, stamp: Stamp, item: T) -> list[tuple[float, T]]:
+        """Frames whose time is known now, as (capture time, item), in order."""
+        if stamp.wallclock is not None:
+            self.offset = stamp.wallclock - stamp.stream_s
+            self.source = TIME_SOURCE_RTCP
+        elif self.offset is None:
+            self._held.append((stamp, item))
+            first = self._held[0][0].arrival
+            if stamp.arrival - first < self.settle_s:
+                return []
+            self.offset = min(s.arrival - s.stream_s for s, _ in self._held)
+            self.source = TIME_SOURCE_ARRIVAL
+            return list(self._release())
+        elif self.source == TIME_SOURCE_ARRIVAL:
+            self.offset = min(self.offset, stamp.arrival - stamp.stream_s)
+        self._held.append((stamp, item))
+        return list(self._release())
+
+    def flush(self) -> list[tuple[float, T]]:
+        """The end of the stream: held frames get the best anchor there is."""
+        if self._held and self.offset is None:
+            self.offset = min(s.arrival - s.stream_s for s, _ in self._held)
+            self.source = TIME_SOURCE_ARRIVAL
+        return list(self._release())
+
+    def _release(self) -> Iterator[tuple[float, T]]:
+        held, self._held = self._held, []
+        offset = self.offset or 0.0
+        for stamp, item in held:
+            time = max(stamp.stream_s + offset, self._last + 1e-6)
+            self._last = time
+            yield time, item
