@@ -15,6 +15,8 @@ from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
+from analyzer.video.recording import is_camera_event, video_summary
+from analyzer.video.spec import add_video_options
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
 DESCRIPTION = """\
@@ -64,6 +66,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
     add_compression_argument(parser)
+    add_video_options(parser)
     parser.add_argument(
         "-f",
         "--force",
@@ -103,7 +106,7 @@ class LinkWatch:
         self.status = LinkStatus()
 
     def handle(self, batch: Batch) -> None:
-        self.status.fold(batch.events)
+        self.status.fold(e for e in batch.events if not is_camera_event(e))
 
     def close(self) -> None:
         pass
@@ -134,6 +137,7 @@ class StatusLine:
         self.tty = stream.isatty()
         self.interval = STATUS_INTERVAL_TTY if self.tty else STATUS_INTERVAL_LOG
         self.capture: Any = None
+        self.video: Any = None  # a VideoRecorder: its streams are shown too
         self._next = time.monotonic() + self.interval
         self._width = 0
         self._link_shown = ""
@@ -149,6 +153,8 @@ class StatusLine:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
         parts.append(f"{stats.events} events")
         parts.append(f"{stats.diagnostics} diagnostics")
+        if self.video is not None:
+            parts.append(self.video.words())
         if stats.dropped:  # the capture fell behind: say so where the user looks
             parts.append(f"{stats.dropped} DROPPED")
         parts.append(_megabytes(self.path))
@@ -207,6 +213,8 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
+    from analyzer.video.recording import video_recorder
+    from analyzer.video.spec import video_specs
 
     if args.duration is not None and not args.duration > 0:
         raise UsageError("--duration must be a positive number of seconds")
@@ -215,6 +223,7 @@ def run(args: argparse.Namespace) -> int:
             "record --tui needs a terminal; leave out --tui to record with a status line "
             "on standard error"
         )
+    video_specs(args)  # a wrong --video is a usage error before anything starts
     inputs = _input_files(args.source)
     target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
@@ -240,17 +249,22 @@ def run(args: argparse.Namespace) -> int:
     except SourceError:
         source.close()
         raise
+    video = video_recorder(args, sink)
     link = LinkWatch()
-    sinks: list[Any] = [sink, link]
+    sinks: list[Any] = [sink, link] if video is None else [video, sink, link]
     status = None
     if not args.quiet and not args.tui:
         address = getattr(source, "address", None)
         waiting = f"connecting to {address}" if address else "waiting for data"
         status = StatusLine(sys.stderr, path, link, waiting)
+        status.video = video
         sinks.append(status)
     if args.print and not args.tui:
         sinks.append(EventPrinter(sys.stdout))
-    capture = Capture(source, sinks, stages=analysis_stages())
+    stages = [*analysis_stages(), *([video.stage] if video is not None else [])]
+    capture = Capture(source, sinks, stages=stages)
+    if video is not None:
+        video.start()
     if status is not None:
         status.capture = capture
     timer: threading.Timer | None = None
@@ -277,6 +291,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if timer is not None:
             timer.cancel()
+        if video is not None:
+            video.stop()
         if capture.running:
             capture.stop()
             capture.join()
@@ -301,6 +317,8 @@ def run(args: argparse.Namespace) -> int:
             f"to {path} ({_megabytes(path)}); ended: {reason}",
             file=sys.stderr,
         )
+    if video is not None and not args.quiet:
+        print(f"{video_summary(video)}", file=sys.stderr)
     if nothing_received:
         # A live source that delivered nothing is a failed capture (exit 1), not a
         # success: say why we think nothing came (the last link message).

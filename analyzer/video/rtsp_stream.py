@@ -105,6 +105,7 @@ class VideoStream:
         self.dropped = 0
         self.connections = 0
         self.state = ""
+        self.last_problem = ""  # the last failure in words (for the final summary)
         self._frames: deque[VideoFrame] = deque()
         self._events: deque[Event] = deque()
         self._queued_bytes = 0
@@ -138,6 +139,8 @@ class VideoStream:
 
     def _link(self, detail: str, state: str, **extra: Any) -> None:
         self.state = state
+        if state in ("connect_failed", "lost", STATE_REFUSED):
+            self.last_problem = detail
         event = link_event(self.source_name, detail, state, peer=self.spec.shown, **extra)
         with self._lock:
             self._events.append(event)

@@ -1,0 +1,322 @@
+"""Camera video in a recording: CompressedVideo and thumbnail channels, written and read."""
+
+from __future__ import annotations
+
+import base64
+import itertools
+import json
+import os
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from analyzer.mcapio.channels import ROLE_KEY, time_ns
+from analyzer.mcapio.chunked_writer import ChunkedWriter
+from analyzer.mcapio.writer import McapSink
+from analyzer.pipeline import Batch
+from analyzer.protocol.types import Event
+from analyzer.video.rtsp_stream import VideoFrame, VideoStream
+
+ROLE_VIDEO = "video"
+ROLE_THUMBNAIL = "thumbnail"
+COMPRESSED_VIDEO = "foxglove.CompressedVideo"
+COMPRESSED_IMAGE = "foxglove.CompressedImage"
+TOPIC_PREFIX = "/camera/"
+GAP_FACTOR = 3.0  # frames further apart than this many frame intervals are a gap
+
+_TIME: dict[str, Any] = {
+    "type": "object",
+    "title": "time",
+    "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+    },
+}
+
+# The fields of Foxglove's schemas (foxglove-sdk schemas/jsonschema), descriptions as there.
+COMPRESSED_VIDEO_SCHEMA: dict[str, Any] = {
+    "title": COMPRESSED_VIDEO,
+    "description": "A single frame of a compressed video bitstream",
+    "type": "object",
+    "properties": {
+        "timestamp": {**_TIME, "description": "Timestamp of video frame"},
+        "frame_id": {
+            "type": "string",
+            "description": "Frame of reference for the video.\n\nThe origin of the frame is the "
+            "optical center of the camera. +x points to the right in the video, +y points "
+            "down, and +z points into the plane of the video.",
+        },
+        "data": {
+            "type": "string",
+            "contentEncoding": "base64",
+            "description": "Compressed video frame data.\n\nFor packet-based video codecs this "
+            "data must begin and end on packet boundaries (no partial packets), and must "
+            "contain enough video packets to decode exactly one image (either a keyframe or "
+            "delta frame). Note: Foxglove does not support video streams that include B "
+            "frames because they require lookahead.",
+        },
+        "format": {
+            "type": "string",
+            "description": "Video format.\n\nSupported values: `h264`, `h265`, `vp9`, `av1`.",
+        },
+    },
+    "required": ["timestamp", "frame_id", "data", "format"],
+}
+
+COMPRESSED_IMAGE_SCHEMA: dict[str, Any] = {
+    "title": COMPRESSED_IMAGE,
+    "description": "A compressed image",
+    "type": "object",
+    "properties": {
+        "timestamp": {**_TIME, "description": "Timestamp of image"},
+        "frame_id": {
+            "type": "string",
+            "description": "Frame of reference for the image. The origin of the frame is the "
+            "optical center of the camera. +x points to the right in the image, +y points "
+            "down, and +z points into the plane of the image.",
+        },
+        "data": {
+            "type": "string",
+            "contentEncoding": "base64",
+            "description": "Compressed image data",
+        },
+        "format": {
+            "type": "string",
+            "description": "Image format\n\nSupported values: `jpeg`, `png`, `webp`, `avif`",
+        },
+    },
+    "required": ["timestamp", "frame_id", "data", "format"],
+}
+
+
+def video_topic(name: str) -> str:
+    return f"{TOPIC_PREFIX}{name}"
+
+
+def thumbnail_topic(name: str) -> str:
+    return f"{TOPIC_PREFIX}{name}/thumbnail"
+
+
+def frame_id(name: str) -> str:
+    return f"camera_{name}"
+
+
+def message_json(name: str, time: float, data: bytes, fmt: str) -> bytes:
+    """One CompressedVideo / CompressedImage message (the two share their fields)."""
+    ns = time_ns(time)
+    message = {
+        "timestamp": {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000},
+        "frame_id": frame_id(name),
+        "data": base64.b64encode(data).decode("ascii"),
+        "format": fmt,
+    }
+    return json.dumps(message, separators=(",", ":")).encode()
+
+
+class VideoChannels:
+    """Registers the camera channels on first use and writes frames and thumbnails."""
+
+    def __init__(self) -> None:
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._sequence: dict[int, int] = {}
+
+    def write(self, writer: ChunkedWriter, frames: Sequence[VideoFrame]) -> None:
+        for frame in frames:
+            log_time = time_ns(frame.time)
+            metadata = {
+                ROLE_KEY: ROLE_VIDEO,
+                "codec": frame.codec,
+                "width": str(frame.width),
+                "height": str(frame.height),
+            }
+            topic = video_topic(frame.stream)
+            channel = self._channel(writer, topic, COMPRESSED_VIDEO_SCHEMA, metadata)
+            data = message_json(frame.stream, frame.time, frame.data, frame.codec)
+            writer.add_message(channel, log_time, data, log_time, self._next(channel))
+            if frame.thumbnail is not None:
+                topic = thumbnail_topic(frame.stream)
+                meta = {ROLE_KEY: ROLE_THUMBNAIL}
+                channel = self._channel(writer, topic, COMPRESSED_IMAGE_SCHEMA, meta)
+                data = message_json(frame.stream, frame.time, frame.thumbnail, "jpeg")
+                writer.add_message(channel, log_time, data, log_time, self._next(channel))
+
+    def _next(self, channel: int) -> int:
+        self._sequence[channel] += 1
+        return self._sequence[channel]
+
+    def _channel(
+        self, writer: ChunkedWriter, topic: str, schema: dict[str, Any], metadata: dict[str, str]
+    ) -> int:
+        channel = self._channels.get(topic)
+        if channel is not None:
+            return channel
+        name = str(schema["title"])
+        schema_id = self._schemas.get(name)
+        if schema_id is None:
+            data = json.dumps(schema, separators=(",", ":")).encode()
+            schema_id = self._schemas[name] = writer.register_schema(name, "jsonschema", data)
+        channel = writer.register_channel(topic, "json", schema_id, metadata)
+        self._channels[topic] = channel
+        self._sequence[channel] = 0
+        return channel
+
+
+class VideoRecorder:
+    """Sink writing what the camera streams delivered into the recording, batch by batch.
+
+    Put it before the McapSink in the capture's sinks; its ``stage`` goes among the
+    capture's stages and brings the streams' link diagnostics into the pipeline (so they
+    reach /diagnostics, the status line and the counts like the telemetry's). The
+    streams run in their own threads; ``stop`` ends them (also done by the stage's
+    ``close`` at the end of the capture).
+    """
+
+    def __init__(self, mcap: McapSink, streams: Sequence[VideoStream]) -> None:
+        self.mcap = mcap
+        self.streams = list(streams)
+        self.channels = VideoChannels()
+        self.stage = _LinkStage(self)
+        self.frames_written = 0
+        self._frames: list[VideoFrame] = []
+
+    def start(self) -> None:
+        for stream in self.streams:
+            stream.start()
+
+    def stop(self) -> None:
+        for stream in self.streams:
+            stream._stopping.set()
+        for stream in self.streams:
+            stream.stop()
+
+    def collect(self) -> list[Event]:
+        events: list[Event] = []
+        for stream in self.streams:
+            frames, news = stream.take()
+            self._frames.extend(frames)
+            events.extend(news)
+        return events
+
+    def handle(self, batch: Batch) -> None:
+        frames, self._frames = self._frames, []
+        if frames:
+            frames.sort(key=lambda f: f.time)
+            self.mcap.write_with(lambda writer: self.channels.write(writer, frames))
+            self.frames_written += len(frames)
+
+    def close(self) -> None:
+        self.stop()
+
+    def words(self) -> str:
+        """The streams for the status line: "main 812 frames" / "main 401 unauthorized"."""
+        parts = []
+        for stream in self.streams:
+            if stream.state == "connected" or not stream.state:
+                parts.append(f"{stream.spec.name} {stream.frames} frames")
+            else:
+                parts.append(f"{stream.spec.name} {stream.state.replace('_', ' ')}")
+        return "video: " + ", ".join(parts)
+
+
+class _LinkStage:
+    """The recorder's link diagnostics and queued frames, taken once per batch."""
+
+    def __init__(self, recorder: VideoRecorder) -> None:
+        self.recorder = recorder
+
+    def process(self, events: list[Event]) -> list[Event]:
+        return self.recorder.collect()
+
+    def close(self) -> list[Event]:
+        self.recorder.stop()
+        return self.recorder.collect()
+
+
+# -- reading ------------------------------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class VideoSummary:
+    """What ``info`` says of one camera stream in a recording."""
+
+    topic: str
+    codec: str = ""
+    width: int = 0
+    height: int = 0
+    frames: int = 0
+    thumbnails: int = 0
+    first: float = 0.0
+    last: float = 0.0
+    gaps: list[tuple[float, float]] = field(default_factory=list)
+
+    @property
+    def fps(self) -> float:
+        span = self.last - self.first
+        return (self.frames - 1) / span if self.frames > 1 and span > 0 else 0.0
+
+
+def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
+    """Every camera stream of a recording: codec, size, frames, rate and gaps."""
+    from mcap.reader import make_reader
+
+    out: dict[str, VideoSummary] = {}
+    times: dict[str, list[float]] = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        for schema, channel, message in reader.iter_messages():
+            role = channel.metadata.get(ROLE_KEY, "")
+            if schema is None or schema.name not in (COMPRESSED_VIDEO, COMPRESSED_IMAGE):
+                continue
+            if schema.name == COMPRESSED_IMAGE:
+                base = channel.topic.removesuffix("/thumbnail")
+                out.setdefault(base, VideoSummary(base)).thumbnails += 1
+                continue
+            summary = out.setdefault(channel.topic, VideoSummary(channel.topic))
+            if role == ROLE_VIDEO and not summary.codec:
+                summary.codec = channel.metadata.get("codec", "")
+                summary.width = int(channel.metadata.get("width", "0") or 0)
+                summary.height = int(channel.metadata.get("height", "0") or 0)
+            summary.frames += 1
+            times.setdefault(channel.topic, []).append(message.log_time / 1e9)
+    for topic, stamps in times.items():
+        summary = out[topic]
+        summary.first, summary.last = stamps[0], stamps[-1]
+        if len(stamps) > 2:
+            steps = sorted(b - a for a, b in itertools.pairwise(stamps))
+            typical = steps[len(steps) // 2]
+            summary.gaps = [
+                (a, b)
+                for a, b in itertools.pairwise(stamps)
+                if typical > 0 and b - a > GAP_FACTOR * typical
+            ]
+    return [s for s in out.values() if s.frames or s.thumbnails]
+
+
+@dataclass(frozen=True, slots=True)
+class Thumbnail:
+    """One JPEG of a camera stream at ``time`` (Unix seconds)."""
+
+    stream: str
+    time: float
+    jpeg: bytes
+
+
+def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
+    """The thumbnails of every camera stream, in file order."""
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        for schema, channel, message in reader.iter_messages():
+            if schema is None or schema.name != COMPRESSED_IMAGE:
+                continue
+            if not channel.topic.startswith(TOPIC_PREFIX):
+                continue
+            try:
+                obj = json.loads(message.data)
+                jpeg = base64.b64decode(obj["data"])
+            except (ValueError, KeyError, TypeError):
+                continue
+            name = channel.topic[len(TOPIC_PREFIX) :].removesuffix("/thumbnail")
+            yield Thumbnail(name, message.log_time / 1e9, jpeg)
