@@ -3,11 +3,8 @@
 from __future__ import annotations
 
 import base64
-import itertools
 import json
-import os
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Any
 
 from analyzer.mcapio.channels import ROLE_KEY, time_ns
@@ -22,7 +19,6 @@ ROLE_THUMBNAIL = "thumbnail"
 COMPRESSED_VIDEO = "foxglove.CompressedVideo"
 COMPRESSED_IMAGE = "foxglove.CompressedImage"
 TOPIC_PREFIX = "/camera/"
-GAP_FACTOR = 3.0  # frames further apart than this many frame intervals are a gap
 
 _TIME: dict[str, Any] = {
     "type": "object",
@@ -231,92 +227,3 @@ class _LinkStage:
     def close(self) -> list[Event]:
         self.recorder.stop()
         return self.recorder.collect()
-
-
-# -- reading ------------------------------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class VideoSummary:
-    """What ``info`` says of one camera stream in a recording."""
-
-    topic: str
-    codec: str = ""
-    width: int = 0
-    height: int = 0
-    frames: int = 0
-    thumbnails: int = 0
-    first: float = 0.0
-    last: float = 0.0
-    gaps: list[tuple[float, float]] = field(default_factory=list)
-
-    @property
-    def fps(self) -> float:
-        span = self.last - self.first
-        return (self.frames - 1) / span if self.frames > 1 and span > 0 else 0.0
-
-
-def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
-    """Every camera stream of a recording: codec, size, frames, rate and gaps."""
-    from mcap.reader import make_reader
-
-    out: dict[str, VideoSummary] = {}
-    times: dict[str, list[float]] = {}
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        for schema, channel, message in reader.iter_messages():
-            role = channel.metadata.get(ROLE_KEY, "")
-            if schema is None or schema.name not in (COMPRESSED_VIDEO, COMPRESSED_IMAGE):
-                continue
-            if schema.name == COMPRESSED_IMAGE:
-                base = channel.topic.removesuffix("/thumbnail")
-                out.setdefault(base, VideoSummary(base)).thumbnails += 1
-                continue
-            summary = out.setdefault(channel.topic, VideoSummary(channel.topic))
-            if role == ROLE_VIDEO and not summary.codec:
-                summary.codec = channel.metadata.get("codec", "")
-                summary.width = int(channel.metadata.get("width", "0") or 0)
-                summary.height = int(channel.metadata.get("height", "0") or 0)
-            summary.frames += 1
-            times.setdefault(channel.topic, []).append(message.log_time / 1e9)
-    for topic, stamps in times.items():
-        summary = out[topic]
-        summary.first, summary.last = stamps[0], stamps[-1]
-        if len(stamps) > 2:
-            steps = sorted(b - a for a, b in itertools.pairwise(stamps))
-            typical = steps[len(steps) // 2]
-            summary.gaps = [
-                (a, b)
-                for a, b in itertools.pairwise(stamps)
-                if typical > 0 and b - a > GAP_FACTOR * typical
-            ]
-    return [s for s in out.values() if s.frames or s.thumbnails]
-
-
-@dataclass(frozen=True, slots=True)
-class Thumbnail:
-    """One JPEG of a camera stream at ``time`` (Unix seconds)."""
-
-    stream: str
-    time: float
-    jpeg: bytes
-
-
-def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
-    """The thumbnails of every camera stream, in file order."""
-    from mcap.reader import make_reader
-
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        for schema, channel, message in reader.iter_messages():
-            if schema is None or schema.name != COMPRESSED_IMAGE:
-                continue
-            if not channel.topic.startswith(TOPIC_PREFIX):
-                continue
-            try:
-                obj = json.loads(message.data)
-                jpeg = base64.b64decode(obj["data"])
-            except (ValueError, KeyError, TypeError):
-                continue
-            name = channel.topic[len(TOPIC_PREFIX) :].removesuffix("/thumbnail")
-            yield Thumbnail(name, message.log_time / 1e9, jpeg)

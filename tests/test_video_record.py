@@ -1,0 +1,287 @@
+"""`record --video`: a real RTSP camera (gst-rtsp-server) recorded next to a simulated gimbal."""
+
+from __future__ import annotations
+
+import base64
+import itertools
+import json
+import os
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import av
+import jsonschema
+import pytest
+from mcap.reader import make_reader
+
+from analyzer.mcapio.video_channels import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
+from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
+
+ROOT = Path(__file__).resolve().parent.parent
+FRAME_INTERVAL = 1 / 30
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _env() -> dict[str, str]:
+    return dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(ROOT))
+
+
+@contextmanager
+def gimbal() -> Iterator[int]:
+    """The simulated gimbal on a loopback TCP port (attitude feedback every 500 ms)."""
+    port = free_port()
+    args = ["simulate", "--on", f"tcp:127.0.0.1:{port}", "--quiet", "--duration", "60"]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "analyzer", *args], env=_env(), stdout=subprocess.DEVNULL
+    )
+    try:
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            try:
+                socket.create_connection(("127.0.0.1", port), 0.2).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        yield port
+    finally:
+        process.terminate()
+        process.wait(10)
+
+
+def record(args: list[str], cwd: Path, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "analyzer", "record", *args],
+        cwd=cwd,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=90,
+        **kwargs,
+    )
+
+
+def messages(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
+    """Every message by topic (log time ns, JSON), read with the mcap library."""
+    out: dict[str, list[tuple[int, dict[str, Any]]]] = {}
+    with path.open("rb") as f:
+        for _, channel, message in make_reader(f).iter_messages():
+            out.setdefault(channel.topic, []).append((message.log_time, json.loads(message.data)))
+    return out
+
+
+def decode_all(frames: list[dict[str, Any]]) -> int:
+    """Pictures PyAV decodes from the messages, fed one message per packet as a player does."""
+    decoder = av.CodecContext.create(frames[0]["format"], "r")
+    decoded = 0
+    for frame in frames:
+        decoded += len(decoder.decode(av.Packet(base64.b64decode(frame["data"]))))
+    return decoded + len(decoder.decode(None))
+
+
+def camera_diagnostics(found: dict[str, list[tuple[int, dict[str, Any]]]]) -> list[dict[str, Any]]:
+    return [m for _, m in found.get("/diagnostics", []) if m["source"] == "camera/main"]
+
+
+def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "6",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "/camera/main: " in done.stderr
+    found = messages(out)
+    video = [m for _, m in found["/camera/main"]]
+    assert len(video) > 90  # 6 s at 30 fps, less the opening
+    for message in video:
+        jsonschema.validate(message, COMPRESSED_VIDEO_SCHEMA)
+        assert message["format"] == "h264" and message["frame_id"] == "camera_main"
+    first = [nal_type("h264", u) for u in split_nals(base64.b64decode(video[0]["data"]))]
+    assert first.index(H264_SPS) < first.index(H264_IDR)  # a keyframe with its SPS first
+    assert decode_all(video) == len(video)  # every message is exactly one picture
+
+    # capture times: the stream's spacing, on the telemetry's clock
+    stamps = [m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 for m in video]
+    steps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert statistics.median(steps) == pytest.approx(FRAME_INTERVAL, abs=0.002)
+    assert max(steps) < 4 * FRAME_INTERVAL and min(steps) > 0
+    # The log time is the capture time, raised to the end of the last chunk on disk for
+    # a frame that arrived after it (the writer keeps the file in log-time order).
+    log_times = [t / 1e9 for t, _ in found["/camera/main"]]
+    late = [log - stamp for log, stamp in zip(log_times, stamps, strict=True)]
+    assert min(late) > -1e-6 and statistics.median(late[-60:]) < 0.1
+    attitude = [t / 1e9 for t, _ in found["/gimbal/attitude"]]
+    assert len(attitude) >= 8
+    overlap = min(attitude[-1], stamps[-1]) - max(attitude[0], stamps[0])
+    assert overlap > 3.0  # both cover the same seconds of the run
+
+    thumbnails = [m for _, m in found["/camera/main/thumbnail"]]
+    assert 2 <= len(thumbnails) <= 4  # one every 2 s
+    for message in thumbnails:
+        jsonschema.validate(message, COMPRESSED_IMAGE_SCHEMA)
+        jpeg = base64.b64decode(message["data"])
+        picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(jpeg))[0]
+        assert (picture.width, picture.height) == (320, 180)
+
+    info = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", str(out)],
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert info.returncode == 0, info.stderr
+    assert "video streams" in info.stdout
+    listed = info.stdout.split("video streams")[1]
+    line = next(x for x in listed.splitlines() if x.strip().startswith("/camera/main "))
+    assert "h264 640x360" in line and f"{len(video)} frames" in line and "0 gaps" in line
+
+
+def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+                "--camera-password", "s3cr3t-x",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "401 unauthorized: wrong user name or password" in done.stderr
+    found = messages(out)
+    assert len(found["/gimbal/attitude"]) >= 4  # the recording of the gimbal went on
+    assert "/camera/main" not in found
+    camera = camera_diagnostics(found)
+    failed = [m for m in camera if m["state"] == "connect_failed"]
+    assert failed and "401 unauthorized" in failed[0]["detail"]
+    assert "s3cr3t-x" not in json.dumps(camera)  # the password is never written down
+    retries = [m["retry_in_s"] for m in camera if m["state"] == "reconnecting"]
+    assert retries[:3] == [0.5, 1.0, 2.0]  # the backoff of tcp:
+
+
+def test_a_dropped_stream_is_a_link_diagnostic_and_comes_back_at_a_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory()
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "--duration", "9", "--video", "main",
+                "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(4)
+        camera.kill()  # power cut: no teardown, the link just drops
+        killed_at = time.time()
+        time.sleep(1)
+        rtsp_camera_factory("--port", str(camera.port))  # the camera is back
+        _, err = recorder.communicate(timeout=60)
+    assert recorder.returncode == 0, err
+    found = messages(out)
+    states = [m["state"] for m in camera_diagnostics(found)]
+    assert states[:2] == ["connecting", "connected"]
+    lost = states.index("lost")
+    assert "reconnecting" in states[lost:] and "connected" in states[lost + 1 :]
+    attitude = [t / 1e9 for t, _ in found["/gimbal/attitude"]]
+    assert any(t > killed_at + 1 for t in attitude)  # telemetry never stopped
+    video = found["/camera/main"]
+    times = [t / 1e9 for t, _ in video]
+    gap = max(range(1, len(times)), key=lambda i: times[i] - times[i - 1])
+    assert times[gap] - times[gap - 1] > 1.0 and times[gap] > killed_at
+    resumed = base64.b64decode(video[gap][1]["data"])
+    assert H264_IDR in [nal_type("h264", u) for u in split_nals(resumed)]
+    assert decode_all([m for _, m in video]) == len(video)
+
+
+def test_a_stream_with_b_frames_is_refused_in_words(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--bframes", "2")
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    refused = [m for m in camera_diagnostics(messages(out)) if m["state"] == "refused"]
+    assert len(refused) == 1 and "B-frames" in refused[0]["detail"]
+
+
+def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    import resource
+
+    limit = 400_000
+
+    def limit_size() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "20",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            tmp_path,
+            preexec_fn=limit_size,
+        )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith("gimbal-analyzer record: error: disk full: cannot write"), last
+    assert "Traceback" not in done.stderr
+    assert out.stat().st_size <= limit
+    found = messages(out)  # a finished file the mcap library reads
+    video = [m for _, m in found["/camera/main"]]
+    assert len(video) > 30 and decode_all(video) == len(video)
+
+
+def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(4)
+        started = time.monotonic()
+        recorder.send_signal(signal.SIGINT)
+        _, err = recorder.communicate(timeout=30)
+    assert time.monotonic() - started < 5  # the camera thread does not hold the exit up
+    assert recorder.returncode == 0, err
+    video = [m for _, m in messages(out)["/camera/main"]]
+    assert video and decode_all(video) == len(video)
