@@ -1,0 +1,152 @@
+"""Access units, parameter sets, frame times and --video specs, without a camera."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from analyzer.errors import UsageError
+from analyzer.video.annexb import (
+    H264,
+    START_CODE,
+    ParameterSets,
+    annex_b,
+    nal_type,
+    parameter_sets_from_extradata,
+    split_nals,
+)
+from analyzer.video.frame_clock import FrameClock, Stamp
+from analyzer.video.spec import parse_video_spec
+
+# SPS and PPS exactly as the test camera's x264 sends them (extradata of the RTSP stream).
+SPS = bytes.fromhex("6742c01eda0280bfe5c05a8303035280000003008000001e478b1750")
+PPS = bytes.fromhex("68ce3c80")
+IDR = bytes.fromhex("65888040") + bytes(range(1, 60))
+P_SLICE = bytes.fromhex("419a2020") + bytes(range(1, 40))
+AUD = bytes.fromhex("0910")
+
+# A NAL unit never holds 00 00 00/01/02/03 (emulation prevention) nor ends with 00.
+nal_units = st.binary(min_size=1, max_size=64).filter(
+    lambda b: b"\x00\x00" not in b and not b.endswith(b"\x00")
+)
+
+
+@given(st.lists(nal_units, max_size=8), st.sampled_from([b"\x00\x00\x01", START_CODE]))
+def test_split_nals_gives_back_the_units_it_was_made_of(units: list[bytes], code: bytes) -> None:
+    assert split_nals(b"".join(code + u for u in units)) == units
+
+
+@given(st.binary(max_size=300))
+def test_any_bytes_split_without_an_error_and_without_losing_payload(data: bytes) -> None:
+    units = split_nals(data)
+    assert sum(len(u) for u in units) <= len(data)
+    assert all(units)
+    for unit in units:
+        assert unit in data
+
+
+@given(st.binary(max_size=200))
+def test_damaged_extradata_gives_what_it_can_never_an_error(data: bytes) -> None:
+    for codec in ("h264", "h265"):
+        for unit in parameter_sets_from_extradata(codec, data):
+            assert unit in data
+
+
+def test_parameter_sets_from_annex_b_and_avcc_extradata() -> None:
+    annexb = START_CODE + SPS + START_CODE + PPS
+    assert parameter_sets_from_extradata(H264, annexb) == [SPS, PPS]
+    avcc = (
+        bytes([1, SPS[1], SPS[2], SPS[3], 0xFF, 0xE1])
+        + len(SPS).to_bytes(2, "big")
+        + SPS
+        + bytes([1])
+        + len(PPS).to_bytes(2, "big")
+        + PPS
+    )
+    assert parameter_sets_from_extradata(H264, avcc) == [SPS, PPS]
+
+
+def test_a_keyframe_gets_the_parameter_sets_in_front_once_in_decoding_order() -> None:
+    params = ParameterSets(H264, [SPS, PPS])
+    # as x264 zerolatency + rtph264pay deliver it: slices with the sets repeated between them
+    data, key = annex_b(H264, [AUD, IDR, SPS, PPS, IDR], params)
+    assert key
+    assert [nal_type(H264, u) for u in split_nals(data)] == [9, 7, 8, 5, 5]
+    data, key = annex_b(H264, [P_SLICE], params)
+    assert not key and split_nals(data) == [P_SLICE]
+
+
+def test_frames_of_the_opening_burst_keep_the_stream_spacing() -> None:
+    clock: FrameClock[int] = FrameClock(settle_s=1.0)
+    out: list[tuple[float, int]] = []
+    t0 = 1_000.0
+    for n in range(30):  # one second of frames buffered by the camera, arriving at once
+        out += clock.add(Stamp(n / 30, t0 + 0.001 * n), n)
+    assert out == []  # held until the anchor is known
+    for n in range(30, 90):  # then live, each 40 ms after capture
+        out += clock.add(Stamp(n / 30, t0 - 1.0 + n / 30 + 0.04), n)
+    times = [t for t, _ in out]
+    assert [n for _, n in out] == list(range(len(out)))
+    steps = [b - a for a, b in itertools.pairwise(times)]
+    assert steps == pytest.approx([1 / 30] * len(steps), abs=1e-6)
+    assert times[0] == pytest.approx(t0 - 1.0 + 0.04, abs=1e-6)
+    assert clock.source == "arrival"
+
+
+def test_rtcp_wallclock_wins_for_held_and_later_frames() -> None:
+    clock: FrameClock[int] = FrameClock(settle_s=5.0)
+    out = clock.add(Stamp(0.0, 50.0), 0) + clock.add(Stamp(1 / 30, 50.01), 1)
+    out += clock.add(Stamp(2 / 30, 50.02, wallclock=40.0 + 2 / 30), 2)
+    assert [t for t, _ in out] == pytest.approx([40.0, 40.0 + 1 / 30, 40.0 + 2 / 30])
+    assert clock.source == "rtcp"
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(0, 1e4, allow_nan=False),
+            st.floats(0, 1e4, allow_nan=False),
+            st.none() | st.floats(0, 1e4, allow_nan=False),
+        ),
+        max_size=50,
+    )
+)
+def test_frame_times_never_go_back_and_no_frame_is_lost(
+    stamps: list[tuple[float, float, float | None]],
+) -> None:
+    clock: FrameClock[int] = FrameClock(settle_s=0.5)
+    out: list[tuple[float, int]] = []
+    for n, (stream_s, arrival, wallclock) in enumerate(stamps):
+        out += clock.add(Stamp(stream_s, arrival, wallclock), n)
+    out += clock.flush()
+    assert [n for _, n in out] == list(range(len(stamps)))
+    assert all(a < b for a, b in itertools.pairwise(t for t, _ in out))
+
+
+def test_video_specs_of_the_document_and_any_url() -> None:
+    main = parse_video_spec("main")
+    assert main.url == "rtsp://admin:admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype=0"
+    assert main.shown == "rtsp://admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype=0"
+    thermal = parse_video_spec("thermal", camera="127.0.0.1:8554", password="p@ss")
+    assert thermal.url.endswith("@127.0.0.1:8554/cam/realmonitor?channel=1&subtype=2")
+    assert "admin:p%40ss@" in thermal.url and "p%40ss" not in thermal.shown
+    front = parse_video_spec("front=rtsp://u:pw@10.0.0.9/live")
+    assert (front.name, front.url, front.shown) == (
+        "front",
+        "rtsp://u:pw@10.0.0.9/live",
+        "rtsp://u@10.0.0.9/live",
+    )
+
+
+@pytest.mark.parametrize("text", ["front", "x y=rtsp://h/p", "a=http://h/p", "a=rtsp:///p", "sub3"])
+def test_bad_video_specs_say_what_is_expected(text: str) -> None:
+    with pytest.raises(UsageError, match="--video"):
+        parse_video_spec(text)
+
+
+def test_bad_camera_address() -> None:
+    with pytest.raises(UsageError, match="--camera"):
+        parse_video_spec("main", camera="host:99999")
