@@ -15,6 +15,10 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
+IMAGE = "Image!gimbal-camera"
+# The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
+# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
+CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
 
 # Message paths the layout shows: (topic, field) pairs, checked against the schemas by tests.
 PLOT_SERIES = (
@@ -93,6 +97,7 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+        IMAGE: {"imageMode": {"imageTopic": CAMERA_THUMBNAIL_TOPIC}},
     }
     mosaic = {
         "direction": "row",
@@ -100,7 +105,12 @@ def layout() -> dict[str, Any]:
         "first": {
             "direction": "column",
             "splitPercentage": 55,
-            "first": MAP,
+            "first": {
+                "direction": "row",
+                "splitPercentage": 50,
+                "first": MAP,
+                "second": IMAGE,
+            },
             "second": {
                 "direction": "column",
                 "splitPercentage": 22,
