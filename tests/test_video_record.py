@@ -285,3 +285,22 @@ def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path
     assert recorder.returncode == 0, err
     video = [m for _, m in messages(out)["/camera/main"]]
     assert video and decode_all(video) == len(video)
+
+
+def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "demo.mcap"
+    done = subprocess.run(
+        [
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "4",
+            "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
+        ],
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    found = messages(out)
+    video = [m for _, m in found["/camera/bench"]]
+    assert video and decode_all(video) == len(video)
+    assert video[0]["frame_id"] == "camera_bench"
+    assert found["/gimbal/attitude"] and found["/camera/bench/thumbnail"]
