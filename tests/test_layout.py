@@ -23,7 +23,7 @@ PANEL_KEYS = {
     "StateTransitions": {"paths", "isSynced"},
     "RawMessages": {"topicPath", "diffTopicPath", "diffMethod", "diffEnabled"},
     "Table": {"topicPath"},
-    "Image": {"imageMode"},
+    "ImageViewPanel": {"cameraTopic", "enabledMarkerTopics", "mode", "synchronize"},
 }
 
 

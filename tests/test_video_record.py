@@ -6,6 +6,7 @@ import base64
 import itertools
 import json
 import os
+import re
 import signal
 import socket
 import statistics
@@ -293,8 +294,8 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     out = tmp_path / "demo.mcap"
     done = subprocess.run(
         [
-            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "4",
-            "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "5",
+            "--sluggish", "0.4", "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
         ],
         cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
     )  # fmt: skip
@@ -304,3 +305,21 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     assert video and decode_all(video) == len(video)
     assert video[0]["frame_id"] == "camera_bench"
     assert found["/gimbal/attitude"] and found["/camera/bench/thumbnail"]
+
+    # the flight report: a strip of thumbnails, and the picture nearest each failed command
+    page = tmp_path / "report.html"
+    done = subprocess.run(
+        [sys.executable, "-m", "analyzer", "report", str(out), "-o", str(page)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    text = page.read_text()
+    section = text.split("<h2>What the camera saw</h2>")[1].split("<h2>")[0]
+    pictures = re.findall(r'src="data:image/jpeg;base64,([^"]+)"', section)
+    strip = section.split('<div class="strip">')[1].split("</div>")[0].count("<img")
+    failed = section.split('<div class="seen">')[1].count("<img")
+    assert strip == len(found["/camera/bench/thumbnail"]) and failed >= 1  # sluggish: partial
+    assert len(pictures) == strip + failed
+    for jpeg in pictures:
+        picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(base64.b64decode(jpeg)))
+        assert picture[0].width == 320

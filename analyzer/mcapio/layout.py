@@ -15,7 +15,7 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
-IMAGE = "Image!gimbal-camera"
+IMAGE = "ImageViewPanel!gimbal-camera"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
 # CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
 CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
@@ -97,7 +97,16 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
-        IMAGE: {"imageMode": {"imageTopic": CAMERA_THUMBNAIL_TOPIC}},
+        IMAGE: {
+            "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
+            "enabledMarkerTopics": [],
+            "mode": "fit",
+            "pan": {"x": 0, "y": 0},
+            "rotation": 0,
+            "synchronize": False,
+            "transformMarkers": False,
+            "zoom": 1,
+        },
     }
     mosaic = {
         "direction": "row",
