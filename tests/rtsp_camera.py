@@ -55,7 +55,7 @@ def launch_line(args: argparse.Namespace, subtype: str) -> str:
             f"bitrate={args.bitrate}"
         )
     return (
-        f"( videotestsrc is-live=true pattern={PATTERNS[subtype]} "
+        f"( videotestsrc is-live=true pattern={args.pattern or PATTERNS[subtype]} "
         f"! video/x-raw,width={width},height={height},framerate={args.fps}/1 "
         '! timeoverlay font-desc="Sans 24" ! videoconvert '
         f"! {encoder} ! video/x-h264,profile=high "
@@ -71,6 +71,7 @@ def main() -> int:
     parser.add_argument("--gop", type=int, default=30, help="frames from keyframe to keyframe")
     parser.add_argument("--bitrate", type=int, default=800, help="kbit/s")
     parser.add_argument("--bframes", type=int, default=0, help="B-frames (a camera that has them)")
+    parser.add_argument("--pattern", default="", help="videotestsrc pattern of every stream")
     parser.add_argument("--user", default="admin")
     parser.add_argument("--password", default="admin")
     args = parser.parse_args()

@@ -29,25 +29,25 @@ def split_nals(data: bytes) -> list[bytes]:
 
     Bytes before the first start code (not Annex B) are returned as one unit, so nothing
     is lost; trailing zero bytes of a unit belong to the next start code and are cut."""
-    units: list[bytes] = []
-    n = len(data)
-    start = -1
-    i = 0
-    while i + 2 < n:
-        if data[i] == 0 and data[i + 1] == 0 and data[i + 2] == 1:
-            if start >= 0 or i > 0:
-                unit = data[max(start, 0) : i].rstrip(b"\x00")
-                if unit:
-                    units.append(unit)
-            i += 3
-            start = i
-            continue
-        i += 1
-    if start < 0:
+    find = data.find
+    pos = find(b"\x00\x00\x01")
+    if pos < 0:
         return [data] if data else []
-    if data[start:]:
-        units.append(data[start:])
-    return units
+    units: list[bytes] = []
+    lead = data[:pos].rstrip(b"\x00")
+    if lead:
+        units.append(lead)
+    start = pos + 3
+    while True:
+        end = find(b"\x00\x00\x01", start)
+        if end < 0:
+            if data[start:]:
+                units.append(data[start:])
+            return units
+        unit = data[start:end].rstrip(b"\x00")
+        if unit:
+            units.append(unit)
+        start = end + 3
 
 
 def nal_type(codec: str, unit: bytes) -> int:
