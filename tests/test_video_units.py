@@ -86,8 +86,12 @@ def test_frames_of_the_opening_burst_keep_the_stream_spacing() -> None:
     for n in range(30):  # one second of frames buffered by the camera, arriving at once
         out += clock.add(Stamp(n / 30, t0 + 0.001 * n), n)
     assert out == []  # held until the anchor is known
+    released_at = None
     for n in range(30, 90):  # then live, each 40 ms after capture
         out += clock.add(Stamp(n / 30, t0 - 1.0 + n / 30 + 0.04), n)
+        if out and released_at is None:
+            released_at = n
+    assert released_at is not None and released_at < 30 + 12  # about 0.3 s after the burst
     times = [t for t, _ in out]
     assert [n for _, n in out] == list(range(len(out)))
     steps = [b - a for a, b in itertools.pairwise(times)]

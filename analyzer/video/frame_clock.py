@@ -12,6 +12,10 @@ T = TypeVar("T")
 # times then say nothing about capture. Frames are held this long (seconds of arrival)
 # before the clock is anchored, unless an RTCP sender report gives the mapping first.
 SETTLE_S = 2.0
+# ... or until frames have come in the stream's own pace this long: the smallest delay
+# (arrival - stream time) has not dropped by more than STEADY_TOLERANCE_S since.
+STEADY_S = 0.3
+STEADY_TOLERANCE_S = 0.002
 TIME_SOURCE_RTCP = "rtcp"
 TIME_SOURCE_ARRIVAL = "arrival"
 
@@ -32,9 +36,10 @@ class FrameClock(Generic[T]):
     With RTCP sender reports, a frame's time is the sender's wallclock for its RTP
     timestamp (FFmpeg's producer reference time). Without them, time is the stream time
     plus an offset: the smallest ``arrival - stream time`` seen, i.e. the frame that came
-    with the least delay anchors the stream's own spacing to the local clock. Frames of
-    the first ``settle_s`` seconds are held back (``add`` returns nothing) until the
-    anchor is known, so the burst a camera sends when a stream opens keeps its spacing.
+    with the least delay anchors the stream's own spacing to the local clock. Frames are
+    held back (``add`` returns nothing) until the anchor is known: once frames have come
+    at the stream's own pace for ``STEADY_S`` (the burst a camera sends when a stream
+    opens is over), at most ``settle_s`` seconds; so the burst keeps its spacing.
     Times never go backwards.
     """
 
@@ -43,6 +48,8 @@ class FrameClock(Generic[T]):
         self.offset: float | None = None
         self.source = ""
         self._held: list[tuple[Stamp, T]] = []
+        self._smallest = float("inf")  # smallest arrival - stream time while held
+        self._steady_since = 0.0  # arrival time since when it has not dropped
         self._last = float("-inf")
 
     def add(self, stamp: Stamp, item: T) -> list[tuple[float, T]]:
@@ -52,8 +59,13 @@ class FrameClock(Generic[T]):
             self.source = TIME_SOURCE_RTCP
         elif self.offset is None:
             self._held.append((stamp, item))
+            delay = stamp.arrival - stamp.stream_s
+            if delay < self._smallest - STEADY_TOLERANCE_S:
+                self._steady_since = stamp.arrival
+            self._smallest = min(self._smallest, delay)
             first = self._held[0][0].arrival
-            if stamp.arrival - first < self.settle_s:
+            steady = len(self._held) > 2 and stamp.arrival - self._steady_since >= STEADY_S
+            if stamp.arrival - first < self.settle_s and not steady:
                 return []
             self.offset = min(s.arrival - s.stream_s for s, _ in self._held)
             self.source = TIME_SOURCE_ARRIVAL
