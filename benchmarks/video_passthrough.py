@@ -114,6 +114,12 @@ def main() -> int:
         recorder = VideoRecorder(sink, [stream])
         bare = BareDemux(spec.url)
         recorder.start()
+        # One client at a time into the shared media: gst-rtsp-server 1.22 can abort when a
+        # second client joins while the first one's media is still being prepared.
+        deadline = time.monotonic() + 15
+        while stream.state != "connected" and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.5)
         bare.start()
         written = {"frames": 0}
         writer_tid: list[int] = []
@@ -130,7 +136,11 @@ def main() -> int:
         driver.start()
         time.sleep(3.0)  # both connected and past the opening burst
         threads = {t.name: t.native_id for t in threading.enumerate() if t.native_id}
+        if f"video-{spec.name}" not in threads:
+            raise SystemExit(f"the recorder stopped: {stream.last_problem or stream.state}")
         recorder_tids = [threads[f"video-{spec.name}"], writer_tid[0], threads["mcap-flush"]]
+        if "bare-demux" not in threads:
+            raise SystemExit("the bare demux client could not connect to the test camera")
         bare_tid = threads["bare-demux"]
         frames0, packets0 = recorder.frames_written, bare.packets
         cpu0 = (sum(thread_cpu_s(t) for t in recorder_tids), thread_cpu_s(bare_tid))

@@ -323,3 +323,58 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     for jpeg in pictures:
         picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(base64.b64decode(jpeg)))
         assert picture[0].width == 320
+
+
+def test_a_recorder_killed_with_kill_9_leaves_video_that_decodes(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "-q", "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(4)
+        recorder.kill()
+        recorder.communicate(timeout=30)
+    found = messages(out)  # the flush every 0.5 s leaves an indexed file
+    video = [m for _, m in found["/camera/main"]]
+    assert len(video) > 30 and decode_all(video) == len(video)
+    assert found["/gimbal/attitude"]
+
+
+def test_timestamps_that_start_over_at_a_keyframe_are_anchored_again(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    # gst-rtsp-server restarts a shared live stream when a second client joins: the first
+    # client's timestamps start over at a new keyframe, as with a camera whose encoder
+    # restarts. Not B-frames: the recording goes on.
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "-q", "--duration", "7", "--video", "main",
+                "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(3)
+        viewer = av.open(rtsp_camera.url(0), options={"rtsp_transport": "tcp"}, timeout=5.0)
+        for n, _ in enumerate(viewer.demux(viewer.streams.video[0])):
+            if n > 30:
+                break
+        viewer.close()
+        _, err = recorder.communicate(timeout=60)
+    assert recorder.returncode == 0, err
+    found = messages(out)
+    states = [m["state"] for m in camera_diagnostics(found)]
+    assert "resync" in states and "refused" not in states
+    video = [m for _, m in found["/camera/main"]]
+    assert decode_all(video) == len(video)
+    stamps = [m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 for m in video]
+    steps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert min(steps) > 0 and max(steps) < 1.0

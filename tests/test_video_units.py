@@ -102,10 +102,20 @@ def test_frames_of_the_opening_burst_keep_the_stream_spacing() -> None:
 
 def test_rtcp_wallclock_wins_for_held_and_later_frames() -> None:
     clock: FrameClock[int] = FrameClock(settle_s=5.0)
-    out = clock.add(Stamp(0.0, 50.0), 0) + clock.add(Stamp(1 / 30, 50.01), 1)
-    out += clock.add(Stamp(2 / 30, 50.02, wallclock=40.0 + 2 / 30), 2)
+    out = clock.add(Stamp(0.0, 40.3), 0) + clock.add(Stamp(1 / 30, 40.31), 1)
+    out += clock.add(Stamp(2 / 30, 40.32, wallclock=40.0 + 2 / 30), 2)
     assert [t for t, _ in out] == pytest.approx([40.0, 40.0 + 1 / 30, 40.0 + 2 / 30])
     assert clock.source == "rtcp"
+
+
+def test_rtcp_times_far_from_the_local_clock_are_not_believed() -> None:
+    # a camera without NTP, or a sender report from before the stream restarted
+    clock: FrameClock[int] = FrameClock(settle_s=0.1)
+    out: list[tuple[float, int]] = []
+    for n in range(10):
+        out += clock.add(Stamp(n / 30, 1000.05 + n / 30, wallclock=900.0 + n / 30), n)
+    assert clock.source == "arrival"
+    assert out[0][0] == pytest.approx(1000.05, abs=1e-6)
 
 
 @given(

@@ -5,14 +5,16 @@ from __future__ import annotations
 import base64
 import json
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from analyzer.mcapio.channels import ROLE_KEY, time_ns
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
-from analyzer.video.rtsp_stream import VideoFrame, VideoStream
+
+if TYPE_CHECKING:  # the streams import PyAV; reading a recording does not need it
+    from analyzer.video.rtsp_stream import VideoFrame, VideoStream
 
 ROLE_VIDEO = "video"
 ROLE_THUMBNAIL = "thumbnail"
@@ -210,6 +212,8 @@ class VideoRecorder:
         for stream in self.streams:
             if stream.state == "connected" or not stream.state:
                 parts.append(f"{stream.spec.name} {stream.frames} frames")
+            elif stream.last_reason:
+                parts.append(f"{stream.spec.name} {stream.last_reason.split(':')[0]}")
             else:
                 parts.append(f"{stream.spec.name} {stream.state.replace('_', ' ')}")
         return "video: " + ", ".join(parts)

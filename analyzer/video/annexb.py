@@ -134,6 +134,7 @@ class AccessUnit:
     arrival: float
     wallclock: float | None = None  # capture time from an RTCP sender report, if any
     units: list[bytes] = field(default_factory=list)
+    restart: bool = False  # a keyframe whose timestamp went back: the camera started over
 
     def keyframe(self, codec: str) -> bool:
         return any(is_key_slice(codec, nal_type(codec, u)) for u in self.units)

@@ -16,6 +16,10 @@ SETTLE_S = 2.0
 # (arrival - stream time) has not dropped by more than STEADY_TOLERANCE_S since.
 STEADY_S = 0.3
 STEADY_TOLERANCE_S = 0.002
+# An RTCP time is believed when the frame arrived this soon after it (seconds): a camera
+# whose clock is not synchronised, or a sender report older than a restart of the
+# stream, gives times off by more, and the arrival anchor is used instead.
+RTCP_PLAUSIBLE = (-0.5, 1.5)
 TIME_SOURCE_RTCP = "rtcp"
 TIME_SOURCE_ARRIVAL = "arrival"
 
@@ -34,7 +38,8 @@ class FrameClock(Generic[T]):
     """Turns stream timestamps into capture times on the local (telemetry) clock.
 
     With RTCP sender reports, a frame's time is the sender's wallclock for its RTP
-    timestamp (FFmpeg's producer reference time). Without them, time is the stream time
+    timestamp (FFmpeg's producer reference time), when that agrees with the local clock
+    (the frame arrived within ``RTCP_PLAUSIBLE`` of it). Without them, time is the stream time
     plus an offset: the smallest ``arrival - stream time`` seen, i.e. the frame that came
     with the least delay anchors the stream's own spacing to the local clock. Frames are
     held back (``add`` returns nothing) until the anchor is known: once frames have come
@@ -43,18 +48,19 @@ class FrameClock(Generic[T]):
     Times never go backwards.
     """
 
-    def __init__(self, settle_s: float = SETTLE_S) -> None:
+    def __init__(self, settle_s: float = SETTLE_S, not_before: float = float("-inf")) -> None:
         self.settle_s = settle_s
         self.offset: float | None = None
         self.source = ""
         self._held: list[tuple[Stamp, T]] = []
         self._smallest = float("inf")  # smallest arrival - stream time while held
         self._steady_since = 0.0  # arrival time since when it has not dropped
-        self._last = float("-inf")
+        self._last = not_before  # times stay after this (the clock this one replaces)
 
     def add(self, stamp: Stamp, item: T) -> list[tuple[float, T]]:
         """Frames whose time is known now, as (capture time, item), in order."""
-        if stamp.wallclock is not None:
+        low, high = RTCP_PLAUSIBLE
+        if stamp.wallclock is not None and low <= stamp.arrival - stamp.wallclock <= high:
             self.offset = stamp.wallclock - stamp.stream_s
             self.source = TIME_SOURCE_RTCP
         elif self.offset is None:
@@ -74,6 +80,11 @@ class FrameClock(Generic[T]):
             self.offset = min(self.offset, stamp.arrival - stamp.stream_s)
         self._held.append((stamp, item))
         return list(self._release())
+
+    @property
+    def last(self) -> float:
+        """The newest time given out."""
+        return self._last
 
     def flush(self) -> list[tuple[float, T]]:
         """The end of the stream: held frames get the best anchor there is."""

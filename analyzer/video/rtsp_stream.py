@@ -106,6 +106,7 @@ class VideoStream:
         self.connections = 0
         self.state = ""
         self.last_problem = ""  # the last failure in words (for the final summary)
+        self.last_reason = ""  # ... and its reason alone (for the status line)
         self._frames: deque[VideoFrame] = deque()
         self._events: deque[Event] = deque()
         self._queued_bytes = 0
@@ -153,6 +154,7 @@ class VideoStream:
             try:
                 got_frames = self._session()
             except StreamRefused as exc:
+                self.last_reason = "refused: B-frames" if "B-frames" in str(exc) else "refused"
                 self._link(f"{shown}: {exc}; not recorded", STATE_REFUSED)
                 return
             except Exception as exc:  # every failure is reported and retried
@@ -161,7 +163,8 @@ class VideoStream:
                 lost = self.connections and self.state == "connected"
                 state = "lost" if lost else "connect_failed"
                 verb = "connection lost" if state == "lost" else f"cannot open {shown}"
-                self._link(f"{verb}: {describe_error(exc)}", state)
+                self.last_reason = describe_error(exc)
+                self._link(f"{verb}: {self.last_reason}", state)
             else:
                 if self._stopping.is_set():
                     break
@@ -201,14 +204,27 @@ class VideoStream:
             params = ParameterSets(codec, initial)
             clock: FrameClock[tuple[bytes, bool]] = FrameClock()
             got = False
+
+            def queue(timed: list[tuple[float, tuple[bytes, bool]]]) -> bool:
+                size = (codec, ctx.width, ctx.height)
+                return any([self._queue(t, data, key, *size) for t, (data, key) in timed])
+
             for unit in assembler.units(container.demux(stream), self._stopping):
+                if unit.restart:  # timestamps start over: a new anchor for the clock
+                    got = queue(clock.flush()) or got
+                    clock = FrameClock(not_before=clock.last)
+                    self._link(
+                        "the stream's timestamps went back at a keyframe (the camera restarted "
+                        "it); capture times anchored again",
+                        "resync",
+                    )
                 data, key = annex_b(codec, unit.units, params)
-                stamp = Stamp(unit.pts * assembler.time_base, unit.arrival, unit.wallclock)  # type: ignore[operator]
-                for when, (frame_data, is_key) in clock.add(stamp, (data, key)):
-                    got = self._queue(when, frame_data, is_key, codec, ctx.width, ctx.height) or got
-            for when, (frame_data, is_key) in clock.flush():
-                got = self._queue(when, frame_data, is_key, codec, ctx.width, ctx.height) or got
-            return got
+                stream_s = (unit.pts or 0) * assembler.time_base
+                got = (
+                    queue(clock.add(Stamp(stream_s, unit.arrival, unit.wallclock), (data, key)))
+                    or got
+                )
+            return queue(clock.flush()) or got
         finally:
             container.close()
 
@@ -301,7 +317,9 @@ class _Assembler:
                 unit.pts = following - self.interval
             else:
                 unit.pts = 0
-        if last is not None and unit.pts < last:
+        if last is not None and unit.pts < last and unit.keyframe(self.codec):
+            unit.restart = True  # the camera restarted its stream (not a reordered frame)
+        elif last is not None and unit.pts < last:
             raise StreamRefused(
                 "the stream has B-frames (frames out of order), which Foxglove cannot play; "
                 "set the camera's encoder to no B-frames (baseline profile)"
