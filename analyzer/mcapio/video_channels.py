@@ -184,7 +184,7 @@ class VideoRecorder:
 
     def stop(self) -> None:
         for stream in self.streams:
-            stream._stopping.set()
+            stream.request_stop()
         for stream in self.streams:
             stream.stop()
 

@@ -10,6 +10,8 @@ from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from mcap.reader import McapReader
+
 from analyzer import timefmt
 from analyzer.mcapio.channels import ROLE_KEY
 from analyzer.mcapio.video_channels import (
@@ -42,6 +44,22 @@ class VideoSummary:
         return (self.frames - 1) / span if self.frames > 1 and span > 0 else 0.0
 
 
+def _camera_topics(reader: McapReader) -> list[str] | None:
+    """The camera channels' topics from the summary (None: no summary, read everything)."""
+    try:
+        summary = reader.get_summary()
+    except Exception:  # an unfinished file: its messages are read in order instead
+        return None
+    if summary is None:
+        return None
+    names = (COMPRESSED_VIDEO, COMPRESSED_IMAGE)
+    return [
+        channel.topic
+        for channel in summary.channels.values()
+        if channel.schema_id in summary.schemas and summary.schemas[channel.schema_id].name in names
+    ]
+
+
 def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
     """Every camera stream of a recording: codec, size, frames, rate and gaps."""
     from mcap.reader import make_reader
@@ -50,7 +68,10 @@ def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
     times: dict[str, list[float]] = {}
     with open(path, "rb") as f:
         reader = make_reader(f)
-        for schema, channel, message in reader.iter_messages():
+        topics = _camera_topics(reader)
+        if topics == []:
+            return []
+        for schema, channel, message in reader.iter_messages(topics=topics):
             role = channel.metadata.get(ROLE_KEY, "")
             if schema is None or schema.name not in (COMPRESSED_VIDEO, COMPRESSED_IMAGE):
                 continue
@@ -66,6 +87,7 @@ def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
             summary.frames += 1
             times.setdefault(channel.topic, []).append(message.publish_time / 1e9)  # capture time
     for topic, stamps in times.items():
+        stamps.sort()
         summary = out[topic]
         summary.first, summary.last = stamps[0], stamps[-1]
         if len(stamps) > 2:
@@ -94,7 +116,10 @@ def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
 
     with open(path, "rb") as f:
         reader = make_reader(f)
-        for schema, channel, message in reader.iter_messages():
+        topics = _camera_topics(reader)
+        if topics == []:
+            return
+        for schema, channel, message in reader.iter_messages(topics=topics):
             if schema is None or schema.name != COMPRESSED_IMAGE:
                 continue
             if not channel.topic.startswith(TOPIC_PREFIX):

@@ -121,6 +121,10 @@ class VideoStream:
     def start(self) -> None:
         self._thread.start()
 
+    def request_stop(self) -> None:
+        """Ask the thread to end (returns at once; ``stop`` waits for it)."""
+        self._stopping.set()
+
     def stop(self, timeout: float = READ_TIMEOUT_S + 2) -> None:
         self._stopping.set()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -160,7 +164,7 @@ class VideoStream:
             except Exception as exc:  # every failure is reported and retried
                 if self._stopping.is_set():
                     break
-                lost = self.connections and self.state == "connected"
+                lost = self.connections and self.state in ("connected", "resync")
                 state = "lost" if lost else "connect_failed"
                 verb = "connection lost" if state == "lost" else f"cannot open {shown}"
                 self.last_reason = describe_error(exc)
@@ -272,12 +276,14 @@ class _Assembler:
     picture start) are merged; a missing pts is filled from the frame interval; a pts
     going back (B-frames) refuses the stream."""
 
-    def __init__(self, codec: str, stream: Any, rate: float) -> None:
+    def __init__(self, codec: str, stream: av.video.stream.VideoStream, rate: float) -> None:
         self.codec = codec
         self.time_base = float(stream.time_base or 1 / 90000)
         self.interval = max(1, round(1 / (rate or 30) / self.time_base))
 
-    def units(self, packets: Iterator[Any], stopping: threading.Event) -> Iterator[AccessUnit]:
+    def units(
+        self, packets: Iterator[av.Packet], stopping: threading.Event
+    ) -> Iterator[AccessUnit]:
         pending: AccessUnit | None = None
         last_pts: int | None = None
         for packet in packets:
@@ -338,7 +344,7 @@ def _starts_picture(codec: str, units: list[bytes]) -> bool:
     return True
 
 
-def _wallclock(packet: Any) -> float | None:
+def _wallclock(packet: av.Packet) -> float | None:
     """The capture time FFmpeg derived from the camera's RTCP sender reports, if any."""
     for side in packet.iter_sidedata():
         if side.data_type == "prft":
