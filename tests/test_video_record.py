@@ -155,6 +155,13 @@ def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
     listed = info.stdout.split("video streams")[1]
     line = next(x for x in listed.splitlines() if x.strip().startswith("/camera/main "))
     assert "h264 640x360" in line and f"{len(video)} frames" in line and "0 gaps" in line
+    as_json = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", "--json", str(out)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    (stream,) = json.loads(as_json.stdout)["video_streams"]
+    assert stream["topic"] == "/camera/main" and stream["frames"] == len(video)
+    assert stream["fps"] == pytest.approx(30, abs=0.5) and stream["gaps"] == []
 
 
 def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(

@@ -9,6 +9,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from analyzer.errors import UsageError
+from analyzer.mcapio.schema_subset import foxglove_problems
+from analyzer.mcapio.video_channels import (
+    COMPRESSED_IMAGE_SCHEMA,
+    COMPRESSED_VIDEO_SCHEMA,
+    message_json,
+)
 from analyzer.video.annexb import (
     H264,
     START_CODE,
@@ -164,3 +170,33 @@ def test_bad_video_specs_say_what_is_expected(text: str) -> None:
 def test_bad_camera_address() -> None:
     with pytest.raises(UsageError, match="--camera"):
         parse_video_spec("main", camera="host:99999")
+
+
+@given(st.lists(st.binary(min_size=1, max_size=40), max_size=10))
+def test_any_units_make_an_access_unit_without_losing_a_picture_unit(units: list[bytes]) -> None:
+    params = ParameterSets(H264)
+    data, _ = annex_b(H264, units, params)
+    kept = split_nals(data)
+    for unit in units:
+        if nal_type(H264, unit) not in (7, 8, 9):  # sets and AUD are written once
+            assert unit.rstrip(b"\x00") in data or not unit.rstrip(b"\x00")
+    assert len(kept) <= len(units) + len(params.units()) + 1
+
+
+def test_camera_schemas_are_foxglove_s_and_in_the_subset_it_reads() -> None:
+    import json
+
+    import jsonschema
+
+    for schema in (COMPRESSED_VIDEO_SCHEMA, COMPRESSED_IMAGE_SCHEMA):
+        assert foxglove_problems(schema) == []
+        assert set(schema["properties"]) == {"timestamp", "frame_id", "data", "format"}
+    message = json.loads(message_json("main", 1_795_527_000.25, b"\x00\x00\x00\x01\x65", "h264"))
+    jsonschema.validate(message, COMPRESSED_VIDEO_SCHEMA)
+    stamp = message.pop("timestamp")
+    assert stamp["sec"] == 1_795_527_000 and abs(stamp["nsec"] - 250_000_000) < 1_000
+    assert message == {
+        "frame_id": "camera_main",
+        "data": "AAAAAWU=",
+        "format": "h264",
+    }
