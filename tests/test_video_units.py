@@ -200,3 +200,23 @@ def test_camera_schemas_are_foxglove_s_and_in_the_subset_it_reads() -> None:
         "data": "AAAAAWU=",
         "format": "h264",
     }
+
+
+def test_a_camera_link_change_leaves_the_telemetry_link_state_alone() -> None:
+    from analyzer.commands.record import LinkWatch
+    from analyzer.pipeline import Batch
+    from analyzer.protocol.types import LINK, diagnostic
+    from analyzer.tui.state import MonitorState
+
+    telemetry = diagnostic(1.0, "tcp", LINK, "connected to 127.0.0.1:2000", state="connected")
+    camera = diagnostic(
+        2.0, "camera/main", LINK, "cannot open rtsp://...: 401 unauthorized", state="connect_failed"
+    )
+    batch = Batch([], [telemetry, camera], 2.0)
+    state = MonitorState()
+    state.fold(batch)
+    watch = LinkWatch()
+    watch.handle(batch)
+    assert (state.link_state, state.link_detail) == ("connected", "connected to 127.0.0.1:2000")
+    assert state.counters.errors == 0
+    assert watch.status.state == "connected" and not watch.status.failing
