@@ -54,12 +54,14 @@ def launch_line(args: argparse.Namespace, subtype: str) -> str:
             f"x264enc tune=zerolatency speed-preset=ultrafast key-int-max={args.gop} "
             f"bitrate={args.bitrate}"
         )
+    if args.config_interval == 0:  # parameter sets only in the SDP, as some cameras do
+        encoder += " option-string=repeat-headers=0"
     return (
         f"( videotestsrc is-live=true pattern={args.pattern or PATTERNS[subtype]} "
         f"! video/x-raw,width={width},height={height},framerate={args.fps}/1 "
         '! timeoverlay font-desc="Sans 24" ! videoconvert '
         f"! {encoder} ! video/x-h264,profile=high "
-        "! rtph264pay name=pay0 pt=96 config-interval=-1 )"
+        f"! rtph264pay name=pay0 pt=96 config-interval={args.config_interval} )"
     )
 
 
@@ -71,6 +73,12 @@ def main() -> int:
     parser.add_argument("--gop", type=int, default=30, help="frames from keyframe to keyframe")
     parser.add_argument("--bitrate", type=int, default=800, help="kbit/s")
     parser.add_argument("--bframes", type=int, default=0, help="B-frames (a camera that has them)")
+    parser.add_argument(
+        "--config-interval",
+        type=int,
+        default=-1,
+        help="SPS/PPS in the stream: -1 before every keyframe (default), 0 only in the SDP",
+    )
     parser.add_argument("--pattern", default="", help="videotestsrc pattern of every stream")
     parser.add_argument("--user", default="admin")
     parser.add_argument("--password", default="admin")

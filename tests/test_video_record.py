@@ -385,3 +385,28 @@ def test_timestamps_that_start_over_at_a_keyframe_are_anchored_again(
     stamps = [m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 for m in video]
     steps = [b - a for a, b in itertools.pairwise(stamps)]
     assert min(steps) > 0 and max(steps) < 1.0
+
+
+def test_parameter_sets_sent_only_in_the_sdp_go_in_front_of_every_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--config-interval", "0")  # SPS/PPS only in the SDP
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    video = [m for _, m in messages(out)["/camera/main"]]
+    kinds = [[nal_type("h264", u) for u in split_nals(base64.b64decode(m["data"]))] for m in video]
+    keyframes = [i for i, k in enumerate(kinds) if H264_IDR in k]
+    assert len(keyframes) >= 2
+    for i in keyframes:
+        assert kinds[i][:3] == [9, H264_SPS, 8]  # AUD, SPS, PPS, then the slices
+    # a player may start at any keyframe (seeking): each decodes without what came before
+    for i in keyframes:
+        assert decode_all(video[i:]) == len(video) - i
