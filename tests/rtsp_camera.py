@@ -56,12 +56,17 @@ def launch_line(args: argparse.Namespace, subtype: str) -> str:
         )
     if args.config_interval == 0:  # parameter sets only in the SDP, as some cameras do
         encoder += " option-string=repeat-headers=0"
+    coded = f"{encoder} ! video/x-h264,profile=high ! rtph264pay"
+    if args.codec == "h265":
+        coded = (
+            f"x265enc tune=zerolatency speed-preset=ultrafast key-int-max={args.gop} "
+            f"bitrate={args.bitrate} ! video/x-h265 ! rtph265pay"
+        )
     return (
         f"( videotestsrc is-live=true pattern={args.pattern or PATTERNS[subtype]} "
         f"! video/x-raw,width={width},height={height},framerate={args.fps}/1 "
         '! timeoverlay font-desc="Sans 24" ! videoconvert '
-        f"! {encoder} ! video/x-h264,profile=high "
-        f"! rtph264pay name=pay0 pt=96 config-interval={args.config_interval} )"
+        f"! {coded} name=pay0 pt=96 config-interval={args.config_interval} )"
     )
 
 
@@ -69,6 +74,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--port", default="0", help="TCP port (default: a free one)")
     parser.add_argument("--size", default="640x360")
+    parser.add_argument("--codec", choices=("h264", "h265"), default="h264")
     parser.add_argument("--fps", type=int, default=30)
     parser.add_argument("--gop", type=int, default=30, help="frames from keyframe to keyframe")
     parser.add_argument("--bitrate", type=int, default=800, help="kbit/s")

@@ -85,7 +85,7 @@ def messages(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
 
 def decode_all(frames: list[dict[str, Any]]) -> int:
     """Pictures PyAV decodes from the messages, fed one message per packet as a player does."""
-    decoder = av.CodecContext.create(frames[0]["format"], "r")
+    decoder = av.CodecContext.create({"h264": "h264", "h265": "hevc"}[frames[0]["format"]], "r")
     decoded = 0
     for frame in frames:
         decoded += len(decoder.decode(av.Packet(base64.b64decode(frame["data"]))))
@@ -408,5 +408,31 @@ def test_parameter_sets_sent_only_in_the_sdp_go_in_front_of_every_keyframe(
     for i in keyframes:
         assert kinds[i][:3] == [9, H264_SPS, 8]  # AUD, SPS, PPS, then the slices
     # a player may start at any keyframe (seeking): each decodes without what came before
+    for i in keyframes:
+        assert decode_all(video[i:]) == len(video) - i
+
+
+def test_an_h265_camera_is_recorded_with_vps_sps_pps_before_every_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--codec", "h265")  # x265: later keyframes are bare CRAs
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    video = [m for _, m in messages(out)["/camera/main"]]
+    assert {m["format"] for m in video} == {"h265"}
+    assert messages(out)["/camera/main/thumbnail"]  # decoded from an H.265 keyframe
+    kinds = [[nal_type("h265", u) for u in split_nals(base64.b64decode(m["data"]))] for m in video]
+    keyframes = [i for i, k in enumerate(kinds) if any(16 <= n <= 23 for n in k)]
+    assert keyframes[0] == 0 and len(keyframes) >= 2
+    for i in keyframes:
+        assert kinds[i][:3] == [32, 33, 34]  # VPS, SPS, PPS first
     for i in keyframes:
         assert decode_all(video[i:]) == len(video) - i

@@ -8,13 +8,14 @@ from typing import cast
 import av
 
 THUMBNAIL_WIDTH = 320
+DECODERS = {"h264": "h264", "h265": "hevc"}  # Foxglove's format names -> FFmpeg's decoders
 
 
 def jpeg_thumbnail(codec: str, access_unit: bytes, width: int = THUMBNAIL_WIDTH) -> bytes | None:
     """A JPEG of the keyframe in ``access_unit`` (Annex B with its parameter sets), at most
     ``width`` pixels wide; None when it does not decode."""
     try:
-        decoder = cast(av.VideoCodecContext, av.CodecContext.create(codec, "r"))
+        decoder = cast(av.VideoCodecContext, av.CodecContext.create(DECODERS[codec], "r"))
         frames = [*decoder.decode(av.Packet(access_unit)), *decoder.decode(None)]
         if not frames:
             return None
@@ -28,6 +29,6 @@ def jpeg_thumbnail(codec: str, access_unit: bytes, width: int = THUMBNAIL_WIDTH)
         encoder.pix_fmt = "yuvj420p"
         encoder.time_base = Fraction(1, 25)
         packets = [*encoder.encode(small), *encoder.encode(None)]
-    except (av.error.FFmpegError, ValueError):
+    except (av.error.FFmpegError, ValueError, KeyError):
         return None
     return bytes(packets[0]) if packets else None
