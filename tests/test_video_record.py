@@ -436,3 +436,35 @@ def test_an_h265_camera_is_recorded_with_vps_sps_pps_before_every_keyframe(
         assert kinds[i][:3] == [32, 33, 34]  # VPS, SPS, PPS first
     for i in keyframes:
         assert decode_all(video[i:]) == len(video) - i
+
+
+def test_a_full_video_queue_drops_up_to_a_keyframe_and_says_so(rtsp_camera: Any) -> None:
+    from analyzer.protocol.types import Event
+    from analyzer.video.rtsp_stream import VideoFrame, VideoStream
+    from analyzer.video.spec import parse_video_spec
+
+    spec = parse_video_spec("main", camera=f"127.0.0.1:{rtsp_camera.port}")
+    stream = VideoStream(spec, max_frames=10, thumbnail_interval=0)
+    stream.start()
+    frames: list[VideoFrame] = []
+    events: list[Event] = []
+    try:
+        time.sleep(3)  # nobody takes the frames: the queue of 10 fills up
+        for _ in range(40):
+            got, news = stream.take()
+            frames += got
+            events += news
+            time.sleep(0.05)
+    finally:
+        stream.stop()
+    assert stream.dropped > 30
+    overflow = [e for e in events if e.fields["state"] == "overflow"]
+    assert len(overflow) == 1 and f"{stream.dropped} video frame(s) dropped" in str(
+        overflow[0].fields["detail"]
+    )
+    gap = next(i for i in range(1, len(frames)) if frames[i].time - frames[i - 1].time > 0.1)
+    assert gap == 10 and frames[gap].keyframe  # the queue's 10, then a keyframe
+    decoded = decode_all(
+        [{"format": f.codec, "data": base64.b64encode(f.data).decode()} for f in frames]
+    )
+    assert decoded == len(frames)

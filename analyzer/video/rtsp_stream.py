@@ -102,7 +102,9 @@ class VideoStream:
         self.max_frames = max_frames
         self.max_bytes = max_bytes
         self.frames = 0  # frames queued for the recording
-        self.dropped = 0
+        self.dropped = 0  # frames lost because the queue was full (reported)
+        self.skipped = 0  # frames before the first keyframe of a connection
+        self._overflowed = False
         self.connections = 0
         self.state = ""
         self.last_problem = ""  # the last failure in words (for the final summary)
@@ -235,7 +237,9 @@ class VideoStream:
     def _queue(
         self, when: float, data: bytes, key: bool, codec: str, width: int, height: int
     ) -> bool:
-        if self._need_key and not key:
+        """Queue one frame for the recorder; False when it was not queued."""
+        if self._need_key and not key and not self._overflowed:
+            self.skipped += 1  # the start of a connection: wait for a keyframe
             return False
         thumbnail = None
         interval = self.thumbnail_interval
@@ -249,18 +253,18 @@ class VideoStream:
                 self._frames and self._queued_bytes + len(data) > self.max_bytes
             )
             if full or (self._need_key and not key):
+                # after a drop, delta frames are useless until the next keyframe
                 self.dropped += 1
-                self._need_key = True  # a delta frame without its predecessors is useless
-                dropped = True
-            else:
-                if self._need_key and self.dropped:
-                    self._events.append(self._overflow())
-                self._need_key = False
-                self._frames.append(frame)
-                self._queued_bytes += len(data)
-                self.frames += 1
-                dropped = False
-        return not dropped
+                self._need_key = self._overflowed = True
+                return False
+            if self._overflowed:
+                self._events.append(self._overflow())  # where the gap is: before this frame
+                self._overflowed = False
+            self._need_key = False
+            self._frames.append(frame)
+            self._queued_bytes += len(data)
+            self.frames += 1
+        return True
 
     def _overflow(self) -> Event:
         return link_event(
