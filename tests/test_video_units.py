@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import pytest
 from hypothesis import given
@@ -220,3 +221,24 @@ def test_a_camera_link_change_leaves_the_telemetry_link_state_alone() -> None:
     assert (state.link_state, state.link_detail) == ("connected", "connected to 127.0.0.1:2000")
     assert state.counters.errors == 0
     assert watch.status.state == "connected" and not watch.status.failing
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--source", "tcp:2000", "--video", "bogus"], "--video bogus: expected main, sub1"),
+        (["--source", "tcp:2000", "--video", "main", "--video", "main"], "given twice"),
+        (["--source", "tcp:2000", "--video", "main", "--camera", "h:0"], "--camera h:0"),
+        (["--source", "file:x.log", "--video", "main"], "a file: replay has the times"),
+        (["--source", "tcp:2000", "--video", "main", "--thumbnail-interval", "-1"], "0 (none)"),
+    ],
+)
+def test_record_refuses_wrong_video_options_before_starting(
+    args: list[str], words: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.cli import main
+
+    out = tmp_path / "x.mcap"
+    assert main(["record", *args, "-o", str(out)]) == 2
+    assert words in capsys.readouterr().err
+    assert not out.exists()

@@ -42,6 +42,7 @@ Examples:
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap
   gimbal-analyzer record --source tcp:192.168.42.200:2000 -o bench.mcap --duration 600
   gimbal-analyzer record --source proxy:2000->192.168.42.200:2000 -o gs.mcap --tui
+  gimbal-analyzer record --source tcp:192.168.42.200:2000 -o flight.mcap --video main
 """
 
 STATUS_INTERVAL_TTY = 0.5
@@ -223,8 +224,12 @@ def run(args: argparse.Namespace) -> int:
             "record --tui needs a terminal; leave out --tui to record with a status line "
             "on standard error"
         )
-    video_specs(args)  # a wrong --video is a usage error before anything starts
     inputs = _input_files(args.source)
+    if video_specs(args) and inputs:  # a wrong --video is a usage error before anything starts
+        raise UsageError(
+            "--video records a live camera next to a live source; a file: replay has the "
+            "times of its recording"
+        )
     target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
     run_app: Any = None
