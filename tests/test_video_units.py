@@ -242,3 +242,31 @@ def test_record_refuses_wrong_video_options_before_starting(
     assert main(["record", *args, "-o", str(out)]) == 2
     assert words in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_camera_that_refuses_the_connection_is_said_in_words_and_retried() -> None:
+    import socket
+    import time
+
+    from analyzer.video.rtsp_stream import VideoStream
+
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    spec = parse_video_spec(f"front=rtsp://admin:s3cr3t@127.0.0.1:{port}/live")
+    stream = VideoStream(spec, backoff_initial=0.1)
+    stream.start()
+    time.sleep(1.0)
+    stream.stop()
+    _, events = stream.take()
+    details = [str(e.fields["detail"]) for e in events]
+    failed = [d for d in details if d.startswith("cannot open")]
+    assert (
+        failed
+        and failed[0] == f"cannot open rtsp://admin@127.0.0.1:{port}/live: connection refused"
+    )
+    assert [e.fields["retry_in_s"] for e in events if e.fields["state"] == "reconnecting"][:2] == [
+        0.1,
+        0.2,
+    ]
+    assert all("s3cr3t" not in d for d in details)

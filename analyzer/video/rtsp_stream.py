@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import struct
 import threading
 import time
@@ -38,6 +39,7 @@ OPEN_TIMEOUT_S = 5.0
 READ_TIMEOUT_S = 5.0
 STATE_REFUSED = "refused"
 _PRFT = struct.Struct("<q")
+_CREDENTIALS = re.compile(r"(rtsps?://[^:/@\s]*):[^@\s]*@")
 
 
 @dataclass(slots=True)
@@ -69,6 +71,7 @@ def describe_error(exc: BaseException) -> str:
     if isinstance(exc, av.error.ExitError | TimeoutError):
         return "timed out (no answer / no data)"
     text = getattr(exc, "strerror", None) or str(exc) or exc.__class__.__name__
+    text = _CREDENTIALS.sub(r"\1@", text)  # FFmpeg's messages may name the URL: no password
     return text[:1].lower() + text[1:] if text[:2] != text[:2].upper() else text
 
 
