@@ -235,7 +235,7 @@ def test_a_stream_with_b_frames_is_refused_in_words(
     with gimbal() as port:
         done = record(
             [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
                 "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
             ],
             tmp_path,
@@ -285,7 +285,7 @@ def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path
             ],
             cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
         )  # fmt: skip
-        time.sleep(4)
+        time.sleep(3)
         started = time.monotonic()
         recorder.send_signal(signal.SIGINT)
         _, err = recorder.communicate(timeout=30)
@@ -344,7 +344,7 @@ def test_a_recorder_killed_with_kill_9_leaves_video_that_decodes(
             ],
             cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
         )  # fmt: skip
-        time.sleep(4)
+        time.sleep(3)
         recorder.kill()
         recorder.communicate(timeout=30)
     found = messages(out)  # the flush every 0.5 s leaves an indexed file
@@ -395,7 +395,7 @@ def test_parameter_sets_sent_only_in_the_sdp_go_in_front_of_every_keyframe(
     with gimbal() as port:
         done = record(
             [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
                 "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
             ],
             tmp_path,
@@ -420,7 +420,7 @@ def test_an_h265_camera_is_recorded_with_vps_sps_pps_before_every_keyframe(
     with gimbal() as port:
         done = record(
             [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "4",
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
                 "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
             ],
             tmp_path,
