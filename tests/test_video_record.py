@@ -23,6 +23,7 @@ import jsonschema
 import pytest
 from mcap.reader import make_reader
 
+from analyzer.mcapio.reader import Recording
 from analyzer.mcapio.video_channels import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
 from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 
@@ -270,9 +271,19 @@ def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
     assert last.startswith("gimbal-analyzer record: error: disk full: cannot write"), done.stderr
     assert "Traceback" not in done.stderr
     assert out.stat().st_size <= limit
-    found = messages(out)  # a finished file the mcap library reads
-    video = [m for _, m in found["/camera/main"]]
+    kept = int(last.split("; ")[-1].split(" messages up to ")[0])
+    # Read as every command reads it: finished with a summary when the freed space
+    # allowed, else the complete chunks, recovered.
+    recording = Recording(out)
+    assert sum(1 for _ in recording.messages()) == kept
+    video = [json.loads(m.data) for m in recording.messages(topics={"/camera/main"})]
     assert len(video) > 10 and decode_all(video) == len(video), done.stderr
+    info = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", str(out)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert info.returncode == 0, info.stderr
+    assert "h264 640x360" in info.stdout and f" {len(video)} frames" in info.stdout
 
 
 def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path) -> None:

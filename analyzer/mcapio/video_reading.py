@@ -10,18 +10,21 @@ from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from mcap.reader import McapReader
-
 from analyzer import timefmt
-from analyzer.mcapio.channels import ROLE_KEY
-from analyzer.mcapio.video_channels import (
-    COMPRESSED_IMAGE,
-    COMPRESSED_VIDEO,
-    ROLE_VIDEO,
-    TOPIC_PREFIX,
-)
+from analyzer.mcapio.video_channels import ROLE_THUMBNAIL, ROLE_VIDEO, TOPIC_PREFIX
 
 GAP_FACTOR = 3.0  # frames further apart than this many frame intervals are a gap
+
+
+@dataclass(frozen=True, slots=True)
+class _Message:
+    """A camera message: topic, channel role, capture time, format and decoded data."""
+
+    topic: str
+    role: str
+    time: float
+    format: str
+    data: bytes
 
 
 @dataclass(slots=True)
@@ -44,48 +47,39 @@ class VideoSummary:
         return (self.frames - 1) / span if self.frames > 1 and span > 0 else 0.0
 
 
-def _camera_topics(reader: McapReader) -> list[str] | None:
-    """The camera channels' topics from the summary (None: no summary, read everything)."""
-    try:
-        summary = reader.get_summary()
-    except Exception:  # an unfinished file: its messages are read in order instead
-        return None
-    if summary is None:
-        return None
-    names = (COMPRESSED_VIDEO, COMPRESSED_IMAGE)
-    return [
-        channel.topic
-        for channel in summary.channels.values()
-        if channel.schema_id in summary.schemas and summary.schemas[channel.schema_id].name in names
-    ]
+def _camera_messages(path: str | os.PathLike[str], roles: set[str]) -> Iterator[_Message]:
+    """The camera messages of a recording with their JSON, through the project's reader (a
+    recording cut short by a full disk or ``kill -9`` is recovered like for every command)."""
+    from analyzer.mcapio.reader import Recording
+
+    for message in Recording(path).messages(roles=roles):
+        try:
+            obj = json.loads(message.data)
+            stamp = obj["timestamp"]
+            when = int(stamp["sec"]) + int(stamp["nsec"]) / 1e9
+            data = base64.b64decode(obj["data"])
+        except (ValueError, KeyError, TypeError):
+            continue  # not a message of ours: nothing to show
+        yield _Message(message.topic, message.role, when, str(obj.get("format", "")), data)
 
 
 def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
     """Every camera stream of a recording: codec, size, frames, rate and gaps."""
-    from mcap.reader import make_reader
+    from analyzer.video.thumbnail import picture_size
 
     out: dict[str, VideoSummary] = {}
     times: dict[str, list[float]] = {}
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        topics = _camera_topics(reader)
-        if topics == []:
-            return []
-        for schema, channel, message in reader.iter_messages(topics=topics):
-            role = channel.metadata.get(ROLE_KEY, "")
-            if schema is None or schema.name not in (COMPRESSED_VIDEO, COMPRESSED_IMAGE):
-                continue
-            if schema.name == COMPRESSED_IMAGE:
-                base = channel.topic.removesuffix("/thumbnail")
-                out.setdefault(base, VideoSummary(base)).thumbnails += 1
-                continue
-            summary = out.setdefault(channel.topic, VideoSummary(channel.topic))
-            if role == ROLE_VIDEO and not summary.codec:
-                summary.codec = channel.metadata.get("codec", "")
-                summary.width = int(channel.metadata.get("width", "0") or 0)
-                summary.height = int(channel.metadata.get("height", "0") or 0)
-            summary.frames += 1
-            times.setdefault(channel.topic, []).append(message.publish_time / 1e9)  # capture time
+    for message in _camera_messages(path, {ROLE_VIDEO, ROLE_THUMBNAIL}):
+        if message.role == ROLE_THUMBNAIL:
+            base = message.topic.removesuffix("/thumbnail")
+            out.setdefault(base, VideoSummary(base)).thumbnails += 1
+            continue
+        summary = out.setdefault(message.topic, VideoSummary(message.topic))
+        if not summary.width:  # the size of the first picture that decodes
+            summary.codec = message.format
+            summary.width, summary.height = picture_size(message.format, message.data)
+        summary.frames += 1
+        times.setdefault(message.topic, []).append(message.time)
     for topic, stamps in times.items():
         stamps.sort()
         summary = out[topic]
@@ -111,26 +105,10 @@ class Thumbnail:
 
 
 def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
-    """The thumbnails of every camera stream, in file order."""
-    from mcap.reader import make_reader
-
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        topics = _camera_topics(reader)
-        if topics == []:
-            return
-        for schema, channel, message in reader.iter_messages(topics=topics):
-            if schema is None or schema.name != COMPRESSED_IMAGE:
-                continue
-            if not channel.topic.startswith(TOPIC_PREFIX):
-                continue
-            try:
-                obj = json.loads(message.data)
-                jpeg = base64.b64decode(obj["data"])
-            except (ValueError, KeyError, TypeError):
-                continue
-            name = channel.topic[len(TOPIC_PREFIX) :].removesuffix("/thumbnail")
-            yield Thumbnail(name, message.publish_time / 1e9, jpeg)
+    """The thumbnails of every camera stream, in file order (times: capture times)."""
+    for message in _camera_messages(path, {ROLE_THUMBNAIL}):
+        name = message.topic.removeprefix(TOPIC_PREFIX).removesuffix("/thumbnail")
+        yield Thumbnail(name, message.time, message.data)
 
 
 def video_lines(path: str | os.PathLike[str]) -> list[str]:

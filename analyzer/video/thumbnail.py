@@ -32,3 +32,13 @@ def jpeg_thumbnail(codec: str, access_unit: bytes, width: int = THUMBNAIL_WIDTH)
     except (av.error.FFmpegError, ValueError, KeyError):
         return None
     return bytes(packets[0]) if packets else None
+
+
+def picture_size(codec: str, access_unit: bytes) -> tuple[int, int]:
+    """Width and height of the picture in ``access_unit`` ((0, 0) when it does not decode)."""
+    try:
+        decoder = cast(av.VideoCodecContext, av.CodecContext.create(DECODERS[codec], "r"))
+        frames = [*decoder.decode(av.Packet(access_unit)), *decoder.decode(None)]
+    except (av.error.FFmpegError, ValueError, KeyError):
+        return 0, 0
+    return (frames[0].width, frames[0].height) if frames else (0, 0)
