@@ -23,6 +23,7 @@ PANEL_KEYS = {
     "StateTransitions": {"paths", "isSynced"},
     "RawMessages": {"topicPath", "diffTopicPath", "diffMethod", "diffEnabled"},
     "Table": {"topicPath"},
+    "ImageViewPanel": {"cameraTopic", "enabledMarkerTopics", "mode", "synchronize"},
 }
 
 

@@ -28,6 +28,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_GPS,
     Event,
 )
+from analyzer.video.spec import add_video_options
 
 HELP = "see the whole tool work with no hardware: simulated gimbal, live decode, demo.mcap"
 DESCRIPTION = """\
@@ -89,6 +90,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_compression_argument(parser)
     add_heading_argument(parser)
     add_foxglove_options(parser)
+    add_video_options(parser)  # a camera on the bench recorded next to the simulated gimbal
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
     parser.set_defaults(**DEMO_FAULTS)
@@ -181,7 +183,10 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
+    from analyzer.video.recording import video_recorder
+    from analyzer.video.spec import video_specs
 
+    video_specs(args)  # a wrong --video is a usage error before anything starts
     tui = not args.no_tui and sys.stdin.isatty() and sys.stdout.isatty()
     run_app: Any = None
     if tui:
@@ -223,8 +228,12 @@ def run(args: argparse.Namespace) -> int:
             live.close()
         raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    sinks = [s for s in (sink, printer, live) if s is not None]
-    capture = Capture(source, sinks, stages=analysis_stages())
+    video = video_recorder(args, sink)
+    sinks: list[Any] = [s for s in (video, sink, printer, live) if s is not None]
+    stages = [*analysis_stages(), *([video.stage] if video else [])]
+    capture = Capture(source, sinks, stages=stages)
+    if video is not None:
+        video.start()
     try:
         scene = Scene(spec, config)
     except BaseException:
@@ -277,6 +286,8 @@ def run(args: argparse.Namespace) -> int:
         if timer is not None:
             timer.cancel()
         scene.stop()
+        if video is not None:
+            video.stop()
         if capture.running:
             capture.stop()
             capture.join()

@@ -134,10 +134,18 @@ def render(info: RecordingInfo) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.mcapio.info import recording_info
+    from analyzer.mcapio.video_channels import COMPRESSED_VIDEO
+    from analyzer.mcapio.video_reading import video_dicts, video_lines
 
     info = recording_info(args.recording, scan=args.scan)
+    has_video = any(t.schema == COMPRESSED_VIDEO for t in info.topics)
     if args.json:
-        print(json.dumps(info.to_dict(), indent=2))
+        out = info.to_dict()
+        if has_video:
+            out["video_streams"] = video_dicts(args.recording)
+        print(json.dumps(out, indent=2))
     else:
         print(render(info))
+        if has_video:
+            print("\n".join(printable(line) for line in video_lines(args.recording)))
     return 0

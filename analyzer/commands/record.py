@@ -17,6 +17,8 @@ from analyzer.link_status import LinkStatus
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
+from analyzer.video.recording import is_camera_event, video_summary
+from analyzer.video.spec import add_video_options
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
 DESCRIPTION = """\
@@ -44,6 +46,7 @@ Examples:
   gimbal-analyzer record --source proxy:2000->192.168.42.200:2000 -o gs.mcap --tui
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap --foxglove
                                 watch it live in Foxglove too (ws://127.0.0.1:8765)
+  gimbal-analyzer record --source tcp:192.168.42.200:2000 -o flight.mcap --video main
 """
 
 STATUS_INTERVAL_TTY = 0.5
@@ -69,6 +72,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true", help="no status line")
     add_compression_argument(parser)
     add_foxglove_options(parser)
+    add_video_options(parser)
     parser.add_argument(
         "-f",
         "--force",
@@ -108,7 +112,7 @@ class LinkWatch:
         self.status = LinkStatus()
 
     def handle(self, batch: Batch) -> None:
-        self.status.fold(batch.events)
+        self.status.fold(e for e in batch.events if not is_camera_event(e))
 
     def close(self) -> None:
         pass
@@ -140,6 +144,7 @@ class StatusLine:
         self.interval = STATUS_INTERVAL_TTY if self.tty else STATUS_INTERVAL_LOG
         self.capture: Any = None
         self.notes: list[Callable[[], str]] = []  # more parts (the live server's)
+        self.video: Any = None  # a VideoRecorder: its streams are shown too
         self._next = time.monotonic() + self.interval
         self._width = 0
         self._link_shown = ""
@@ -155,6 +160,8 @@ class StatusLine:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
         parts.append(f"{stats.events} events")
         parts.append(f"{stats.diagnostics} diagnostics")
+        if self.video is not None:
+            parts.append(self.video.words())
         if stats.dropped:  # the capture fell behind: say so where the user looks
             parts.append(f"{stats.dropped} DROPPED")
         parts += [text for note in self.notes if (text := note())]
@@ -221,6 +228,8 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
+    from analyzer.video.recording import video_recorder
+    from analyzer.video.spec import video_specs
 
     if args.duration is not None and not args.duration > 0:
         raise UsageError("--duration must be a positive number of seconds")
@@ -230,6 +239,11 @@ def run(args: argparse.Namespace) -> int:
             "on standard error"
         )
     inputs = _input_files(args.source)
+    if video_specs(args) and inputs:  # a wrong --video is a usage error before anything starts
+        raise UsageError(
+            "--video records a live camera next to a live source; a file: replay has the "
+            "times of its recording"
+        )
     target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
     run_app: Any = None
@@ -258,18 +272,23 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
         raise
+    video = video_recorder(args, sink)
     link = LinkWatch()
-    sinks: list[Any] = [sink, link] if live is None else [sink, link, live]
+    sinks: list[Any] = [s for s in (video, sink, link, live) if s is not None]
     status = None
     if not args.quiet and not args.tui:
         address = getattr(source, "address", None)
         waiting = f"connecting to {address}" if address else "waiting for data"
         status = StatusLine(sys.stderr, path, link, waiting)
         status.notes.append(lambda: foxglove_note(live))
+        status.video = video
         sinks.append(status)
     if args.print and not args.tui:
         sinks.append(EventPrinter(sys.stdout))
-    capture = Capture(source, sinks, stages=analysis_stages())
+    stages = [*analysis_stages(), *([video.stage] if video is not None else [])]
+    capture = Capture(source, sinks, stages=stages)
+    if video is not None:
+        video.start()
     if status is not None:
         status.capture = capture
     timer: threading.Timer | None = None
@@ -297,6 +316,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if timer is not None:
             timer.cancel()
+        if video is not None:
+            video.stop()
         if capture.running:
             capture.stop()
             capture.join()
@@ -323,6 +344,8 @@ def run(args: argparse.Namespace) -> int:
         )
         if live is not None:
             print(foxglove_summary(live), file=sys.stderr)
+    if video is not None and not args.quiet:
+        print(f"{video_summary(video)}", file=sys.stderr)
     if nothing_received:
         # A live source that delivered nothing is a failed capture (exit 1), not a
         # success: say why we think nothing came (the last link message).

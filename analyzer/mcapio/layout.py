@@ -15,6 +15,10 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
+IMAGE = "ImageViewPanel!gimbal-camera"
+# The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
+# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
+CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
 
 # Message paths the layout shows: (topic, field) pairs, checked against the schemas by tests.
 PLOT_SERIES = (
@@ -93,6 +97,16 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+        IMAGE: {
+            "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
+            "enabledMarkerTopics": [],
+            "mode": "fit",
+            "pan": {"x": 0, "y": 0},
+            "rotation": 0,
+            "synchronize": False,
+            "transformMarkers": False,
+            "zoom": 1,
+        },
     }
     mosaic = {
         "direction": "row",
@@ -100,7 +114,12 @@ def layout() -> dict[str, Any]:
         "first": {
             "direction": "column",
             "splitPercentage": 55,
-            "first": MAP,
+            "first": {
+                "direction": "row",
+                "splitPercentage": 50,
+                "first": MAP,
+                "second": IMAGE,
+            },
             "second": {
                 "direction": "column",
                 "splitPercentage": 22,

@@ -175,6 +175,20 @@ class McapSink:
                 self._stop_after(exc)
                 self._raise_pending()
 
+    def write_with(self, write: Callable[[ChunkedWriter], None]) -> None:
+        """Run ``write`` on the file's writer under the sink's lock, for channels other
+        modules own (camera video); a write error stops the recording as ``handle`` does."""
+        with self._lock:
+            if self._closed:
+                self._raise_pending()
+                return
+            try:
+                write(self._writer)
+                self._dirty = True
+            except OSError as exc:
+                self._stop_after(exc)
+                self._raise_pending()
+
     def flush(self) -> None:
         """Close the open chunk and push everything to the operating system."""
         with self._lock:

@@ -62,6 +62,7 @@ class ReportData:
     feedback_times: list[float] = field(default_factory=list)  # attitude and ranging
     findings: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    pictures: list[Any] = field(default_factory=list)  # camera thumbnails (report.camera)
 
     def add(self, event: Event) -> None:
         t, topic, fields = event.time, event.topic, event.fields

@@ -10,6 +10,7 @@ from typing import Any
 
 from analyzer import __version__, timefmt
 from analyzer.analysis.findings import VERDICTS
+from analyzer.report import camera
 from analyzer.report.collect import MAX_ROWS, ReportData, thin
 
 CHART_JS = "chart.umd.min.js"  # Chart.js 4.6.1, MIT (vendor/chart.js-LICENSE.md)
@@ -218,6 +219,7 @@ def render(data: ReportData, settings: str) -> str:
         _plot("plot-track", has["track"], "no UAV GPS position (0x0000FF15) in this input", True),
         "<h2>Responses</h2>",
         _responses(data),
+        camera.camera_section(data.pictures, data.findings),
         "<h2>Diagnostics</h2>",
         _diagnostics(data),
     ]
@@ -227,7 +229,7 @@ def render(data: ReportData, settings: str) -> str:
             '<html lang="en"><head><meta charset="utf-8">',
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
             f"<title>{_e(title)}</title>",
-            f"<style>{CSS}</style>",
+            f"<style>{CSS}{camera.CSS if data.pictures else ''}</style>",
             "</head><body>",
             *sections,
             f'<script id="report-data" type="application/json">{payload}</script>',

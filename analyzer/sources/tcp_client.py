@@ -7,6 +7,7 @@ import time
 from typing import Any
 
 from analyzer.protocol.types import FROM_IDU, StreamChunk
+from analyzer.sources.backoff import Backoff
 from analyzer.sources.base import QueuedSource, link_event
 from analyzer.sources.netutil import address, close_quietly, enable_keepalive, error_text
 
@@ -51,7 +52,7 @@ class TcpClientSource(QueuedSource):
         self._put(link_event(self.source_name, detail, state, peer=self.address, **extra))
 
     def _run(self) -> None:
-        delay = self.backoff_initial
+        backoff = Backoff(self.backoff_initial, self.backoff_max)
         while not self._stopping.is_set():
             try:
                 sock = socket.create_connection((self.host, self.port), self.connect_timeout)
@@ -70,11 +71,11 @@ class TcpClientSource(QueuedSource):
                     break
                 self._link(f"connection lost: {reason}", "lost")
                 if got_data:
-                    delay = self.backoff_initial
+                    backoff.reset()
+            delay = backoff.failed()
             self._link(f"reconnecting in {delay:.1f} s", "reconnecting", retry_in_s=delay)
             if self._stopping.wait(delay):
                 break
-            delay = min(delay * 2, self.backoff_max)
 
     def _receive(self, sock: socket.socket) -> tuple[bool, str]:
         enable_keepalive(sock)

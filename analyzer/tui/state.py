@@ -41,6 +41,7 @@ from analyzer.protocol.types import (
     CanFrame,
     Event,
 )
+from analyzer.video.recording import is_camera_event
 
 LOG_LIMIT = 2000  # entries kept per log view
 HISTORY = 60  # seconds of frames/s and errors/s kept for the sparklines
@@ -430,9 +431,10 @@ class MonitorState:
                 total.kinds[kind] += 1
                 counters.kinds[kind] += 1
                 if kind == LINK:
-                    self.link.note(event)
-                    self.link_state = self.link.state
-                    self.link_detail = self.link.detail
+                    if not is_camera_event(event):  # the status bar is the telemetry's link
+                        self.link.note(event)
+                        self.link_state = self.link.state
+                        self.link_detail = self.link.detail
                 else:
                     self._window_errors += 1
             elif topic == TOPIC_UAV_GPS:

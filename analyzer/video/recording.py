@@ -1,0 +1,49 @@
+"""The video part of a recording command: streams from the options, attached to the capture."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from analyzer.protocol.types import Event
+from analyzer.video.spec import DEFAULT_THUMBNAIL_S, video_specs
+
+if TYPE_CHECKING:
+    from analyzer.mcapio.video_channels import VideoRecorder
+    from analyzer.mcapio.writer import McapSink
+
+CAMERA_SOURCE_PREFIX = "camera/"
+
+
+def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | None:
+    """The recorder of the ``--video`` streams into ``mcap`` (None without ``--video``).
+
+    Put ``recorder`` first among the capture's sinks and ``recorder.stage`` among its
+    stages; ``recorder.start()`` when the capture starts, ``recorder.stop()`` at the end."""
+    specs = video_specs(args)
+    if not specs:
+        return None
+    from analyzer.mcapio.video_channels import VideoRecorder
+    from analyzer.video.rtsp_stream import VideoStream
+
+    interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
+    streams = [VideoStream(spec, thumbnail_interval=interval or 0.0) for spec in specs]
+    return VideoRecorder(mcap, streams)
+
+
+def is_camera_event(event: Event) -> bool:
+    """A diagnostic of a camera stream (not of the telemetry link)."""
+    return event.source.startswith(CAMERA_SOURCE_PREFIX)
+
+
+def video_summary(recorder: VideoRecorder) -> str:
+    """The last word on the video: frames per stream, drops, and the stream's last problem."""
+    parts = []
+    for stream in recorder.streams:
+        words = f"/camera/{stream.spec.name}: {stream.frames} frames"
+        if stream.dropped:
+            words += f" ({stream.dropped} dropped)"
+        if not stream.frames and stream.last_problem:
+            words += f" (last link message: {stream.last_problem})"
+        parts.append(words)
+    return "video " + "; ".join(parts)

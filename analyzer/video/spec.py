@@ -1,0 +1,145 @@
+"""`--video SPEC` / `--camera HOST[:PORT]`: which RTSP streams to record, by the document's name."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from dataclasses import dataclass
+from urllib.parse import quote, unquote, urlsplit, urlunsplit
+
+from analyzer.errors import UsageError
+
+# Vendor document section 1.3: the camera's address and its RTSP streams.
+DEFAULT_CAMERA = "192.168.42.108:554"
+DEFAULT_RTSP_PORT = 554
+DEFAULT_USER = "admin"
+DEFAULT_PASSWORD = "admin"
+DOCUMENT_PATH = "/cam/realmonitor?channel=1&subtype={subtype}"
+STREAMS = {"main": 0, "sub1": 1, "sub2": 2, "thermal": 2}
+DEFAULT_THUMBNAIL_S = 2.0
+_NAME = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
+
+
+@dataclass(frozen=True, slots=True)
+class VideoSpec:
+    """One stream to record: ``name`` gives the topic ``/camera/NAME``; ``url`` has the
+    credentials in it (for the demuxer); ``shown`` is the URL without the password."""
+
+    name: str
+    url: str
+    shown: str
+
+
+def add_video_options(parser: argparse.ArgumentParser) -> None:
+    """The video options of ``record`` (and any command that records)."""
+    group = parser.add_argument_group(
+        "camera video",
+        "Record the camera's RTSP streams into the same file, time-aligned with the "
+        "telemetry (copied as sent, never re-encoded). Examples:\n"
+        "  --video main                      the main stream at 192.168.42.108:554\n"
+        "  --video main --video thermal      two streams\n"
+        "  --video main --camera 10.0.0.5    another camera address\n"
+        "  --video front=rtsp://user:pw@10.0.0.9/live   any RTSP URL, topic /camera/front",
+    )
+    group.add_argument(
+        "--video",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="main, sub1, sub2, thermal (the document's streams at --camera) or NAME=rtsp://...; "
+        "repeatable. Each goes to /camera/NAME (foxglove.CompressedVideo) and "
+        "/camera/NAME/thumbnail (JPEG, foxglove.CompressedImage)",
+    )
+    group.add_argument(
+        "--camera",
+        default=DEFAULT_CAMERA,
+        metavar="HOST[:PORT]",
+        help=f"the camera of main/sub1/sub2/thermal (default {DEFAULT_CAMERA})",
+    )
+    group.add_argument("--camera-user", default=None, metavar="USER", help="default admin")
+    group.add_argument("--camera-password", default=None, metavar="PASSWORD", help="default admin")
+    group.add_argument(
+        "--thumbnail-interval",
+        type=float,
+        default=DEFAULT_THUMBNAIL_S,
+        metavar="S",
+        help=f"a JPEG thumbnail from a keyframe every S seconds (default {DEFAULT_THUMBNAIL_S:g}; "
+        "0: none)",
+    )
+
+
+def video_specs(args: argparse.Namespace) -> list[VideoSpec]:
+    """The streams the options ask for (UsageError with the reason when one is wrong)."""
+    interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
+    if interval is not None and interval < 0:
+        raise UsageError("--thumbnail-interval must be 0 (none) or a positive number of seconds")
+    specs = [
+        parse_video_spec(
+            text,
+            camera=args.camera,
+            user=args.camera_user,
+            password=args.camera_password,
+        )
+        for text in getattr(args, "video", [])
+    ]
+    names = [spec.name for spec in specs]
+    for name in names:
+        if names.count(name) > 1:
+            raise UsageError(f"--video {name} is given twice (each stream needs its own name)")
+    return specs
+
+
+def parse_video_spec(
+    text: str,
+    *,
+    camera: str = DEFAULT_CAMERA,
+    user: str | None = None,
+    password: str | None = None,
+) -> VideoSpec:
+    """``main`` / ``sub1`` / ``sub2`` / ``thermal`` at ``camera``, or ``NAME=rtsp://...``."""
+    if "=" in text.split("://", 1)[0]:
+        name, url = text.split("=", 1)
+        if not _NAME.match(name):
+            raise UsageError(f"--video {text}: the name must be letters, digits, - or _")
+        parts = urlsplit(url)
+        if parts.scheme not in ("rtsp", "rtsps") or not parts.hostname:
+            raise UsageError(
+                f"--video {text}: expected NAME=rtsp://[USER:PASSWORD@]HOST[:PORT]/PATH"
+            )
+        return _spec(name, url, user, password)
+    subtype = STREAMS.get(text)
+    if subtype is None:
+        raise UsageError(
+            f"--video {text}: expected main, sub1, sub2, thermal or NAME=rtsp://... (see --help)"
+        )
+    host, port = _camera_address(camera)
+    url = f"rtsp://{host}:{port}{DOCUMENT_PATH.format(subtype=subtype)}"
+    return _spec(text, url, user or DEFAULT_USER, password or DEFAULT_PASSWORD)
+
+
+def _camera_address(camera: str) -> tuple[str, int]:
+    host, sep, port = camera.rpartition(":")
+    if not sep or "]" in port:  # no port, or a bare IPv6 address
+        host, port = camera, str(DEFAULT_RTSP_PORT)
+    host = host.strip("[]")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise UsageError(f"--camera {camera}: expected HOST or HOST:PORT")
+    return (f"[{host}]" if ":" in host else host), int(port)
+
+
+def _spec(name: str, url: str, user: str | None, password: str | None) -> VideoSpec:
+    parts = urlsplit(url)
+    url_user = unquote(parts.username) if parts.username else None
+    url_password = unquote(parts.password) if parts.password else None
+    user = user or url_user
+    password = password or url_password
+    host = parts.hostname or ""
+    host = f"[{host}]" if ":" in host else host
+    where = f"{host}:{parts.port}" if parts.port else host
+    auth = ""
+    if user:
+        auth = quote(user, safe="") + (":" + quote(password, safe="") if password else "") + "@"
+    full = urlunsplit((parts.scheme, auth + where, parts.path, parts.query, ""))
+    named = quote(user, safe="") + "@" if user else ""
+    shown = urlunsplit((parts.scheme, named + where, parts.path, parts.query, ""))
+    return VideoSpec(name, full, shown)

@@ -1,0 +1,481 @@
+"""`record --video`: a real RTSP camera (gst-rtsp-server) recorded next to a simulated gimbal."""
+
+from __future__ import annotations
+
+import base64
+import itertools
+import json
+import os
+import re
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import av
+import jsonschema
+import pytest
+from mcap.reader import make_reader
+
+from analyzer.mcapio.reader import Recording
+from analyzer.mcapio.video_channels import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
+from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
+
+ROOT = Path(__file__).resolve().parent.parent
+FRAME_INTERVAL = 1 / 30
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _env() -> dict[str, str]:
+    return dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(ROOT))
+
+
+@contextmanager
+def gimbal() -> Iterator[int]:
+    """The simulated gimbal on a loopback TCP port (attitude feedback every 500 ms)."""
+    port = free_port()
+    args = ["simulate", "--on", f"tcp:127.0.0.1:{port}", "--quiet", "--duration", "60"]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "analyzer", *args], env=_env(), stdout=subprocess.DEVNULL
+    )
+    try:
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            try:
+                socket.create_connection(("127.0.0.1", port), 0.2).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        yield port
+    finally:
+        process.terminate()
+        process.wait(10)
+
+
+def record(args: list[str], cwd: Path, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "analyzer", "record", *args],
+        cwd=cwd,
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=90,
+        **kwargs,
+    )
+
+
+def messages(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
+    """Every message by topic (log time ns, JSON), read with the mcap library."""
+    out: dict[str, list[tuple[int, dict[str, Any]]]] = {}
+    with path.open("rb") as f:
+        for _, channel, message in make_reader(f).iter_messages():
+            out.setdefault(channel.topic, []).append((message.log_time, json.loads(message.data)))
+    return out
+
+
+def decode_all(frames: list[dict[str, Any]]) -> int:
+    """Pictures PyAV decodes from the messages, fed one message per packet as a player does."""
+    decoder = av.CodecContext.create({"h264": "h264", "h265": "hevc"}[frames[0]["format"]], "r")
+    decoded = 0
+    for frame in frames:
+        decoded += len(decoder.decode(av.Packet(base64.b64decode(frame["data"]))))
+    return decoded + len(decoder.decode(None))
+
+
+def camera_diagnostics(found: dict[str, list[tuple[int, dict[str, Any]]]]) -> list[dict[str, Any]]:
+    return [m for _, m in found.get("/diagnostics", []) if m["source"] == "camera/main"]
+
+
+def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "6",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "/camera/main: " in done.stderr
+    found = messages(out)
+    video = [m for _, m in found["/camera/main"]]
+    assert len(video) > 90  # 6 s at 30 fps, less the opening
+    for message in video:
+        jsonschema.validate(message, COMPRESSED_VIDEO_SCHEMA)
+        assert message["format"] == "h264" and message["frame_id"] == "camera_main"
+    first = [nal_type("h264", u) for u in split_nals(base64.b64decode(video[0]["data"]))]
+    assert first.index(H264_SPS) < first.index(H264_IDR)  # a keyframe with its SPS first
+    assert decode_all(video) == len(video)  # every message is exactly one picture
+
+    # capture times: the stream's spacing, on the telemetry's clock
+    stamps = [m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 for m in video]
+    steps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert statistics.median(steps) == pytest.approx(FRAME_INTERVAL, abs=0.002)
+    assert max(steps) < 4 * FRAME_INTERVAL and min(steps) > 0
+    # The log time is the capture time, raised to the end of the last chunk on disk for
+    # a frame that arrived after it (the writer keeps the file in log-time order).
+    log_times = [t / 1e9 for t, _ in found["/camera/main"]]
+    late = [log - stamp for log, stamp in zip(log_times, stamps, strict=True)]
+    assert min(late) > -1e-6 and statistics.median(late[-60:]) < 0.1
+    attitude = [t / 1e9 for t, _ in found["/gimbal/attitude"]]
+    assert len(attitude) >= 8
+    overlap = min(attitude[-1], stamps[-1]) - max(attitude[0], stamps[0])
+    assert overlap > 3.0  # both cover the same seconds of the run
+
+    thumbnails = [m for _, m in found["/camera/main/thumbnail"]]
+    assert 2 <= len(thumbnails) <= 4  # one every 2 s
+    for message in thumbnails:
+        jsonschema.validate(message, COMPRESSED_IMAGE_SCHEMA)
+        jpeg = base64.b64decode(message["data"])
+        picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(jpeg))[0]
+        assert (picture.width, picture.height) == (320, 180)
+
+    info = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", str(out)],
+        env=_env(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert info.returncode == 0, info.stderr
+    assert "video streams" in info.stdout
+    listed = info.stdout.split("video streams")[1]
+    line = next(x for x in listed.splitlines() if x.strip().startswith("/camera/main "))
+    assert "h264 640x360" in line and f"{len(video)} frames" in line and "0 gaps" in line
+    as_json = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", "--json", str(out)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    (stream,) = json.loads(as_json.stdout)["video_streams"]
+    assert stream["topic"] == "/camera/main" and stream["frames"] == len(video)
+    assert stream["fps"] == pytest.approx(30, abs=0.5) and stream["gaps"] == []
+
+
+def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+                "--camera-password", "s3cr3t-x",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "401 unauthorized: wrong user name or password" in done.stderr
+    found = messages(out)
+    assert len(found["/gimbal/attitude"]) >= 4  # the recording of the gimbal went on
+    assert "/camera/main" not in found
+    camera = camera_diagnostics(found)
+    failed = [m for m in camera if m["state"] == "connect_failed"]
+    assert failed and "401 unauthorized" in failed[0]["detail"]
+    assert "s3cr3t-x" not in json.dumps(camera)  # the password is never written down
+    retries = [m["retry_in_s"] for m in camera if m["state"] == "reconnecting"]
+    assert retries[:3] == [0.5, 1.0, 2.0]  # the backoff of tcp:
+
+
+def test_a_dropped_stream_is_a_link_diagnostic_and_comes_back_at_a_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory()
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "--duration", "9", "--video", "main",
+                "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(4)
+        camera.kill()  # power cut: no teardown, the link just drops
+        killed_at = time.time()
+        time.sleep(1)
+        rtsp_camera_factory("--port", str(camera.port))  # the camera is back
+        _, err = recorder.communicate(timeout=60)
+    assert recorder.returncode == 0, err
+    found = messages(out)
+    states = [m["state"] for m in camera_diagnostics(found)]
+    assert states[:2] == ["connecting", "connected"]
+    lost = states.index("lost")
+    assert "reconnecting" in states[lost:] and "connected" in states[lost + 1 :]
+    attitude = [t / 1e9 for t, _ in found["/gimbal/attitude"]]
+    assert any(t > killed_at + 1 for t in attitude)  # telemetry never stopped
+    video = found["/camera/main"]
+    times = [t / 1e9 for t, _ in video]
+    gap = max(range(1, len(times)), key=lambda i: times[i] - times[i - 1])
+    assert times[gap] - times[gap - 1] > 1.0 and times[gap] > killed_at
+    resumed = base64.b64decode(video[gap][1]["data"])
+    assert H264_IDR in [nal_type("h264", u) for u in split_nals(resumed)]
+    assert decode_all([m for _, m in video]) == len(video)
+
+
+def test_a_stream_with_b_frames_is_refused_in_words(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--bframes", "2")
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    refused = [m for m in camera_diagnostics(messages(out)) if m["state"] == "refused"]
+    assert len(refused) == 1 and "B-frames" in refused[0]["detail"]
+
+
+def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    import resource
+
+    limit = 400_000
+
+    def limit_size() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "20",
+                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            tmp_path,
+            preexec_fn=limit_size,
+        )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith("gimbal-analyzer record: error: disk full: cannot write"), done.stderr
+    assert "Traceback" not in done.stderr
+    assert out.stat().st_size <= limit
+    kept = int(last.split("; ")[-1].split(" messages up to ")[0])
+    # Read as every command reads it: finished with a summary when the freed space
+    # allowed, else the complete chunks, recovered.
+    recording = Recording(out)
+    assert sum(1 for _ in recording.messages()) == kept
+    video = [json.loads(m.data) for m in recording.messages(topics={"/camera/main"})]
+    assert len(video) > 10 and decode_all(video) == len(video), done.stderr
+    info = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", str(out)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert info.returncode == 0, info.stderr
+    assert "h264 640x360" in info.stdout and f" {len(video)} frames" in info.stdout
+
+
+def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(3)
+        started = time.monotonic()
+        recorder.send_signal(signal.SIGINT)
+        _, err = recorder.communicate(timeout=30)
+    assert time.monotonic() - started < 5  # the camera thread does not hold the exit up
+    assert recorder.returncode == 0, err
+    video = [m for _, m in messages(out)["/camera/main"]]
+    assert video and decode_all(video) == len(video)
+
+
+def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "demo.mcap"
+    done = subprocess.run(
+        [
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "5",
+            "--sluggish", "0.4", "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
+        ],
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    found = messages(out)
+    video = [m for _, m in found["/camera/bench"]]
+    assert video and decode_all(video) == len(video)
+    assert video[0]["frame_id"] == "camera_bench"
+    assert found["/gimbal/attitude"] and found["/camera/bench/thumbnail"]
+
+    # the flight report: a strip of thumbnails, and the picture nearest each failed command
+    page = tmp_path / "report.html"
+    done = subprocess.run(
+        [sys.executable, "-m", "analyzer", "report", str(out), "-o", str(page)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    text = page.read_text()
+    section = text.split("<h2>What the camera saw</h2>")[1].split("<h2>")[0]
+    pictures = re.findall(r'src="data:image/jpeg;base64,([^"]+)"', section)
+    strip = section.split('<div class="strip">')[1].split("</div>")[0].count("<img")
+    failed = section.split('<div class="seen">')[1].count("<img")
+    assert strip == len(found["/camera/bench/thumbnail"]) and failed >= 1  # sluggish: partial
+    assert len(pictures) == strip + failed
+    for jpeg in pictures:
+        picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(base64.b64decode(jpeg)))
+        assert picture[0].width == 320
+
+
+def test_a_recorder_killed_with_kill_9_leaves_video_that_decodes(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "-q", "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(3)
+        recorder.kill()
+        recorder.communicate(timeout=30)
+    recording = Recording(out)  # what the last 0.5 s flush left, read as every command does
+    video = [json.loads(m.data) for m in recording.messages(topics={"/camera/main"})]
+    assert len(video) > 30 and decode_all(video) == len(video)
+    assert any(True for _ in recording.messages(topics={"/gimbal/attitude"}))
+
+
+def test_timestamps_that_start_over_at_a_keyframe_are_anchored_again(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    # gst-rtsp-server restarts a shared live stream when a second client joins: the first
+    # client's timestamps start over at a new keyframe, as with a camera whose encoder
+    # restarts. Not B-frames: the recording goes on.
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        recorder = subprocess.Popen(
+            [
+                sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
+                "-o", str(out), "-q", "--duration", "7", "--video", "main",
+                "--camera", f"127.0.0.1:{rtsp_camera.port}",
+            ],
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        time.sleep(3)
+        viewer = av.open(rtsp_camera.url(0), options={"rtsp_transport": "tcp"}, timeout=5.0)
+        for n, _ in enumerate(viewer.demux(viewer.streams.video[0])):
+            if n > 30:
+                break
+        viewer.close()
+        _, err = recorder.communicate(timeout=60)
+    assert recorder.returncode == 0, err
+    found = messages(out)
+    states = [m["state"] for m in camera_diagnostics(found)]
+    assert "resync" in states and "refused" not in states
+    video = [m for _, m in found["/camera/main"]]
+    assert decode_all(video) == len(video)
+    stamps = [m["timestamp"]["sec"] + m["timestamp"]["nsec"] / 1e9 for m in video]
+    steps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert min(steps) > 0 and max(steps) < 1.0
+
+
+def test_parameter_sets_sent_only_in_the_sdp_go_in_front_of_every_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--config-interval", "0")  # SPS/PPS only in the SDP
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    video = [m for _, m in messages(out)["/camera/main"]]
+    kinds = [[nal_type("h264", u) for u in split_nals(base64.b64decode(m["data"]))] for m in video]
+    keyframes = [i for i, k in enumerate(kinds) if H264_IDR in k]
+    assert len(keyframes) >= 2
+    for i in keyframes:
+        assert kinds[i][:3] == [9, H264_SPS, 8]  # AUD, SPS, PPS, then the slices
+    # a player may start at any keyframe (seeking): each decodes without what came before
+    for i in keyframes:
+        assert decode_all(video[i:]) == len(video) - i
+
+
+def test_an_h265_camera_is_recorded_with_vps_sps_pps_before_every_keyframe(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory("--codec", "h265")  # x265: later keyframes are bare CRAs
+    out = tmp_path / "flight.mcap"
+    with gimbal() as port:
+        done = record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
+                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
+            ],
+            tmp_path,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    video = [m for _, m in messages(out)["/camera/main"]]
+    assert {m["format"] for m in video} == {"h265"}
+    assert messages(out)["/camera/main/thumbnail"]  # decoded from an H.265 keyframe
+    kinds = [[nal_type("h265", u) for u in split_nals(base64.b64decode(m["data"]))] for m in video]
+    keyframes = [i for i, k in enumerate(kinds) if any(16 <= n <= 23 for n in k)]
+    assert keyframes[0] == 0 and len(keyframes) >= 2
+    for i in keyframes:
+        assert kinds[i][:3] == [32, 33, 34]  # VPS, SPS, PPS first
+    for i in keyframes:
+        assert decode_all(video[i:]) == len(video) - i
+
+
+def test_a_full_video_queue_drops_up_to_a_keyframe_and_says_so(rtsp_camera: Any) -> None:
+    from analyzer.protocol.types import Event
+    from analyzer.video.rtsp_stream import VideoFrame, VideoStream
+    from analyzer.video.spec import parse_video_spec
+
+    spec = parse_video_spec("main", camera=f"127.0.0.1:{rtsp_camera.port}")
+    stream = VideoStream(spec, max_frames=10, thumbnail_interval=0)
+    stream.start()
+    frames: list[VideoFrame] = []
+    events: list[Event] = []
+    try:
+        time.sleep(3)  # nobody takes the frames: the queue of 10 fills up
+        for _ in range(40):
+            got, news = stream.take()
+            frames += got
+            events += news
+            time.sleep(0.05)
+    finally:
+        stream.stop()
+    assert stream.dropped > 30
+    overflow = [e for e in events if e.fields["state"] == "overflow"]
+    assert len(overflow) == 1 and f"{stream.dropped} video frame(s) dropped" in str(
+        overflow[0].fields["detail"]
+    )
+    gap = next(i for i in range(1, len(frames)) if frames[i].time - frames[i - 1].time > 0.1)
+    assert gap == 10 and frames[gap].keyframe  # the queue's 10, then a keyframe
+    decoded = decode_all(
+        [{"format": f.codec, "data": base64.b64encode(f.data).decode()} for f in frames]
+    )
+    assert decoded == len(frames)
