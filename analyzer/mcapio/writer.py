@@ -184,7 +184,7 @@ class McapSink:
                 return
             try:
                 write(self._writer)
-                self._dirty = True
+                self._messages.dirty = True
             except OSError as exc:
                 self._stop_after(exc)
                 self._raise_pending()
