@@ -131,6 +131,8 @@ def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
     shown = shown.replace("_", " ")
     if isinstance(value, bool):
         text = "yes" if value else "no"
+    elif key.endswith("_at") and isinstance(value, (int, float)):
+        text = format_time(value)  # a moment (``observed_at``): a clock time, not seconds
     elif isinstance(value, float):
         text = f"{value:.7f}" if key in PRECISE else f"{value:.2f}"
     else:

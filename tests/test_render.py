@@ -175,3 +175,15 @@ def test_any_event_renders_on_one_line(
 def test_odd_field_types_do_not_break_a_line() -> None:
     event = Event("/can/other", T, "can0", {"can_id": "x", "dlc": None})
     assert "can_id x" in render_event(event)
+
+
+def test_a_findings_moment_is_shown_as_a_clock_time_not_unix_seconds() -> None:
+    finding = Event(
+        "/analysis/response",
+        T,
+        "analysis",
+        fields={"command": "look_down", "verdict": "unknown", "observed_at": T + 2.5},
+    )
+    words = describe_event(finding)
+    assert f"observed at {format_time(T + 2.5)}" in words
+    assert str(T + 2.5) not in words
