@@ -28,7 +28,7 @@ LOG_UNKNOWN, LOG_DEBUG, LOG_INFO, LOG_WARNING, LOG_ERROR, LOG_FATAL = range(6)
 # foxglove.PositionCovarianceType
 COVARIANCE_UNKNOWN = 0
 
-_TIME_SCHEMA: dict[str, Any] = {
+TIME_SCHEMA: dict[str, Any] = {
     "type": "object",
     "title": "time",
     "properties": {
@@ -42,7 +42,7 @@ LOCATION_FIX_SCHEMA: dict[str, Any] = {
     "description": "A navigation satellite fix for any Global Navigation Satellite System",
     "type": "object",
     "properties": {
-        "timestamp": {**_TIME_SCHEMA, "description": "Timestamp of the message"},
+        "timestamp": {**TIME_SCHEMA, "description": "Timestamp of the message"},
         "frame_id": {"type": "string", "description": "Frame for the sensor"},
         "latitude": {"type": "number", "description": "Latitude in degrees"},
         "longitude": {"type": "number", "description": "Longitude in degrees"},
@@ -81,7 +81,7 @@ LOG_SCHEMA: dict[str, Any] = {
     "description": "A log message",
     "type": "object",
     "properties": {
-        "timestamp": {**_TIME_SCHEMA, "description": "Timestamp of log message"},
+        "timestamp": {**TIME_SCHEMA, "description": "Timestamp of log message"},
         "level": {
             "title": "foxglove.LogLevel",
             "description": "Log level",

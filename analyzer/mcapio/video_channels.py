@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from analyzer.mcapio.channels import ROLE_KEY, time_ns
 from analyzer.mcapio.chunked_writer import ChunkedWriter
+from analyzer.mcapio.foxglove import TIME_SCHEMA
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
@@ -22,22 +23,13 @@ COMPRESSED_VIDEO = "foxglove.CompressedVideo"
 COMPRESSED_IMAGE = "foxglove.CompressedImage"
 TOPIC_PREFIX = "/camera/"
 
-_TIME: dict[str, Any] = {
-    "type": "object",
-    "title": "time",
-    "properties": {
-        "sec": {"type": "integer", "minimum": 0},
-        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
-    },
-}
-
 # The fields of Foxglove's schemas (foxglove-sdk schemas/jsonschema), descriptions as there.
 COMPRESSED_VIDEO_SCHEMA: dict[str, Any] = {
     "title": COMPRESSED_VIDEO,
     "description": "A single frame of a compressed video bitstream",
     "type": "object",
     "properties": {
-        "timestamp": {**_TIME, "description": "Timestamp of video frame"},
+        "timestamp": {**TIME_SCHEMA, "description": "Timestamp of video frame"},
         "frame_id": {
             "type": "string",
             "description": "Frame of reference for the video.\n\nThe origin of the frame is the "
@@ -66,7 +58,7 @@ COMPRESSED_IMAGE_SCHEMA: dict[str, Any] = {
     "description": "A compressed image",
     "type": "object",
     "properties": {
-        "timestamp": {**_TIME, "description": "Timestamp of image"},
+        "timestamp": {**TIME_SCHEMA, "description": "Timestamp of image"},
         "frame_id": {
             "type": "string",
             "description": "Frame of reference for the image. The origin of the frame is the "

@@ -95,15 +95,10 @@ def _avcc(data: bytes) -> list[bytes]:
     out: list[bytes] = []
     pos = 5
     for mask in (0x1F, 0xFF):  # numOfSequenceParameterSets, numOfPictureParameterSets
-        count = data[pos] & mask
-        pos += 1
-        for _ in range(count):
-            size = int.from_bytes(data[pos : pos + 2], "big")
-            unit = data[pos + 2 : pos + 2 + size]
-            if len(unit) != size:
-                return out
-            out.append(unit)
-            pos += 2 + size
+        end = _take_units(data, pos + 1, data[pos] & mask, out)
+        if end is None:
+            break
+        pos = end
     return out
 
 
@@ -114,16 +109,24 @@ def _hvcc(data: bytes) -> list[bytes]:
     pos = 23
     for _ in range(arrays):
         pos += 1  # array_completeness, NAL_unit_type
-        count = int.from_bytes(data[pos : pos + 2], "big")
-        pos += 2
-        for _ in range(count):
-            size = int.from_bytes(data[pos : pos + 2], "big")
-            unit = data[pos + 2 : pos + 2 + size]
-            if len(unit) != size:
-                return out
-            out.append(unit)
-            pos += 2 + size
+        end = _take_units(data, pos + 2, int.from_bytes(data[pos : pos + 2], "big"), out)
+        if end is None:
+            break
+        pos = end
     return out
+
+
+def _take_units(data: bytes, pos: int, count: int, out: list[bytes]) -> int | None:
+    """Append ``count`` units of 2-byte length + bytes from ``pos``; the position after
+    them, or None when the record is cut short inside one (what was read is kept)."""
+    for _ in range(count):
+        size = int.from_bytes(data[pos : pos + 2], "big")
+        unit = data[pos + 2 : pos + 2 + size]
+        if len(unit) != size:
+            return None
+        out.append(unit)
+        pos += 2 + size
+    return pos
 
 
 @dataclass(slots=True)
