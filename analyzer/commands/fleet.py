@@ -105,7 +105,12 @@ def run(args: argparse.Namespace) -> int:
 def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, list[Answer]]:
     """The standard answers, the report's overview (with --html) and the --sql answer,
     with the work on the cluster at ``args.dask``."""
-    from analyzer.fleet.dask_questions import ClusterRun, ask_on_cluster, cluster_tags
+    from analyzer.fleet.dask_questions import (
+        ClusterRun,
+        ask_on_cluster,
+        cluster_tags,
+        on_client,
+    )
     from analyzer.fleet.dask_tables import dask_tables, tables_named
     from analyzer.fleet.dataset import Dataset
     from analyzer.fleet.queries import connect, run_sql
@@ -131,7 +136,7 @@ def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, 
             questions.append(overview())
         if not questions:
             return [], None, query
-        run = ask_on_cluster(args.dataset, client, questions, ClusterRun([]))
+        run = ask_on_cluster(args.dataset, on_client(client), questions, ClusterRun([]))
         sys.stderr.write(
             f"fleet: {len(questions)} question(s) aggregated on the workers of {args.dask}; "
             f"{run.rows_back:,} aggregated rows came back\n"

@@ -9,6 +9,7 @@ path (rates, rounding, order, limit), so both give the same answers.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -43,6 +44,7 @@ if TYPE_CHECKING:
     from distributed import Client
 
 ONE = "_one"  # a column of 1s: count(*) is its sum
+Compute = Callable[["dd.DataFrame"], "pd.DataFrame"]
 
 
 @dataclass
@@ -60,10 +62,21 @@ def cluster_tags(dataset: Dataset) -> list[str]:
     return [] if schema is None else [n for n in schema.names if n not in standard]
 
 
+def on_client(client: Client) -> Compute:
+    """Computing on the cluster of ``client``: only the result comes here."""
+
+    def compute(lazy: dd.DataFrame) -> pd.DataFrame:
+        result: pd.DataFrame = client.compute(lazy).result()
+        return result
+
+    return compute
+
+
 def ask_on_cluster(
-    root: str, client: Client, questions: list[Question], run: ClusterRun | None = None
+    root: str, compute: Compute, questions: list[Question], run: ClusterRun | None = None
 ) -> ClusterRun:
-    """Answer ``questions`` with their heavy part on the cluster's workers."""
+    """Answer ``questions`` with their heavy part done by ``compute`` (on_client: the
+    cluster's workers)."""
     dataset = Dataset(root)
     if not dataset.hashes():
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
@@ -81,7 +94,7 @@ def ask_on_cluster(
                 lazy = top_frame(dataset, question)
             else:
                 lazy = group_frame(dataset, question)
-            back: pd.DataFrame = client.compute(lazy).result()
+            back = compute(lazy)
             run.rows_back += len(back)
             finisher.register("agg_rows", pa.Table.from_pandas(back, preserve_index=False))
             sql = (
