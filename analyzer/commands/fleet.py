@@ -37,8 +37,11 @@ DIR by the same path), filter, join, group and aggregate there with
 dask.dataframe (medians by a shuffle), and only the aggregated rows come back;
 DuckDB finishes them here (rates, rounding, order) with the same SQL as without
 --dask, so the answers are the same. --sql with --dask is not spread over the
-cluster (any SQL cannot be cut into worker tasks): the workers read the tables
-the query names, only the columns it names, and the query runs here on them.
+cluster (arbitrary SQL cannot in general be cut into worker tasks): the workers
+read the tables the query names, only the columns it names (every column when it
+has a * or NATURAL JOIN), and the query runs here over those rows.
+
+  gimbal-analyzer fleet fleet/ --dask tcp://scheduler:8786 --sql "SELECT ..."
 
 Times are UTC (--local-time: local time with its offset in the text and the
 report; JSON and CSV keep UTC). Weeks are ISO weeks in UTC.

@@ -52,9 +52,13 @@ same path (checked first); this process writes each input's recordings row last.
 this process writes them. A wrong address stops before DIR is made.
 
 An input that could not be read at all is a row too (its error, keyed by its
-path), and so is one that failed to decode: the next runs skip them and say so;
---retry-failed decodes them again (and a file unreadable before is taken again
-by itself once it reads).
+path): the next runs skip it and say so. One that failed to decode is skipped
+as content already there. --retry-failed decodes every input whose row has an
+error again; a file unreadable before is taken by itself once it reads.
+
+  gimbal-analyzer table flights/ -o fleet --dask tcp://scheduler:8786 --client-writes
+  gimbal-analyzer table flights/ -o fleet --retry-failed
+
 Ask the dataset with `gimbal-analyzer fleet DIR`.
 """
 
