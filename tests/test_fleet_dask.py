@@ -275,8 +275,35 @@ def test_fleet_sql_on_a_cluster_reads_the_named_columns_there(fleet: dict[str, A
     assert on_cluster == here and here.startswith("verdict,n\nnot_obeyed,")
     total = sum(int(line.split(",")[1]) for line in here.splitlines()[1:])
     assert err == (
-        f"fleet: the workers of {address} read 1 table(s); {total:,} rows came back "
+        f"fleet: the workers of {address} read findings (verdict); {total:,} rows came back "
         "and the query ran here\n"
+    )
+
+
+def test_a_cluster_without_the_package_is_one_line(fleet: dict[str, Any], tmp_path: Path) -> None:
+    """A scheduler started where gimbal-analyzer is not installed cannot take its tasks."""
+    port = free_port()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    found = subprocess.run(
+        [sys.executable, "-c", "import analyzer"], env=env, cwd=tmp_path, capture_output=True
+    )
+    if found.returncode == 0:
+        pytest.skip("gimbal-analyzer is installed in this environment: no bare scheduler")
+    command = [*dask_command(), "scheduler", "--host", "127.0.0.1", "--port", str(port)]
+    with open(tmp_path / "bare.log", "wb") as log:
+        bare = subprocess.Popen(
+            [*command, "--no-dashboard"], env=env, stdout=log, stderr=log, cwd=tmp_path
+        )
+        try:
+            wait_for_port(port, bare)
+            address = f"tcp://127.0.0.1:{port}"
+            code, _, err = cli("fleet", str(fleet["local"]), "--dask", address)
+        finally:
+            stop([bare])
+    assert code == 1 and err == (
+        f"gimbal-analyzer fleet: error: the Dask cluster at {address} cannot run "
+        "gimbal-analyzer's tasks: install the package where its scheduler and workers run "
+        "(pip install 'gimbal-analyzer[cluster]')\n"
     )
 
 

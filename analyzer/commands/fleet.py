@@ -128,8 +128,9 @@ def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, 
             con = connect(args.dataset, tables)
             query = [run_sql(con, args.sql, f"Query: {args.sql}")]
             rows = sum(t.num_rows for t in tables.values())
+            read = "; ".join(f"{n} ({', '.join(t.column_names)})" for n, t in tables.items())
             sys.stderr.write(
-                f"fleet: the workers of {args.dask} read {len(tables)} table(s); "
+                f"fleet: the workers of {args.dask} read {read or 'no table'}; "
                 f"{rows:,} rows came back and the query ran here\n"
             )
         questions: list[Question] = []

@@ -36,6 +36,7 @@ from analyzer.fleet.questions import (
     TopQuestion,
     Where,
 )
+from analyzer.fleet.runner import cluster_error
 
 if TYPE_CHECKING:
     import dask.dataframe as dd
@@ -66,7 +67,10 @@ def on_client(client: Client) -> Compute:
     """Computing on the cluster of ``client``: only the result comes here."""
 
     def compute(lazy: dd.DataFrame) -> pd.DataFrame:
-        result: pd.DataFrame = client.compute(lazy).result()
+        try:
+            result: pd.DataFrame = client.compute(lazy).result()
+        except Exception as exc:  # a task's failure, or a cluster without the package
+            raise cluster_error(client, exc) from None
         return result
 
     return compute

@@ -17,6 +17,7 @@ import pyarrow.parquet as pq
 from analyzer.errors import UsageError
 from analyzer.fleet.columns import TABLES
 from analyzer.fleet.dataset import Dataset
+from analyzer.fleet.runner import cluster_error
 
 if TYPE_CHECKING:
     import dask.dataframe as dd
@@ -87,7 +88,10 @@ def dask_tables(
             continue
         columns = None if words is None else [n for n in schema.names if n.lower() in words]
         frame = table_frame(dataset, name, columns, schema)
-        computed = client.compute(frame).result()
+        try:
+            computed = client.compute(frame).result()
+        except Exception as exc:  # a task's failure, or a cluster without the package
+            raise cluster_error(client, exc) from None
         picked = pa.schema([schema.field(n) for n in frame.columns])
         out[name] = pa.Table.from_pandas(computed, schema=picked, preserve_index=False)
     return out

@@ -10,7 +10,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from analyzer.errors import UsageError
+from analyzer.errors import SourceError, UsageError
 from analyzer.fleet.columns import RECORDINGS
 from analyzer.fleet.dataset import Dataset, content_hash, unreadable_hash
 from analyzer.fleet.rows import FileRows, FileWork, error_text, file_rows
@@ -146,7 +146,24 @@ def run_dask(works: Iterable[FileWork], client: Client, root: str | None) -> Ite
         futures = client.map(rows_written, works, root=root, index_here=True, key=keys)
     with client.as_current():
         for future in as_completed(futures):
-            yield future.result()
+            try:
+                result = future.result()
+            except Exception as exc:  # a task's failure, or a cluster without the package
+                raise cluster_error(client, exc) from None
+            yield result
+
+
+def cluster_error(client: Client, exc: BaseException) -> SourceError:
+    """A failure on the cluster as one line: the task's error, or what the cluster lacks."""
+    address = getattr(client.scheduler, "address", "?")
+    chain = f"{exc} {exc.__cause__ or ''}"
+    if "No module named 'analyzer'" in chain:
+        return SourceError(
+            f"the Dask cluster at {address} cannot run gimbal-analyzer's tasks: install the "
+            "package where its scheduler and workers run (pip install 'gimbal-analyzer[cluster]')"
+        )
+    first = next((line for line in str(exc).splitlines() if line.strip()), "")
+    return SourceError(f"the Dask cluster at {address} failed: {type(exc).__name__}: {first}")
 
 
 def workers_reach(client: Client, root: str) -> None:
