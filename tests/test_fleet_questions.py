@@ -4,6 +4,7 @@ to dask.dataframe, on any dataset: nulls, untagged runs, medians of even counts,
 from __future__ import annotations
 
 import tempfile
+from dataclasses import replace
 from datetime import datetime, timedelta, timezone
 from typing import Any
 
@@ -15,7 +16,7 @@ from hypothesis import strategies as st
 from analyzer.fleet.columns import RECORDINGS, event_schema, recordings_schema
 from analyzer.fleet.dataset import Dataset
 from analyzer.fleet.queries import Answer, ask, connect, finish_sql, group_sql, standard_answers
-from analyzer.fleet.questions import overview, standard_questions
+from analyzer.fleet.questions import overview, standard_questions, worst_flights
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
 
 dd = pytest.importorskip("dask.dataframe")  # the cluster extra
@@ -90,20 +91,48 @@ def sync(lazy: Any) -> Any:
 @settings(max_examples=15, deadline=None)
 @given(flights=st.lists(flight, min_size=1, max_size=14))
 def test_sql_and_dask_renderings_give_the_same_answers(flights: list[dict[str, Any]]) -> None:
+    same_answers(flights)
+
+
+def test_worst_flights_close_in_score_are_cut_alike() -> None:
+    """Four flights that all show a score of 29.1: the order is the exact score's (the
+    shown one is rounded), the same on both paths, whatever the names' order."""
+    plain = {
+        "gimbal": "A", "tagged": True, "hours": 5, "error": None, "gaps": 0,
+        "longest_gap_s": None, "not_obeyed": 0, "findings": [],
+    }  # fmt: skip
+    flights = [{**plain, "crc_checked": 1000, "crc_errors": 0} for _ in range(19)]
+    # Flights 0, 6, 12, 18 score their CRC error rate alone (per mille).
+    for n, errors in ((0, 2906), (6, 2914), (12, 2912), (18, 2908)):
+        flights[n] = {**plain, "crc_checked": 100_000 - errors, "crc_errors": errors}
+    answers = same_answers(flights)
+    (worst_3,) = [a for a in answers if a.name == "worst_3"]
+    assert [(row[0], row[-2]) for row in worst_3.rows] == [
+        ("f6.log", 29.1), ("f12.log", 29.1), ("f18.log", 29.1)
+    ]  # fmt: skip
+
+
+def same_answers(flights: list[dict[str, Any]]) -> list[Answer]:
+    """The standard answers (and the worst 3 flights) of a dataset of ``flights``, checked
+    to be the same rendered to SQL and to dask.dataframe."""
     with tempfile.TemporaryDirectory() as root:
         dataset = Dataset(root)
         dataset.create()
         for n, f in enumerate(flights):
             write_flight(dataset, n, f)
         con = connect(root)
-        here = [*standard_answers(con), ask(con, overview())]
         tags = cluster_tags(dataset)
         assert tags == (["gimbal"] if any(f["tagged"] for f in flights) else [])
-        there = ask_on_cluster(root, sync, [*standard_questions(tags), overview()]).answers
+        # The worst flights cut at 3 too: the workers' candidates must hold the answer.
+        worst_3 = replace(worst_flights(tags), name="worst_3", limit=3)
+        here = [*standard_answers(con), ask(con, overview()), ask(con, worst_3)]
+        questions = [*standard_questions(tags), overview(), worst_3]
+        there = ask_on_cluster(root, sync, questions, spread=3).answers  # several partitions
         assert [a.name for a in there] == [a.name for a in here]
         for mine, theirs in zip(here, there, strict=True):
             assert theirs.columns == mine.columns, mine.name
             assert strict(theirs) == strict(mine), mine.name
+    return here
 
 
 def test_the_laptop_sql_aggregates_first_then_finishes() -> None:

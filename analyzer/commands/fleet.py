@@ -114,7 +114,7 @@ def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, 
         cluster_tags,
         on_client,
     )
-    from analyzer.fleet.dask_tables import dask_tables, tables_named
+    from analyzer.fleet.dask_tables import dask_tables, tables_named, workers
     from analyzer.fleet.dataset import Dataset
     from analyzer.fleet.queries import connect, run_sql
     from analyzer.fleet.questions import Question, overview, standard_questions
@@ -140,7 +140,8 @@ def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, 
             questions.append(overview())
         if not questions:
             return [], None, query
-        run = ask_on_cluster(args.dataset, on_client(client), questions, ClusterRun([]))
+        spread = workers(client)
+        run = ask_on_cluster(args.dataset, on_client(client), questions, ClusterRun([]), spread)
         sys.stderr.write(
             f"fleet: {len(questions)} question(s) aggregated on the workers of {args.dask}; "
             f"{run.rows_back:,} aggregated rows came back\n"

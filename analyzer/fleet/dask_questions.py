@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     from distributed import Client
 
 ONE = "_one"  # a column of 1s: count(*) is its sum
+NEAR = 1e-9  # scores this close (relatively) to the last one kept are kept too
 Compute = Callable[["dd.DataFrame"], "pd.DataFrame"]
 
 
@@ -77,10 +78,14 @@ def on_client(client: Client) -> Compute:
 
 
 def ask_on_cluster(
-    root: str, compute: Compute, questions: list[Question], run: ClusterRun | None = None
+    root: str,
+    compute: Compute,
+    questions: list[Question],
+    run: ClusterRun | None = None,
+    spread: int = 1,
 ) -> ClusterRun:
     """Answer ``questions`` with their heavy part done by ``compute`` (on_client: the
-    cluster's workers)."""
+    cluster's workers), each table read in at least ``spread`` partitions."""
     dataset = Dataset(root)
     if not dataset.hashes():
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
@@ -95,9 +100,9 @@ def ask_on_cluster(
             answer = run_sql(connect(root), _laptop_sql(question), question.title)
         else:
             if isinstance(question, TopQuestion):
-                lazy = top_frame(dataset, question)
+                lazy = top_frame(dataset, question, spread)
             else:
-                lazy = group_frame(dataset, question)
+                lazy = group_frame(dataset, question, spread)
             back = compute(lazy)
             run.rows_back += len(back)
             finisher.register("agg_rows", pa.Table.from_pandas(back, preserve_index=False))
@@ -181,18 +186,19 @@ def _spec(question: GroupQuestion) -> dict[str, list[str]]:
     return spec
 
 
-def group_frame(dataset: Dataset, question: GroupQuestion) -> dd.DataFrame:
+def group_frame(dataset: Dataset, question: GroupQuestion, spread: int = 1) -> dd.DataFrame:
     """The question's aggregated rows as a lazy frame (small once computed)."""
     main, joined = question.columns()
     schema = table_schema(dataset, question.table)
     assert schema is not None
-    frame = table_frame(dataset, question.table, main, schema)
+    frame = table_frame(dataset, question.table, main, schema, spread)
     if question.join is not None:
         join = question.join
         other_schema = table_schema(dataset, join.table)
         assert other_schema is not None
         other = table_frame(dataset, join.table, [join.on, *joined], other_schema)
-        other = other.rename(columns={n: JOINED + n for n in joined})
+        # One partition (a file per recording would make a merge per pair of partitions).
+        other = other.rename(columns={n: JOINED + n for n in joined}).repartition(npartitions=1)
         # The joined table is the small one (one row per recording): sent to every partition.
         frame = frame.merge(other, on=join.on, how="inner", broadcast=True)
     meta = _prepare(frame._meta, question)
@@ -239,15 +245,19 @@ def _best(frame: pd.DataFrame, question: TopQuestion) -> pd.DataFrame:
     score = total.astype("float64")
     kept = frame.assign(_score=score)[score > 0]
     kept = kept.sort_values(["_score", question.tie], ascending=[False, True], kind="stable")
-    best: pd.DataFrame = kept.head(question.limit).drop(columns="_score")
+    if len(kept) > question.limit:
+        # The best ``limit``, and any row that scores the same give or take the last bit.
+        last = float(kept["_score"].iloc[question.limit - 1])
+        kept = kept[kept["_score"] >= last - NEAR * max(1.0, abs(last))]
+    best: pd.DataFrame = kept.drop(columns="_score")
     return best
 
 
-def top_frame(dataset: Dataset, question: TopQuestion) -> dd.DataFrame:
+def top_frame(dataset: Dataset, question: TopQuestion, spread: int = 1) -> dd.DataFrame:
     """The rows the top question can show (at most its limit), as a tree reduction."""
     schema = table_schema(dataset, question.table)
     assert schema is not None
-    frame = table_frame(dataset, question.table, question.columns(), schema)
+    frame = table_frame(dataset, question.table, question.columns(), schema, spread)
     kwargs = {"question": question}
     return frame.reduction(
         _best,

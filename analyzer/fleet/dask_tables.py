@@ -7,6 +7,7 @@ back here, where DuckDB runs the query: SQL in general cannot be cut into worker
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -19,22 +20,37 @@ from analyzer.fleet.columns import TABLES
 from analyzer.fleet.dataset import Dataset
 from analyzer.fleet.runner import cluster_error
 
+PART_BYTES = 64 << 20  # Parquet bytes read into one partition (one task)
+
 if TYPE_CHECKING:
     import dask.dataframe as dd
     import pandas as pd
     from distributed import Client
 
 
-def read_part(path: str, columns: Sequence[str], schema: pa.Schema) -> pd.DataFrame:
-    """One Parquet file as a frame with every column of ``schema`` (null where absent)."""
+def read_part(paths: Sequence[str], columns: Sequence[str], schema: pa.Schema) -> pd.DataFrame:
+    """Parquet files as one frame with every column of ``schema`` (null where absent)."""
     import pandas as pd
 
-    table = pq.read_table(path, columns=[c for c in columns if c in pq.read_schema(path).names])
-    for field in schema:
-        if field.name not in table.column_names:
-            table = table.append_column(field, pa.nulls(table.num_rows, field.type))
-    frame: pd.DataFrame = table.select(list(columns)).to_pandas(types_mapper=pd.ArrowDtype)
+    parts = []
+    for path in paths:
+        table = pq.read_table(path, columns=[c for c in columns if c in pq.read_schema(path).names])
+        for field in schema:
+            if field.name not in table.column_names:
+                table = table.append_column(field, pa.nulls(table.num_rows, field.type))
+        parts.append(table.select(list(columns)).cast(schema))
+    whole = pa.concat_tables(parts) if parts else schema.empty_table()
+    frame: pd.DataFrame = whole.to_pandas(types_mapper=pd.ArrowDtype)
     return frame
+
+
+def partitions(files: Sequence[str], spread: int) -> list[list[str]]:
+    """The files in groups of about PART_BYTES (a partition each), at least ``spread``
+    groups when there are that many files, so every worker gets some."""
+    sizes = [os.path.getsize(f) for f in files]
+    count = max(min(len(files), spread), -(-sum(sizes) // PART_BYTES), 1)
+    per = -(-len(files) // count)
+    return [list(files[i : i + per]) for i in range(0, len(files), per)]
 
 
 def read_meta(schema: pa.Schema) -> pd.DataFrame:
@@ -53,15 +69,19 @@ def table_schema(dataset: Dataset, name: str) -> pa.Schema | None:
 
 
 def table_frame(
-    dataset: Dataset, name: str, columns: Sequence[str] | None, schema: pa.Schema
+    dataset: Dataset,
+    name: str,
+    columns: Sequence[str] | None,
+    schema: pa.Schema,
+    spread: int = 1,
 ) -> dd.DataFrame:
-    """A lazy frame of one table, a partition per file, read on the workers."""
+    """A lazy frame of one table read on the workers, a partition per group of files."""
     import dask.dataframe as dd
 
     names = [n for n in (columns if columns is not None else schema.names) if n in schema.names]
     picked = pa.schema([schema.field(n) for n in names])
-    files = [str(p) for p in dataset.files(name)]
-    return dd.from_map(read_part, files, columns=names, schema=picked, meta=read_meta(picked))
+    groups = partitions([str(p) for p in dataset.files(name)], spread)
+    return dd.from_map(read_part, groups, columns=names, schema=picked, meta=read_meta(picked))
 
 
 def tables_named(sql: str) -> dict[str, set[str] | None]:
@@ -71,6 +91,11 @@ def tables_named(sql: str) -> dict[str, set[str] | None]:
     words = set(re.findall(r"[a-z_][a-z0-9_]*", lowered))
     every = "*" in lowered.replace("count(*)", "") or bool(words & {"natural", "columns"})
     return {name: (None if every else words) for name in TABLES if name in words}
+
+
+def workers(client: Client) -> int:
+    """How many partitions spread a small table over the cluster: twice its workers."""
+    return 2 * max(1, len(client.scheduler_info().get("workers", {})))
 
 
 def dask_tables(
@@ -87,7 +112,7 @@ def dask_tables(
         if schema is None:
             continue
         columns = None if words is None else [n for n in schema.names if n.lower() in words]
-        frame = table_frame(dataset, name, columns, schema)
+        frame = table_frame(dataset, name, columns, schema, workers(client))
         try:
             computed = client.compute(frame).result()
         except Exception as exc:  # a task's failure, or a cluster without the package

@@ -212,12 +212,13 @@ def score_sql(question: TopQuestion) -> str:
 
 
 def finish_top_sql(question: TopQuestion, source: str) -> str:
-    """The top rows of ``source`` by score with the reasons (the same on both paths)."""
+    """The top rows of ``source`` by score (unrounded: the rounded one is for people) with
+    the reasons (the same on both paths)."""
     score = score_sql(question)
     shown = "".join(f"r.{q(c)}, " for c in question.shown)
     reason = ", ".join(f"CASE WHEN {r.when} THEN {r.text} END" for r in question.reasons)
     return (
         f"SELECT {shown}round({score}, 1) AS score, concat_ws('; ', {reason}) AS reason "
         f"FROM {source} r WHERE {score} > 0 "
-        f"ORDER BY score DESC, r.{q(question.tie)} LIMIT {question.limit}"
+        f"ORDER BY {score} DESC, r.{q(question.tie)} LIMIT {question.limit}"
     )
