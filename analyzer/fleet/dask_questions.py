@@ -91,18 +91,22 @@ def ask_on_cluster(
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
     run = run or ClusterRun([])
     finisher = _finisher()
+    schemas: dict[str, pa.Schema | None] = {}  # each table's footers read once
     for question in questions:
         tables = [question.table]
         if isinstance(question, GroupQuestion) and question.join is not None:
             tables.append(question.join.table)
-        if any(table_schema(dataset, t) is None for t in tables):
+        for table in tables:
+            if table not in schemas:
+                schemas[table] = table_schema(dataset, table)
+        if any(schemas[t] is None for t in tables):
             # A table with no rows at all: nothing to send out, the empty answer is asked here.
             answer = run_sql(connect(root), _laptop_sql(question), question.title)
         else:
             if isinstance(question, TopQuestion):
-                lazy = top_frame(dataset, question, spread)
+                lazy = top_frame(dataset, question, schemas, spread)
             else:
-                lazy = group_frame(dataset, question, spread)
+                lazy = group_frame(dataset, question, schemas, spread)
             back = compute(lazy)
             run.rows_back += len(back)
             finisher.register("agg_rows", pa.Table.from_pandas(back, preserve_index=False))
@@ -186,15 +190,20 @@ def _spec(question: GroupQuestion) -> dict[str, list[str]]:
     return spec
 
 
-def group_frame(dataset: Dataset, question: GroupQuestion, spread: int = 1) -> dd.DataFrame:
+Schemas = dict[str, "pa.Schema | None"]
+
+
+def group_frame(
+    dataset: Dataset, question: GroupQuestion, schemas: Schemas, spread: int = 1
+) -> dd.DataFrame:
     """The question's aggregated rows as a lazy frame (small once computed)."""
     main, joined = question.columns()
-    schema = table_schema(dataset, question.table)
+    schema = schemas[question.table]
     assert schema is not None
     frame = table_frame(dataset, question.table, main, schema, spread)
     if question.join is not None:
         join = question.join
-        other_schema = table_schema(dataset, join.table)
+        other_schema = schemas[join.table]
         assert other_schema is not None
         other = table_frame(dataset, join.table, [join.on, *joined], other_schema)
         # One partition (a file per recording would make a merge per pair of partitions).
@@ -253,9 +262,11 @@ def _best(frame: pd.DataFrame, question: TopQuestion) -> pd.DataFrame:
     return best
 
 
-def top_frame(dataset: Dataset, question: TopQuestion, spread: int = 1) -> dd.DataFrame:
+def top_frame(
+    dataset: Dataset, question: TopQuestion, schemas: Schemas, spread: int = 1
+) -> dd.DataFrame:
     """The rows the top question can show (at most its limit), as a tree reduction."""
-    schema = table_schema(dataset, question.table)
+    schema = schemas[question.table]
     assert schema is not None
     frame = table_frame(dataset, question.table, question.columns(), schema, spread)
     kwargs = {"question": question}
