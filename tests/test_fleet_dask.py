@@ -7,6 +7,7 @@ import contextlib
 import io
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -264,6 +265,19 @@ def test_fleet_questions_are_aggregated_on_the_workers(fleet: dict[str, Any]) ->
     for kind in ("read_part", "_groupby_apply_funcs", "shuffle-transfer", "customreduction-tree"):
         assert kind in kinds and kinds[kind] <= set(fleet["workers"]), kind
     assert set().union(*kinds.values()) == set(fleet["workers"])
+
+
+def test_the_fleet_report_from_a_cluster_is_the_local_one(
+    fleet: dict[str, Any], tmp_path: Path
+) -> None:
+    local, address = str(fleet["local"]), fleet["address"]
+    pages = {}
+    for name, extra in (("here", ()), ("there", ("--dask", address))):
+        page = tmp_path / f"{name}.html"
+        code, _, err = cli("fleet", local, "--html", str(page), *extra)
+        assert code == 0, err
+        pages[name] = re.sub(r"made [^.]+\.\d+Z", "made (time)", page.read_text())
+    assert pages["there"] == pages["here"] and "b-cut.pcap" in pages["here"]
 
 
 def test_fleet_sql_on_a_cluster_reads_the_named_columns_there(fleet: dict[str, Any]) -> None:
