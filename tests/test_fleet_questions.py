@@ -148,3 +148,21 @@ def test_the_laptop_sql_aggregates_first_then_finishes() -> None:
         ' AS "crc_error_rate"' in outer
     )
     assert outer.endswith('ORDER BY "crc_error_rate" DESC NULLS LAST, "gimbal" ASC NULLS LAST')
+
+
+def test_sql_on_a_cluster_brings_the_columns_the_query_names() -> None:
+    from analyzer.fleet.dask_tables import tables_named
+
+    named = tables_named(
+        "SELECT r.gimbal, count(*) FROM findings f JOIN recordings r USING (content_hash)"
+    )
+    assert set(named) == {"findings", "recordings"}
+    assert all(
+        words is not None and {"gimbal", "content_hash"} <= words for words in named.values()
+    )
+    # A query that may take columns it does not name brings them all.
+    assert tables_named("SELECT * FROM recordings") == {"recordings": None}
+    assert tables_named("SELECT f.* FROM findings f") == {"findings": None}
+    assert tables_named("SELECT 1 FROM findings NATURAL JOIN commands") == {
+        "commands": None, "findings": None,
+    }  # fmt: skip
