@@ -25,6 +25,7 @@ from analyzer.fleet.queries import (
     finish_sql,
     finish_top_sql,
     group_sql,
+    in_memory,
     run_sql,
 )
 from analyzer.fleet.questions import (
@@ -40,7 +41,6 @@ from analyzer.fleet.runner import cluster_error
 
 if TYPE_CHECKING:
     import dask.dataframe as dd
-    import duckdb
     import pandas as pd
     from distributed import Client
 
@@ -90,7 +90,7 @@ def ask_on_cluster(
     if not dataset.hashes():
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
     run = run or ClusterRun([])
-    finisher = _finisher()
+    finisher = in_memory()
     schemas: dict[str, pa.Schema | None] = {}  # each table's footers read once
     for question in questions:
         tables = [question.table]
@@ -120,14 +120,6 @@ def ask_on_cluster(
         answer.name = question.name
         run.answers.append(answer)
     return run
-
-
-def _finisher() -> duckdb.DuckDBPyConnection:
-    import duckdb
-
-    con = duckdb.connect(":memory:")
-    con.execute("SET TimeZone = 'UTC'")
-    return con
 
 
 def _laptop_sql(question: Question) -> str:

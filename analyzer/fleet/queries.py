@@ -42,15 +42,13 @@ class Answer:
 def connect(root: str, tables: dict[str, pa.Table] | None = None) -> duckdb.DuckDBPyConnection:
     """An in-memory DuckDB with one view per table of the dataset at ``root``.
 
-    ``tables`` replaces files by tables already in memory (what ``fleet --dask`` computed).
+    ``tables`` replaces files by tables already in memory (what ``fleet --dask --sql``
+    brought from the workers).
     """
-    import duckdb
-
     dataset = Dataset(root)
     if tables is None and not dataset.hashes():
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
-    con = duckdb.connect(":memory:")
-    con.execute("SET TimeZone = 'UTC'")  # weeks and dates are UTC, as every time shown
+    con = in_memory()
     for name in TABLES:
         given = (tables or {}).get(name)
         files = [str(p) for p in dataset.files(name)] if tables is None else []
@@ -66,6 +64,15 @@ def connect(root: str, tables: dict[str, pa.Table] | None = None) -> duckdb.Duck
         else:
             con.register(f"_{name}", empty_table(name))
             con.execute(f'CREATE VIEW "{name}" AS SELECT * FROM "_{name}"')
+    return con
+
+
+def in_memory() -> duckdb.DuckDBPyConnection:
+    """An empty in-memory DuckDB that works in UTC (weeks and dates, as every time shown)."""
+    import duckdb
+
+    con = duckdb.connect(":memory:")
+    con.execute("SET TimeZone = 'UTC'")
     return con
 
 
