@@ -12,8 +12,13 @@
 4. Writes a fleet attitude table of 10M rows (a random walk of pitch and yaw per flight,
    100 flights under 20 gimbal tags) and times the group-by questions `fleet` asks over
    it: through the views `fleet` makes, and end to end as `fleet --sql` in a new process.
+5. (--only dask) Writes a findings table of --findings rows (default 2M) over 100 flights
+   and times the standard questions answered by DuckDB here against the same questions
+   on a local Dask cluster of two worker processes (`fleet --dask`'s path), which must
+   give the same answers.
 
   python benchmarks/fleet_speed.py [--recordings 100] [--seconds 240] [--rows 10000000]
+  python benchmarks/fleet_speed.py --only dask [--findings 2000000]
 """
 
 from __future__ import annotations
@@ -179,14 +184,17 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=240.0, help="length of each flight")
     parser.add_argument("--rows", type=int, default=10_000_000)
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--only", choices=("table", "fleet"), help="run one half only")
+    parser.add_argument("--findings", type=int, default=2_000_000, help="rows for --only dask")
+    parser.add_argument("--only", choices=("table", "fleet", "dask"), help="run one part only")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="fleet-bench-") as tmp:
         folder = Path(tmp)
-        if args.only != "fleet":
+        if args.only in (None, "table"):
             bench_table(folder, args.recordings, args.seconds, args.repeat)
-        if args.only != "table":
+        if args.only in (None, "fleet"):
             bench_fleet(folder, args.rows, args.repeat)
+        if args.only == "dask":
+            bench_dask(folder, args.findings, args.repeat)
     return 0
 
 
@@ -249,6 +257,92 @@ def bench_fleet(folder: Path, rows: int, repeat: int) -> None:
         lambda: subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL), repeat
     )
     print(f"fleet --sql end to end (new process) {best(end_to_end)}")
+
+
+def make_findings(folder: Path, rows: int, flights: int = 100) -> Path:
+    """A findings table of ``rows`` rows over ``flights`` flights under 20 gimbal tags."""
+    import numpy as np
+    import pyarrow as pa
+
+    from analyzer.fleet.columns import RECORDINGS, event_schema, recordings_schema
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+
+    dataset = Dataset(folder / "findings")
+    dataset.create()
+    schema = event_schema(TOPIC_ANALYSIS_RESPONSE)
+    recordings = recordings_schema(["gimbal"])
+    rng = np.random.default_rng(2)
+    per = rows // flights
+    commands = ["specified_angle", "gimbal_control", "tracking", "look_down", "feedback"]
+    for n in range(flights):
+        digest = f"{n:064x}"
+        start_us = int((T0 + n * 86400) * 1e6)
+        columns = {f.name: pa.nulls(per, f.type) for f in schema}
+        response = np.round(rng.gamma(2.0, 0.4, per), 3)
+        columns.update(
+            recording=pa.array([f"flight-{n:03d}.mcap"] * per),
+            content_hash=pa.array([digest] * per),
+            time=pa.array(start_us + np.arange(per, dtype=np.int64) * 1000).cast(
+                schema.field("time").type
+            ),
+            command=pa.array(rng.choice(commands, per)),
+            verdict=pa.array(rng.choice(["obeyed", "partial", "not_obeyed", "unknown"], per)),
+            response_s=pa.array(
+                np.where(rng.random(per) < 0.1, np.nan, response), from_pandas=True
+            ),
+        )
+        row = {f.name: None for f in recordings}
+        checked, errors = int(rng.integers(1000, 5000)), int(rng.integers(0, 50))
+        row.update(
+            recording=f"flight-{n:03d}.mcap", content_hash=digest, gimbal=f"G{n % 20:02d}",
+            start=start_us, end=start_us + 600_000_000, frames=checked * 3,
+            crc_checked=checked, crc_errors=errors, crc_error_rate=errors / (checked + errors),
+            gaps=int(rng.integers(0, 3)), longest_gap_s=float(rng.random() * 4),
+            diagnostics=errors, findings=per,
+        )  # fmt: skip
+        table = pa.Table.from_pydict(columns, schema=schema)
+        index = pa.Table.from_pylist(
+            [row],
+            schema=recordings.set(
+                recordings.get_field_index("start"), pa.field("start", pa.int64())
+            ).set(recordings.get_field_index("end"), pa.field("end", pa.int64())),
+        ).cast(recordings)
+        dataset.write(digest, {"findings": table, RECORDINGS: index})
+    return dataset.root
+
+
+def bench_dask(folder: Path, rows: int, repeat: int) -> None:
+    from distributed import Client, LocalCluster
+
+    from analyzer.fleet.dask_questions import ask_on_cluster, cluster_tags, on_client
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.queries import connect, standard_answers
+    from analyzer.fleet.questions import standard_questions
+
+    print(f"writing a fleet findings table of {rows:,} rows ...", flush=True)
+    root = str(make_findings(folder, rows))
+    here: list[object] = []
+    laptop = timed(lambda: here.append(standard_answers(connect(root))), repeat)
+    print(f"standard questions, DuckDB here           {best(laptop)}")
+    questions = standard_questions(cluster_tags(Dataset(root)))
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        Client(cluster) as client,
+    ):
+        there: list[object] = []
+        remote = timed(
+            lambda: there.append(ask_on_cluster(root, on_client(client), questions).answers),
+            repeat,
+        )
+    same = all(
+        [(a.columns, a.rows) for a in x] == [(b.columns, b.rows) for b in here[0]]  # type: ignore[attr-defined]
+        for x in there
+    )
+    print(
+        f"same, 2 local Dask workers (--dask path)  {best(remote)}: "
+        f"{min(remote) / min(laptop):.2f} x; same answers: {same}"
+    )
 
 
 if __name__ == "__main__":

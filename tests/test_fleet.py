@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -286,3 +287,38 @@ def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     assert "b-cut.pcap" in dom and "Obedience per command and gimbal" in dom
     code, _, err = cli("fleet", str(fleet["dataset"]), "--html", str(page))
     assert code == 2 and "--force" in err
+
+
+@pytest.fixture
+def india_time(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """This process in UTC+05:30 (no summer time, so the offset is known)."""
+    import time
+
+    monkeypatch.setenv("TZ", "IST-05:30")
+    time.tzset()
+    yield
+    monkeypatch.undo()
+    time.tzset()
+
+
+def test_times_follow_local_time_in_text_and_report_but_not_json(
+    fleet: dict[str, Any], tmp_path: Path, india_time: None
+) -> None:
+    dataset = str(fleet["dataset"])
+    code, utc, _ = cli("fleet", dataset)
+    assert code == 0
+    assert re.search(r"^  b-crc\.log .* 2023-11-14 22:13:20\.000Z ", utc, re.M)
+    code, local, _ = cli("--local-time", "fleet", dataset)
+    assert code == 0
+    assert re.search(r"^  b-crc\.log .* 2023-11-15 03:43:20\.000\+05:30 ", local, re.M)
+    assert "Z " not in local.split("The worst flights")[1]
+    code, out, _ = cli("fleet", dataset, "--json", "--local-time")
+    worst = [json.loads(line) for line in out.splitlines()]
+    (crc,) = [w for w in worst if w.get("recording") == "b-crc.log"]
+    assert crc["start"] == "2023-11-14T22:13:20Z"
+    page = tmp_path / "local.html"
+    code, _, _ = cli("fleet", dataset, "--html", str(page), "--local-time")
+    assert code == 0
+    text = page.read_text()
+    assert "Times are local time; weeks are ISO weeks in UTC." in text
+    assert "2023-11-15 03:43:20.000+05:30 to 2023-11-22 03:43:46.000+05:30" in text

@@ -148,3 +148,49 @@ def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes
         "--csv",
     )
     assert out == "n\n12\n"
+
+
+def test_a_failed_input_is_skipped_next_time_unless_retried(
+    fleet: dict[str, Any], tmp_path: Path
+) -> None:
+    """An input that cannot be read at all (here a link to nothing) or fails to decode is
+    a row with its error; the next runs skip it and say why, --retry-failed tries again."""
+    flights = tmp_path / "flights"
+    flights.mkdir()
+    lost = flights / "lost.log"
+    lost.symlink_to(flights / "elsewhere.log")
+    cut = flights / "b-cut.pcap"
+    cut.write_bytes(fleet["files"]["b-cut.pcap"].read_bytes())
+    dataset = tmp_path / "dataset"
+    args = ("table", str(lost), str(cut), "-o", str(dataset), "--workers", "1")
+    code, out, _ = cli(*args)
+    assert code == 0 and "2 input(s), 0 added (0 rows), 0 skipped" in out
+    assert "2 with errors" in out
+    row = recording(dataset, "lost.log")
+    assert row["error"].startswith(f"cannot read {lost}: ") and row["frames"] is None
+    before = {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")}
+
+    code, out, _ = cli(*args)
+    assert code == 0
+    assert f"skipped {lost}: failed before ({row['error']}); --retry-failed tries again" in out
+    assert f"skipped {cut}: already in {dataset}" in out
+    assert "0 added (0 rows), 2 skipped (content already there) (1 had failed: " in out
+    assert {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")} == before
+
+    code, out, _ = cli(*args, "--retry-failed")
+    assert code == 0
+    assert f"retrying {lost}: it failed before ({row['error']})" in out
+    assert f"retrying {cut}: it failed before (cannot read {cut} as a capture: " in out
+    assert "0 added (0 rows), 0 skipped" in out and "2 with errors" in out
+    assert sorted(r["recording"] for r in rows(dataset, "recordings")) == ["b-cut.pcap", "lost.log"]
+
+    # The link leads somewhere now: the next run reads it, and its error row goes.
+    (flights / "elsewhere.log").write_bytes(fleet["files"]["a-clean.log"].read_bytes())
+    code, out, _ = cli(*args)
+    assert code == 0 and "1 added" in out
+    (row,) = [r for r in rows(dataset, "recordings") if r["recording"] == "lost.log"]
+    assert (
+        row["error"] is None
+        and row["frames"] == recording(fleet["dataset"], "a-clean.log")["frames"]
+    )
+    assert len(rows(dataset, "recordings")) == 2

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import IO, cast
+from typing import IO, TYPE_CHECKING, cast
+
+if TYPE_CHECKING:
+    from analyzer.fleet.queries import Answer
 
 HELP = "ask a fleet dataset (from `table`): CRC errors, gaps, obedience, worst flights, any SQL"
 
@@ -28,10 +31,20 @@ with plots, in the style of `report` (with --sql, the query's answer at its end)
   gimbal-analyzer fleet fleet/ --html fleet.html
   gimbal-analyzer fleet fleet/ --dask tcp://scheduler:8786
 
---dask reads the tables with dask.dataframe on the cluster's workers (they must
-reach DIR by the same path), cuts them there to the columns the questions need,
-and answers from that here; with --sql it brings the tables the query names.
-Times are UTC.
+--dask runs the same questions on a Dask cluster (pip install
+'gimbal-analyzer[cluster]'): its workers read the Parquet files (they must reach
+DIR by the same path), filter, join, group and aggregate there with
+dask.dataframe (medians by a shuffle), and only the aggregated rows come back;
+DuckDB finishes them here (rates, rounding, order) with the same SQL as without
+--dask, so the answers are the same. --sql with --dask is not spread over the
+cluster (arbitrary SQL cannot in general be cut into worker tasks): the workers
+read the tables the query names, only the columns it names (every column when it
+has a * or NATURAL JOIN), and the query runs here over those rows.
+
+  gimbal-analyzer fleet fleet/ --dask tcp://scheduler:8786 --sql "SELECT ..."
+
+Times are UTC (--local-time: local time with its offset in the text and the
+report; JSON and CSV keep UTC). Weeks are ISO weeks in UTC.
 """
 
 
@@ -44,27 +57,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--html", metavar="FILE", help="write the fleet report to FILE")
     parser.add_argument("--force", action="store_true", help="replace the --html file if it exists")
     parser.add_argument(
-        "--dask", metavar="ADDRESS", help="read the tables on this Dask scheduler (tcp://HOST:8786)"
+        "--dask",
+        metavar="ADDRESS",
+        help="run the questions on this Dask scheduler's workers (tcp://HOST:8786)",
     )
 
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.fleet.output import write_csv, write_json, write_text
-    from analyzer.fleet.queries import connect, run_sql, standard_questions
     from analyzer.output_file import OutputFile, check_output
 
     if args.html:
         check_output(args.html, force=args.force)
-    tables = None
+    standard: list[Answer] = []
+    overview: Answer | None = None
+    query: list[Answer] = []
     if args.dask:
-        from analyzer.fleet.dask_tables import dask_tables, tables_named
+        standard, overview, query = _on_cluster(args)
+    else:
+        from analyzer.fleet.queries import ask, connect, run_sql, standard_answers
+        from analyzer.fleet.questions import overview as overview_question
 
-        wanted = tables_named(args.sql) if args.sql else None
-        tables = dask_tables(args.dataset, args.dask, wanted)
-    con = connect(args.dataset, tables)
-    answers = (
-        [run_sql(con, args.sql, f"Query: {args.sql}")] if args.sql else standard_questions(con)
-    )
+        con = connect(args.dataset)
+        if args.sql:
+            query = [run_sql(con, args.sql, f"Query: {args.sql}")]
+        if not args.sql or args.html:
+            standard = standard_answers(con)
+        if args.html:
+            overview = ask(con, overview_question())
+    answers = query or standard
     out = sys.stdout
     if args.json:
         write_json(out, answers, named=not args.sql)
@@ -75,11 +96,59 @@ def run(args: argparse.Namespace) -> int:
     if args.html:
         from analyzer.fleet.page import render_fleet
 
-        if args.sql:  # the standard page, with the query's answer at the end
-            page = render_fleet(con, args.dataset, extra=answers).encode()
-        else:
-            page = render_fleet(con, args.dataset, answers).encode()
+        assert overview is not None
+        # With --sql, the standard page with the query's answer at the end.
+        page = render_fleet(args.dataset, standard, overview, extra=query).encode()
         with OutputFile(args.html, force=args.force) as handle:
             cast("IO[bytes]", handle.file).write(page)
         sys.stderr.write(f"wrote {args.html} ({len(page) / 1024:,.0f} KiB)\n")
     return 0
+
+
+def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, list[Answer]]:
+    """The standard answers, the report's overview (with --html) and the --sql answer,
+    with the work on the cluster at ``args.dask``."""
+    from analyzer.fleet.dask_questions import (
+        ClusterRun,
+        ask_on_cluster,
+        cluster_tags,
+        on_client,
+    )
+    from analyzer.fleet.dask_tables import dask_tables, tables_named, workers
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.queries import connect, run_sql
+    from analyzer.fleet.questions import Question, overview, standard_questions
+    from analyzer.fleet.runner import connect as connect_cluster
+
+    client = connect_cluster(args.dask)
+    try:
+        query: list[Answer] = []
+        if args.sql:
+            tables = dask_tables(args.dataset, client, tables_named(args.sql))
+            con = connect(args.dataset, tables)
+            query = [run_sql(con, args.sql, f"Query: {args.sql}")]
+            rows = sum(t.num_rows for t in tables.values())
+            read = "; ".join(f"{n} ({', '.join(t.column_names)})" for n, t in tables.items())
+            sys.stderr.write(
+                f"fleet: the workers of {args.dask} read {read or 'no table'}; "
+                f"{rows:,} rows came back and the query ran here\n"
+            )
+        questions: list[Question] = []
+        if not args.sql or args.html:
+            questions = list(standard_questions(cluster_tags(Dataset(args.dataset))))
+        if args.html:
+            questions.append(overview())
+        if not questions:
+            return [], None, query
+        spread = workers(client)
+        run = ask_on_cluster(args.dataset, on_client(client), questions, ClusterRun([]), spread)
+        sys.stderr.write(
+            f"fleet: {len(questions)} question(s) aggregated on the workers of {args.dask}; "
+            f"{run.rows_back:,} aggregated rows came back\n"
+        )
+    finally:
+        client.close()
+    answers = run.answers
+    if args.html:
+        return answers[:-1], answers[-1], query
+    return answers, None, query

@@ -5,11 +5,19 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import sys
 import time
 from collections import Counter
+from typing import TYPE_CHECKING
 
 from analyzer.errors import UsageError
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.rows import FileWork
 
 HELP = "add recordings and capture files to a fleet dataset (Parquet, one table per kind)"
 
@@ -37,7 +45,20 @@ A damaged or unreadable input becomes a row with its error; the rest goes on.
 
 --workers N runs N processes (default: the cores). --dask sends the same
 per-file tasks to an existing Dask cluster (pip install 'gimbal-analyzer[cluster]');
-its workers read the inputs by the same path or URL (shared storage, s3://...).
+its workers read the inputs by the same path or URL (shared storage, s3://...)
+and write their Parquet files into DIR themselves, which they must reach by the
+same path (checked first); this process writes each input's recordings row last.
+--client-writes is for a DIR the workers cannot reach: they send the rows back and
+this process writes them. A wrong address stops before DIR is made.
+
+An input that could not be read at all is a row too (its error, keyed by its
+path): the next runs skip it and say so. One that failed to decode is skipped
+as content already there. --retry-failed decodes every input whose row has an
+error again; a file unreadable before is taken by itself once it reads.
+
+  gimbal-analyzer table flights/ -o fleet --dask tcp://scheduler:8786 --client-writes
+  gimbal-analyzer table flights/ -o fleet --retry-failed
+
 Ask the dataset with `gimbal-analyzer fleet DIR`.
 """
 
@@ -66,6 +87,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--dask", metavar="ADDRESS", help="run the tasks on this Dask scheduler (tcp://HOST:8786)"
+    )
+    parser.add_argument(
+        "--client-writes",
+        action="store_true",
+        help="with --dask: the workers send every row here and this process writes DIR "
+        "(when the workers cannot reach DIR)",
+    )
+    parser.add_argument(
+        "--retry-failed",
+        action="store_true",
+        help="decode again the inputs whose row has an error (unreadable or failed before)",
     )
     parser.add_argument(
         "-f", "--format", metavar="FORMAT", help="read every input as " + "/".join(FORMATS)
@@ -97,47 +129,60 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.fleet.dataset import Dataset
-    from analyzer.fleet.rows import FileWork
-    from analyzer.fleet.runner import plan, run_dask, run_local, walk_inputs
+    from analyzer.fleet.runner import connect, walk_inputs
 
     tags = parse_tags(args.tag)
     if args.workers < 1:
         raise UsageError(f"--workers must be 1 or more, not {args.workers}")
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1..65535, not {args.port}")
+    if args.client_writes and not args.dask:
+        raise UsageError("--client-writes goes with --dask")
     started = time.monotonic()
     paths = walk_inputs(args.inputs)
+    if not args.dask:
+        return _run(args, paths, tags, started, None)
+    # The cluster first: a wrong address leaves nothing behind. Its workers have other
+    # working folders: they get absolute paths.
+    paths = [p if "://" in p else os.path.abspath(p) for p in paths]
+    client = connect(args.dask)
+    try:
+        return _run(args, paths, tags, started, client)
+    finally:
+        client.close()
+
+
+def _run(
+    args: argparse.Namespace,
+    paths: list[str],
+    tags: dict[str, str],
+    started: float,
+    client: Client | None,
+) -> int:
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.runner import run_dask, run_local, workers_reach
+
     dataset = Dataset(args.output)
+    made = not dataset.root.exists()
     dataset.create()
+    root = os.path.abspath(args.output)
+    if client is not None and not args.client_writes:
+        try:
+            workers_reach(client, root)
+        except UsageError:
+            if made:
+                shutil.rmtree(dataset.root, ignore_errors=True)  # empty folders made above
+            raise
     out = sys.stdout
     removed = dataset.remove_partial()
     if removed:
         out.write(f"removed {removed} unfinished file(s) of an interrupted run in {args.output}\n")
-    settings = {
-        "fmt": args.format,
-        "port": args.port,
-        "tolerance_deg": args.tolerance,
-        "time_allowed_s": args.time_allowed,
-    }
-    todo: list[FileWork] = []
-    seen: dict[str, str] = {}
-    skipped = 0
-    for path in paths:
-        work = plan(path, tags, **settings)
-        if dataset.holds(work.content_hash) or work.content_hash in seen:
-            skipped += 1
-            if not args.quiet:
-                same = seen.get(work.content_hash)
-                why = f"same content as {same}" if same else f"already in {args.output}"
-                out.write(f"skipped {path}: {why}\n")
-            continue
-        seen[work.content_hash] = path
-        todo.append(work)
+    todo, skipped, failed_before = _plan(args, paths, tags, dataset)
     out.flush()
-    # Local workers write their files themselves; Dask workers send the rows to be written here.
-    local = not args.dask
-    results = run_local(todo, args.workers, args.output) if local else run_dask(todo, args.dask)
+    if client is None:  # local workers write their files themselves
+        results = run_local(todo, args.workers, args.output)
+    else:  # Dask workers too, but for the recordings rows (with --client-writes: every row)
+        results = run_dask(todo, client, None if args.client_writes else root)
     added = rows = errors = 0
     where: Counter[str] = Counter()
     for n, result in enumerate(results, 1):
@@ -155,11 +200,66 @@ def run(args: argparse.Namespace) -> int:
             out.write(f"[{n}/{len(todo)}] {line}\n")
             out.flush()
     seconds = time.monotonic() - started
+    again = f" ({failed_before} had failed: --retry-failed tries again)" if failed_before else ""
     out.write(
         f"{args.output}: {len(paths)} input(s), {added} added ({rows:,} rows), "
-        f"{skipped} skipped (content already there), {errors} with errors; {seconds:.1f} s\n"
+        f"{skipped} skipped (content already there){again}, {errors} with errors; "
+        f"{seconds:.1f} s\n"
     )
     if where:
         runners = ", ".join(f"{name} ({count})" for name, count in sorted(where.items()))
         out.write(f"tasks ran on: {runners}\n")
+    if client is not None:
+        writer = "this process" if args.client_writes else "the workers (recordings rows: here)"
+        out.write(f"written by: {writer}\n")
     return 0
+
+
+def _plan(
+    args: argparse.Namespace, paths: list[str], tags: dict[str, str], dataset: Dataset
+) -> tuple[list[FileWork], int, int]:
+    """The inputs to do (new content, or a failure to retry); how many skipped, and how
+    many of those had failed."""
+    from analyzer.fleet.dataset import unreadable_hash
+    from analyzer.fleet.runner import plan
+
+    settings = {
+        "fmt": args.format,
+        "port": args.port,
+        "tolerance_deg": args.tolerance,
+        "time_allowed_s": args.time_allowed,
+    }
+    out = sys.stdout
+    todo: list[FileWork] = []
+    seen: dict[str, str] = {}
+    skipped = failed_before = 0
+    for path in paths:
+        work = plan(path, tags, **settings)
+        digest = work.content_hash
+        if work.error is None and dataset.holds(stale := unreadable_hash(path)):
+            dataset.forget(stale)  # unreadable before, readable now: its error row goes
+        if digest in seen:
+            skipped += 1
+            if not args.quiet:
+                out.write(f"skipped {path}: same content as {seen[digest]}\n")
+            continue
+        seen[digest] = path
+        if dataset.holds(digest):
+            unreadable = work.error is not None
+            failure = dataset.failure(digest) if args.retry_failed or unreadable else None
+            if failure is not None and args.retry_failed:
+                dataset.forget(digest)
+                if not args.quiet:
+                    out.write(f"retrying {path}: it failed before ({failure})\n")
+                todo.append(work)
+                continue
+            skipped += 1
+            why = f"already in {args.output}"
+            if failure is not None:
+                failed_before += 1
+                why = f"failed before ({failure}); --retry-failed tries again"
+            if not args.quiet:
+                out.write(f"skipped {path}: {why}\n")
+            continue
+        todo.append(work)
+    return todo, skipped, failed_before

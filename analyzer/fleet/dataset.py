@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import uuid
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from analyzer.fleet.columns import RECORDINGS, TABLES
 from analyzer.output_file import OutputWriteError, describe_os_error
 
 SUFFIX = ".parquet"
-UNREADABLE = "unreadable-"  # hash prefix of a file that could not be read (tried again)
+UNREADABLE = "unreadable-"  # key prefix of a file that could not be read (by its path)
 _PARTIAL = ".partial-"
 HASH_BLOCK = 1 << 20
 
@@ -44,7 +45,8 @@ def content_hash(path: str) -> str:
 
 
 def unreadable_hash(path: str) -> str:
-    """A stand-in hash for a file that could not be read: named after its path."""
+    """A stand-in hash for a file that could not be read: named after its path, so the next
+    run knows it failed (and skips it, unless told to retry)."""
     return UNREADABLE + hashlib.sha256(os.path.abspath(path).encode()).hexdigest()[:32]
 
 
@@ -75,8 +77,30 @@ class Dataset:
         }
 
     def holds(self, digest: str) -> bool:
-        """True when an input of this content is complete here (unreadable ones are retried)."""
-        return not digest.startswith(UNREADABLE) and (self.path(RECORDINGS, digest)).exists()
+        """True when an input of this content (or this unreadable path) is complete here."""
+        return self.path(RECORDINGS, digest).exists()
+
+    def failure(self, digest: str) -> str | None:
+        """The error of the input's row (None when it was read, or is not here)."""
+        try:
+            column = pq.read_table(self.path(RECORDINGS, digest), columns=["error"]).column(0)
+        except (OSError, pa.ArrowException):
+            return None
+        return None if len(column) == 0 else column[0].as_py()
+
+    def forget(self, digest: str) -> None:
+        """Remove an input's files, its ``recordings`` row first (to be made again)."""
+        for name in (RECORDINGS, *(n for n in TABLES if n != RECORDINGS)):
+            try:
+                self.path(name, digest).unlink(missing_ok=True)
+            except OSError as exc:
+                raise OutputWriteError(
+                    f"cannot remove {self.path(name, digest)}: {describe_os_error(exc)}"
+                ) from exc
+
+    def scratch(self, name: str) -> Path:
+        """A temporary file's path in the dataset (removed by the next run if left)."""
+        return self.root / RECORDINGS / f"{_PARTIAL}{name}"
 
     def path(self, table: str, digest: str) -> Path:
         return self.root / table / f"{digest}{SUFFIX}"
@@ -114,7 +138,7 @@ class Dataset:
 
     @staticmethod
     def _write_one(target: Path, table: pa.Table) -> None:
-        temp = target.with_name(f"{_PARTIAL}{os.getpid()}-{target.name}")
+        temp = target.with_name(f"{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}-{target.name}")
         try:
             pq.write_table(table, temp, compression="zstd")
             with open(temp, "rb+") as handle:

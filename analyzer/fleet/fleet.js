@@ -1,4 +1,5 @@
-// Draws the fleet report's plots from the JSON in <script id="fleet-data">; Chart.js is inlined above.
+// Draws the fleet report's plots from the JSON in <script id="fleet-data">; Chart.js is inlined above,
+// analyzer/report/plots_check.js below.
 (function () {
   "use strict";
   var data = JSON.parse(document.getElementById("fleet-data").textContent);
@@ -41,22 +42,4 @@
         "findings", true);
   chart("plot-response", "bar", data.commands, sets(data.response, data.commands, "bar"),
         "median response time (s)");
-
-  // For checks: how many painted pixels each plot has (a blank canvas has none).
-  Array.prototype.forEach.call(document.querySelectorAll("canvas"), function (canvas) {
-    var ctx = canvas.getContext("2d");
-    var pixels = ctx.getImageData(0, 0, canvas.width, canvas.height).data;
-    var painted = 0;
-    for (var i = 3; i < pixels.length; i += 4 * 7) { if (pixels[i]) { painted++; } }
-    canvas.setAttribute("data-painted", String(painted));
-    var drawn = Chart.getChart(canvas);
-    var count = 0;
-    if (drawn) {
-      drawn.data.datasets.forEach(function (d) {
-        count += d.data.filter(function (v) { return v !== null; }).length;
-      });
-    }
-    canvas.setAttribute("data-points", String(count));
-  });
-  document.body.setAttribute("data-plots-ready", "yes");
 })();

@@ -9,6 +9,7 @@ from datetime import date, datetime, timezone
 from decimal import Decimal
 from typing import IO
 
+from analyzer import timefmt
 from analyzer.fleet.queries import Answer, Value
 from analyzer.terminal_text import printable
 
@@ -16,7 +17,7 @@ MAX_TEXT_ROWS = 50  # per question in the text output (--json and --csv give all
 
 
 def cell(value: Value | object) -> str | int | float | bool | None:
-    """A value as JSON has it: times in UTC with Z."""
+    """A value as JSON and CSV have it: times in UTC with Z (whatever --local-time says)."""
     if isinstance(value, datetime):
         if value.tzinfo is not None:
             value = value.astimezone(timezone.utc).replace(tzinfo=None)
@@ -30,8 +31,15 @@ def cell(value: Value | object) -> str | int | float | bool | None:
     return str(value)
 
 
+def human(value: Value | object) -> str | int | float | bool | None:
+    """A value as people read it: times by the one time rule (analyzer.timefmt)."""
+    if isinstance(value, datetime):
+        return timefmt.format_datetime(value.timestamp())
+    return cell(value)
+
+
 def _text(value: Value | object) -> str:
-    shown = cell(value)
+    shown = human(value)
     if shown is None:
         return "-"
     if isinstance(shown, float):

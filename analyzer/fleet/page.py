@@ -5,17 +5,15 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Sequence
+from datetime import datetime
 from importlib import resources
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from analyzer import __version__
+from analyzer import __version__, timefmt
 from analyzer.analysis.findings import VERDICTS
-from analyzer.fleet.output import cell
-from analyzer.fleet.queries import Answer, run_sql, standard_questions, tag_columns
-from analyzer.report.page import CHART_JS, CSS, _e, _plot, _rows
-
-if TYPE_CHECKING:
-    import duckdb
+from analyzer.fleet.output import human
+from analyzer.fleet.queries import Answer, Value
+from analyzer.report.page import CHART_JS, CHECK_JS, CSS, _e, _plot, _rows
 
 
 def _by_name(answers: Sequence[Answer], prefix: str) -> Answer | None:
@@ -74,43 +72,58 @@ def _table(answer: Answer) -> str:
         for i in range(len(answer.columns))
         if all(isinstance(row[i], (int, float)) or row[i] is None for row in answer.rows)
     )
-    rows = [["" if (v := cell(x)) is None else _e(v) for x in row] for row in answer.rows]
+    rows = [["" if (v := human(x)) is None else _e(v) for x in row] for row in answer.rows]
     return _rows(rows, answer.columns, numeric)
 
 
+def _tags(answers: Sequence[Answer]) -> list[str]:
+    """The tags the standard answers are grouped by (``fleet`` alone when there are none)."""
+    prefix = "link_by_"
+    return [
+        a.name[len(prefix) :]
+        for a in answers
+        if a.name.startswith(prefix) and not a.name.startswith("link_by_week_")
+    ]
+
+
+def _when(value: Value | object) -> str:
+    """A time as every human output shows it (analyzer.timefmt: UTC, or --local-time)."""
+    if isinstance(value, datetime):
+        return timefmt.format_datetime(value.timestamp())
+    return "-"
+
+
 def render_fleet(
-    con: duckdb.DuckDBPyConnection,
     dataset: str,
-    answers: Sequence[Answer] | None = None,
+    answers: Sequence[Answer],
+    overview: Answer,
     extra: Sequence[Answer] = (),
 ) -> str:
-    """The whole page: the standard ``answers`` (asked when not given), then ``extra`` ones."""
-    answers = list(answers) if answers is not None else standard_questions(con)
-    tags = tag_columns(con)
+    """The whole page: the standard ``answers`` and the ``overview``, then ``extra`` ones."""
+    tags = [t for t in _tags(answers) if t != "fleet"]
     tag = tags[0] if tags else "fleet"
     plots = plot_data(answers, tag)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
+    check_js = (resources.files("analyzer.report") / CHECK_JS).read_text("utf-8")
     script = (resources.files("analyzer.fleet") / "fleet.js").read_text("utf-8")
     payload = json.dumps(plots, separators=(",", ":")).replace("</", "<\\/")
-    overview = run_sql(
-        con,
-        "SELECT count(*), count(*) FILTER (error IS NOT NULL), sum(frames), sum(findings), "
-        "strftime(min(start), '%Y-%m-%d %H:%M:%SZ'), strftime(max(\"end\"), '%Y-%m-%d %H:%M:%SZ') "
-        "FROM recordings",
-    ).rows[0]
-    flights, failed, frames, findings, first, last = overview
-    generated = time.strftime("%Y-%m-%d %H:%M:%SZ", time.gmtime())
+    flights, failed, frames, findings, first, last = (
+        overview.rows[0] if overview.rows else (0, 0, None, None, None, None)
+    )
+    generated = timefmt.format_datetime(time.time())
+    zone = "local time" if timefmt.local_time() else "UTC"
     kv = [
         ("dataset", _e(dataset)),
         ("recordings", f"{flights:,} ({failed:,} unreadable or damaged)"),
-        ("time range", f"{_e(first or '-')} to {_e(last or '-')}"),
+        ("time range", f"{_e(_when(first))} to {_e(_when(last))}"),
         ("CAN frames", f"{frames or 0:,}"),
         ("findings", f"{findings or 0:,}"),
         ("tags", _e(", ".join(tags) or "none")),
     ]
     sections = [
         f"<h1>Fleet report: {_e(dataset)}</h1>",
-        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. Times are UTC. '
+        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {_e(generated)}. '
+        f"Times are {zone}; weeks are ISO weeks in UTC. "
         f"Plots are grouped by the first tag ({_e(tag)}).</p>",
         "<h2>Overview</h2>",
         '<table class="kv">' + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in kv),
@@ -140,6 +153,7 @@ def render_fleet(
             f'<script id="fleet-data" type="application/json">{payload}</script>',
             f"<script>{chart_js}</script>",
             f"<script>{script}</script>",
+            f"<script>{check_js}</script>",
             "</body></html>",
         ]
     )

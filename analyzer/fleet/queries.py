@@ -1,8 +1,7 @@
-"""The fleet's questions in SQL, answered by embedded DuckDB over the Parquet dataset."""
+"""The fleet's questions rendered to SQL and answered by embedded DuckDB over the dataset."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING
@@ -10,14 +9,24 @@ from typing import TYPE_CHECKING
 from analyzer.errors import UsageError
 from analyzer.fleet.columns import RECORDINGS, TABLES, empty_table, recordings_schema
 from analyzer.fleet.dataset import Dataset
+from analyzer.fleet.questions import (
+    JOINED,
+    Aggregate,
+    Column,
+    Constant,
+    GroupQuestion,
+    IsoWeek,
+    Question,
+    TopQuestion,
+    Where,
+    standard_questions,
+)
 
 if TYPE_CHECKING:
     import duckdb
     import pyarrow as pa
 
 Value = str | int | float | bool | datetime | None
-WORST = 10  # flights in the worst-flights list
-CRC_ALARM = 0.01  # a CRC error rate above this is a reason to look at a flight
 
 
 @dataclass
@@ -33,15 +42,13 @@ class Answer:
 def connect(root: str, tables: dict[str, pa.Table] | None = None) -> duckdb.DuckDBPyConnection:
     """An in-memory DuckDB with one view per table of the dataset at ``root``.
 
-    ``tables`` replaces files by tables already in memory (what ``fleet --dask`` computed).
+    ``tables`` replaces files by tables already in memory (what ``fleet --dask --sql``
+    brought from the workers).
     """
-    import duckdb
-
     dataset = Dataset(root)
     if tables is None and not dataset.hashes():
         raise UsageError(f"{root} holds no fleet dataset (make one with `gimbal-analyzer table`)")
-    con = duckdb.connect(":memory:")
-    con.execute("SET TimeZone = 'UTC'")  # weeks and dates are UTC, as every time shown
+    con = in_memory()
     for name in TABLES:
         given = (tables or {}).get(name)
         files = [str(p) for p in dataset.files(name)] if tables is None else []
@@ -57,6 +64,15 @@ def connect(root: str, tables: dict[str, pa.Table] | None = None) -> duckdb.Duck
         else:
             con.register(f"_{name}", empty_table(name))
             con.execute(f'CREATE VIEW "{name}" AS SELECT * FROM "_{name}"')
+    return con
+
+
+def in_memory() -> duckdb.DuckDBPyConnection:
+    """An empty in-memory DuckDB that works in UTC (weeks and dates, as every time shown)."""
+    import duckdb
+
+    con = duckdb.connect(":memory:")
+    con.execute("SET TimeZone = 'UTC'")
     return con
 
 
@@ -81,94 +97,135 @@ def run_sql(con: duckdb.DuckDBPyConnection, sql: str, title: str = "query") -> A
     return Answer("sql", title, columns, [tuple(r) for r in rows])
 
 
-def _q(name: str) -> str:
+def q(name: str) -> str:
+    """A quoted SQL identifier."""
     return '"' + name.replace('"', '""') + '"'
 
 
-def standard_questions(con: duckdb.DuckDBPyConnection) -> list[Answer]:
-    """CRC and gaps per tag and per week, obedience per command and tag, the worst flights."""
-    tags = tag_columns(con)
-    groups: list[tuple[str, str]] = [(t, f"r.{_q(t)}") for t in tags] or [("fleet", "'all'")]
-    answers: list[Answer] = []
-    link = (
-        "count(*) AS flights, sum(r.crc_errors) AS crc_errors, "
-        "sum(r.crc_checked + r.crc_errors) AS crc_protected, "
-        "round(sum(r.crc_errors) / nullif(sum(r.crc_checked + r.crc_errors), 0), 6) "
-        "AS crc_error_rate, sum(r.gaps) AS gaps, round(max(r.longest_gap_s), 3) AS longest_gap_s"
-    )
-    for tag, expr in groups:
-        answers.append(
-            _ask(
-                con,
-                f"link_by_{tag}",
-                f"CRC error rate and feedback gaps per {tag}",
-                f"SELECT {expr} AS {_q(tag)}, {link} FROM recordings r WHERE r.error IS NULL "
-                "GROUP BY 1 ORDER BY crc_error_rate DESC NULLS LAST, 1",
-            )
-        )
-    for tag, expr in groups:
-        answers.append(
-            _ask(
-                con,
-                f"link_by_week_{tag}",
-                f"CRC error rate and feedback gaps per week and {tag}",
-                f"SELECT strftime(date_trunc('week', r.start), '%G-W%V') AS week, "
-                f"{expr} AS {_q(tag)}, {link} FROM recordings r "
-                "WHERE r.error IS NULL GROUP BY 1, 2 ORDER BY 1, 2",
-            )
-        )
-    for tag, expr in groups:
-        answers.append(
-            _ask(
-                con,
-                f"obedience_by_{tag}",
-                f"Obedience per command and {tag}",
-                f"SELECT f.command, {expr} AS {_q(tag)}, count(*) AS findings, "
-                "count(*) FILTER (f.verdict = 'obeyed') AS obeyed, "
-                "count(*) FILTER (f.verdict = 'partial') AS partial, "
-                "count(*) FILTER (f.verdict = 'not_obeyed') AS not_obeyed, "
-                "count(*) FILTER (f.verdict = 'unknown') AS unknown, "
-                "round(median(f.response_s), 3) AS median_response_s "
-                "FROM findings f JOIN recordings r USING (content_hash) "
-                "WHERE f.command <> 'feedback' GROUP BY 1, 2 ORDER BY 1, 2",
-            )
-        )
-    answers.append(_worst(con, tags))
-    return answers
+def literal(text: str) -> str:
+    return "'" + text.replace("'", "''") + "'"
 
 
-def _worst(con: duckdb.DuckDBPyConnection, tags: Sequence[str]) -> Answer:
-    shown = "".join(f"r.{_q(t)}, " for t in tags)
-    reason = (
-        "concat_ws('; ', "
-        "CASE WHEN r.error IS NOT NULL THEN 'unreadable: ' || r.error END, "
-        f"CASE WHEN r.crc_error_rate > {CRC_ALARM} THEN 'CRC errors ' || "
-        "round(r.crc_error_rate * 100, 2) || ' %' END, "
-        "CASE WHEN r.findings_not_obeyed > 0 THEN "
-        "r.findings_not_obeyed || ' finding(s) not obeyed' END, "
-        "CASE WHEN r.findings_partial > 0 THEN r.findings_partial || ' partial' END, "
-        "CASE WHEN r.gaps > 0 THEN r.gaps || ' feedback gap(s), longest ' || "
-        "round(r.longest_gap_s, 1) || ' s' END, "
-        "CASE WHEN r.diagnostics > r.crc_errors THEN (r.diagnostics - r.crc_errors) || "
-        "' other diagnostic(s)' END)"
-    )
-    score = (
-        "(CASE WHEN r.error IS NOT NULL THEN 1000 ELSE 0 END"
-        " + coalesce(r.crc_error_rate, 0) * 1000 + coalesce(r.findings_not_obeyed, 0) * 10"
-        " + coalesce(r.findings_partial, 0) * 3 + coalesce(r.gaps, 0) * 5"
-        " + coalesce(r.diagnostics - r.crc_errors, 0))"
-    )
-    return _ask(
-        con,
-        "worst_flights",
-        f"The worst flights (at most {WORST})",
-        f"SELECT r.recording, {shown}strftime(r.start, '%Y-%m-%dT%H:%M:%SZ') AS start, "
-        f"round({score}, 1) AS score, {reason} AS reason FROM recordings r "
-        f"WHERE {score} > 0 ORDER BY score DESC, r.recording LIMIT {WORST}",
-    )
+def standard_answers(con: duckdb.DuckDBPyConnection) -> list[Answer]:
+    """The standard questions (analyzer.fleet.questions) asked of the dataset here."""
+    return [ask(con, question) for question in standard_questions(tag_columns(con))]
 
 
-def _ask(con: duckdb.DuckDBPyConnection, name: str, title: str, sql: str) -> Answer:
-    answer = run_sql(con, sql, title)
-    answer.name = name
+def ask(con: duckdb.DuckDBPyConnection, question: Question) -> Answer:
+    """One described question, rendered to SQL and answered by DuckDB."""
+    if isinstance(question, TopQuestion):
+        sql = finish_top_sql(question, q(question.table))
+    else:
+        sql = finish_sql(question, f"({group_sql(question)})")
+    answer = run_sql(con, sql, question.title)
+    answer.name = question.name
     return answer
+
+
+# -- a description rendered to SQL ---------------------------------------------------------
+
+
+def _column(column: Column) -> str:
+    return q(column.source)
+
+
+def _key(expr: Column | Constant | IsoWeek) -> str:
+    if isinstance(expr, Column):
+        return _column(expr)
+    if isinstance(expr, Constant):
+        return literal(expr.value)
+    return f"strftime(date_trunc('week', {_column(expr.column)}), '%G-W%V')"
+
+
+def _where(where: Where) -> str:
+    column = _column(where.column)
+    if where.test == "null":
+        return f"{column} IS NULL"
+    if where.test == "not_null":
+        return f"{column} IS NOT NULL"
+    operator = "=" if where.test == "equal" else "<>"
+    return f"{column} {operator} {literal(str(where.value))}"
+
+
+def _aggregate(agg: Aggregate) -> str:
+    column = _column(agg.column) if agg.column is not None else "*"
+    if agg.func == "count":
+        return f"count({column})"
+    if agg.func == "count_equal":
+        return f"count(*) FILTER (WHERE {column} = {literal(str(agg.value))})"
+    if agg.plus is not None:
+        column = f"{column} + {_column(agg.plus)}"
+    return f"{agg.func}({column})"
+
+
+def source_sql(question: GroupQuestion) -> str:
+    """The question's rows: its table's columns it reads, joined, filtered."""
+    main, joined = question.columns()
+    names = [f"t.{q(n)}" for n in main]
+    origin = f"{q(question.table)} t"
+    if question.join is not None:
+        join = question.join
+        names += [f"j.{q(n)} AS {q(JOINED + n)}" for n in joined]
+        inner = ", ".join(q(n) for n in [join.on, *joined])
+        on = q(join.on)
+        origin += f" JOIN (SELECT {inner} FROM {q(join.table)}) j ON t.{on} = j.{on}"
+    sql = f"SELECT {', '.join(names) or '1'} FROM {origin}"
+    if question.where:
+        sql = f"SELECT * FROM ({sql}) WHERE " + " AND ".join(_where(w) for w in question.where)
+    return sql
+
+
+def group_sql(question: GroupQuestion) -> str:
+    """The aggregation (what ``fleet --dask`` computes on the workers instead)."""
+    keys = [f"{_key(k.expr)} AS {q(k.name)}" for k in question.keys]
+    aggs = [f"{_aggregate(a)} AS {q(a.name)}" for a in question.aggregates]
+    positions = ", ".join(str(n + 1) for n in range(len(keys)))
+    return f"SELECT {', '.join(keys + aggs)} FROM ({source_sql(question)}) GROUP BY {positions}"
+
+
+def finish_sql(question: GroupQuestion, source: str) -> str:
+    """The answer from the aggregated rows in ``source``: rates, rounding, order, limit.
+    The same on both paths, over few rows."""
+    shown = []
+    for out in question.outputs:
+        value = q(out.of)
+        if out.over is not None:
+            value = f"CAST({value} AS DOUBLE) / nullif(CAST({q(out.over)} AS DOUBLE), 0)"
+        if out.digits is not None:
+            value = f"round({value}, {out.digits})"
+        shown.append(f"{value} AS {q(out.name)}")
+    sql = f"SELECT {', '.join(shown)} FROM {source} agg"
+    if question.order:
+        order = [
+            f"{q(o.name)} {'DESC' if o.descending else 'ASC'} NULLS LAST" for o in question.order
+        ]
+        sql += " ORDER BY " + ", ".join(order)
+    if question.limit is not None:
+        sql += f" LIMIT {question.limit}"
+    return sql
+
+
+def score_sql(question: TopQuestion) -> str:
+    terms = []
+    for term in question.score:
+        column = f"r.{q(term.column)}"
+        if term.present:
+            terms.append(f"(CASE WHEN {column} IS NOT NULL THEN {term.weight} ELSE 0 END)")
+        elif term.minus is not None:
+            terms.append(f"coalesce({column} - r.{q(term.minus)}, 0) * {term.weight}")
+        else:
+            terms.append(f"coalesce({column}, 0) * {term.weight}")
+    return "(" + " + ".join(terms) + ")"
+
+
+def finish_top_sql(question: TopQuestion, source: str) -> str:
+    """The top rows of ``source`` by score (unrounded: the rounded one is for people) with
+    the reasons (the same on both paths)."""
+    score = score_sql(question)
+    shown = "".join(f"r.{q(c)}, " for c in question.shown)
+    reason = ", ".join(f"CASE WHEN {r.when} THEN {r.text} END" for r in question.reasons)
+    return (
+        f"SELECT {shown}round({score}, 1) AS score, concat_ws('; ', {reason}) AS reason "
+        f"FROM {source} r WHERE {score} > 0 "
+        f"ORDER BY {score} DESC, r.{q(question.tie)} LIMIT {question.limit}"
+    )

@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import hashlib
 import os
+import uuid
 from collections.abc import Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from analyzer.errors import UsageError
+from analyzer.errors import SourceError, UsageError
+from analyzer.fleet.columns import RECORDINGS
 from analyzer.fleet.dataset import Dataset, content_hash, unreadable_hash
 from analyzer.fleet.rows import FileRows, FileWork, error_text, file_rows
 from analyzer.inputs import EXTENSIONS
+from analyzer.output_file import describe_os_error
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -84,14 +87,22 @@ def _size(path: str) -> int:
     return os.path.getsize(path)
 
 
-def rows_written(work: FileWork, root: str) -> FileRows:
-    """A local worker's task: the rows of one file, written into the dataset at ``root``
-    by the worker itself (so writing runs in parallel too); the result keeps only counts."""
+def rows_written(work: FileWork, root: str, index_here: bool = False) -> FileRows:
+    """A worker's task: the rows of one file, written into the dataset at ``root`` by the
+    worker itself (so writing runs in parallel too); the result keeps only counts.
+
+    ``index_here``: the worker writes every table but ``recordings`` and sends that row
+    back, for the caller to write last (a Dask worker on another machine: the input is
+    complete in the index only once the caller has its row).
+    """
     result = file_rows(work)
-    Dataset(root).write(work.content_hash, result.tables)
-    result.row_count = result.rows
-    result.tables = {}
-    result.written = True
+    count = result.rows
+    tables = dict(result.tables)
+    index = tables.pop(RECORDINGS, None) if index_here else None
+    Dataset(root).write(work.content_hash, tables)
+    result.row_count = count
+    result.tables = {RECORDINGS: index} if index is not None else {}
+    result.written = index is None
     return result
 
 
@@ -119,20 +130,79 @@ def run_local(works: Iterable[FileWork], workers: int, root: str) -> Iterator[Fi
                     pending.add(pool.submit(rows_written, nxt, root))
 
 
-def run_dask(works: Iterable[FileWork], address: str) -> Iterator[FileRows]:
-    """The same tasks on a Dask cluster (``dask.distributed``); results as they finish."""
-    client = connect(address)
-    try:
-        from distributed import as_completed
+def run_dask(works: Iterable[FileWork], client: Client, root: str | None) -> Iterator[FileRows]:
+    """The same tasks on a Dask cluster (``dask.distributed``); results as they finish.
 
-        works = list(works)
-        keys = [f"fleet-rows-{hashlib.sha256(repr(w).encode()).hexdigest()[:24]}" for w in works]
+    With ``root`` (a path the workers reach) the workers write their tables there and send
+    back the ``recordings`` row; without, they send every row back to be written here.
+    """
+    from distributed import as_completed
+
+    works = list(works)
+    keys = [f"fleet-rows-{hashlib.sha256(repr(w).encode()).hexdigest()[:24]}" for w in works]
+    if root is None:
         futures = client.map(file_rows, works, key=keys)
-        with client.as_current():
-            for future in as_completed(futures):
-                yield future.result()
+    else:
+        futures = client.map(rows_written, works, root=root, index_here=True, key=keys)
+    with client.as_current():
+        for future in as_completed(futures):
+            try:
+                result = future.result()
+            except Exception as exc:  # a task's failure, or a cluster without the package
+                raise cluster_error(client, exc) from None
+            yield result
+
+
+def cluster_error(client: Client, exc: BaseException) -> SourceError:
+    """A failure on the cluster as one line: the task's error, or what the cluster lacks."""
+    address = getattr(client.scheduler, "address", "?")
+    chain = f"{exc} {exc.__cause__ or ''}"
+    if "No module named 'analyzer'" in chain:
+        return SourceError(
+            f"the Dask cluster at {address} cannot run gimbal-analyzer's tasks: install the "
+            "package where its scheduler and workers run (pip install 'gimbal-analyzer[cluster]')"
+        )
+    first = next((line for line in str(exc).splitlines() if line.strip()), "")
+    return SourceError(f"the Dask cluster at {address} failed: {type(exc).__name__}: {first}")
+
+
+def workers_reach(client: Client, root: str) -> None:
+    """UsageError unless every worker of the cluster can read and write ``root`` (the same
+    folder as here: a probe file written here must be there)."""
+    try:
+        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+    except TimeoutError:
+        waited = f"waited {CONNECT_TIMEOUT_S} s"
+        raise UsageError(f"the Dask cluster has no workers ({waited})") from None
+    token = uuid.uuid4().hex
+    probe = Dataset(root).scratch(f"reach-{token}")
+    probe.write_text(token)
+    try:
+        seen: dict[str, str] = client.run(sees, str(probe), token)
     finally:
-        client.close()
+        probe.unlink(missing_ok=True)
+    blind = sorted(f"{worker} ({why})" for worker, why in seen.items() if why)
+    if blind:
+        raise UsageError(
+            f"the Dask workers cannot write {root} (it must be the same folder for them, "
+            f"e.g. shared storage): {', '.join(blind)}; give --client-writes to have them "
+            "send the rows here instead"
+        )
+
+
+def sees(probe: str, token: str) -> str:
+    """On a worker: why it cannot use the folder of ``probe`` ("" when it can)."""
+    try:
+        with open(probe, encoding="utf-8") as handle:
+            if handle.read() != token:
+                return "another folder at that path"
+        mine = f"{probe}-{os.getpid()}"
+        with open(mine, "w", encoding="utf-8") as handle:
+            handle.write(token)
+        os.unlink(mine)
+    except OSError as exc:
+        return describe_os_error(exc)
+    return ""
 
 
 def connect(address: str) -> Client:

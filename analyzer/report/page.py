@@ -14,6 +14,7 @@ from analyzer.report import camera
 from analyzer.report.collect import MAX_ROWS, ReportData, thin
 
 CHART_JS = "chart.umd.min.js"  # Chart.js 4.6.1, MIT (vendor/chart.js-LICENSE.md)
+CHECK_JS = "plots_check.js"  # shared with the fleet report: what the page checks can read
 TARGET_AXES = ("pitch", "yaw", "motor_yaw")
 
 CSS = """
@@ -184,6 +185,7 @@ def render(data: ReportData, settings: str) -> str:
     plots = _plot_data(data)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
+    check_js = (resources.files("analyzer.report") / CHECK_JS).read_text("utf-8")
     payload = json.dumps(plots, separators=(",", ":")).replace("</", "<\\/")
     timed = plots["span"] > 0  # a raw byte dump has no clock: nothing to plot over time
     has = {key: bool(plots[key]) and (timed or key == "track") for key in plots}
@@ -235,6 +237,7 @@ def render(data: ReportData, settings: str) -> str:
             f'<script id="report-data" type="application/json">{payload}</script>',
             f"<script>{chart_js}</script>",
             f"<script>{script}</script>",
+            f"<script>{check_js}</script>",
             "</body></html>",
         ]
     )

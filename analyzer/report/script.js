@@ -1,4 +1,5 @@
-// Draws the report's plots from the JSON in <script id="report-data">; Chart.js is inlined above.
+// Draws the report's plots from the JSON in <script id="report-data">; Chart.js is inlined above,
+// plots_check.js below.
 (function () {
   "use strict";
   var data = JSON.parse(document.getElementById("report-data").textContent);
@@ -135,18 +136,4 @@
         "altitude (m)");
   chart("plot-track", [line("UAV track", points(data.track, 1), COLORS.track, { pointRadius: 1 })],
         "north (m)", { x: { type: "linear", title: { display: true, text: "east (m)" } } });
-
-  // For checks: how many painted pixels each plot has (a blank canvas has none).
-  Array.prototype.forEach.call(document.querySelectorAll("canvas"), function (canvas) {
-    var ctx = canvas.getContext("2d");
-    var pixels = ctx.getImageData(0, 0, canvas.width, canvas.height).data;
-    var painted = 0;
-    for (var i = 3; i < pixels.length; i += 4 * 7) { if (pixels[i]) { painted++; } }
-    canvas.setAttribute("data-painted", String(painted));
-    var drawn = Chart.getChart(canvas);
-    var count = 0;
-    if (drawn) { drawn.data.datasets.forEach(function (d) { count += d.data.length; }); }
-    canvas.setAttribute("data-points", String(count));
-  });
-  document.body.setAttribute("data-plots-ready", "yes");
 })();
