@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
+from itertools import repeat
+from operator import itemgetter
+from typing import cast
 
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.candump_line import (
@@ -15,7 +18,7 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_scan import scanner
+from analyzer.inputs.candump_scan import ID_TEXT, OTHER, Found, Scan, scanner
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
@@ -28,6 +31,12 @@ FOREIGN_BAD = 10  # bad lines (with under a tenth as many frames) that make it n
 # is looked at anew each time, and memory stays flat.
 MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
+
+_OTHER = itemgetter(OTHER)
+_VALUE = itemgetter(0)  # of an IdInfo
+_EXTENDED = itemgetter(1)
+_FALSE = repeat(False)
+_DIRECTION_OF = {b"": "", **DIRECTIONS}
 
 __all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
 
@@ -59,6 +68,7 @@ class CandumpParser:
         self.wanted_ids = None if wanted_ids is None else frozenset(wanted_ids)
         self.clock = clock
         self._scan = scanner(self.wanted_ids) if scan else None
+        self._mixed = False  # the last block had lines for the line parser
         self.lines = 0
         self.frames = 0  # valid frames, skipped ones included
         self.frames_skipped = 0
@@ -122,61 +132,102 @@ class CandumpParser:
     def parse_block(self, block: bytes) -> list[InputItem]:
         """Parse whole lines, each ending with ``\\n``; returns frames and diagnostics.
 
-        The scan takes runs of well-formed frame lines and picks the wanted frames out of
-        them; every other line goes to the line parser. Skipped frames are counted by line
-        ends, a run at a time, and only the first and last time of a run are read.
+        The scan goes over the block in one pass. When it met frame lines only (the usual
+        block), the wanted frames are built a column at a time and the skipped ones are
+        counted by line ends; otherwise the block is gone through match by match, and
+        each line that is no well-formed frame goes to the line parser. After a block
+        with such lines the next one is gone through match by match at once.
         """
         if block[-1:] != b"\n":
             block += b"\n"
-        out: list[InputItem] = []
-        append = out.append
         scan = self._scan
-        ids = self._ids
-        channels = self._channels
-        directions = DIRECTIONS
-        size = len(block)
-        pos = mark = 0  # lines from ``mark`` to ``pos`` are frames the scan took
-        taken = 0  # of them, the wanted frames (the rest were skipped)
-        while pos < size:
-            if scan is not None:
-                end = scan.run(block, pos).end()
-                if end > pos:
-                    if self.first_time is None:
-                        self.first_time = _stamp_at(block, pos)
-                    found = scan.wanted(block, pos, end)
-                    taken += len(found)
-                    for stamp, channel, id_text, data, suffix in found:
-                        info = ids.get(id_text) or self._frame_id(id_text)
-                        append(
-                            CanFrame(
-                                float(stamp),
-                                info[0],
-                                unhexlify(data),
-                                info[1],
-                                channels.get(channel) or self._channel(channel),
-                                False,
-                                False,
-                                False,
-                                directions[suffix] if suffix else "",
-                            )
-                        )
-                    pos = end
-                    if pos == size:
-                        break
-            # A line for the line parser: first count what the scan took before it.
-            self._count_scanned(block, mark, pos, taken)
-            taken = 0
-            eol = block.index(b"\n", pos)
-            line = block[pos : min(eol, pos + MAX_LINE + 1)]
-            self.lines += 1
-            item = self._slow_line(line, self.lines)
-            if item is not None:
-                append(item)
-            pos = mark = eol + 1
-        self._count_scanned(block, mark, pos, taken)
+        if scan is None:
+            out = self._parse_lines(block)
+        elif self._mixed:
+            out = self._parse_matches(block, scan)
+        else:
+            found = scan.findall(block)
+            while found and not (found[-1][ID_TEXT] or found[-1][OTHER]):
+                found.pop()  # the end of the block
+            if any(map(_OTHER, found)):
+                out = self._parse_matches(block, scan)
+            else:
+                out = self._frames(found)
+                self._count_scanned(block, 0, len(block), len(out))
         if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
+        return out
+
+    def _frames(self, found: list[Found]) -> list[InputItem]:
+        """The CanFrames of wanted frames the scan found, built a column at a time."""
+        if not found:
+            return []
+        stamps, channels, id_texts, datas, directions, _ = zip(*found, strict=True)
+        infos = cast(list[IdInfo], list(map(self._ids.get, id_texts)))
+        if not all(infos):
+            infos = [
+                info or self._frame_id(text) for info, text in zip(infos, id_texts, strict=True)
+            ]
+        names = list(map(self._channels.get, channels))
+        if not all(names):
+            names = [
+                name or self._channel(text) for name, text in zip(names, channels, strict=True)
+            ]
+        return list(
+            map(
+                CanFrame,
+                map(float, stamps),
+                map(_VALUE, infos),
+                map(unhexlify, datas),
+                map(_EXTENDED, infos),
+                names,
+                _FALSE,
+                _FALSE,
+                _FALSE,
+                map(_DIRECTION_OF.__getitem__, directions),
+            )
+        )
+
+    def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
+        """A block with lines for the line parser: each in its place, with its number."""
+        out: list[InputItem] = []
+        wanted: list[Found] = []  # wanted frames since the last other line
+        mark = 0  # the lines from ``mark`` on are frames the scan took
+        mixed = False
+        for match in scan.finditer(block):
+            found = cast(Found, match.groups(b""))
+            if found[ID_TEXT]:
+                wanted.append(found)
+                continue
+            other = found[OTHER]
+            if not other:
+                continue  # the end of the block
+            mixed = True
+            out += self._frames(wanted)
+            self._count_scanned(block, mark, match.start(OTHER + 1), len(wanted))
+            wanted = []
+            self.lines += 1
+            item = self._slow_line(other[:-1][: MAX_LINE + 1], self.lines)
+            if item is not None:
+                out.append(item)
+            mark = match.end()
+        out += self._frames(wanted)
+        self._count_scanned(block, mark, len(block), len(wanted))
+        self._mixed = mixed
+        return out
+
+    def _parse_lines(self, block: bytes) -> list[InputItem]:
+        """Every line of the block by the line parser (no scan)."""
+        out: list[InputItem] = []
+        pos, size = 0, len(block)
+        while pos < size:
+            eol = block.index(b"\n", pos)
+            self.lines += 1
+            item = self._slow_line(block[pos : min(eol, pos + MAX_LINE + 1)], self.lines)
+            if item is not None:
+                out.append(item)
+            pos = eol + 1
         return out
 
     def _count_scanned(self, block: bytes, mark: int, pos: int, taken: int) -> None:
@@ -184,6 +235,8 @@ class CandumpParser:
         them wanted frames (handed on) and the rest skipped frames."""
         if pos == mark:
             return
+        if self.first_time is None:
+            self.first_time = _stamp_at(block, mark)
         lines = block.count(b"\n", mark, pos)
         self.lines += lines
         self.frames += lines

@@ -1,12 +1,13 @@
-"""Well-formed ``candump -L`` lines found at C speed: runs of frames, and the wanted ones.
+"""Well-formed ``candump -L`` lines found at C speed: one pattern that takes a whole block.
 
 A busy bus log is mostly frames of other devices. Looking at each of those lines in
-Python costs more than python-can's whole reader; two compiled patterns instead do the
-work in C: one finds how far a run of well-formed classic frame lines goes (checking each
-as strictly as the line parser does), the other picks the wanted frames out of such a
-run with their parts as groups. Whatever the first does not take (damaged lines, remote,
-CAN FD and error frames, the screen layout, unusual ID widths) is left to the line
-parser, which says what is wrong; so the scan changes speed, never results
+Python costs more than python-can's whole reader; one compiled pattern instead does the
+work in C, in one pass over a block. Each of its matches takes a run of well-formed
+classic frame lines of other IDs (checking each as strictly as the line parser does),
+then one of: a wanted frame, with its parts as groups; any other line, whole, for the line
+parser (damaged lines, remote, CAN FD and error frames, the screen layout, unusual ID
+widths), which says what is wrong; or the end of the block. So the matches follow each
+other from the block's start to its end, and the scan changes speed, never results
 (``tests/test_inputs_candump_scan.py`` checks that).
 """
 
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import cast
 
@@ -28,23 +29,24 @@ _HEX = "[0-9A-Fa-f]"
 _ANY_ID = f"(?:[01]{_HEX}{{7}}|{_HEX}{{3}})"
 # Classic CAN data: an even number of hex digits, at most 16 (tried longest first).
 _DATA = "(?:" + "|".join(f"{_HEX}{{{n}}}" for n in range(16, 0, -2)) + "|)"
-_RUN = f"(?:{_STAMP} \\S++ {_ANY_ID}#{_DATA}(?: [RrTt])?\\n)*+"
 
-# (timestamp text, channel, ID text, data in hex, direction letter or b"")
-Found = tuple[bytes, bytes, bytes, bytes, bytes]
+# (timestamp text, channel, ID text, data in hex, direction letter or b"", other line):
+# a wanted frame has the first five (the direction may be b""), a line for the line
+# parser only the last (its line end included), the end of the block none.
+Found = tuple[bytes, bytes, bytes, bytes, bytes, bytes]
+STAMP, CHANNEL, ID_TEXT, DATA, DIRECTION, OTHER = range(6)
 
 
 @dataclass(frozen=True)
 class Scan:
-    """The two patterns for one set of wanted IDs.
+    """The pattern for one set of wanted IDs, as ``findall`` and as ``finditer``.
 
-    ``run(block, pos).end()`` is the end of the run of well-formed lines from ``pos``
-    (``pos`` itself when the line there is the line parser's); ``wanted(block, pos,
-    end)`` lists the wanted frames of such a run, in order.
+    ``findall(block)`` lists what the matches found, in order (a block is whole lines);
+    ``finditer(block)`` gives the matches themselves, to know where each other line is.
     """
 
-    run: Callable[[bytes, int], re.Match[bytes]]
-    wanted: Callable[[bytes, int, int], list[Found]]
+    findall: Callable[[bytes], list[Found]]
+    finditer: Callable[[bytes], Iterator[re.Match[bytes]]]
 
 
 def id_texts(ids: Iterable[int]) -> list[str]:
@@ -58,19 +60,24 @@ def id_texts(ids: Iterable[int]) -> list[str]:
     return texts
 
 
-@functools.lru_cache(maxsize=8)
-def scanner(wanted_ids: frozenset[int] | None) -> Scan:
-    """The scan for this set of wanted IDs (None: every ID is wanted)."""
+def block_pattern(wanted_ids: frozenset[int] | None) -> str:
+    """The pattern (see the module docstring) for this set of wanted IDs (None: all)."""
     if wanted_ids is None:
-        wanted = _ANY_ID
+        wanted, other_id = _ANY_ID, "(?!)"  # every well-formed frame is wanted
     else:
         texts = id_texts(wanted_ids)
         wanted = f"(?i:{'|'.join(texts)})" if texts else "(?!)"
-    # Within a run every line is known to be well-formed: the parts need no more checks,
-    # and a match can only start at a line's start (nothing else in a line can begin
-    # ``(digits) name ID#``).
-    frame = f"\\(([0-9.]++)\\) (\\S++) ({wanted})#({_HEX}*+)(?: ([RrTt]))?\\n"
+        other_id = f"(?!{wanted}#){_ANY_ID}"
+    skipped = f"{_STAMP} \\S++ {other_id}#{_DATA}(?: [RrTt])?\\n"
+    frame = f"\\(([0-9]{{1,15}}+\\.[0-9]++)\\) (\\S++) ({wanted})#({_DATA})(?: ([RrTt]))?\\n"
+    return f"(?:{skipped})*+(?:{frame}|([^\\n]*+\\n)|\\Z)"
+
+
+@functools.lru_cache(maxsize=8)
+def scanner(wanted_ids: frozenset[int] | None) -> Scan:
+    """The scan for this set of wanted IDs (None: every ID is wanted)."""
+    pattern = re.compile(block_pattern(wanted_ids).encode())
     return Scan(
-        cast(Callable[[bytes, int], "re.Match[bytes]"], re.compile(_RUN.encode()).match),
-        cast(Callable[[bytes, int, int], list[Found]], re.compile(frame.encode()).findall),
+        cast(Callable[[bytes], list[Found]], pattern.findall),
+        pattern.finditer,
     )
