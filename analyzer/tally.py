@@ -26,6 +26,7 @@ from analyzer.protocol.types import (
     TOPIC_GIMBAL_RANGING,
     CanFrame,
     Event,
+    FrameRun,
     StreamChunk,
 )
 
@@ -170,8 +171,22 @@ class Tally:
         self.chunks += chunks
         self.bytes += size
         self.bits += bits
-        first, last = items[0].time, items[-1].time
-        self.widen(min(first, last), max(first, last))
+        times = list(map(_TIME, items))
+        self.widen(min(times), max(times))
+
+    def add_runs(self, runs: Iterable[FrameRun]) -> None:
+        """Count runs of plain CAN frames as ``add_items`` counts the same frames."""
+        for run in runs:
+            frames = len(run)
+            if not frames:
+                continue
+            size = sum(map(len, run.data))
+            bits = CAN_BITS_STANDARD * frames + 8 * size
+            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * sum(run.extended)
+            self.frames += frames
+            self.bytes += size
+            self.bits += bits
+            self.widen(min(run.time), max(run.time))
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.

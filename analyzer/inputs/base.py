@@ -9,9 +9,10 @@ from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.protocol.types import CanFrame, Event, StreamChunk
+from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 
-InputItem = CanFrame | StreamChunk | Event
+# FrameRun only from a reader whose ``frame_runs`` was set.
+InputItem = CanFrame | StreamChunk | Event | FrameRun
 
 
 class InputReader:
@@ -25,6 +26,9 @@ class InputReader:
     """
 
     format_name = "unknown"
+    # Set by a driver whose sinks keep no raw frames: a reader that can then hands on runs
+    # of plain frames as ``FrameRun`` items (the candump reader does), others ignore it.
+    frame_runs = False
 
     def __init__(self, path: str) -> None:
         self.path = path

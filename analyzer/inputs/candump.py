@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
-from itertools import repeat
 from operator import itemgetter
 from typing import cast
 
@@ -22,7 +21,7 @@ from analyzer.inputs.candump_scan import ID_TEXT, OTHER, Found, Scan, scanner
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
-from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
+from analyzer.protocol.types import BAD_LINE, CanFrame, Event, FrameRun, diagnostic
 
 RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
 FOREIGN_HEAD = 20  # first bad lines looked at to tell what a file that is no candump is
@@ -33,9 +32,6 @@ MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
 
 _OTHER = itemgetter(OTHER)
-_VALUE = itemgetter(0)  # of an IdInfo
-_EXTENDED = itemgetter(1)
-_FALSE = repeat(False)
 _DIRECTION_OF = {b"": "", **DIRECTIONS}
 
 __all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
@@ -69,6 +65,7 @@ class CandumpParser:
         self.clock = clock
         self._scan = scanner(self.wanted_ids) if scan else None
         self._mixed = False  # the last block had lines for the line parser
+        self.frame_runs = False  # hand on the scanned frames as FrameRuns
         self.lines = 0
         self.frames = 0  # valid frames, skipped ones included
         self.frames_skipped = 0
@@ -153,41 +150,48 @@ class CandumpParser:
                 out = self._parse_matches(block, scan)
             else:
                 out = self._frames(found)
-                self._count_scanned(block, 0, len(block), len(out))
+                self._count_scanned(block, 0, len(block), len(found))
         if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
         return out
 
     def _frames(self, found: list[Found]) -> list[InputItem]:
-        """The CanFrames of wanted frames the scan found, built a column at a time."""
-        if not found:
-            return []
-        stamps, channels, id_texts, datas, directions, _ = zip(*found, strict=True)
-        infos = cast(list[IdInfo], list(map(self._ids.get, id_texts)))
-        if not all(infos):
-            infos = [
-                info or self._frame_id(text) for info, text in zip(infos, id_texts, strict=True)
+        """The CanFrames of the wanted frames the scan found (one FrameRun of them all
+        when ``frame_runs`` is set)."""
+        id_of, frame_id = self._ids.get, self._frame_id
+        channel_of, channel_name = self._channels.get, self._channel
+        direction_of = _DIRECTION_OF
+        if self.frame_runs:
+            if not found:
+                return []
+            stamps, channels, id_texts, datas, directions, _ = zip(*found, strict=True)
+            infos = [id_of(text) or frame_id(text) for text in id_texts]
+            return [
+                FrameRun(
+                    list(map(float, stamps)),
+                    [info[0] for info in infos],
+                    list(map(unhexlify, datas)),
+                    [info[1] for info in infos],
+                    [channel_of(text) or channel_name(text) for text in channels],
+                    list(map(direction_of.__getitem__, directions)),
+                )
             ]
-        names = list(map(self._channels.get, channels))
-        if not all(names):
-            names = [
-                name or self._channel(text) for name, text in zip(names, channels, strict=True)
-            ]
-        return list(
-            map(
-                CanFrame,
-                map(float, stamps),
-                map(_VALUE, infos),
-                map(unhexlify, datas),
-                map(_EXTENDED, infos),
-                names,
-                _FALSE,
-                _FALSE,
-                _FALSE,
-                map(_DIRECTION_OF.__getitem__, directions),
+        return [
+            CanFrame(
+                float(stamp),
+                info[0],
+                unhexlify(data),
+                info[1],
+                channel_of(channel) or channel_name(channel),
+                False,
+                False,
+                False,
+                direction_of[direction],
             )
-        )
+            for stamp, channel, id_text, data, direction, _ in found
+            for info in (id_of(id_text) or frame_id(id_text),)
+        ]
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
         """A block with lines for the line parser: each in its place, with its number."""
@@ -408,6 +412,7 @@ class CandumpReader(InputReader):
         parser = self.parser
         raw = self._raw
         problems = self.problems
+        parser.frame_runs = self.frame_runs
         reported = 0
         for block in line_blocks(self._blocks, self.block_size):
             items = parser.parse_block(block)

@@ -81,6 +81,41 @@ class CanFrame:
 
 
 @dataclass(slots=True)
+class FrameRun:
+    """Classic data frames read in a row, as columns: no remote, error or CAN FD frame.
+
+    A reader hands frames on like this only when asked to (``InputReader.frame_runs``,
+    set when no sink keeps raw frames): the decoder and the counters take the columns
+    as they are, and no CanFrame is built for a frame nobody keeps. ``frames()`` gives
+    the same frames as CanFrames.
+    """
+
+    time: list[float]
+    can_id: list[int]
+    data: list[bytes]
+    extended: list[bool]
+    channel: list[str]
+    direction: list[str]
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def frames(self) -> list[CanFrame]:
+        return [
+            CanFrame(time, can_id, data, extended, channel, False, False, False, direction)
+            for time, can_id, data, extended, channel, direction in zip(
+                self.time,
+                self.can_id,
+                self.data,
+                self.extended,
+                self.channel,
+                self.direction,
+                strict=True,
+            )
+        ]
+
+
+@dataclass(slots=True)
 class StreamChunk:
     """Bytes read from a TCP or UART stream in one go."""
 
