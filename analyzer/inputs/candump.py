@@ -17,7 +17,7 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_scan import ID_TEXT, OTHER, Found, Scan, scanner
+from analyzer.inputs.candump_scan import OTHER, WHERE, Found, Scan, scanner
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
@@ -32,6 +32,7 @@ MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
 
 _OTHER = itemgetter(OTHER)
+Place = tuple[str, int, bool]  # channel name, ID value, extended
 _DIRECTION_OF = {b"": "", **DIRECTIONS}
 
 __all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
@@ -76,6 +77,7 @@ class CandumpParser:
         self.last_time: float | None = None
         self._ids: dict[bytes, IdInfo | None] = {}
         self._channels: dict[bytes, str] = {}
+        self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
         self._after_error = False
         self._times = ScreenTimes()
         self._held: list[InputItem] = []
@@ -106,6 +108,15 @@ class CandumpParser:
         if info is None:
             raise LineError(f"bad CAN ID {text.decode('ascii', 'replace')!r}")
         return info
+
+    def _place(self, where: bytes) -> Place:
+        """Channel name, ID value and whether extended, of a scanned ``channel ID`` text."""
+        space = where.rindex(b" ")
+        info = self._frame_id(where[space + 1 :])
+        place = (self._channel(where[:space]), info[0], info[1])
+        if len(self._places) < MAX_CACHED_IDS:
+            self._places[where] = place
+        return place
 
     def _channel(self, text: bytes) -> str:
         name = self._channels.get(text)
@@ -144,7 +155,7 @@ class CandumpParser:
             out = self._parse_matches(block, scan)
         else:
             found = scan.findall(block)
-            while found and not (found[-1][ID_TEXT] or found[-1][OTHER]):
+            while found and not (found[-1][WHERE] or found[-1][OTHER]):
                 found.pop()  # the end of the block
             if any(map(_OTHER, found)):
                 out = self._parse_matches(block, scan)
@@ -159,38 +170,37 @@ class CandumpParser:
     def _frames(self, found: list[Found]) -> list[InputItem]:
         """The CanFrames of the wanted frames the scan found (one FrameRun of them all
         when ``frame_runs`` is set)."""
-        id_of, frame_id = self._ids.get, self._frame_id
-        channel_of, channel_name = self._channels.get, self._channel
+        place_of, place = self._places.get, self._place
         direction_of = _DIRECTION_OF
         if self.frame_runs:
             if not found:
                 return []
-            stamps, channels, id_texts, datas, directions, _ = zip(*found, strict=True)
-            infos = [id_of(text) or frame_id(text) for text in id_texts]
+            stamps, wheres, datas, directions, _ = zip(*found, strict=True)
+            places = [place_of(where) or place(where) for where in wheres]
             return [
                 FrameRun(
                     list(map(float, stamps)),
-                    [info[0] for info in infos],
+                    [p[1] for p in places],
                     list(map(unhexlify, datas)),
-                    [info[1] for info in infos],
-                    [channel_of(text) or channel_name(text) for text in channels],
+                    [p[2] for p in places],
+                    [p[0] for p in places],
                     list(map(direction_of.__getitem__, directions)),
                 )
             ]
         return [
             CanFrame(
                 float(stamp),
-                info[0],
+                p[1],
                 unhexlify(data),
-                info[1],
-                channel_of(channel) or channel_name(channel),
+                p[2],
+                p[0],
                 False,
                 False,
                 False,
                 direction_of[direction],
             )
-            for stamp, channel, id_text, data, direction, _ in found
-            for info in (id_of(id_text) or frame_id(id_text),)
+            for stamp, where, data, direction, _ in found
+            for p in (place_of(where) or place(where),)
         ]
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
@@ -201,7 +211,7 @@ class CandumpParser:
         mixed = False
         for match in scan.finditer(block):
             found = cast(Found, match.groups(b""))
-            if found[ID_TEXT]:
+            if found[WHERE]:
                 wanted.append(found)
                 continue
             other = found[OTHER]

@@ -30,11 +30,12 @@ _ANY_ID = f"(?:[01]{_HEX}{{7}}|{_HEX}{{3}})"
 # Classic CAN data: an even number of hex digits, at most 16 (tried longest first).
 _DATA = "(?:" + "|".join(f"{_HEX}{{{n}}}" for n in range(16, 0, -2)) + "|)"
 
-# (timestamp text, channel, ID text, data in hex, direction letter or b"", other line):
-# a wanted frame has the first five (the direction may be b""), a line for the line
-# parser only the last (its line end included), the end of the block none.
-Found = tuple[bytes, bytes, bytes, bytes, bytes, bytes]
-STAMP, CHANNEL, ID_TEXT, DATA, DIRECTION, OTHER = range(6)
+# (timestamp text, channel and ID text with the space between them, data in hex,
+# direction letter or b"", other line): a wanted frame has the first four (the direction
+# may be b""), a line for the line parser only the last (its line end included), the end
+# of the block none. Channel and ID are one text: one object and one look-up a frame.
+Found = tuple[bytes, bytes, bytes, bytes, bytes]
+STAMP, WHERE, DATA, DIRECTION, OTHER = range(5)
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ def block_pattern(wanted_ids: frozenset[int] | None) -> str:
         wanted = f"(?i:{'|'.join(texts)})" if texts else "(?!)"
         other_id = f"(?!{wanted}#){_ANY_ID}"
     skipped = f"{_STAMP} \\S++ {other_id}#{_DATA}(?: [RrTt])?\\n"
-    frame = f"\\(([0-9]{{1,15}}+\\.[0-9]++)\\) (\\S++) ({wanted})#({_DATA})(?: ([RrTt]))?\\n"
+    frame = f"\\(([0-9]{{1,15}}+\\.[0-9]++)\\) (\\S++ {wanted})#({_DATA})(?: ([RrTt]))?\\n"
     return f"(?:{skipped})*+(?:{frame}|([^\\n]*+\\n)|\\Z)"
 
 
