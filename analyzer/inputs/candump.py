@@ -17,7 +17,7 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_scan import OTHER, WHERE, Found, Scan, scanner
+from analyzer.inputs.candump_scan import OTHER, STAMP, WHERE, Found, Scan, scanner, stamp_times
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
@@ -32,6 +32,7 @@ MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
 
 _OTHER = itemgetter(OTHER)
+_STAMP = itemgetter(STAMP)
 Place = tuple[str, int, bool]  # channel name, ID value, extended
 _DIRECTION_OF = {b"": "", **DIRECTIONS}
 
@@ -179,7 +180,7 @@ class CandumpParser:
             places = [place_of(where) or place(where) for where in wheres]
             return [
                 FrameRun(
-                    list(map(float, stamps)),
+                    stamp_times(stamps),
                     [p[1] for p in places],
                     list(map(unhexlify, datas)),
                     [p[2] for p in places],
@@ -187,9 +188,10 @@ class CandumpParser:
                     list(map(direction_of.__getitem__, directions)),
                 )
             ]
+        times = stamp_times(map(_STAMP, found))
         return [
             CanFrame(
-                float(stamp),
+                time,
                 p[1],
                 unhexlify(data),
                 p[2],
@@ -199,7 +201,7 @@ class CandumpParser:
                 False,
                 direction_of[direction],
             )
-            for stamp, where, data, direction, _ in found
+            for (_, where, data, direction, _), time in zip(found, times, strict=True)
             for p in (place_of(where) or place(where),)
         ]
 
