@@ -13,7 +13,7 @@ import json
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from typing import Any
 
 from analyzer.protocol.lru import MAX_SOURCES
@@ -50,6 +50,7 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
+_PLACE_EXTENDED = itemgetter(2)  # of a FrameRun's (channel, CAN ID, extended)
 
 
 @dataclass
@@ -182,7 +183,8 @@ class Tally:
                 continue
             size = sum(map(len, run.data))
             bits = CAN_BITS_STANDARD * frames + 8 * size
-            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * sum(run.extended)
+            extended = sum(map(_PLACE_EXTENDED, run.place))
+            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
             self.frames += frames
             self.bytes += size
             self.bits += bits

@@ -129,10 +129,8 @@ def plain_frames(draw: st.DrawFn) -> list[CanFrame]:
 def as_run(frames: list[CanFrame]) -> FrameRun:
     return FrameRun(
         [f.time for f in frames],
-        [f.can_id for f in frames],
+        [(f.channel, f.can_id, f.extended) for f in frames],
         [f.data for f in frames],
-        [f.extended for f in frames],
-        [f.channel for f in frames],
         [f.direction for f in frames],
     )
 

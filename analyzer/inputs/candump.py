@@ -177,14 +177,11 @@ class CandumpParser:
             if not found:
                 return []
             stamps, wheres, datas, directions, _ = zip(*found, strict=True)
-            places = [place_of(where) or place(where) for where in wheres]
             return [
                 FrameRun(
                     stamp_times(stamps),
-                    [p[1] for p in places],
+                    [place_of(where) or place(where) for where in wheres],
                     list(map(unhexlify, datas)),
-                    [p[2] for p in places],
-                    [p[0] for p in places],
                     list(map(direction_of.__getitem__, directions)),
                 )
             ]

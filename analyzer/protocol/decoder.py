@@ -196,8 +196,8 @@ class Decoder:
         status_decoders = EIGHT_BYTE_DECODERS
         status_topics = STATUS_TOPICS
         protocol = 0
-        for time, can_id, data, extended, channel, direction in zip(
-            run.time, run.can_id, run.data, run.extended, run.channel, run.direction, strict=True
+        for time, (channel, can_id, extended), data, direction in zip(
+            run.time, run.place, run.data, run.direction, strict=True
         ):
             if extended:
                 if can_id == CONTROL_ID and len(data) == 8:

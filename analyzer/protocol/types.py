@@ -86,15 +86,14 @@ class FrameRun:
 
     A reader hands frames on like this only when asked to (``InputReader.frame_runs``,
     set when no sink keeps raw frames): the decoder and the counters take the columns
-    as they are, and no CanFrame is built for a frame nobody keeps. ``frames()`` gives
-    the same frames as CanFrames.
+    as they are, and no CanFrame is built for a frame nobody keeps. ``place`` holds
+    (channel, CAN ID, extended) of each frame, the same tuple for every frame of one ID
+    on one channel. ``frames()`` gives the same frames as CanFrames.
     """
 
     time: list[float]
-    can_id: list[int]
+    place: list[tuple[str, int, bool]]
     data: list[bytes]
-    extended: list[bool]
-    channel: list[str]
     direction: list[str]
 
     def __len__(self) -> int:
@@ -103,14 +102,8 @@ class FrameRun:
     def frames(self) -> list[CanFrame]:
         return [
             CanFrame(time, can_id, data, extended, channel, False, False, False, direction)
-            for time, can_id, data, extended, channel, direction in zip(
-                self.time,
-                self.can_id,
-                self.data,
-                self.extended,
-                self.channel,
-                self.direction,
-                strict=True,
+            for time, (channel, can_id, extended), data, direction in zip(
+                self.time, self.place, self.data, self.direction, strict=True
             )
         ]
 
