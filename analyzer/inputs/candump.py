@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
 from operator import itemgetter
 from typing import cast
 
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.candump_line import (
-    DIRECTIONS,
     RELATIVE_LIMIT,
     IdInfo,
     LineError,
@@ -17,11 +15,21 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_scan import OTHER, STAMP, WHERE, Found, Scan, scanner, stamp_times
+from analyzer.inputs.candump_scan import (
+    OTHER,
+    WHERE,
+    Found,
+    Place,
+    Scan,
+    can_frames,
+    frame_run,
+    scanner,
+    stamp_at,
+)
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
-from analyzer.protocol.types import BAD_LINE, CanFrame, Event, FrameRun, diagnostic
+from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
 RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
 FOREIGN_HEAD = 20  # first bad lines looked at to tell what a file that is no candump is
@@ -32,9 +40,6 @@ MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
 
 _OTHER = itemgetter(OTHER)
-_STAMP = itemgetter(STAMP)
-Place = tuple[str, int, bool]  # channel name, ID value, extended
-_DIRECTION_OF = {b"": "", **DIRECTIONS}
 
 __all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
 
@@ -171,36 +176,9 @@ class CandumpParser:
     def _frames(self, found: list[Found]) -> list[InputItem]:
         """The CanFrames of the wanted frames the scan found (one FrameRun of them all
         when ``frame_runs`` is set)."""
-        place_of, place = self._places.get, self._place
-        direction_of = _DIRECTION_OF
         if self.frame_runs:
-            if not found:
-                return []
-            stamps, wheres, datas, directions, _ = zip(*found, strict=True)
-            return [
-                FrameRun(
-                    stamp_times(stamps),
-                    [place_of(where) or place(where) for where in wheres],
-                    list(map(unhexlify, datas)),
-                    list(map(direction_of.__getitem__, directions)),
-                )
-            ]
-        times = stamp_times(map(_STAMP, found))
-        return [
-            CanFrame(
-                time,
-                p[1],
-                unhexlify(data),
-                p[2],
-                p[0],
-                False,
-                False,
-                False,
-                direction_of[direction],
-            )
-            for (_, where, data, direction, _), time in zip(found, times, strict=True)
-            for p in (place_of(where) or place(where),)
-        ]
+            return [frame_run(found, self._places.get, self._place)] if found else []
+        return list(can_frames(found, self._places.get, self._place))
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
         """A block with lines for the line parser: each in its place, with its number."""
@@ -249,13 +227,13 @@ class CandumpParser:
         if pos == mark:
             return
         if self.first_time is None:
-            self.first_time = _stamp_at(block, mark)
+            self.first_time = stamp_at(block, mark)
         lines = block.count(b"\n", mark, pos)
         self.lines += lines
         self.frames += lines
         self.frames_skipped += lines - taken
         self._after_error = False
-        self.last_time = _stamp_at(block, block.rfind(b"\n", mark, pos - 1) + 1 or mark)
+        self.last_time = stamp_at(block, block.rfind(b"\n", mark, pos - 1) + 1 or mark)
 
     def _bad(self, line: bytes, lineno: int, why: str) -> Event | None:
         self.bad_lines += 1
@@ -387,11 +365,6 @@ class CandumpParser:
     def _release(self) -> list[InputItem]:
         held, self._held = self._held, []
         return held
-
-
-def _stamp_at(block: bytes, start: int) -> float:
-    """The time of the scanned ``(seconds.fraction) ...`` line that starts at ``start``."""
-    return float(block[start + 1 : block.index(b")", start)])
 
 
 class CandumpReader(InputReader):

@@ -8,18 +8,23 @@ then one of: a wanted frame, with its parts as groups; any other line, whole, fo
 parser (damaged lines, remote, CAN FD and error frames, the screen layout, unusual ID
 widths), which says what is wrong; or the end of the block. So the matches follow each
 other from the block's start to its end, and the scan changes speed, never results
-(``tests/test_inputs_candump_scan.py`` checks that).
+(``tests/test_inputs_candump_scan.py`` checks that). The wanted frames found become
+CanFrames or one FrameRun here (``can_frames``, ``frame_run``).
 """
 
 from __future__ import annotations
 
 import functools
 import re
+from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from itertools import repeat
-from operator import truediv
+from operator import itemgetter, truediv
 from typing import cast
+
+from analyzer.inputs.candump_line import DIRECTIONS
+from analyzer.protocol.types import CanFrame, FrameRun
 
 # A ``(seconds.fraction)`` stamp: at most 15 digits before the point (under 1e15 s, the
 # line parser's limit).
@@ -98,3 +103,47 @@ def scanner(wanted_ids: frozenset[int] | None) -> Scan:
         cast(Callable[[bytes], list[Found]], pattern.findall),
         pattern.finditer,
     )
+
+
+Place = tuple[str, int, bool]  # channel name, ID value, extended
+_STAMP_TEXT = itemgetter(STAMP)
+_DIRECTION_OF = {b"": "", **DIRECTIONS}
+
+
+def frame_run(
+    found: list[Found],
+    cached: Callable[[bytes], Place | None],
+    place: Callable[[bytes], Place],
+) -> FrameRun:
+    """The wanted frames the scan found (at least one), as one FrameRun. ``cached`` gives
+    the place of a ``channel ID`` text seen before (else None), ``place`` works it out."""
+    stamps, wheres, datas, directions, _ = zip(*found, strict=True)
+    direction_of = _DIRECTION_OF
+    return FrameRun(
+        stamp_times(stamps),
+        [cached(where) or place(where) for where in wheres],
+        list(map(unhexlify, datas)),
+        list(map(direction_of.__getitem__, directions)),
+    )
+
+
+def can_frames(
+    found: list[Found],
+    cached: Callable[[bytes], Place | None],
+    place: Callable[[bytes], Place],
+) -> list[CanFrame]:
+    """The wanted frames the scan found, as CanFrames (see ``frame_run``)."""
+    direction_of = _DIRECTION_OF
+    times = stamp_times(map(_STAMP_TEXT, found))
+    return [
+        CanFrame(
+            time, p[1], unhexlify(data), p[2], p[0], False, False, False, direction_of[direction]
+        )
+        for (_, where, data, direction, _), time in zip(found, times, strict=True)
+        for p in (cached(where) or place(where),)
+    ]
+
+
+def stamp_at(block: bytes, start: int) -> float:
+    """The time of the scanned ``(seconds.fraction) ...`` line that starts at ``start``."""
+    return float(block[start + 1 : block.index(b")", start)])
