@@ -15,6 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from analyzer.inputs.base import by_frames
 from analyzer.inputs.candump import CandumpParser, CandumpReader
 from analyzer.pipeline import Batch, Pipeline, default_decoder, run_items
 from analyzer.protocol.codec import encode_command
@@ -215,3 +216,20 @@ def test_a_pipeline_without_raw_items_reads_runs_and_counts_the_same(
     assert (with_items[0], without[0]) == (False, True)
     assert with_items[1:] == without[1:]
     assert keeper.items and all(type(i) is CanFrame for i in keeper.items)
+
+
+@given(st.lists(st.integers(0, 300), max_size=30), st.integers(1, 200))
+def test_runs_go_to_the_pipeline_in_lists_of_at_most_a_batch_of_frames(
+    lengths: list[int], size: int
+) -> None:
+    # Items as a block gives them: runs of frames and, between them, single items.
+    items: list[Any] = [
+        as_run([CanFrame(float(i), CONTROL_ID, b"")] * n) if n else Event("/d", 0.0, "t")
+        for i, n in enumerate(lengths)
+    ]
+    chunks = list(by_frames(items, size))
+    assert [i for chunk in chunks for i in chunk] == items
+    for chunk in chunks:
+        weight = sum(len(i) if isinstance(i, FrameRun) else 1 for i in chunk)
+        assert weight <= size or len(chunk) == 1
+    assert all(chunks) or chunks == [[]]

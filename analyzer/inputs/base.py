@@ -95,3 +95,18 @@ def open_binary(path: str) -> IO[bytes]:
         raise UsageError(f"cannot read {path}: permission denied") from None
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
+
+
+def by_frames(items: list[InputItem], size: int) -> Iterator[list[InputItem]]:
+    """``items`` in lists of at most ``size`` frames (a FrameRun counts its frames), in
+    order; a run of more frames than that is a list of its own."""
+    chunk: list[InputItem] = []
+    weight = 0
+    for item in items:
+        frames = len(item) if type(item) is FrameRun else 1
+        if chunk and weight + frames > size:
+            yield chunk
+            chunk, weight = [], 0
+        chunk.append(item)
+        weight += frames
+    yield chunk

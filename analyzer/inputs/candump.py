@@ -6,7 +6,7 @@ from collections.abc import Callable, Iterable, Iterator
 from operator import itemgetter
 from typing import cast
 
-from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.base import InputItem, InputReader, by_frames
 from analyzer.inputs.candump_line import (
     RELATIVE_LIMIT,
     IdInfo,
@@ -38,6 +38,9 @@ FOREIGN_BAD = 10  # bad lines (with under a tenth as many frames) that make it n
 # is looked at anew each time, and memory stays flat.
 MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
+# Frames in one FrameRun: a batch's frames and events then stay few enough to be in the
+# processor's caches while the decoder and the counters go over them.
+RUN_FRAMES = 2048
 
 _OTHER = itemgetter(OTHER)
 
@@ -177,7 +180,10 @@ class CandumpParser:
         """The CanFrames of the wanted frames the scan found (one FrameRun of them all
         when ``frame_runs`` is set)."""
         if self.frame_runs:
-            return [frame_run(found, self._places.get, self._place)] if found else []
+            return [
+                frame_run(found[start : start + RUN_FRAMES], self._places.get, self._place)
+                for start in range(0, len(found), RUN_FRAMES)
+            ]
         return list(can_frames(found, self._places.get, self._place))
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
@@ -403,7 +409,9 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 items.append(self._damage(problems[reported]))
                 reported += 1
-            if len(items) <= size:
+            if self.frame_runs and items:
+                yield from by_frames(items, size)
+            elif len(items) <= size:
                 yield items  # also when empty: the caller's progress moves on
             else:
                 for start in range(0, len(items), size):
