@@ -20,11 +20,11 @@ from dataclasses import dataclass, field
 from itertools import islice
 from typing import Any, Protocol, runtime_checkable
 
-from analyzer.protocol.types import CanFrame, Event, StreamChunk
+from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 from analyzer.tally import Tally
 
 RawItem = CanFrame | StreamChunk
-Item = CanFrame | StreamChunk | Event  # what readers and sources deliver
+Item = CanFrame | StreamChunk | Event | FrameRun  # what readers and sources deliver
 
 BATCH_ITEMS = 2000  # file commands hand a batch to the sinks after this many items
 
@@ -35,16 +35,23 @@ class Batch:
 
     ``items`` are the raw frames / stream chunks as read (lossless), ``events`` the
     decoded events and diagnostics they gave (link-state diagnostics and events of the
-    stages included).
+    stages included). ``runs`` holds the frames a reader handed on as FrameRuns, which
+    happens only when no sink keeps raw items (``Pipeline.keeps_items``).
     """
 
     items: list[RawItem] = field(default_factory=list)
     events: list[Event] = field(default_factory=list)
     wall_time: float = 0.0
+    # Frames read as runs (only when no sink keeps raw items): counted, never in ``items``.
+    runs: list[FrameRun] = field(default_factory=list)
 
 
 class Sink(Protocol):
-    """Anything that consumes batches: MCAP writer, text printer, TUI bridge."""
+    """Anything that consumes batches: MCAP writer, text printer, TUI bridge.
+
+    A sink that never looks at ``Batch.items`` says so with a ``keeps_items = False``
+    attribute; then a file reader may hand on frames as runs nobody builds one by one.
+    """
 
     def handle(self, batch: Batch) -> None: ...
 
@@ -126,6 +133,7 @@ class Pipeline:
         self.failures: list[SinkFailure] = []
         self.batch = Batch()
         self.finished = False
+        self.frame_runs = False  # the input may hold FrameRuns (set by ``run_items``)
 
     # -- input -------------------------------------------------------------------------------
 
@@ -133,6 +141,13 @@ class Pipeline:
         """Decode items into the open batch; ready-made events go in as they are."""
         batch = self.batch
         self.decoder.feed_batch(items, batch.items, batch.events)
+        if self.frame_runs:
+            batch.runs.extend([i for i in items if isinstance(i, FrameRun)])
+
+    @property
+    def keeps_items(self) -> bool:
+        """Whether a sink looks at raw items (else the input may come as FrameRuns)."""
+        return any(getattr(sink, "keeps_items", True) for sink in self.sinks)
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Events from outside the decoder (link changes, notes) into the open batch."""
@@ -160,6 +175,7 @@ class Pipeline:
                 events.extend(extra)
         with self.lock:
             self.tally.add_items(batch.items)
+            self.tally.add_runs(batch.runs)
             self.tally.add_events(events)
         failed = {id(f.sink) for f in self.failures}
         for sink in self.sinks:
@@ -218,11 +234,14 @@ def run_items(
 
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
-    input, so each line shows at once); ``after_batch`` runs after each. Stops
+    input, so each line shows at once); ``after_batch`` runs after each. When no sink
+    keeps raw items, a reader that can hands its frames on as FrameRuns. Stops
     early when a sink fails. An exception of the reader (Ctrl-C, unreadable input)
     propagates without ``finish``: the caller decides whether what was read counts
     (``decode`` of live input finishes, ``convert`` throws its output away).
     """
+    if not pipeline.keeps_items and hasattr(items, "frame_runs"):
+        items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
     if isinstance(items, BatchedItems):
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:

@@ -13,7 +13,7 @@ import json
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from typing import Any
 
 from analyzer.protocol.lru import MAX_SOURCES
@@ -26,6 +26,7 @@ from analyzer.protocol.types import (
     TOPIC_GIMBAL_RANGING,
     CanFrame,
     Event,
+    FrameRun,
     StreamChunk,
 )
 
@@ -49,6 +50,7 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
+_PLACE_EXTENDED = itemgetter(2)  # of a FrameRun's (channel, CAN ID, extended)
 
 
 @dataclass
@@ -170,8 +172,23 @@ class Tally:
         self.chunks += chunks
         self.bytes += size
         self.bits += bits
-        first, last = items[0].time, items[-1].time
-        self.widen(min(first, last), max(first, last))
+        times = list(map(_TIME, items))
+        self.widen(min(times), max(times))
+
+    def add_runs(self, runs: Iterable[FrameRun]) -> None:
+        """Count runs of plain CAN frames as ``add_items`` counts the same frames."""
+        for run in runs:
+            frames = len(run)
+            if not frames:
+                continue
+            size = sum(map(len, run.data))
+            bits = CAN_BITS_STANDARD * frames + 8 * size
+            extended = sum(map(_PLACE_EXTENDED, run.place))
+            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+            self.frames += frames
+            self.bytes += size
+            self.bits += bits
+            self.widen(min(run.time), max(run.time))
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.

@@ -87,6 +87,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 class LinePrinter:
     """Sink writing the events of each batch that pass the filter, as lines or JSON lines."""
 
+    keeps_items = False  # events only: frames may come as runs
+
     def __init__(
         self,
         out: IO[str],

@@ -9,7 +9,6 @@ from collections.abc import Iterable
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
-from analyzer.inputs.dataflash import looks_like_dataflash
 from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
 from analyzer.protocol.ids import TCP_PORT
 
@@ -115,8 +114,11 @@ def sniff_format(head: bytes) -> str | None:
         return "blf"
     if head[:2] == b"\xeb\x90":
         return "stream"
-    if looks_like_dataflash(head):
-        return "dataflash"
+    if head[:2] == b"\xa3\x95":  # a DataFlash record header: its reader looks closer
+        from analyzer.inputs.dataflash import looks_like_dataflash  # (not at each start-up)
+
+        if looks_like_dataflash(head):
+            return "dataflash"
     text = head.lstrip(b"\xef\xbb\xbf")
     if _CANDUMP_LOG.search(text) or _CANDUMP_SCREEN.search(text):
         return "candump"

@@ -9,9 +9,10 @@ from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.protocol.types import CanFrame, Event, StreamChunk
+from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 
-InputItem = CanFrame | StreamChunk | Event
+# FrameRun only from a reader whose ``frame_runs`` was set.
+InputItem = CanFrame | StreamChunk | Event | FrameRun
 
 
 class InputReader:
@@ -25,6 +26,9 @@ class InputReader:
     """
 
     format_name = "unknown"
+    # Set by a driver whose sinks keep no raw frames: a reader that can then hands on runs
+    # of plain frames as ``FrameRun`` items (the candump reader does), others ignore it.
+    frame_runs = False
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -91,3 +95,18 @@ def open_binary(path: str) -> IO[bytes]:
         raise UsageError(f"cannot read {path}: permission denied") from None
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
+
+
+def by_frames(items: list[InputItem], size: int) -> Iterator[list[InputItem]]:
+    """``items`` in lists of at most ``size`` frames (a FrameRun counts its frames), in
+    order; a run of more frames than that is a list of its own."""
+    chunk: list[InputItem] = []
+    weight = 0
+    for item in items:
+        frames = len(item) if type(item) is FrameRun else 1
+        if chunk and weight + frames > size:
+            yield chunk
+            chunk, weight = [], 0
+        chunk.append(item)
+        weight += frames
+    yield chunk

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from binascii import unhexlify
 from collections.abc import Callable, Iterable, Iterator
+from operator import itemgetter
+from typing import cast
 
-from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.base import InputItem, InputReader, by_frames
 from analyzer.inputs.candump_line import (
-    DIRECTIONS,
     RELATIVE_LIMIT,
     IdInfo,
     LineError,
@@ -15,11 +15,21 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_scan import scanner
+from analyzer.inputs.candump_scan import (
+    OTHER,
+    WHERE,
+    Found,
+    Place,
+    Scan,
+    can_frames,
+    frame_run,
+    scanner,
+    stamp_at,
+)
 from analyzer.inputs.candump_times import DECIDE_AFTER, ScreenTimes
 from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
-from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
+from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
 RAW_LIMIT = 200  # bytes of a bad line kept in its diagnostic
 FOREIGN_HEAD = 20  # first bad lines looked at to tell what a file that is no candump is
@@ -28,6 +38,11 @@ FOREIGN_BAD = 10  # bad lines (with under a tenth as many frames) that make it n
 # is looked at anew each time, and memory stays flat.
 MAX_CACHED_IDS = 20_000
 MAX_CACHED_CHANNELS = 10_000
+# Frames in one FrameRun: a batch's frames and events then stay few enough to be in the
+# processor's caches while the decoder and the counters go over them.
+RUN_FRAMES = 2048
+
+_OTHER = itemgetter(OTHER)
 
 __all__ = ["DECIDE_AFTER", "CandumpParser", "CandumpReader", "LineError"]
 
@@ -59,6 +74,8 @@ class CandumpParser:
         self.wanted_ids = None if wanted_ids is None else frozenset(wanted_ids)
         self.clock = clock
         self._scan = scanner(self.wanted_ids) if scan else None
+        self._mixed = False  # the last block had lines for the line parser
+        self.frame_runs = False  # hand on the scanned frames as FrameRuns
         self.lines = 0
         self.frames = 0  # valid frames, skipped ones included
         self.frames_skipped = 0
@@ -69,6 +86,7 @@ class CandumpParser:
         self.last_time: float | None = None
         self._ids: dict[bytes, IdInfo | None] = {}
         self._channels: dict[bytes, str] = {}
+        self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
         self._after_error = False
         self._times = ScreenTimes()
         self._held: list[InputItem] = []
@@ -100,6 +118,15 @@ class CandumpParser:
             raise LineError(f"bad CAN ID {text.decode('ascii', 'replace')!r}")
         return info
 
+    def _place(self, where: bytes) -> Place:
+        """Channel name, ID value and whether extended, of a scanned ``channel ID`` text."""
+        space = where.rindex(b" ")
+        info = self._frame_id(where[space + 1 :])
+        place = (self._channel(where[:space]), info[0], info[1])
+        if len(self._places) < MAX_CACHED_IDS:
+            self._places[where] = place
+        return place
+
     def _channel(self, text: bytes) -> str:
         name = self._channels.get(text)
         if name is None:
@@ -122,61 +149,82 @@ class CandumpParser:
     def parse_block(self, block: bytes) -> list[InputItem]:
         """Parse whole lines, each ending with ``\\n``; returns frames and diagnostics.
 
-        The scan takes runs of well-formed frame lines and picks the wanted frames out of
-        them; every other line goes to the line parser. Skipped frames are counted by line
-        ends, a run at a time, and only the first and last time of a run are read.
+        The scan goes over the block in one pass. When it met frame lines only (the usual
+        block), the wanted frames are built a column at a time and the skipped ones are
+        counted by line ends; otherwise the block is gone through match by match, and
+        each line that is no well-formed frame goes to the line parser. After a block
+        with such lines the next one is gone through match by match at once.
         """
         if block[-1:] != b"\n":
             block += b"\n"
-        out: list[InputItem] = []
-        append = out.append
         scan = self._scan
-        ids = self._ids
-        channels = self._channels
-        directions = DIRECTIONS
-        size = len(block)
-        pos = mark = 0  # lines from ``mark`` to ``pos`` are frames the scan took
-        taken = 0  # of them, the wanted frames (the rest were skipped)
-        while pos < size:
-            if scan is not None:
-                end = scan.run(block, pos).end()
-                if end > pos:
-                    if self.first_time is None:
-                        self.first_time = _stamp_at(block, pos)
-                    found = scan.wanted(block, pos, end)
-                    taken += len(found)
-                    for stamp, channel, id_text, data, suffix in found:
-                        info = ids.get(id_text) or self._frame_id(id_text)
-                        append(
-                            CanFrame(
-                                float(stamp),
-                                info[0],
-                                unhexlify(data),
-                                info[1],
-                                channels.get(channel) or self._channel(channel),
-                                False,
-                                False,
-                                False,
-                                directions[suffix] if suffix else "",
-                            )
-                        )
-                    pos = end
-                    if pos == size:
-                        break
-            # A line for the line parser: first count what the scan took before it.
-            self._count_scanned(block, mark, pos, taken)
-            taken = 0
-            eol = block.index(b"\n", pos)
-            line = block[pos : min(eol, pos + MAX_LINE + 1)]
-            self.lines += 1
-            item = self._slow_line(line, self.lines)
-            if item is not None:
-                append(item)
-            pos = mark = eol + 1
-        self._count_scanned(block, mark, pos, taken)
+        if scan is None:
+            out = self._parse_lines(block)
+        elif self._mixed:
+            out = self._parse_matches(block, scan)
+        else:
+            found = scan.findall(block)
+            while found and not (found[-1][WHERE] or found[-1][OTHER]):
+                found.pop()  # the end of the block
+            if any(map(_OTHER, found)):
+                out = self._parse_matches(block, scan)
+            else:
+                out = self._frames(found)
+                self._count_scanned(block, 0, len(block), len(found))
         if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
+        return out
+
+    def _frames(self, found: list[Found]) -> list[InputItem]:
+        """The CanFrames of the wanted frames the scan found (one FrameRun of them all
+        when ``frame_runs`` is set)."""
+        if self.frame_runs:
+            return [
+                frame_run(found[start : start + RUN_FRAMES], self._places.get, self._place)
+                for start in range(0, len(found), RUN_FRAMES)
+            ]
+        return list(can_frames(found, self._places.get, self._place))
+
+    def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
+        """A block with lines for the line parser: each in its place, with its number."""
+        out: list[InputItem] = []
+        wanted: list[Found] = []  # wanted frames since the last other line
+        mark = 0  # the lines from ``mark`` on are frames the scan took
+        mixed = False
+        for match in scan.finditer(block):
+            found = cast(Found, match.groups(b""))
+            if found[WHERE]:
+                wanted.append(found)
+                continue
+            other = found[OTHER]
+            if not other:
+                continue  # the end of the block
+            mixed = True
+            out += self._frames(wanted)
+            self._count_scanned(block, mark, match.start(OTHER + 1), len(wanted))
+            wanted = []
+            self.lines += 1
+            item = self._slow_line(other[:-1][: MAX_LINE + 1], self.lines)
+            if item is not None:
+                out.append(item)
+            mark = match.end()
+        out += self._frames(wanted)
+        self._count_scanned(block, mark, len(block), len(wanted))
+        self._mixed = mixed
+        return out
+
+    def _parse_lines(self, block: bytes) -> list[InputItem]:
+        """Every line of the block by the line parser (no scan)."""
+        out: list[InputItem] = []
+        pos, size = 0, len(block)
+        while pos < size:
+            eol = block.index(b"\n", pos)
+            self.lines += 1
+            item = self._slow_line(block[pos : min(eol, pos + MAX_LINE + 1)], self.lines)
+            if item is not None:
+                out.append(item)
+            pos = eol + 1
         return out
 
     def _count_scanned(self, block: bytes, mark: int, pos: int, taken: int) -> None:
@@ -184,12 +232,14 @@ class CandumpParser:
         them wanted frames (handed on) and the rest skipped frames."""
         if pos == mark:
             return
+        if self.first_time is None:
+            self.first_time = stamp_at(block, mark)
         lines = block.count(b"\n", mark, pos)
         self.lines += lines
         self.frames += lines
         self.frames_skipped += lines - taken
         self._after_error = False
-        self.last_time = _stamp_at(block, block.rfind(b"\n", mark, pos - 1) + 1 or mark)
+        self.last_time = stamp_at(block, block.rfind(b"\n", mark, pos - 1) + 1 or mark)
 
     def _bad(self, line: bytes, lineno: int, why: str) -> Event | None:
         self.bad_lines += 1
@@ -323,11 +373,6 @@ class CandumpParser:
         return held
 
 
-def _stamp_at(block: bytes, start: int) -> float:
-    """The time of the scanned ``(seconds.fraction) ...`` line that starts at ``start``."""
-    return float(block[start + 1 : block.index(b")", start)])
-
-
 class CandumpReader(InputReader):
     """A candump text file (``-L`` or default output), plain or gzip-compressed."""
 
@@ -355,6 +400,7 @@ class CandumpReader(InputReader):
         parser = self.parser
         raw = self._raw
         problems = self.problems
+        parser.frame_runs = self.frame_runs
         reported = 0
         for block in line_blocks(self._blocks, self.block_size):
             items = parser.parse_block(block)
@@ -363,7 +409,9 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 items.append(self._damage(problems[reported]))
                 reported += 1
-            if len(items) <= size:
+            if self.frame_runs and items:
+                yield from by_frames(items, size)
+            elif len(items) <= size:
                 yield items  # also when empty: the caller's progress moves on
             else:
                 for start in range(0, len(items), size):

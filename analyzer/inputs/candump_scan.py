@@ -1,22 +1,30 @@
-"""Well-formed ``candump -L`` lines found at C speed: runs of frames, and the wanted ones.
+"""Well-formed ``candump -L`` lines found at C speed: one pattern that takes a whole block.
 
 A busy bus log is mostly frames of other devices. Looking at each of those lines in
-Python costs more than python-can's whole reader; two compiled patterns instead do the
-work in C: one finds how far a run of well-formed classic frame lines goes (checking each
-as strictly as the line parser does), the other picks the wanted frames out of such a
-run with their parts as groups. Whatever the first does not take (damaged lines, remote,
-CAN FD and error frames, the screen layout, unusual ID widths) is left to the line
-parser, which says what is wrong; so the scan changes speed, never results
-(``tests/test_inputs_candump_scan.py`` checks that).
+Python costs more than python-can's whole reader; one compiled pattern instead does the
+work in C, in one pass over a block. Each of its matches takes a run of well-formed
+classic frame lines of other IDs (checking each as strictly as the line parser does),
+then one of: a wanted frame, with its parts as groups; any other line, whole, for the line
+parser (damaged lines, remote, CAN FD and error frames, the screen layout, unusual ID
+widths), which says what is wrong; or the end of the block. So the matches follow each
+other from the block's start to its end, and the scan changes speed, never results
+(``tests/test_inputs_candump_scan.py`` checks that). The wanted frames found become
+CanFrames or one FrameRun here (``can_frames``, ``frame_run``).
 """
 
 from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Iterable
+from binascii import unhexlify
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from itertools import repeat
+from operator import itemgetter, truediv
 from typing import cast
+
+from analyzer.inputs.candump_line import DIRECTIONS
+from analyzer.protocol.types import CanFrame, FrameRun
 
 # A ``(seconds.fraction)`` stamp: at most 15 digits before the point (under 1e15 s, the
 # line parser's limit).
@@ -28,23 +36,26 @@ _HEX = "[0-9A-Fa-f]"
 _ANY_ID = f"(?:[01]{_HEX}{{7}}|{_HEX}{{3}})"
 # Classic CAN data: an even number of hex digits, at most 16 (tried longest first).
 _DATA = "(?:" + "|".join(f"{_HEX}{{{n}}}" for n in range(16, 0, -2)) + "|)"
-_RUN = f"(?:{_STAMP} \\S++ {_ANY_ID}#{_DATA}(?: [RrTt])?\\n)*+"
 
-# (timestamp text, channel, ID text, data in hex, direction letter or b"")
+# (timestamp text, with 6 digits after the point; channel and ID text with the space
+# between them; data in hex; direction letter or b""; other line): a wanted frame has the
+# first three (the direction may be b""), a line for the line parser only the last (its
+# line end included), the end of the block none. Channel and ID are one text: one object
+# and one look-up a frame.
 Found = tuple[bytes, bytes, bytes, bytes, bytes]
+STAMP, WHERE, DATA, DIRECTION, OTHER = range(5)
 
 
 @dataclass(frozen=True)
 class Scan:
-    """The two patterns for one set of wanted IDs.
+    """The pattern for one set of wanted IDs, as ``findall`` and as ``finditer``.
 
-    ``run(block, pos).end()`` is the end of the run of well-formed lines from ``pos``
-    (``pos`` itself when the line there is the line parser's); ``wanted(block, pos,
-    end)`` lists the wanted frames of such a run, in order.
+    ``findall(block)`` lists what the matches found, in order (a block is whole lines);
+    ``finditer(block)`` gives the matches themselves, to know where each other line is.
     """
 
-    run: Callable[[bytes, int], re.Match[bytes]]
-    wanted: Callable[[bytes, int, int], list[Found]]
+    findall: Callable[[bytes], list[Found]]
+    finditer: Callable[[bytes], Iterator[re.Match[bytes]]]
 
 
 def id_texts(ids: Iterable[int]) -> list[str]:
@@ -58,19 +69,81 @@ def id_texts(ids: Iterable[int]) -> list[str]:
     return texts
 
 
-@functools.lru_cache(maxsize=8)
-def scanner(wanted_ids: frozenset[int] | None) -> Scan:
-    """The scan for this set of wanted IDs (None: every ID is wanted)."""
+def block_pattern(wanted_ids: frozenset[int] | None) -> str:
+    """The pattern (see the module docstring) for this set of wanted IDs (None: all)."""
     if wanted_ids is None:
-        wanted = _ANY_ID
+        wanted, other_id = _ANY_ID, "(?!)"  # every well-formed frame is wanted
     else:
         texts = id_texts(wanted_ids)
         wanted = f"(?i:{'|'.join(texts)})" if texts else "(?!)"
-    # Within a run every line is known to be well-formed: the parts need no more checks,
-    # and a match can only start at a line's start (nothing else in a line can begin
-    # ``(digits) name ID#``).
-    frame = f"\\(([0-9.]++)\\) (\\S++) ({wanted})#({_HEX}*+)(?: ([RrTt]))?\\n"
+        other_id = f"(?!{wanted}#){_ANY_ID}"
+    skipped = f"{_STAMP} \\S++ {other_id}#{_DATA}(?: [RrTt])?\\n"
+    # The wanted frame's stamp has 6 digits after the point, as candump writes it (for
+    # ``stamp_times``); a wanted frame with another stamp goes to the line parser.
+    frame = f"\\(([0-9]{{1,15}}+\\.[0-9]{{6}})\\) (\\S++ {wanted})#({_DATA})(?: ([RrTt]))?\\n"
+    return f"(?:{skipped})*+(?:{frame}|([^\\n]*+\\n)|\\Z)"
+
+
+def stamp_times(stamps: Iterable[bytes]) -> list[float]:
+    """The times of ``seconds.micros`` stamp texts (6 digits after the point): exactly what
+    ``float`` makes of them (both round the exact value to the nearest float; an integer
+    divided by an integer is rounded once) at about half of ``float``'s cost, which is
+    slow for the 16 digits candump writes."""
+    return list(map(truediv, map(int, map(bytes.replace, stamps, _POINT, _NOTHING)), _MICRO))
+
+
+_POINT, _NOTHING, _MICRO = repeat(b"."), repeat(b""), repeat(1_000_000)
+
+
+@functools.lru_cache(maxsize=8)
+def scanner(wanted_ids: frozenset[int] | None) -> Scan:
+    """The scan for this set of wanted IDs (None: every ID is wanted)."""
+    pattern = re.compile(block_pattern(wanted_ids).encode())
     return Scan(
-        cast(Callable[[bytes, int], "re.Match[bytes]"], re.compile(_RUN.encode()).match),
-        cast(Callable[[bytes, int, int], list[Found]], re.compile(frame.encode()).findall),
+        cast(Callable[[bytes], list[Found]], pattern.findall),
+        pattern.finditer,
     )
+
+
+Place = tuple[str, int, bool]  # channel name, ID value, extended
+_STAMP_TEXT = itemgetter(STAMP)
+_DIRECTION_OF = {b"": "", **DIRECTIONS}
+
+
+def frame_run(
+    found: list[Found],
+    cached: Callable[[bytes], Place | None],
+    place: Callable[[bytes], Place],
+) -> FrameRun:
+    """The wanted frames the scan found (at least one), as one FrameRun. ``cached`` gives
+    the place of a ``channel ID`` text seen before (else None), ``place`` works it out."""
+    stamps, wheres, datas, directions, _ = zip(*found, strict=True)
+    direction_of = _DIRECTION_OF
+    return FrameRun(
+        stamp_times(stamps),
+        [cached(where) or place(where) for where in wheres],
+        list(map(unhexlify, datas)),
+        list(map(direction_of.__getitem__, directions)),
+    )
+
+
+def can_frames(
+    found: list[Found],
+    cached: Callable[[bytes], Place | None],
+    place: Callable[[bytes], Place],
+) -> list[CanFrame]:
+    """The wanted frames the scan found, as CanFrames (see ``frame_run``)."""
+    direction_of = _DIRECTION_OF
+    times = stamp_times(map(_STAMP_TEXT, found))
+    return [
+        CanFrame(
+            time, p[1], unhexlify(data), p[2], p[0], False, False, False, direction_of[direction]
+        )
+        for (_, where, data, direction, _), time in zip(found, times, strict=True)
+        for p in (cached(where) or place(where),)
+    ]
+
+
+def stamp_at(block: bytes, start: int) -> float:
+    """The time of the scanned ``(seconds.fraction) ...`` line that starts at ``start``."""
+    return float(block[start + 1 : block.index(b")", start)])

@@ -27,13 +27,14 @@ def _decoder(row: Command, fields: Sequence[Field], variant: int | None) -> Comm
     (the selector first, if any); ``variant`` is None when the selector's value has no
     layout (the general path says so right after the selector's own values)."""
     code = Code()
-    code.items += [
-        f"'s_id': {row.s_id}",
-        f"'cmd': {row.cmd}",
-        f"'name': {row.name!r}",
-        f"'component': {COMPONENT_NAMES[row.s_id]!r}",
-        "'raw': data.hex(' ').upper()",
-    ]
+    constants = {
+        "s_id": row.s_id,
+        "cmd": row.cmd,
+        "name": row.name,
+        "component": COMPONENT_NAMES[row.s_id],
+    }
+    code.items += [f"{key!r}: {value!r}" for key, value in constants.items()]
+    code.items.append("'raw': data.hex(' ').upper()")
     code.lines.append("    warnings = []")
     names = code.unpack(fields, CAN_DATA_SIZE)
     for position, (f, r) in enumerate(zip(fields, names, strict=True)):
@@ -49,7 +50,7 @@ def _decoder(row: Command, fields: Sequence[Field], variant: int | None) -> Comm
         code.lines.append(f"    if {' or '.join(f'data[{i}]' for i in unused)}:")
         code.lines.append(f"        warnings.append({report}({name}, data, {where}))")
     decode: CommandDecoder = code.define(
-        "decode(data)", [*code.lines, f"    return {code.result()}, warnings"]
+        "decode(data)", [*code.lines, *code.filled(len(constants)), "    return fields, warnings"]
     )
     return decode
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import struct
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
@@ -104,6 +105,19 @@ class Code:
 
     def result(self) -> str:
         return "{" + ", ".join(self.items) + "}"
+
+    def filled(self, constants: int) -> list[str]:
+        """Lines that make the result as ``fields``, the first ``constants`` items being
+        literals: a copy of a dict that holds them and every other key in the order of
+        the items (as the literal would), then the other values stored in order. Copying
+        beats the literal when several values are constants."""
+        pairs = [item.split(": ", 1) for item in self.items]
+        template: dict[object, object] = {ast.literal_eval(key): None for key, _ in pairs}
+        for key, value in pairs[:constants]:
+            template[ast.literal_eval(key)] = ast.literal_eval(value)
+        lines = [f"    fields = {self.constant(template)}.copy()"]
+        lines += [f"    fields[{key}] = {value}" for key, value in pairs[constants:]]
+        return lines
 
     def define(self, head: str, lines: list[str]) -> Any:
         """Compile ``def head:`` with ``lines`` as its body; returns the function."""

@@ -26,6 +26,7 @@ from analyzer.protocol.types import (
     TOPIC_DIAGNOSTICS,
     CanFrame,
     Event,
+    FrameRun,
     StreamChunk,
     diagnostic,
     hexstr,
@@ -162,7 +163,9 @@ class Decoder:
                 events.extend(self._can_any(frame, frame.channel or "can", _NO_EXTRA))
             else:
                 mixed = True
-                if type(item) is StreamChunk:
+                if type(item) is FrameRun:
+                    self._feed_run(item, events)
+                elif type(item) is StreamChunk:
                     events.extend(self.feed_stream(item))
                 elif isinstance(item, Event):
                     add_event(item)
@@ -178,6 +181,61 @@ class Decoder:
             last = raw[-1]
             if type(last) is CanFrame:
                 self.last_time = last.time
+        if mixed:  # a run after the last raw item: its last frame is the latest
+            for item in reversed(items):
+                if type(item) is FrameRun and len(item):
+                    self.last_time = item.time[-1]
+                if type(item) is not Event:
+                    break
+
+    def _feed_run(self, run: FrameRun, events: list[Event]) -> None:
+        """Decode a run of plain frames, column by column, as ``feed_batch`` decodes them
+        one CanFrame at a time (a frame not decoded here goes through ``_can_any``)."""
+        add_event = events.append
+        command_decoders = COMMAND_DECODERS
+        status_decoders = EIGHT_BYTE_DECODERS
+        status_topics = STATUS_TOPICS
+        protocol = 0
+        for time, (channel, can_id, extended), data, direction in zip(
+            run.time, run.place, run.data, run.direction, strict=True
+        ):
+            if extended:
+                if can_id == CONTROL_ID and len(data) == 8:
+                    decode = command_decoders.get(data[0] << 8 | data[1])
+                    if decode is not None:
+                        fields, warnings = decode(data)
+                        add_event(Event(TOPIC_COMMAND, time, channel or "can", fields, warnings))
+                        protocol += 1
+                        continue
+                if can_id == FEEDBACK_ID:
+                    source = channel or "can"
+                    reassembler = self._recent if source == self._recent_source else None
+                    if reassembler is None:
+                        self.last_time = time  # an eviction happens as of now
+                        reassembler = self._reassembler(source)
+                        if self._given_up:
+                            events.extend(self._take_given_up())
+                    results = reassembler.feed(data, time)
+                    if results:
+                        events.extend(self._feedback(source, results, _NO_EXTRA))
+                    protocol += 1
+                    continue
+                decode = status_decoders.get(can_id)
+                if decode is not None and len(data) == 8:
+                    fields, status_warnings = decode(data)
+                    fields["raw"] = data.hex(" ").upper()
+                    add_event(
+                        Event(
+                            status_topics[can_id], time, channel or "can", fields, status_warnings
+                        )
+                    )
+                    protocol += 1
+                    continue
+            self.last_time = time
+            frame = CanFrame(time, can_id, data, extended, channel, False, False, False, direction)
+            events.extend(self._can_any(frame, channel or "can", _NO_EXTRA))
+        self.frames += len(run)
+        self.protocol_frames += protocol
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         """Decode bytes read from a TCP / UART stream."""

@@ -1,0 +1,235 @@
+"""Frames handed on as FrameRuns (when no sink keeps raw frames) give what CanFrames give.
+
+The candump reader, the decoder and the counters each take a short way with runs; each
+is held here to the long way: the same text read as CanFrames, the same frames fed one
+CanFrame at a time, the same frames counted as items.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from analyzer.inputs.base import by_frames
+from analyzer.inputs.candump import CandumpParser, CandumpReader
+from analyzer.pipeline import Batch, Pipeline, default_decoder, run_items
+from analyzer.protocol.codec import encode_command
+from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
+from analyzer.protocol.ids import (
+    ALTITUDE_ID,
+    CONTROL_ID,
+    FEEDBACK_ID,
+    GPS_ID,
+    PROTOCOL_IDS,
+    TEXT_END_ID,
+    TEXT_ID,
+    UAV_ATTITUDE_ID,
+)
+from analyzer.protocol.types import CanFrame, Event, FrameRun
+from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
+from analyzer.tally import Tally
+from tests.fault_logs import CANDUMP_NAME, write_fault_logs
+from tests.test_inputs_candump_scan import lines
+
+SAMPLES = Path(__file__).resolve().parents[1] / "samples"
+
+
+def expanded(items: list[Any]) -> list[Any]:
+    """Items with every FrameRun replaced by its CanFrames."""
+    out: list[Any] = []
+    for item in items:
+        out += item.frames() if isinstance(item, FrameRun) else [item]
+    return out
+
+
+def parsed(text: bytes, cuts: list[int], wanted: frozenset[int] | None, runs: bool) -> Any:
+    parser = CandumpParser("test.log", wanted_ids=wanted)
+    parser.frame_runs = runs
+    ends = sorted({i + 1 for i, c in enumerate(text) if c == 0x0A})
+    chosen = sorted({ends[c % len(ends)] for c in cuts}) if ends else []
+    items: list[Any] = []
+    start = 0
+    for end in [*chosen, len(text)]:
+        if end > start:
+            items += parser.parse_block(text[start:end])
+        start = end
+    items += parser.finish()
+    if runs:
+        assert all(len(i) for i in items if isinstance(i, FrameRun))
+    shown = [
+        (i.topic, i.time, dict(i.fields)) if isinstance(i, Event) else i for i in expanded(items)
+    ]
+    return shown, parser.stats, parser.first_time, parser.last_time, parser.notes
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.lists(lines(), max_size=60),
+    st.lists(st.integers(0, 10_000), max_size=4),
+    st.sampled_from([PROTOCOL_IDS, None, frozenset({0x123, 0x18F00000})]),
+)
+def test_the_reader_gives_the_same_frames_as_runs(
+    text_lines: list[bytes], cuts: list[int], wanted: frozenset[int] | None
+) -> None:
+    text = b"".join(line + b"\n" for line in text_lines)
+    assert parsed(text, cuts, wanted, runs=True) == parsed(text, cuts, wanted, runs=False)
+
+
+# Data as the bus carries it: valid messages of each protocol ID, and anything else.
+_FEEDBACK = [
+    *segments(encode_attitude(pitch_deg=-30.0, yaw_deg=12.5, motor_yaw_deg=3.0)),
+    *segments(
+        encode_ranging(distance_m=120.0, height_m=80.0, latitude_deg=31.1, longitude_deg=118.1)
+    ),
+]
+_DATA_BY_ID: dict[int, list[bytes]] = {
+    CONTROL_ID: [
+        encode_command("gimbal_control", pan_speed_dps=12.5, tilt_speed_dps=-3.0),
+        encode_command("zoom", action="zoom_in"),
+        encode_command("snapshot", mode="single"),
+    ],
+    FEEDBACK_ID: [bytes(s) for s in _FEEDBACK],
+    GPS_ID: [encode_gps(31.12, 118.12)],
+    ALTITUDE_ID: [encode_altitude(123.4)],
+    UAV_ATTITUDE_ID: [encode_uav_attitude(1.5, -2.0, 90.0)],
+    TEXT_ID: [d for i, d in encode_text("BATTERY LOW") if i == TEXT_ID],
+    TEXT_END_ID: [d for i, d in encode_text("BATTERY LOW") if i == TEXT_END_ID],
+}
+
+
+@st.composite
+def plain_frames(draw: st.DrawFn) -> list[CanFrame]:
+    """Plain data frames of the protocol's IDs and others, in (mostly) time order."""
+    out = []
+    time = draw(st.floats(0, 2e9, allow_nan=False))
+    for _ in range(draw(st.integers(0, 40))):
+        time += draw(st.sampled_from([0.0, 0.001, 0.05, 0.3, 2.0, -0.5]))
+        can_id = draw(st.sampled_from([*_DATA_BY_ID, 0x18F00000, 0x123, 0xF01]))
+        known = _DATA_BY_ID.get(can_id, [])
+        data = draw(
+            st.sampled_from(known) if known and draw(st.booleans()) else st.binary(max_size=8)
+        )
+        out.append(
+            CanFrame(
+                time,
+                can_id,
+                data,
+                draw(st.booleans()) if can_id <= 0x7FF else True,
+                draw(st.sampled_from(["can0", "can1", ""])),
+                direction=draw(st.sampled_from(["", "rx", "tx"])),
+            )
+        )
+    return out
+
+
+def as_run(frames: list[CanFrame]) -> FrameRun:
+    return FrameRun(
+        [f.time for f in frames],
+        [(f.channel, f.can_id, f.extended) for f in frames],
+        [f.data for f in frames],
+        [f.direction for f in frames],
+    )
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(plain_frames(), max_size=4), st.booleans())
+def test_the_decoder_decodes_a_run_as_the_same_frames_one_by_one(
+    batches: list[list[CanFrame]], emit_other: bool
+) -> None:
+    short, long = default_decoder(emit_other=emit_other), default_decoder(emit_other=emit_other)
+    short_events: list[Event] = []
+    long_events: list[Event] = []
+    for frames in batches:
+        run = as_run(frames)
+        assert run.frames() == frames
+        raw: list[Any] = []
+        short.feed_batch([run], raw, short_events)
+        assert raw == []  # a run is counted by the pipeline, never handed on as items
+        long.feed_batch(frames, [], long_events)
+        assert short.last_time == long.last_time  # type: ignore[attr-defined]
+    short_events += short.close()
+    long_events += long.close()
+    assert [e.to_dict() for e in short_events] == [e.to_dict() for e in long_events]
+    assert short.stats == long.stats  # type: ignore[attr-defined]
+
+
+@given(st.lists(plain_frames(), max_size=4))
+def test_the_counters_count_a_run_as_the_same_frames(batches: list[list[CanFrame]]) -> None:
+    short, long = Tally(), Tally()
+    for frames in batches:
+        short.add_runs([as_run(frames)])
+        long.add_items(frames)
+    assert dataclasses.asdict(short) == dataclasses.asdict(long)
+
+
+class Keeper:
+    """A sink that keeps raw items (and every event), as an MCAP writer does."""
+
+    keeps_items = True
+
+    def __init__(self) -> None:
+        self.items: list[Any] = []
+        self.events: list[dict[str, Any]] = []
+
+    def handle(self, batch: Batch) -> None:
+        self.items += batch.items
+        self.events += [e.to_dict() for e in batch.events]
+
+    def close(self) -> None:
+        pass
+
+
+class EventsOnly(Keeper):
+    keeps_items = False
+
+
+def run_file(path: Path, sink: Keeper) -> tuple[Any, ...]:
+    reader = CandumpReader(str(path), wanted_ids=PROTOCOL_IDS)
+    pipeline = Pipeline([sink])
+    run_items(reader, pipeline, batch_items=64)
+    reader.close()
+    stats = pipeline.decoder.stats  # type: ignore[attr-defined]
+    return (
+        reader.frame_runs,
+        sink.events,
+        dataclasses.asdict(pipeline.tally),
+        stats,
+        reader.stats,
+        (reader.first_time, reader.last_time),
+    )
+
+
+@pytest.mark.parametrize("name", ["flight-candump.log", CANDUMP_NAME])
+def test_a_pipeline_without_raw_items_reads_runs_and_counts_the_same(
+    name: str, tmp_path: Path
+) -> None:
+    write_fault_logs(tmp_path)
+    path = SAMPLES / name if (SAMPLES / name).exists() else tmp_path / name
+    keeper = Keeper()
+    with_items = run_file(path, keeper)
+    without = run_file(path, EventsOnly())
+    assert (with_items[0], without[0]) == (False, True)
+    assert with_items[1:] == without[1:]
+    assert keeper.items and all(type(i) is CanFrame for i in keeper.items)
+
+
+@given(st.lists(st.integers(0, 300), max_size=30), st.integers(1, 200))
+def test_runs_go_to_the_pipeline_in_lists_of_at_most_a_batch_of_frames(
+    lengths: list[int], size: int
+) -> None:
+    # Items as a block gives them: runs of frames and, between them, single items.
+    items: list[Any] = [
+        as_run([CanFrame(float(i), CONTROL_ID, b"")] * n) if n else Event("/d", 0.0, "t")
+        for i, n in enumerate(lengths)
+    ]
+    chunks = list(by_frames(items, size))
+    assert [i for chunk in chunks for i in chunk] == items
+    for chunk in chunks:
+        weight = sum(len(i) if isinstance(i, FrameRun) else 1 for i in chunk)
+        assert weight <= size or len(chunk) == 1
+    assert all(chunks) or chunks == [[]]
