@@ -4,12 +4,24 @@ from __future__ import annotations
 
 import bisect
 import struct
+from dataclasses import dataclass
 
 _RECORD_HEAD = struct.Struct("<BQ")  # opcode, record length
 _PAST_ANY_OFFSET = 1 << 64
 
 # (log time, offset in the chunk, channel id) of one message
 Placed = tuple[int, int, int]
+
+
+@dataclass(slots=True)
+class HoldBack:
+    """A writer's hold-back: ``window`` (ns; 0 for none), the open chunk's size after the
+    last flush, and the messages held out of a chunk while it is written (chunk, index,
+    newest log time), kept should that write fail."""
+
+    window: int
+    open_at_flush: int = 0
+    held_over: tuple[bytearray, dict[int, list[int]], int] | None = None
 
 
 def messages_in_order(index: dict[int, list[int]]) -> list[Placed]:

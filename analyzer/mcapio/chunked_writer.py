@@ -39,7 +39,7 @@ from mcap.records import (
     Statistics,
 )
 
-from analyzer.mcapio.chunk_order import count_until, messages_in_order, rebuild
+from analyzer.mcapio.chunk_order import HoldBack, count_until, messages_in_order, rebuild
 from analyzer.mcapio.options import COMPRESSIONS, DEFAULT_COMPRESSION
 from analyzer.mcapio.summary_tail import MAGIC, serialise, summary_tail
 
@@ -82,9 +82,10 @@ class ChunkedWriter:
         hold_back: int = 0,
     ) -> None:
         self._stream = stream
-        # Messages within this many ns of the newest log time stay in the open chunk when
-        # it is closed by a flush or by its size (0: every message is closed at once).
-        self._hold_back = hold_back
+        # Messages within ``hold_back`` ns of the newest log time stay in the open chunk
+        # when it is closed by a flush or by its size (0: every message is closed at once).
+        # (Few attributes: past 30, CPython's attribute access on the hot path slows down.)
+        self._hold = HoldBack(hold_back)
         # Live recording: every flush also writes a provisional summary and footer after the
         # data (overwritten by the next chunk), so a killed recorder leaves an indexed file.
         self._live_summary = live_summary
@@ -92,9 +93,6 @@ class ChunkedWriter:
         self._since_tail = 0  # data bytes written since the last provisional summary
         self._chunk_size = chunk_size
         self._close_at = chunk_size  # open chunk size at which it is closed
-        self._open_at_flush = 0  # open chunk size after the last flush (with a hold-back)
-        # the messages held back from a chunk being written: (chunk, index, newest time)
-        self._held_over: tuple[bytearray, dict[int, list[int]], int] | None = None
         self._compression, self._compress = compressor(compression)
         self.retimed = 0  # messages whose log time was raised to keep the file in order
         self.retimed_topics: Counter[str] = Counter()  # the same, by topic
@@ -163,9 +161,10 @@ class ChunkedWriter:
         self._chunk_last = self._floor
         self._unsorted = False
         self._close_at = self._chunk_size
-        if self._held_over is not None:
-            self._chunk, self._index, self._chunk_last = self._held_over
-            self._held_over = None
+        hold = self._hold
+        if hold.held_over is not None:
+            self._chunk, self._index, self._chunk_last = hold.held_over
+            hold.held_over = None
 
     @staticmethod
     def _record(record: object) -> bytes:
@@ -249,13 +248,14 @@ class ChunkedWriter:
         complete as it stands; the next data written replaces them. To bound the extra
         writes of a long recording, a summary larger than ``LIVE_SUMMARY_FREE`` is written
         again only once at least as many data bytes have followed the previous one."""
-        if not self._hold_back:
+        hold = self._hold
+        if not hold.window:
             self._finish_chunk()
-        elif len(self._chunk) == self._open_at_flush:
+        elif len(self._chunk) == hold.open_at_flush:
             self._finish_chunk()  # nothing came since the last flush: all of it goes out
         else:
             self._close_older()
-        self._open_at_flush = len(self._chunk)
+        hold.open_at_flush = len(self._chunk)
         if self._live_summary and self._tail_at is None and self._message_count:
             tail = self._tail(self._pos)
             if len(tail) <= LIVE_SUMMARY_FREE or self._since_tail >= len(tail):
@@ -314,7 +314,7 @@ class ChunkedWriter:
 
     def _chunk_full(self) -> None:
         """The open chunk reached its size: closed, less what the hold-back keeps open."""
-        if not self._hold_back or len(self._chunk) > HOLD_BACK_MAX_BYTES:
+        if not self._hold.window or len(self._chunk) > HOLD_BACK_MAX_BYTES:
             self._finish_chunk()
         else:
             self._close_older()
@@ -324,7 +324,7 @@ class ChunkedWriter:
         hold-back into a chunk of their own; the others stay open, in log-time order."""
         if not self._index:
             return
-        cutoff = self._chunk_last - self._hold_back
+        cutoff = self._chunk_last - self._hold.window
         messages = messages_in_order(self._index)
         split = count_until(messages, cutoff)
         if split == len(messages):
@@ -337,9 +337,9 @@ class ChunkedWriter:
             head = b"".join(self._records)
             self._chunk, self._index = rebuild(chunk, head, messages[:split])
             self._unsorted = False
-            self._held_over = (held, held_index, newest)  # kept should the write fail
+            self._hold.held_over = (held, held_index, newest)  # kept should the write fail
             self._finish_chunk()
-            self._held_over = None
+            self._hold.held_over = None
             self._chunk, self._index = held, held_index
             self._chunk_last = newest
         # the held messages stay; the next close by size comes after as much again
