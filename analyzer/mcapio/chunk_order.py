@@ -15,12 +15,12 @@ Placed = tuple[int, int, int]
 
 @dataclass(slots=True)
 class HoldBack:
-    """A writer's hold-back: ``window`` (ns; 0 for none), the open chunk's size after the
-    last flush, and the messages held out of a chunk while it is written (chunk, index,
-    newest log time), kept should that write fail."""
+    """A writer's hold-back: ``window`` (ns; 0 for none), the messages given to the writer
+    up to the last flush, and the messages held out of a chunk while it is written (chunk,
+    index, newest log time), kept should that write fail."""
 
     window: int
-    open_at_flush: int = 0
+    given_at_flush: int = 0
     held_over: tuple[bytearray, dict[int, list[int]], int] | None = None
 
 

@@ -251,11 +251,11 @@ class ChunkedWriter:
         hold = self._hold
         if not hold.window:
             self._finish_chunk()
-        elif len(self._chunk) == hold.open_at_flush:
+        elif self._message_count + self.held_messages == hold.given_at_flush:
             self._finish_chunk()  # nothing came since the last flush: all of it goes out
         else:
             self._close_older()
-        hold.open_at_flush = len(self._chunk)
+        hold.given_at_flush = self._message_count + self.held_messages
         if self._live_summary and self._tail_at is None and self._message_count:
             tail = self._tail(self._pos)
             if len(tail) <= LIVE_SUMMARY_FREE or self._since_tail >= len(tail):
