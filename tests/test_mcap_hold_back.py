@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import errno
-import io
 import json
 import shutil
 from pathlib import Path
-from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -23,6 +20,7 @@ from analyzer.mcapio.write_failure import keep_complete_chunks
 from analyzer.mcapio.writer import McapSink
 from analyzer.protocol.types import CanFrame
 from tests.mcap_doctor import examine
+from tests.test_mcap_writer import _FullDisk  # a disk that fills up after `room` bytes
 
 S = 1_000_000_000  # ns
 T0 = 1_700_000_000 * S
@@ -179,20 +177,6 @@ def test_the_sink_writes_held_back_messages_when_nothing_else_comes(tmp_path: Pa
     finally:
         sink.close()
     assert sum(1 for _ in Recording(path).messages()) == 20
-
-
-class _FullDisk(io.FileIO):
-    """A file on a disk that fills up after ``room`` bytes."""
-
-    room = 0
-
-    def write(self, data: Any) -> int:
-        left = self.room - self.tell()
-        if len(data) > left:
-            if left > 0:
-                super().write(bytes(data)[:left])
-            raise OSError(errno.ENOSPC, "No space left on device")
-        return super().write(data)
 
 
 def test_a_full_disk_keeps_every_complete_chunk_in_order(
