@@ -155,7 +155,8 @@ def test_large_messages_fill_chunks_by_size_and_late_ones_still_keep_their_time(
     recorder.finish()
     assert recorder.writer.retimed == 0
     diagnosis = examine(path)
-    assert diagnosis.errors == [] and diagnosis.warnings == [] and diagnosis.chunks > 10
+    # closed by size (there is no flush), each chunk at least as large as what is held
+    assert diagnosis.errors == [] and diagnosis.warnings == [] and diagnosis.chunks >= 3
     found = _library_messages(path)
     assert len(found) == 2 * len(frames) - 15
     assert all(log == own for _, log, _, own in found)

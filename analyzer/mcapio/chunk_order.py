@@ -11,20 +11,24 @@ _PAST_ANY_OFFSET = 1 << 64
 
 # (log time, offset in the chunk, channel id) of one message
 Placed = tuple[int, int, int]
+Index = dict[int, list[int]]  # channel id -> [log time, offset, log time, offset, ...]
+# a chunk cut in two: the records up to a log time and their index, the rest and theirs,
+# and whether the rest is in log-time order
+Split = tuple[bytearray, Index, bytearray, Index, bool]
 
 
 @dataclass(slots=True)
 class HoldBack:
     """A writer's hold-back: ``window`` (ns; 0 for none), the messages given to the writer
     up to the last flush, and the messages held out of a chunk while it is written (chunk,
-    index, newest log time), kept should that write fail."""
+    index, newest log time, whether in log-time order), kept should that write fail."""
 
     window: int
     given_at_flush: int = 0
-    held_over: tuple[bytearray, dict[int, list[int]], int] | None = None
+    held_over: tuple[bytearray, Index, int, bool] | None = None
 
 
-def messages_in_order(index: dict[int, list[int]]) -> list[Placed]:
+def messages_in_order(index: Index) -> list[Placed]:
     """The messages of a chunk's index (channel id -> [log time, offset, ...]) by log time,
     in the order they were added among equal times."""
     messages: list[Placed] = []
@@ -36,18 +40,75 @@ def messages_in_order(index: dict[int, list[int]]) -> list[Placed]:
     return messages
 
 
-def count_until(messages: list[Placed], log_time: int) -> int:
-    """How many of ``messages`` (in order) have a log time up to ``log_time``."""
-    return bisect.bisect_right(messages, (log_time, _PAST_ANY_OFFSET, 0))
+def split_by_time(
+    chunk: bytearray, head: bytes, index: Index, log_time: int, in_order: bool
+) -> Split | None:
+    """``chunk`` (its records ``head``, its messages in log-time order if ``in_order``) cut
+    after ``log_time``: the head and the messages up to that time in log-time order, and
+    the later ones; None when no message is later. Where the later messages begin at one
+    place (the common case: a few late messages among them), the bytes are cut there;
+    otherwise every message is copied to its place."""
+    if not head:
+        place = _one_cut(index, log_time, len(chunk))
+        if place is not None:
+            return _cut(chunk, index, place, in_order)
+    messages = messages_in_order(index)
+    split = bisect.bisect_right(messages, (log_time, _PAST_ANY_OFFSET, 0))
+    if split == len(messages):
+        return None
+    if not split:
+        return bytearray(), {}, chunk, index, in_order  # all of it is later
+    held, held_index = rebuild(chunk, b"", messages[split:])
+    closed, closed_index = rebuild(chunk, head, messages[:split])
+    return closed, closed_index, held, held_index, True
 
 
-def rebuild(
-    chunk: bytearray, head: bytes, messages: list[Placed]
-) -> tuple[bytearray, dict[int, list[int]]]:
+def _one_cut(index: Index, log_time: int, end: int) -> tuple[int, dict[int, int]] | None:
+    """Where the messages later than ``log_time`` begin (``end`` if none is), and how many
+    of each channel come before, if every channel's messages are in log-time order and
+    none up to ``log_time`` lies after the first later one; else None."""
+    cut = end
+    counts: dict[int, int] = {}
+    for channel_id, pairs in index.items():
+        times = pairs[0::2]
+        if times != sorted(times):
+            return None
+        count = counts[channel_id] = bisect.bisect_right(times, log_time)
+        if count < len(times):
+            cut = min(cut, pairs[2 * count + 1])
+    for channel_id, count in counts.items():
+        if count and index[channel_id][2 * count - 1] > cut:
+            return None
+    return cut, counts
+
+
+def _cut(
+    chunk: bytearray, index: Index, place: tuple[int, dict[int, int]], in_order: bool
+) -> Split | None:
+    cut, counts = place
+    if cut == len(chunk):
+        return None
+    closed_index: Index = {}
+    held_index: Index = {}
+    for channel_id, pairs in index.items():
+        at = 2 * counts[channel_id]
+        if at:
+            closed_index[channel_id] = pairs[:at]
+        if at < len(pairs):
+            rest = pairs[at:]
+            rest[1::2] = [offset - cut for offset in rest[1::2]]
+            held_index[channel_id] = rest
+    closed = chunk[:cut]
+    if not in_order and closed_index:  # the few late ones sorted into place
+        closed, closed_index = rebuild(chunk, b"", messages_in_order(closed_index))
+    return closed, closed_index, chunk[cut:], held_index, in_order
+
+
+def rebuild(chunk: bytearray, head: bytes, messages: list[Placed]) -> tuple[bytearray, Index]:
     """A chunk of ``head`` then the records of ``messages`` (taken from ``chunk``) in that
     order, with its message index."""
     rebuilt = bytearray(head)
-    index: dict[int, list[int]] = {}
+    index: Index = {}
     for log_time, offset, channel_id in messages:
         _, length = _RECORD_HEAD.unpack_from(chunk, offset)
         index.setdefault(channel_id, []).extend((log_time, len(rebuilt)))

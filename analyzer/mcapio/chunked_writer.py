@@ -39,7 +39,12 @@ from mcap.records import (
     Statistics,
 )
 
-from analyzer.mcapio.chunk_order import HoldBack, count_until, messages_in_order, rebuild
+from analyzer.mcapio.chunk_order import (
+    HoldBack,
+    messages_in_order,
+    rebuild,
+    split_by_time,
+)
 from analyzer.mcapio.options import COMPRESSIONS, DEFAULT_COMPRESSION
 from analyzer.mcapio.summary_tail import MAGIC, serialise, summary_tail
 
@@ -163,7 +168,8 @@ class ChunkedWriter:
         self._close_at = self._chunk_size
         hold = self._hold
         if hold.held_over is not None:
-            self._chunk, self._index, self._chunk_last = hold.held_over
+            self._chunk, self._index, self._chunk_last, in_order = hold.held_over
+            self._unsorted = not in_order
             hold.held_over = None
 
     @staticmethod
@@ -321,29 +327,32 @@ class ChunkedWriter:
 
     def _close_older(self) -> None:
         """Close the messages of the open chunk older than the newest by more than the
-        hold-back into a chunk of their own; the others stay open, in log-time order."""
+        hold-back into a chunk of their own (in log-time order); the others stay open."""
         if not self._index:
             return
         cutoff = self._chunk_last - self._hold.window
-        messages = messages_in_order(self._index)
-        split = count_until(messages, cutoff)
-        if split == len(messages):
-            self._finish_chunk()
+        head = b"".join(self._records)
+        split = split_by_time(self._chunk, head, self._index, cutoff, not self._unsorted)
+        if split is None:
+            self._finish_chunk()  # nothing is held back
             return
-        if split:
-            chunk = self._chunk
+        closed, closed_index, held, held_index, held_in_order = split
+        if closed_index:
             newest = self._chunk_last
-            held, held_index = rebuild(chunk, b"", messages[split:])
-            head = b"".join(self._records)
-            self._chunk, self._index = rebuild(chunk, head, messages[:split])
+            self._chunk, self._index = closed, closed_index
             self._unsorted = False
-            self._hold.held_over = (held, held_index, newest)  # kept should the write fail
+            # kept should the write fail
+            self._hold.held_over = (held, held_index, newest, held_in_order)
             self._finish_chunk()
             self._hold.held_over = None
             self._chunk, self._index = held, held_index
             self._chunk_last = newest
-        # the held messages stay; the next close by size comes after as much again
-        self._close_at = len(self._chunk) + self._chunk_size
+            self._unsorted = not held_in_order
+        # The held messages stay. The next close by size comes after a chunk's size of new
+        # data, or as much as is held if that is more: each close copies what is held, so
+        # the copying stays within the size of the data written.
+        held_size = len(self._chunk)
+        self._close_at = held_size + max(self._chunk_size, held_size)
 
     def _finish_chunk(self) -> None:
         if not self._index:
