@@ -236,7 +236,8 @@ def test_when_a_chunk_does_not_fit_the_messages_held_back_from_it_are_still_trie
 @st.composite
 def _arrivals(draw: st.DrawFn) -> tuple[list[tuple[str, int, int]], list[bool], int]:
     """Messages (topic, own time, pad) in an order where each comes less than the hold-back
-    after the newest before it, with a flush after some of them, and a chunk size."""
+    after the newest before it (at its time plus a delay under the hold-back; often each
+    topic's in their order), with a flush after some of them, and a chunk size."""
     count = draw(st.integers(1, 120))
     steps = draw(st.lists(st.integers(0, S // 5), min_size=count, max_size=count))
     delays = draw(st.lists(st.integers(0, HOLD_BACK - 1), min_size=count, max_size=count))
@@ -246,9 +247,16 @@ def _arrivals(draw: st.DrawFn) -> tuple[list[tuple[str, int, int]], list[bool], 
     for step in steps:
         t += step
         times.append(t)
-    # a message reaches the writer at its own time plus its delay (less than the hold-back)
-    order = sorted(range(count), key=lambda i: (times[i] + delays[i], i))
-    messages = [(topics[i % len(topics)], times[i], pads[i]) for i in order]
+    topic = [topics[i % len(topics)] for i in range(count)]
+    # a message reaches the writer at its own time plus its delay (less than the hold-back);
+    # often each topic's messages come in their order, as a camera's frames do
+    arrival = [times[i] + delays[i] for i in range(count)]
+    if draw(st.booleans()):
+        last: dict[str, int] = {}
+        for i in range(count):
+            arrival[i] = last[topic[i]] = max(arrival[i], last.get(topic[i], 0))
+    order = sorted(range(count), key=lambda i: (arrival[i], i))
+    messages = [(topic[i], times[i], pads[i]) for i in order]
     flushes = draw(st.lists(st.booleans(), min_size=count, max_size=count))
     chunk_size = draw(st.sampled_from([1024, 4096, 1 << 20]))
     return messages, flushes, chunk_size

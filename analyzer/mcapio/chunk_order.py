@@ -15,6 +15,10 @@ Index = dict[int, list[int]]  # channel id -> [log time, offset, log time, offse
 # a chunk cut in two: the records up to a log time and their index, the rest and theirs,
 # and whether the rest is in log-time order
 Split = tuple[bytearray, Index, bytearray, Index, bool]
+# where a chunk is cut: the offset, each channel's messages before it, the late ones after it
+_Place = tuple[int, dict[int, int], list[int]]
+# More late messages than this after the cut, and the chunk is rebuilt message by message.
+MAX_LATE = 256
 
 
 @dataclass(slots=True)
@@ -63,10 +67,11 @@ def split_by_time(
     return closed, closed_index, held, held_index, True
 
 
-def _one_cut(index: Index, log_time: int, end: int) -> tuple[int, dict[int, int]] | None:
-    """Where the messages later than ``log_time`` begin (``end`` if none is), and how many
-    of each channel come before, if every channel's messages are in log-time order and
-    none up to ``log_time`` lies after the first later one; else None."""
+def _one_cut(index: Index, log_time: int, end: int) -> _Place | None:
+    """Where the messages later than ``log_time`` begin (``end`` if none is), how many of
+    each channel's messages are not later, and the offsets of those that lie after that
+    place all the same (a few late ones); None unless every channel's messages are in
+    log-time order and such late ones are few."""
     cut = end
     counts: dict[int, int] = {}
     for channel_id, pairs in index.items():
@@ -76,18 +81,33 @@ def _one_cut(index: Index, log_time: int, end: int) -> tuple[int, dict[int, int]
         count = counts[channel_id] = bisect.bisect_right(times, log_time)
         if count < len(times):
             cut = min(cut, pairs[2 * count + 1])
+    late: list[int] = []
     for channel_id, count in counts.items():
         if count and index[channel_id][2 * count - 1] > cut:
-            return None
-    return cut, counts
+            offsets = index[channel_id][1 : 2 * count : 2]
+            late += offsets[bisect.bisect_right(offsets, cut) :]
+            if len(late) > MAX_LATE:
+                return None
+    return cut, counts, sorted(late)
 
 
-def _cut(
-    chunk: bytearray, index: Index, place: tuple[int, dict[int, int]], in_order: bool
-) -> Split | None:
-    cut, counts = place
+def _cut(chunk: bytearray, index: Index, place: _Place, in_order: bool) -> Split | None:
+    """``split_by_time`` at the place ``_one_cut`` found: the bytes before it, sorted if
+    need be with the late ones, and the bytes after it less the late ones."""
+    cut, counts, late = place
     if cut == len(chunk):
         return None
+    # the later part: the bytes from the cut on, less the late messages' records
+    held = bytearray()
+    shifts: list[tuple[int, int]] = []  # (offset, how far the bytes from there move back)
+    start = cut
+    for offset in late:
+        shifts.append((start, start - len(held)))
+        held += chunk[start:offset]
+        _, length = _RECORD_HEAD.unpack_from(chunk, offset)
+        start = offset + 9 + length
+    shifts.append((start, start - len(held)))
+    held += chunk[start:]
     closed_index: Index = {}
     held_index: Index = {}
     for channel_id, pairs in index.items():
@@ -96,12 +116,25 @@ def _cut(
             closed_index[channel_id] = pairs[:at]
         if at < len(pairs):
             rest = pairs[at:]
-            rest[1::2] = [offset - cut for offset in rest[1::2]]
+            rest[1::2] = _moved(rest[1::2], shifts)
             held_index[channel_id] = rest
     closed = chunk[:cut]
     if not in_order and closed_index:  # the few late ones sorted into place
         closed, closed_index = rebuild(chunk, b"", messages_in_order(closed_index))
-    return closed, closed_index, chunk[cut:], held_index, in_order
+    return closed, closed_index, held, held_index, in_order
+
+
+def _moved(offsets: list[int], shifts: list[tuple[int, int]]) -> list[int]:
+    """``offsets`` (in increasing order) moved back as ``shifts`` say for where they lie."""
+    if len(shifts) == 1:
+        back = shifts[0][1]
+        return [offset - back for offset in offsets]
+    out: list[int] = []
+    for n, (_, back) in enumerate(shifts):
+        end = shifts[n + 1][0] if n + 1 < len(shifts) else None
+        upto = len(offsets) if end is None else bisect.bisect_left(offsets, end)
+        out += [offset - back for offset in offsets[len(out) : upto]]
+    return out
 
 
 def rebuild(chunk: bytearray, head: bytes, messages: list[Placed]) -> tuple[bytearray, Index]:

@@ -22,11 +22,8 @@ import errno
 import struct
 import zlib
 from collections import Counter
-from collections.abc import Callable
 from typing import IO
 
-import lz4.frame
-import zstandard
 from mcap.opcode import Opcode
 from mcap.records import (
     Channel,
@@ -45,7 +42,8 @@ from analyzer.mcapio.chunk_order import (
     rebuild,
     split_by_time,
 )
-from analyzer.mcapio.options import COMPRESSIONS, DEFAULT_COMPRESSION
+from analyzer.mcapio.compression import compressor
+from analyzer.mcapio.options import DEFAULT_COMPRESSION
 from analyzer.mcapio.summary_tail import MAGIC, serialise, summary_tail
 
 # Message record: opcode, record length, channel id, sequence, log time, publish time.
@@ -54,24 +52,12 @@ _MESSAGE_FIXED = 2 + 4 + 8 + 8
 # Message index record head: opcode, record length, channel id, byte length of the pairs.
 _INDEX_HEAD = struct.Struct("<BQHI")
 
-ZSTD_LEVEL = 3  # what the mcap library's writer uses
 # A provisional summary up to this size is rewritten at every live flush; a larger one only
 # once as many data bytes followed it (so it at most doubles what is written).
 LIVE_SUMMARY_FREE = 256 * 1024
 # With a hold-back, an open chunk holding more than this is closed whole all the same
 # (its newest messages then bound the file as without a hold-back): memory stays bounded.
 HOLD_BACK_MAX_BYTES = 16 * 1024 * 1024
-
-
-def compressor(name: str) -> tuple[str, Callable[[bytes], bytes] | None]:
-    """``zstd`` / ``lz4`` / ``none`` -> (the chunk's compression field, the function)."""
-    if name == "zstd":
-        return "zstd", zstandard.ZstdCompressor(level=ZSTD_LEVEL).compress
-    if name == "lz4":
-        return "lz4", lz4.frame.compress
-    if name in ("none", ""):
-        return "", None
-    raise ValueError(f"unknown compression {name!r}; valid: {', '.join(COMPRESSIONS)}")
 
 
 class ChunkedWriter:
