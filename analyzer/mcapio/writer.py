@@ -65,7 +65,8 @@ class McapSink:
     the telemetry of the same moment (camera frames): a flush leaves the messages within
     that much of the newest log time in the open chunk, so a late one still takes its own
     log time instead of the end of a chunk already written. A killed recorder then loses
-    that much more; ``close`` and a write error's stop write (or count) all of them.
+    that much more. ``close`` writes them all; after a write error they are kept if they
+    fit in the space the failed chunk freed (``kept_messages`` counts what the file holds).
     """
 
     def __init__(
