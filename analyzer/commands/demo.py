@@ -184,9 +184,10 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
     from analyzer.video.recording import video_recorder
-    from analyzer.video.spec import video_specs
+    from analyzer.video.spec import VIDEO_HOLD_BACK_S, video_specs
 
-    video_specs(args)  # a wrong --video is a usage error before anything starts
+    # a wrong --video is a usage error before anything starts; video needs the hold-back
+    hold_back = VIDEO_HOLD_BACK_S if video_specs(args) else 0.0
     tui = not args.no_tui and sys.stdin.isatty() and sys.stdout.isatty()
     run_app: Any = None
     if tui:
@@ -221,6 +222,7 @@ def run(args: argparse.Namespace) -> int:
             force=args.force,
             replaceable=written_by_demo,
             tee=live,
+            hold_back=hold_back,
         )
     except SourceError:
         source.close()

@@ -18,17 +18,18 @@ from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.video.recording import is_camera_event, video_summary
-from analyzer.video.spec import add_video_options
+from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
-DESCRIPTION = """\
+DESCRIPTION = f"""\
 Capture everything a source delivers into an MCAP file that opens in Foxglove:
 decoded events (one JSON channel per topic), the raw CAN frames / stream bytes
 (so the recording can be decoded again by a later version), UAV and ranging
 target positions for the Map panel and diagnostics for the Log panel.
 
 The file is flushed every half second: if the recorder is killed, everything
-older than about a second can still be read (gimbal-analyzer info / decode).
+older than about a second can still be read (gimbal-analyzer info / decode);
+with --video, older than about {VIDEO_HOLD_BACK_S + 0.5:g} s (see "camera video" below).
 Ctrl-C or SIGTERM finishes the file properly.
 
 Sources:
@@ -239,7 +240,9 @@ def run(args: argparse.Namespace) -> int:
             "on standard error"
         )
     inputs = _input_files(args.source)
-    if video_specs(args) and inputs:  # a wrong --video is a usage error before anything starts
+    # a wrong --video is a usage error before anything starts; video needs the hold-back
+    hold_back = VIDEO_HOLD_BACK_S if video_specs(args) else 0.0
+    if hold_back and inputs:
         raise UsageError(
             "--video records a live camera next to a live source; a file: replay has the "
             "times of its recording"
@@ -266,6 +269,7 @@ def run(args: argparse.Namespace) -> int:
             force=args.force,
             inputs=inputs,
             tee=live,
+            hold_back=hold_back,
         )
     except SourceError:
         source.close()

@@ -10,7 +10,10 @@ here. Tests check every file with the mcap reader.
 Messages come out in log-time order, as readers that stream a file expect: a chunk whose
 messages arrived out of order is sorted before it is written, and a message older than a
 chunk already written takes that chunk's end as its log time (its publish time keeps its
-own; ``retimed`` counts them).
+own; ``retimed`` counts them). With a ``hold_back`` (live recordings of sources that
+arrive late, such as camera frames) a flush closes only the messages older than the
+newest by more than the hold-back; the newer ones stay in the open chunk, so a message
+late by less than that still takes its own place and time.
 """
 
 from __future__ import annotations
@@ -19,52 +22,42 @@ import errno
 import struct
 import zlib
 from collections import Counter
-from collections.abc import Callable
 from typing import IO
 
-import lz4.frame
-import zstandard
-from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
 from mcap.records import (
     Channel,
     Chunk,
     ChunkIndex,
-    DataEnd,
-    Footer,
     Header,
     Metadata,
     MetadataIndex,
     Schema,
     Statistics,
-    SummaryOffset,
 )
 
-from analyzer.mcapio.options import COMPRESSIONS, DEFAULT_COMPRESSION
+from analyzer.mcapio.chunk_order import (
+    HoldBack,
+    messages_in_order,
+    rebuild,
+    split_by_time,
+)
+from analyzer.mcapio.compression import compressor
+from analyzer.mcapio.options import DEFAULT_COMPRESSION
+from analyzer.mcapio.summary_tail import MAGIC, serialise, summary_tail
 
-MAGIC = b"\x89MCAP0\r\n"
 # Message record: opcode, record length, channel id, sequence, log time, publish time.
 _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_FIXED = 2 + 4 + 8 + 8
 # Message index record head: opcode, record length, channel id, byte length of the pairs.
 _INDEX_HEAD = struct.Struct("<BQHI")
-_RECORD_HEAD = struct.Struct("<BQ")
 
-ZSTD_LEVEL = 3  # what the mcap library's writer uses
 # A provisional summary up to this size is rewritten at every live flush; a larger one only
 # once as many data bytes followed it (so it at most doubles what is written).
 LIVE_SUMMARY_FREE = 256 * 1024
-
-
-def compressor(name: str) -> tuple[str, Callable[[bytes], bytes] | None]:
-    """``zstd`` / ``lz4`` / ``none`` -> (the chunk's compression field, the function)."""
-    if name == "zstd":
-        return "zstd", zstandard.ZstdCompressor(level=ZSTD_LEVEL).compress
-    if name == "lz4":
-        return "lz4", lz4.frame.compress
-    if name in ("none", ""):
-        return "", None
-    raise ValueError(f"unknown compression {name!r}; valid: {', '.join(COMPRESSIONS)}")
+# With a hold-back, an open chunk holding more than this is closed whole all the same
+# (its newest messages then bound the file as without a hold-back): memory stays bounded.
+HOLD_BACK_MAX_BYTES = 16 * 1024 * 1024
 
 
 class ChunkedWriter:
@@ -77,14 +70,20 @@ class ChunkedWriter:
         chunk_size: int = 128 * 1024,
         compression: str = DEFAULT_COMPRESSION,
         live_summary: bool = False,
+        hold_back: int = 0,
     ) -> None:
         self._stream = stream
+        # Messages within ``hold_back`` ns of the newest log time stay in the open chunk
+        # when it is closed by a flush or by its size (0: every message is closed at once).
+        # (Few attributes: past 30, CPython's attribute access on the hot path slows down.)
+        self._hold = HoldBack(hold_back)
         # Live recording: every flush also writes a provisional summary and footer after the
         # data (overwritten by the next chunk), so a killed recorder leaves an indexed file.
         self._live_summary = live_summary
         self._tail_at: int | None = None  # where the provisional summary starts, if written
         self._since_tail = 0  # data bytes written since the last provisional summary
         self._chunk_size = chunk_size
+        self._close_at = chunk_size  # open chunk size at which it is closed
         self._compression, self._compress = compressor(compression)
         self.retimed = 0  # messages whose log time was raised to keep the file in order
         self.retimed_topics: Counter[str] = Counter()  # the same, by topic
@@ -144,18 +143,24 @@ class ChunkedWriter:
         return self._end_time
 
     def drop_open_chunk(self) -> None:
-        """Forget the chunk being built (after a write error it cannot be written)."""
+        """Forget the chunk being built (after a write error it cannot be written). If its
+        write failed after the hold-back kept newer messages out of it, those become the
+        open chunk, for one more try (``finish``); a second call forgets them too."""
         self._chunk = bytearray()
         self._index = {}
         self._records = []
         self._chunk_last = self._floor
         self._unsorted = False
+        self._close_at = self._chunk_size
+        hold = self._hold
+        if hold.held_over is not None:
+            self._chunk, self._index, self._chunk_last, in_order = hold.held_over
+            self._unsorted = not in_order
+            hold.held_over = None
 
     @staticmethod
     def _record(record: object) -> bytes:
-        builder = RecordBuilder()
-        record.write(builder)  # type: ignore[attr-defined]
-        return bytes(builder.end())
+        return serialise(record)
 
     # -- public API (a subset of mcap.writer.Writer) -----------------------------------------------
 
@@ -215,8 +220,8 @@ class ChunkedWriter:
             Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel_id, sequence, log_time, publish_time
         )
         chunk += data
-        if len(chunk) >= self._chunk_size:
-            self._finish_chunk()
+        if len(chunk) >= self._close_at:
+            self._chunk_full()
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         record = self._record(Metadata(name=name, metadata=dict(data)))
@@ -229,11 +234,20 @@ class ChunkedWriter:
     def flush(self) -> None:
         """Close the open chunk (if it holds messages) and flush the stream.
 
-        With ``live_summary`` a provisional summary and footer follow the data, so the file
-        is complete as it stands; the next data written replaces them. To bound the extra
+        With a hold-back only the messages older than the newest by more than it are
+        closed, unless nothing came since the last flush (then all of them are). With
+        ``live_summary`` a provisional summary and footer follow the data, so the file is
+        complete as it stands; the next data written replaces them. To bound the extra
         writes of a long recording, a summary larger than ``LIVE_SUMMARY_FREE`` is written
         again only once at least as many data bytes have followed the previous one."""
-        self._finish_chunk()
+        hold = self._hold
+        if not hold.window:
+            self._finish_chunk()
+        elif self._message_count + self.held_messages == hold.given_at_flush:
+            self._finish_chunk()  # nothing came since the last flush: all of it goes out
+        else:
+            self._close_older()
+        hold.given_at_flush = self._message_count + self.held_messages
         if self._live_summary and self._tail_at is None and self._message_count:
             tail = self._tail(self._pos)
             if len(tail) <= LIVE_SUMMARY_FREE or self._since_tail >= len(tail):
@@ -243,7 +257,8 @@ class ChunkedWriter:
         self._stream.flush()
 
     def finish(self) -> None:
-        """Write the last chunk, the data end, the summary and the footer."""
+        """Write the last chunk (held-back messages too), the data end, the summary and
+        the footer."""
         self._finish_chunk()
         if self._tail_at is not None:
             self._drop_tail()
@@ -259,25 +274,6 @@ class ChunkedWriter:
 
     def _tail(self, data_end: int) -> bytes:
         """DataEnd, summary, summary offsets, footer and magic for data ending at ``data_end``."""
-        data_end_record = self._record(DataEnd(data_section_crc=self._data_crc))
-        summary_start = data_end + len(data_end_record)
-        parts: list[bytes] = []
-        offsets: list[SummaryOffset] = []
-        position = summary_start
-
-        def group(opcode: Opcode, records: list[bytes]) -> None:
-            nonlocal position
-            if not records:
-                return
-            size = sum(len(r) for r in records)
-            offsets.append(
-                SummaryOffset(group_opcode=opcode, group_start=position, group_length=size)
-            )
-            parts.extend(records)
-            position += size
-
-        group(Opcode.SCHEMA, [self._record(s) for s in self._schemas.values()])
-        group(Opcode.CHANNEL, [self._record(c) for c in self._channels.values()])
         statistics = Statistics(
             message_count=self._message_count,
             schema_count=len(self._schemas),
@@ -289,25 +285,60 @@ class ChunkedWriter:
             message_end_time=self._end_time,
             channel_message_counts={k: v for k, v in self._channel_counts.items() if v},
         )
-        group(Opcode.STATISTICS, [self._record(statistics)])
-        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
-        group(Opcode.METADATA_INDEX, self._metadata_indexes)
-        summary_offset_start = position
-        parts.extend(self._record(o) for o in offsets)
-        summary = b"".join(parts)
-        crc = zlib.crc32(summary)
-        crc = zlib.crc32(
-            struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4, summary_start, summary_offset_start),
-            crc,
+        return summary_tail(
+            data_end,
+            self._data_crc,
+            [
+                (Opcode.SCHEMA, [self._record(s) for s in self._schemas.values()]),
+                (Opcode.CHANNEL, [self._record(c) for c in self._channels.values()]),
+                (Opcode.STATISTICS, [self._record(statistics)]),
+                (Opcode.CHUNK_INDEX, self._chunk_indexes),
+                (Opcode.METADATA_INDEX, self._metadata_indexes),
+            ],
         )
-        footer = Footer(
-            summary_start=summary_start,
-            summary_offset_start=summary_offset_start,
-            summary_crc=crc,
-        )
-        return data_end_record + summary + self._record(footer) + MAGIC
 
     # -- chunks ----------------------------------------------------------------------------------
+
+    @property
+    def held_messages(self) -> int:
+        """Messages in the open chunk, not on disk yet (held back or not yet flushed)."""
+        return sum(len(pairs) for pairs in self._index.values()) // 2
+
+    def _chunk_full(self) -> None:
+        """The open chunk reached its size: closed, less what the hold-back keeps open."""
+        if not self._hold.window or len(self._chunk) > HOLD_BACK_MAX_BYTES:
+            self._finish_chunk()
+        else:
+            self._close_older()
+
+    def _close_older(self) -> None:
+        """Close the messages of the open chunk older than the newest by more than the
+        hold-back into a chunk of their own (in log-time order); the others stay open."""
+        if not self._index:
+            return
+        cutoff = self._chunk_last - self._hold.window
+        head = b"".join(self._records)
+        split = split_by_time(self._chunk, head, self._index, cutoff, not self._unsorted)
+        if split is None:
+            self._finish_chunk()  # nothing is held back
+            return
+        closed, closed_index, held, held_index, held_in_order = split
+        if closed_index:
+            newest = self._chunk_last
+            self._chunk, self._index = closed, closed_index
+            self._unsorted = False
+            # kept should the write fail
+            self._hold.held_over = (held, held_index, newest, held_in_order)
+            self._finish_chunk()
+            self._hold.held_over = None
+            self._chunk, self._index = held, held_index
+            self._chunk_last = newest
+            self._unsorted = not held_in_order
+        # The held messages stay. The next close by size comes after a chunk's size of new
+        # data, or as much as is held if that is more: each close copies what is held, so
+        # the copying stays within the size of the data written.
+        held_size = len(self._chunk)
+        self._close_at = held_size + max(self._chunk_size, held_size)
 
     def _finish_chunk(self) -> None:
         if not self._index:
@@ -376,23 +407,9 @@ class ChunkedWriter:
         self._floor = max(self._floor, end)
         self._chunk_last = self._floor
         self._unsorted = False
+        self._close_at = self._chunk_size
 
     def _sort_chunk(self) -> None:
         """Rebuild the open chunk: its schema / channel records, then messages by log time."""
-        chunk = self._chunk
         head = b"".join(self._records)
-        messages: list[tuple[int, int, int]] = []  # (log time, old offset, channel id)
-        for channel_id, pairs in self._index.items():
-            messages.extend(
-                zip(pairs[0::2], pairs[1::2], [channel_id] * (len(pairs) // 2), strict=True)
-            )
-        messages.sort()
-        rebuilt = bytearray(head)
-        index: dict[int, list[int]] = {}
-        for log_time, offset, channel_id in messages:
-            _, length = _RECORD_HEAD.unpack_from(chunk, offset)
-            record = chunk[offset : offset + 9 + length]
-            index.setdefault(channel_id, []).extend((log_time, len(rebuilt)))
-            rebuilt += record
-        self._chunk = rebuilt
-        self._index = index
+        self._chunk, self._index = rebuild(self._chunk, head, messages_in_order(self._index))

@@ -17,20 +17,22 @@ def keep_complete_chunks(
     """Cut off the half-written tail of the file ``writer`` writes to (descriptor ``fd``).
 
     If the space it freed allows, the file is finished (the ``stats`` metadata record, the
-    summary), so it opens like any other recording; else the summary alone is tried (what
-    a live flush writes), so the file still opens indexed; else only the complete chunks
-    stay, an unfinished recording the reader recovers. Write errors here are swallowed."""
+    summary), so it opens like any other recording, with the messages a hold-back kept
+    out of the failed chunk; else the summary alone is tried (what a live flush writes),
+    so the file still opens indexed; else only the complete chunks stay, an unfinished
+    recording the reader recovers. Write errors here are swallowed."""
     good = writer.position
-    writer.drop_open_chunk()
+    writer.drop_open_chunk()  # messages a hold-back kept out of it stay, tried by finish
     try:
         os.ftruncate(fd, good)
         os.lseek(fd, good, os.SEEK_SET)
-        if writer.message_count:
+        if writer.message_count or writer.held_messages:
             writer.add_metadata(STATS_METADATA_NAME, stats())
             writer.finish()
         os.fsync(fd)
     except OSError:
         end = writer.position
+        writer.drop_open_chunk()  # the held-back messages did not fit either
         try:
             os.ftruncate(fd, end)
             os.lseek(fd, end, os.SEEK_SET)

@@ -60,6 +60,13 @@ class McapSink:
     The file is created through ``OutputFile`` (``force``, ``inputs``, ``replaceable``,
     ``atomic`` as there): directly at its name by default, so a killed recorder leaves it
     there; ``atomic=True`` writes a temporary file renamed by ``close``.
+
+    ``hold_back`` (seconds) is for recordings with messages that reach the sink later than
+    the telemetry of the same moment (camera frames): a flush leaves the messages within
+    that much of the newest log time in the open chunk, so a late one still takes its own
+    log time instead of the end of a chunk already written. A killed recorder then loses
+    that much more. ``close`` writes them all; after a write error they are kept if they
+    fit in the space the failed chunk freed (``kept_messages`` counts what the file holds).
     """
 
     def __init__(
@@ -78,6 +85,7 @@ class McapSink:
         replaceable: Callable[[Path], bool] | None = None,
         atomic: bool = False,
         tee: MessageTee | None = None,
+        hold_back: float = 0.0,
     ) -> None:
 
         self.path = str(path)
@@ -113,6 +121,7 @@ class McapSink:
                 chunk_size=chunk_size,
                 compression=compression,
                 live_summary=flush_interval is not None,
+                hold_back=round(hold_back * 1e9),
             )
             self._messages = MessageWriter(
                 self._writer,
@@ -282,7 +291,8 @@ class McapSink:
         if not self._messages.dirty:
             return
         self._writer.flush()
-        self._messages.dirty = False
+        # held-back messages go out at a later flush, even if nothing else comes
+        self._messages.dirty = self._writer.held_messages > 0
 
     def _flush_loop(self) -> None:
         interval = self._flush_interval or DEFAULT_FLUSH_INTERVAL
