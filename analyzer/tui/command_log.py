@@ -18,8 +18,8 @@ from textual.scroll_view import ScrollView
 from textual.strip import Strip
 
 from analyzer.protocol.types import LINK, TOPIC_COMMAND, TOPIC_DIAGNOSTICS
+from analyzer.tui.event_log import LogEntry
 from analyzer.tui.formatting import event_raw, event_text, format_time
-from analyzer.tui.state import LogEntry
 
 RAW_WIDTH = 24  # "0F 04 0C FE 00 00 00 00" + a space
 TEXT_CACHE_LIMIT = 10_000

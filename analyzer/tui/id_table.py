@@ -6,7 +6,8 @@ from rich.text import Text
 from textual.widgets import DataTable
 
 from analyzer.tui.event_filter import EventFilter
-from analyzer.tui.state import IdRow, MonitorState
+from analyzer.tui.id_rows import IdRow
+from analyzer.tui.state import MonitorState
 
 MAX_DATA_BYTES = 8
 COLUMNS = (("ID", "id", 11), ("Name", "name", 9), ("Count", "count", 9), ("Hz", "hz", 8))

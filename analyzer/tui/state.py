@@ -8,26 +8,13 @@ the wall clock, so the age of the last feedback keeps growing when the source go
 
 from __future__ import annotations
 
-import math
 from collections import Counter, deque
-from dataclasses import dataclass, field
 
 from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
-from analyzer.protocol.ids import (
-    ALTITUDE_ID,
-    CAN_BITRATE,
-    CONTROL_ID,
-    FEEDBACK_ID,
-    GPS_ID,
-    TEXT_END_ID,
-    TEXT_ID,
-    UAV_ATTITUDE_ID,
-)
+from analyzer.protocol.ids import CAN_BITRATE
 from analyzer.protocol.types import (
-    FROM_IDU,
     LINK,
-    TO_IDU,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
@@ -41,147 +28,43 @@ from analyzer.protocol.types import (
     CanFrame,
     Event,
 )
+from analyzer.tui.command_groups import COMMAND_GROUPS, command_group
+from analyzer.tui.counters import Counters, count_items
+from analyzer.tui.event_log import COMMAND_VIEW_TOPICS, LOG_LIMIT, LogEntry, insert_in_time_order
+from analyzer.tui.id_rows import (
+    HIGHLIGHT_S,
+    ID_LABELS,
+    MAX_ROWS,
+    OVERFLOW_KEY,
+    IdRow,
+    add_row,
+    frame_bits,
+    stream_key,
+)
 from analyzer.video.recording import is_camera_event
 
-LOG_LIMIT = 2000  # entries kept per log view
+# The names importers know from here; most are defined in the modules above.
+__all__ = [
+    "COMMAND_GROUPS",
+    "COMMAND_VIEW_TOPICS",
+    "FEEDBACK_STALE_S",
+    "HIGHLIGHT_S",
+    "HISTORY",
+    "ID_LABELS",
+    "LOG_LIMIT",
+    "MAX_ROWS",
+    "OVERFLOW_KEY",
+    "RATE_WINDOW_S",
+    "Counters",
+    "IdRow",
+    "LogEntry",
+    "MonitorState",
+    "frame_bits",
+]
+
 HISTORY = 60  # seconds of frames/s and errors/s kept for the sparklines
 FEEDBACK_STALE_S = 1.0  # the gimbal answers about every 500 ms
-HIGHLIGHT_S = 1.0  # a changed data byte stays highlighted this long
 RATE_WINDOW_S = 1.0
-MAX_ROWS = 2048  # distinct IDs with a row of their own; the rest share one row
-OVERFLOW_KEY = "more IDs"
-
-ID_LABELS: dict[int, str] = {
-    CONTROL_ID: "control",
-    FEEDBACK_ID: "feedback",
-    GPS_ID: "uav gps",
-    ALTITUDE_ID: "uav alt",
-    UAV_ATTITUDE_ID: "uav att",
-    TEXT_ID: "uav text",
-    TEXT_END_ID: "text end",
-}
-
-# The command log view shows these topics; the "all" view every decoded topic.
-COMMAND_VIEW_TOPICS = frozenset({TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_UAV_TEXT})
-
-# Last command of each group shown in the gimbal panel.
-COMMAND_GROUPS: dict[str, str] = {
-    "zoom": "zoom",
-    "digital_zoom": "zoom",
-    "zoom_1x": "zoom",
-    "tap_zoom": "zoom",
-    "focus": "focus",
-    "tap_focus": "focus",
-    "recording": "recording",
-    "snapshot": "snapshot",
-    "gimbal_control": "motion",
-    "specified_angle": "motion",
-    "look_down": "motion",
-    "forward": "motion",
-    "tracking": "motion",
-    "tracking_stop": "motion",
-}
-
-
-_ARROWS = {TO_IDU: "→idu", FROM_IDU: "←idu"}
-
-
-def frame_bits(frame: CanFrame) -> int:
-    """Bits a classic CAN frame occupies on the wire (without stuff bits), interframe included."""
-    return (67 if frame.extended else 47) + 8 * len(frame.data)
-
-
-class IdRow:
-    """One line of the bus sniffer table: a CAN ID (or a stream source + direction)."""
-
-    __slots__ = (
-        "can_id",
-        "changed_at",
-        "count",
-        "data",
-        "extended",
-        "key",
-        "label",
-        "last_time",
-        "protocol",
-        "rate_hz",
-        "window_count",
-    )
-
-    def __init__(self, key: str, can_id: int | None, label: str, protocol: bool) -> None:
-        self.key = key
-        self.can_id = can_id
-        self.label = label
-        self.protocol = protocol
-        self.extended = True
-        self.count = 0
-        self.window_count = 0
-        self.rate_hz = 0.0
-        self.last_time = 0.0
-        self.data = b""
-        self.changed_at: list[float] = []
-
-    def note_data(self, data: bytes, time: float) -> None:
-        """Remember which bytes differ from the previous frame, and when."""
-        old = self.data
-        changed = self.changed_at
-        if len(changed) < len(data):
-            # bytes seen for the first time are not "changed"
-            changed.extend([-math.inf] * (len(data) - len(changed)))
-        for i in range(min(len(old), len(data))):
-            if old[i] != data[i]:
-                changed[i] = time
-        self.data = data
-
-    def changed_mask(self, now: float, within: float = HIGHLIGHT_S) -> tuple[bool, ...]:
-        """Per data byte: did it change in the last ``within`` seconds?"""
-        if self.count <= 1:
-            return (False,) * len(self.data)
-        return tuple(now - t < within for t in self.changed_at[: len(self.data)])
-
-
-def _insert_in_time_order(log: deque[LogEntry], entry: LogEntry) -> None:
-    """Append, or insert before newer entries: events can be reported after later ones.
-
-    (A partial message is reported when it times out, with the time it started; a link
-    change carries the wall clock.) Entries of equal time keep their arrival order.
-    """
-    t = entry.event.time
-    if not log or log[-1].event.time <= t:
-        log.append(entry)
-        return
-    if len(log) == log.maxlen:
-        log.popleft()  # the oldest makes room, as an append would do
-    i = len(log)
-    while i > 0 and log[i - 1].event.time > t:
-        i -= 1
-    log.insert(i, entry)
-
-
-class LogEntry:
-    """An event in a log view, numbered in arrival order (the views are in time order)."""
-
-    __slots__ = ("event", "seq")
-
-    def __init__(self, seq: int, event: Event) -> None:
-        self.seq = seq
-        self.event = event
-
-
-@dataclass
-class Counters:
-    """Counts since start or since the user last cleared them."""
-
-    frames: int = 0
-    chunks: int = 0
-    bytes: int = 0
-    events: int = 0
-    warnings: int = 0
-    kinds: Counter[str] = field(default_factory=Counter)
-
-    @property
-    def errors(self) -> int:
-        return sum(n for kind, n in self.kinds.items() if kind != LINK)
 
 
 class MonitorState:
@@ -341,7 +224,7 @@ class MonitorState:
                     self._fold_events(events[first:next_event])
                 self._window_frames += frames + chunks
                 self._window_bits += bits
-                self._count(total, counters, frames, chunks, nbytes)
+                count_items(total, counters, frames, chunks, nbytes)
                 frames = chunks = nbytes = bits = 0
                 self._advance_to(t)
                 window_end = (self._window_start or t) + RATE_WINDOW_S
@@ -355,7 +238,7 @@ class MonitorState:
                     row = self._new_row(key, item)
             else:
                 chunks += 1
-                key = f"{item.source} {_ARROWS.get(item.direction, item.direction)}".strip()
+                key = stream_key(item)
                 row = rows.get(key)
                 if row is None:
                     row = self._new_row(key, None)
@@ -367,37 +250,15 @@ class MonitorState:
             last_time = t
         self._window_frames += frames + chunks
         self._window_bits += bits
-        self._count(total, counters, frames, chunks, nbytes)
+        count_items(total, counters, frames, chunks, nbytes)
         self.last_item_time = last_time
         if next_event < n_events:
             self._fold_events(events[next_event:])
 
-    @staticmethod
-    def _count(total: Counters, counters: Counters, frames: int, chunks: int, nbytes: int) -> None:
-        for c in (total, counters):
-            c.frames += frames
-            c.chunks += chunks
-            c.bytes += nbytes
-
     def _new_row(self, key: int | str, frame: CanFrame | None) -> IdRow:
-        if len(self.rows) >= self.max_rows:
-            # a bus full of random IDs must not grow the table without bound
-            row = self.rows.get(OVERFLOW_KEY)
-            if row is None:
-                row = self.rows[OVERFLOW_KEY] = IdRow(OVERFLOW_KEY, None, "other IDs", False)
-                self.rows_added += 1
-            return row
-        if frame is None:
-            row = IdRow(str(key), None, "stream", True)
-        else:
-            label = ID_LABELS.get(frame.can_id, "foreign")
-            text = f"0x{frame.can_id:08X}" if frame.extended else f"0x{frame.can_id:03X}"
-            row = IdRow(text, frame.can_id, label, frame.can_id in ID_LABELS)
-            row.extended = frame.extended
-            if frame.can_id in ID_LABELS and not frame.extended:
-                row.label += "!"  # a protocol ID sent as a standard frame
-        self.rows[key] = row
-        self.rows_added += 1
+        row, added = add_row(self.rows, key, frame, self.max_rows)
+        if added:
+            self.rows_added += 1
         return row
 
     def _fold_events(self, events: list[Event]) -> None:
@@ -415,17 +276,14 @@ class MonitorState:
                 counters.warnings += 1
             self.seq += 1
             entry = LogEntry(self.seq, event)
-            _insert_in_time_order(self.all_log, entry)
+            insert_in_time_order(self.all_log, entry)
             if topic in COMMAND_VIEW_TOPICS:
-                _insert_in_time_order(self.command_log, entry)
+                insert_in_time_order(self.command_log, entry)
             if topic == TOPIC_GIMBAL_ATTITUDE:
                 self.attitude = event
                 self._note_feedback(event)
             elif topic == TOPIC_COMMAND:
-                group = COMMAND_GROUPS.get(str(event.fields.get("name", "")), "other")
-                if group == "motion" and event.fields.get("axis") == "zoom":
-                    group = "zoom"
-                self.last_commands[group] = event
+                self.last_commands[command_group(event)] = event
             elif topic == TOPIC_DIAGNOSTICS:
                 kind = str(event.fields.get("kind", "?"))
                 total.kinds[kind] += 1
