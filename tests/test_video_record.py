@@ -77,6 +77,21 @@ def record(args: list[str], cwd: Path, **kwargs: Any) -> subprocess.CompletedPro
     )
 
 
+def record_camera(
+    camera_port: int, out: Path, cwd: Path, *extra: str, **kwargs: Any
+) -> subprocess.CompletedProcess[str]:
+    """``record`` of the simulated gimbal on TCP with the test camera's main stream."""
+    with gimbal() as port:
+        return record(
+            [
+                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out),
+                "--video", "main", "--camera", f"127.0.0.1:{camera_port}", *extra,
+            ],
+            cwd,
+            **kwargs,
+        )  # fmt: skip
+
+
 def messages(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
     """Every message by topic (log time ns, JSON), read with the mcap library."""
     out: dict[str, list[tuple[int, dict[str, Any]]]] = {}
@@ -118,14 +133,7 @@ def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
     rtsp_camera: Any, tmp_path: Path
 ) -> None:
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "6",
-                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
-            ],
-            tmp_path,
-        )  # fmt: skip
+    done = record_camera(rtsp_camera.port, out, tmp_path, "--duration", "6")
     assert done.returncode == 0, done.stderr
     assert "/camera/main: " in done.stderr
     found = messages(out)
@@ -185,15 +193,9 @@ def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(
     rtsp_camera: Any, tmp_path: Path
 ) -> None:
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
-                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
-                "--camera-password", "s3cr3t-x",
-            ],
-            tmp_path,
-        )  # fmt: skip
+    done = record_camera(
+        rtsp_camera.port, out, tmp_path, "--duration", "3", "--camera-password", "s3cr3t-x"
+    )
     assert done.returncode == 0, done.stderr
     assert "401 unauthorized: wrong user name or password" in done.stderr
     found = messages(out)
@@ -250,14 +252,7 @@ def test_a_stream_with_b_frames_is_refused_in_words(
 ) -> None:
     camera = rtsp_camera_factory("--bframes", "2")
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
-                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
-            ],
-            tmp_path,
-        )  # fmt: skip
+    done = record_camera(camera.port, out, tmp_path, "--duration", "3")
     assert done.returncode == 0, done.stderr
     refused = [m for m in camera_diagnostics(messages(out)) if m["state"] == "refused"]
     assert len(refused) == 1 and "B-frames" in refused[0]["detail"]
@@ -274,15 +269,7 @@ def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "20",
-                "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
-            ],
-            tmp_path,
-            preexec_fn=limit_size,
-        )  # fmt: skip
+    done = record_camera(rtsp_camera.port, out, tmp_path, "--duration", "20", preexec_fn=limit_size)
     assert done.returncode == 1, done.stderr
     last = done.stderr.strip().splitlines()[-1]
     assert last.startswith("gimbal-analyzer record: error: disk full: cannot write"), done.stderr
@@ -427,14 +414,7 @@ def test_parameter_sets_sent_only_in_the_sdp_go_in_front_of_every_keyframe(
 ) -> None:
     camera = rtsp_camera_factory("--config-interval", "0")  # SPS/PPS only in the SDP
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
-                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
-            ],
-            tmp_path,
-        )  # fmt: skip
+    done = record_camera(camera.port, out, tmp_path, "--duration", "3")
     assert done.returncode == 0, done.stderr
     video = [m for _, m in messages(out)["/camera/main"]]
     kinds = [[nal_type("h264", u) for u in split_nals(base64.b64decode(m["data"]))] for m in video]
@@ -452,14 +432,7 @@ def test_an_h265_camera_is_recorded_with_vps_sps_pps_before_every_keyframe(
 ) -> None:
     camera = rtsp_camera_factory("--codec", "h265")  # x265: later keyframes are bare CRAs
     out = tmp_path / "flight.mcap"
-    with gimbal() as port:
-        done = record(
-            [
-                "--source", f"tcp:127.0.0.1:{port}", "-o", str(out), "--duration", "3",
-                "--video", "main", "--camera", f"127.0.0.1:{camera.port}",
-            ],
-            tmp_path,
-        )  # fmt: skip
+    done = record_camera(camera.port, out, tmp_path, "--duration", "3")
     assert done.returncode == 0, done.stderr
     video = [m for _, m in messages(out)["/camera/main"]]
     assert {m["format"] for m in video} == {"h265"}
