@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
+import random
 import sys
 import tempfile
 import time
@@ -48,35 +50,63 @@ def _feedback(t: float, message: bytes, step: float) -> list[CanFrame]:
 
 
 def make_frames(count: int, *, gimbal_only: bool = False) -> list[CanFrame]:
-    """Gimbal traffic (commands at 20 Hz, feedback at 2 Hz, UAV status at 10 Hz).
+    """Gimbal traffic (commands at 20 Hz, feedback at 2 Hz, UAV status at 10 Hz) whose values
+    change from frame to frame as on a real bus: a pilot's stick (speeds drawn at random), a
+    moving gimbal (attitude feedback follows the speeds), an aircraft flying an orbit (GPS,
+    altitude and attitude move), ranging to a moving target; so no cache measures itself.
 
     By default padded with foreign IDs to a saturated 1 Mbit/s bus (about 7,600 frames/s,
-    the mix of the live-load benchmark). ``gimbal_only``: protocol frames only, the worst
-    case for convert since nearly every frame gives an event.
+    the mix of the live-load benchmark), each carrying a counter and sensor-like bytes that
+    change every frame. ``gimbal_only``: protocol frames only, the worst case for convert
+    since nearly every frame gives an event.
     """
+    rng = random.Random(20240514)
     frames: list[CanFrame] = []
     step = 1 / 7600
     tick = 0
+    pitch, yaw = -10.0, 0.0
+    pan = tilt = 0.0
     while len(frames) < count:
         t = T0 + tick * 0.05  # one 50 ms slot
-        data = encode_command("gimbal_control", pan_speed_dps=(tick % 200) / 10, tilt_speed_dps=0)
+        if rng.random() < 0.1:  # the pilot moves the stick now and then, holds it between
+            pan, tilt = rng.uniform(-99, 99), rng.uniform(-99, 99)
+        pan_cmd = round(pan + rng.uniform(-0.5, 0.5), 2)  # a hand is never quite still
+        tilt_cmd = round(tilt + rng.uniform(-0.5, 0.5), 2)
+        data = encode_command("gimbal_control", pan_speed_dps=pan_cmd, tilt_speed_dps=tilt_cmd)
         slot = [CanFrame(t, CONTROL_ID, data, channel="can0")]
+        yaw = (yaw + pan_cmd * 0.05) % 360
+        pitch = min(60.0, max(-110.0, pitch + tilt_cmd * 0.05))
         if tick % 2 == 0:
-            slot.append(CanFrame(t, GPS_ID, encode_gps(31.1234567, 118.1234567), channel="can0"))
-            slot.append(CanFrame(t, ALTITUDE_ID, encode_altitude(506.78), channel="can0"))
-            slot.append(CanFrame(t, UAV_ATTITUDE_ID, encode_uav_attitude(1, 2, 3), channel="can0"))
+            angle = tick * 0.0005  # an orbit of about 150 m
+            lat = 31.1234567 + 0.00135 * math.sin(angle) + rng.uniform(-1e-6, 1e-6)
+            lon = 118.1234567 + 0.00158 * math.cos(angle) + rng.uniform(-1e-6, 1e-6)
+            slot.append(CanFrame(t, GPS_ID, encode_gps(lat, lon), channel="can0"))
+            altitude = 100 + 5 * math.sin(tick / 300) + rng.uniform(-0.05, 0.05)
+            slot.append(CanFrame(t, ALTITUDE_ID, encode_altitude(altitude), channel="can0"))
+            heading = (math.degrees(angle) + 270) % 360 - 180  # -180..180 fits the field
+            attitude = encode_uav_attitude(
+                rng.uniform(-3, 3), rng.uniform(-8, -4), round(heading, 1)
+            )
+            slot.append(CanFrame(t, UAV_ATTITUDE_ID, attitude, channel="can0"))
         if tick % 10 == 3:
-            yaw = (tick / 10) % 360
-            slot += _feedback(t, encode_attitude(pitch_deg=-10, yaw_deg=yaw, motor_yaw_deg=1), step)
+            motor = ((yaw + 180) % 360) - 180
+            motor = min(170.0, max(-170.0, motor))
+            message = encode_attitude(pitch_deg=round(pitch, 2), yaw_deg=yaw, motor_yaw_deg=motor)
+            slot += _feedback(t, message, step)
         if tick % 10 == 8:
             ranging = encode_ranging(
-                distance_m=100.0, height_m=20.0, latitude_deg=31.1, longitude_deg=118.1
+                distance_m=round(rng.uniform(50, 1500), 1),
+                height_m=round(rng.uniform(5, 120), 1),
+                latitude_deg=31.1 + rng.uniform(-0.01, 0.01),
+                longitude_deg=118.1 + rng.uniform(-0.01, 0.01),
             )
             slot += _feedback(t, ranging, step)
         if not gimbal_only:
             for k in range(380 - len(slot)):
                 ident = 0x18FF0000 + k % 64
-                slot.append(CanFrame(t + k * step, ident, bytes([k % 256] * 8), channel="can0"))
+                counter = (tick * 380 + k) & 0xFFFF
+                payload = counter.to_bytes(2, "little") + rng.randbytes(6)
+                slot.append(CanFrame(t + k * step, ident, payload, channel="can0"))
         slot.sort(key=lambda fr: fr.time)
         frames.extend(slot)
         tick += 1

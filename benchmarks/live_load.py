@@ -44,48 +44,6 @@ TARGET_LIVE_EXTRA_PCT = 5.0  # "a few percent of one core" more with one live cl
 SDK_THREADS = "tokio"  # the foxglove-sdk server's threads (Rust): /proc/self/task/*/comm
 
 
-def gimbal_frames() -> dict[str, list[tuple[int, bytes]]]:
-    """One example of each kind of protocol traffic, as (CAN ID, data) frames."""
-    from analyzer.protocol.codec import encode_command
-    from analyzer.protocol.feedback import encode_attitude, encode_ranging
-    from analyzer.protocol.ids import (
-        ALTITUDE_ID,
-        CONTROL_ID,
-        FEEDBACK_ID,
-        GPS_ID,
-        UAV_ATTITUDE_ID,
-    )
-    from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
-
-    attitude = encode_attitude(pitch_deg=-12.5, yaw_deg=187.25, motor_yaw_deg=7.25)
-    ranging = encode_ranging(
-        distance_m=812.4, height_m=120.0, latitude_deg=31.1234567, longitude_deg=118.1234567
-    )
-    return {
-        "command": [
-            (CONTROL_ID, encode_command("gimbal_control", pan_speed_dps=-5.0, tilt_speed_dps=2.5))
-        ],
-        "attitude": [(FEEDBACK_ID, attitude[i : i + 8]) for i in range(0, 32, 8)],
-        "ranging": [(FEEDBACK_ID, ranging[i : i + 8]) for i in range(0, 32, 8)],
-        "gps": [(GPS_ID, encode_gps(31.1234567, 118.1234567))],
-        "altitude": [(ALTITUDE_ID, encode_altitude(506.78))],
-        "uav_attitude": [(UAV_ATTITUDE_ID, encode_uav_attitude(1.5, -2.0, 93.0))],
-        "text": list(encode_text("RTL: low battery")),
-    }
-
-
-# frames of each kind per second; foreign IDs fill the rest of the bus
-SCHEDULE_HZ = {
-    "command": 10,
-    "attitude": 2,
-    "ranging": 2,
-    "gps": 5,
-    "altitude": 5,
-    "uav_attitude": 10,
-    "text": 0.2,
-}
-
-
 class Sender:
     """Sends a paced mix of gimbal and foreign frames on a virtual channel."""
 
@@ -103,36 +61,32 @@ class Sender:
         self.thread = threading.Thread(target=self._run, name="sender", daemon=True)
 
     def _plan(self) -> list[Any]:
-        """One second of traffic, gimbal frames spread evenly among foreign ones."""
+        """Every frame of the run, values changing as on a real bus: the traffic of
+        ``benchmarks/convert_speed.py`` (a pilot's stick, a moving gimbal, an aircraft on an
+        orbit, foreign IDs with counters and sensor bytes), none of it repeated."""
         import can
 
-        kinds = gimbal_frames()
-        slots: list[tuple[float, int, bytes, bool]] = []
-        for phase, (kind, hz) in enumerate(SCHEDULE_HZ.items()):
-            if hz < 1:
-                continue
-            for n in range(int(hz)):
-                # kinds start at different phases so feedback messages never interleave
-                start = (n + phase / len(SCHEDULE_HZ)) / hz
-                for k, (can_id, data) in enumerate(kinds[kind]):
-                    slots.append((start + 0.0005 * k, can_id, data, True))
-        foreign = self.rate - len(slots)
-        for n in range(foreign):
-            can_id = 0x18FF0000 | (n % 0x40)
-            slots.append((n / foreign, can_id, n.to_bytes(4, "little") * 2, False))
-        slots.sort(key=lambda s: s[0])
+        from analyzer.protocol.ids import PROTOCOL_IDS
+        from analyzer.protocol.uav import encode_text
+        from benchmarks.convert_speed import make_frames
+
+        frames = make_frames(int(self.seconds * self.rate) + 1)
         self._text = [
-            can.Message(arbitration_id=i, data=d, is_extended_id=True) for i, d in kinds["text"]
+            can.Message(arbitration_id=i, data=d, is_extended_id=True)
+            for i, d in encode_text("RTL: low battery")
         ]
         return [
-            (can.Message(arbitration_id=i, data=d, is_extended_id=True), gimbal)
-            for _, i, d, gimbal in slots
+            (
+                can.Message(arbitration_id=f.can_id, data=f.data, is_extended_id=f.extended),
+                f.can_id in PROTOCOL_IDS,
+            )
+            for f in frames
         ]
 
     def _run(self) -> None:
         cpu0 = time.thread_time()
         plan = self._messages
-        per_second = len(plan)
+        planned = 0  # frames of the plan sent (text messages come on top)
         start = time.monotonic()
         total = int(self.seconds * self.rate)
         next_text = 5.0
@@ -142,7 +96,8 @@ class Sender:
             if due - self.sent > self.rate // 10:
                 self.late_s = max(self.late_s, (due - self.sent) / self.rate)
             while self.sent < due:
-                msg, gimbal = plan[self.sent % per_second]
+                msg, gimbal = plan[planned]
+                planned += 1
                 self.bus.send(msg)
                 self.sent += 1
                 self.gimbal_sent += gimbal
