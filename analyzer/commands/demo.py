@@ -19,7 +19,7 @@ from analyzer.commands.simulate import (
 )
 from analyzer.errors import SourceError, UsageError
 from analyzer.live.options import add_foxglove_options
-from analyzer.mcapio.options import add_compression_argument
+from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
@@ -159,7 +159,7 @@ def _plain(event: Event) -> str:
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
-    from analyzer.mcapio.reader import Recording
+    from analyzer.mcapio.read.reader import Recording
 
     try:
         return Recording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
@@ -170,20 +170,20 @@ def written_by_demo(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import OUTPUT_CLOSED, Capture
+    from analyzer.commands.video_options import video_recorder
     from analyzer.live.attach import (
         foxglove_status,
         foxglove_summary,
         start_foxglove,
         with_foxglove,
     )
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
     from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
-    from analyzer.video.recording import video_recorder
     from analyzer.video.spec import VIDEO_HOLD_BACK_S, video_specs
 
     # a wrong --video is a usage error before anything starts; video needs the hold-back

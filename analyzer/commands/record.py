@@ -12,12 +12,12 @@ import time
 from collections.abc import Callable
 from typing import IO, Any
 
+from analyzer.commands.video_options import is_camera_event, video_summary
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
 from analyzer.live.options import add_foxglove_options
-from analyzer.mcapio.options import add_compression_argument
+from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
-from analyzer.video.recording import is_camera_event, video_summary
 from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
@@ -219,6 +219,7 @@ def _input_files(spec: str) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture, run_until_interrupted
+    from analyzer.commands.video_options import video_recorder
     from analyzer.live.attach import (
         foxglove_note,
         foxglove_status,
@@ -226,10 +227,9 @@ def run(args: argparse.Namespace) -> int:
         start_foxglove,
         with_foxglove,
     )
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
-    from analyzer.video.recording import video_recorder
     from analyzer.video.spec import video_specs
 
     if args.duration is not None and not args.duration > 0:

@@ -88,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         data.add(finding)
     data.notes.extend(reader.notes)
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
-        from analyzer.mcapio.video_reading import read_thumbnails
+        from analyzer.mcapio.read.video import read_thumbnails
 
         data.pictures.extend(read_thumbnails(args.file))
     if data.first is not None and data.first == data.last and data.findings:

@@ -115,7 +115,7 @@ def sniff_format(head: bytes) -> str | None:
     if head[:2] == b"\xeb\x90":
         return "stream"
     if head[:2] == b"\xa3\x95":  # a DataFlash record header: its reader looks closer
-        from analyzer.inputs.dataflash import looks_like_dataflash  # (not at each start-up)
+        from analyzer.inputs.dataflash.reader import looks_like_dataflash  # (not at each start-up)
 
         if looks_like_dataflash(head):
             return "dataflash"
@@ -179,11 +179,11 @@ def open_input(
         if name == "candump" and b"\0" in _head(path):
             raise UsageError(f"{path} is not candump text (it holds binary data); give --format")
     if name == "candump":
-        from analyzer.inputs.candump import CandumpReader
+        from analyzer.inputs.candump.reader import CandumpReader
 
         return CandumpReader(path, wanted_ids=wanted_ids)
     if name == "pcap":
-        from analyzer.inputs.pcap import PcapReader
+        from analyzer.inputs.pcap.reader import PcapReader
 
         return PcapReader(path, port=port)
     if name == "stream":
@@ -191,7 +191,7 @@ def open_input(
 
         return RawStreamReader(path)
     if name == "dataflash":
-        from analyzer.inputs.dataflash import DataFlashReader
+        from analyzer.inputs.dataflash.reader import DataFlashReader
 
         return DataFlashReader(path)
     if name == "savvycan":
@@ -206,6 +206,6 @@ def open_input(
         from analyzer.inputs.rosbag import RosbagReader
 
         return RosbagReader(path)
-    from analyzer.inputs.python_can import PythonCanReader
+    from analyzer.inputs.python_can.reader import PythonCanReader
 
     return PythonCanReader(path, name)

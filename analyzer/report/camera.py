@@ -29,7 +29,7 @@ figcaption { font-size: 11px; color: #555; }
 
 
 class Picture(Protocol):
-    """A thumbnail of a camera stream (``analyzer.mcapio.video_reading.Thumbnail``)."""
+    """A thumbnail of a camera stream (``analyzer.mcapio.read.video.Thumbnail``)."""
 
     stream: str
     time: float

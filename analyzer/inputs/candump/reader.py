@@ -7,9 +7,9 @@ from operator import itemgetter
 from typing import cast
 
 from analyzer.inputs.base import InputItem, InputReader, by_frames
-from analyzer.inputs.candump_line import LineError
-from analyzer.inputs.candump_linewise import MAX_CACHED_IDS, CandumpLineParser
-from analyzer.inputs.candump_scan import (
+from analyzer.inputs.candump.line import LineError
+from analyzer.inputs.candump.linewise import MAX_CACHED_IDS, CandumpLineParser
+from analyzer.inputs.candump.scan import (
     OTHER,
     WHERE,
     Found,
@@ -20,7 +20,7 @@ from analyzer.inputs.candump_scan import (
     scanner,
     stamp_at,
 )
-from analyzer.inputs.candump_times import DECIDE_AFTER
+from analyzer.inputs.candump.times import DECIDE_AFTER
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 

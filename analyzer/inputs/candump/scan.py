@@ -23,7 +23,7 @@ from itertools import repeat
 from operator import itemgetter, truediv
 from typing import cast
 
-from analyzer.inputs.candump_line import DIRECTIONS
+from analyzer.inputs.candump.line import DIRECTIONS
 from analyzer.protocol.types import CanFrame, FrameRun
 
 # A ``(seconds.fraction)`` stamp: at most 15 digits before the point (under 1e15 s, the

@@ -7,7 +7,8 @@ import struct
 from collections.abc import Iterator
 from typing import IO, Any
 
-from analyzer.mcapio.chunks import (
+from analyzer.mcapio.read.file_end import MAGIC, data_section_crc
+from analyzer.mcapio.read.records import (
     MAX_RECORD,
     MESSAGE_FIXED,
     OPCODE_CHUNK,
@@ -18,9 +19,8 @@ from analyzer.mcapio.chunks import (
     chunk_payload,
     walk,
 )
-from analyzer.mcapio.file_end import MAGIC, data_section_crc
-from analyzer.mcapio.recover import Damage
-from analyzer.mcapio.stored_message import RawMessage
+from analyzer.mcapio.read.recover import Damage
+from analyzer.mcapio.read.stored_message import RawMessage
 
 _MESSAGE_HEAD = struct.Struct("<HIQ")  # channel id, sequence, log time
 

@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.mcapio.channels import METADATA_NAME, ROLE_EVENT, ROLE_RAW, STATS_METADATA_NAME
-from analyzer.mcapio.file_end import read_header
-from analyzer.mcapio.reader import RawMessage, Recording, channel_role, raw_item, ros_item
-from analyzer.mcapio.ros_can import ROS_CAN_ROLES
+from analyzer.mcapio.read.file_end import read_header
+from analyzer.mcapio.read.reader import RawMessage, Recording, channel_role, raw_item, ros_item
+from analyzer.mcapio.read.ros_can import ROS_CAN_ROLES
 from analyzer.pipeline import Decoding, default_decoder
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from analyzer.mcapio.recover import Damage, Recovery, Scan, scan_records
-from analyzer.mcapio.stored_message import (
+from analyzer.mcapio.read.recover import Damage, Recovery, Scan, scan_records
+from analyzer.mcapio.read.stored_message import (
     ChannelFilter,
     ChannelKind,
     MessageTally,

@@ -8,7 +8,7 @@ from typing import IO, Any
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.python_can_text import DELTA, LineFeed, TextLogReading, text_lines
+from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
 # format -> (python-can reader class name, text file?)

@@ -7,7 +7,7 @@ from collections.abc import Callable
 import lz4.frame
 import zstandard
 
-from analyzer.mcapio.options import COMPRESSIONS
+from analyzer.mcapio.write.options import COMPRESSIONS
 
 ZSTD_LEVEL = 3  # what the mcap library's writer uses
 

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 from analyzer import timefmt
 from analyzer.mcapio.channels import STATS_METADATA_NAME
-from analyzer.mcapio.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 
 
 def keep_complete_chunks(

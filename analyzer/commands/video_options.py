@@ -9,8 +9,8 @@ from analyzer.protocol.types import Event
 from analyzer.video.spec import DEFAULT_THUMBNAIL_S, video_specs
 
 if TYPE_CHECKING:
-    from analyzer.mcapio.video_channels import VideoRecorder
-    from analyzer.mcapio.writer import McapSink
+    from analyzer.mcapio.write.sink import McapSink
+    from analyzer.mcapio.write.video import VideoRecorder
 
 CAMERA_SOURCE_PREFIX = "camera/"
 
@@ -23,7 +23,7 @@ def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | 
     specs = video_specs(args)
     if not specs:
         return None
-    from analyzer.mcapio.video_channels import VideoRecorder
+    from analyzer.mcapio.write.video import VideoRecorder
     from analyzer.video.rtsp_stream import VideoStream
 
     interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)

@@ -11,7 +11,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from analyzer import timefmt
-from analyzer.mcapio.video_channels import ROLE_THUMBNAIL, ROLE_VIDEO, TOPIC_PREFIX
+from analyzer.mcapio.write.video import ROLE_THUMBNAIL, ROLE_VIDEO, TOPIC_PREFIX
 
 GAP_FACTOR = 3.0  # frames further apart than this many frame intervals are a gap
 
@@ -50,7 +50,7 @@ class VideoSummary:
 def _camera_messages(path: str | os.PathLike[str], roles: set[str]) -> Iterator[_Message]:
     """The camera messages of a recording with their JSON, through the project's reader (a
     recording cut short by a full disk or ``kill -9`` is recovered like for every command)."""
-    from analyzer.mcapio.reader import Recording
+    from analyzer.mcapio.read.reader import Recording
 
     for message in Recording(path).messages(roles=roles):
         try:

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import IO, Any
 
-from analyzer.mcapio.chunks import (
+from analyzer.mcapio.read.records import (
     MAX_RECORD,
     MESSAGE_FIXED,
     OPCODE_CHANNEL,

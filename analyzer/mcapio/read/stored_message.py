@@ -18,7 +18,7 @@ from analyzer.mcapio.channels import (
     stream_chunk_from_dict,
 )
 from analyzer.mcapio.foxglove import VIEW_SCHEMAS
-from analyzer.mcapio.ros_can import RosFrameError, ros_can_role, ros_frame
+from analyzer.mcapio.read.ros_can import RosFrameError, ros_can_role, ros_frame
 from analyzer.pipeline import RawItem
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event, diagnostic
 

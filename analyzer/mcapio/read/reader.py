@@ -12,12 +12,12 @@ from analyzer.mcapio.channels import (
     ROLE_EVENT,
     ROLE_RAW,
 )
-from analyzer.mcapio.file_end import RecordingError, read_file_end
-from analyzer.mcapio.indexed_read import indexed_metadata, read_indexed, verify_chunks
-from analyzer.mcapio.recover import Damage, Recovery, metadata_before_data
-from analyzer.mcapio.ros_can import ROS_CAN_ROLES
-from analyzer.mcapio.sequential_read import read_sequentially
-from analyzer.mcapio.stored_message import (
+from analyzer.mcapio.read.file_end import RecordingError, read_file_end
+from analyzer.mcapio.read.indexed import indexed_metadata, read_indexed, verify_chunks
+from analyzer.mcapio.read.recover import Damage, Recovery, metadata_before_data
+from analyzer.mcapio.read.ros_can import ROS_CAN_ROLES
+from analyzer.mcapio.read.sequential import read_sequentially
+from analyzer.mcapio.read.stored_message import (
     ChannelFilter,
     ChannelKind,
     MessageTally,

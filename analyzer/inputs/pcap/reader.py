@@ -9,11 +9,11 @@ from collections.abc import Iterator
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.pcap_can import CanCounts, can_notes, sll2_can, sll_can, socketcan_frame
-from analyzer.inputs.pcap_file import CaptureFile, Damage, Packet
-from analyzer.inputs.pcap_notes import PcapStats, capture_notes, capture_problems
-from analyzer.inputs.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
-from analyzer.inputs.tcp_reassembly import Delivered, Result
+from analyzer.inputs.pcap.notes import PcapStats, capture_notes, capture_problems
+from analyzer.inputs.pcap.records import CaptureFile, Damage, Packet
+from analyzer.inputs.pcap.socketcan import CanCounts, can_notes, sll2_can, sll_can, socketcan_frame
+from analyzer.inputs.pcap.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
+from analyzer.inputs.pcap.tcp_reassembly import Delivered, Result
 from analyzer.protocol.ids import TCP_PORT
 from analyzer.protocol.types import (
     BAD_FRAME,

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from analyzer.inputs.base import InputItem
-from analyzer.inputs.candump_line import (
+from analyzer.inputs.candump.line import (
     RELATIVE_LIMIT,
     IdInfo,
     LineError,
@@ -13,8 +13,8 @@ from analyzer.inputs.candump_line import (
     parse_log_line,
     parse_screen_line,
 )
-from analyzer.inputs.candump_times import ScreenTimes
-from analyzer.inputs.python_can_text import ABSOLUTE, RELATIVE_TO_START
+from analyzer.inputs.candump.times import ScreenTimes
+from analyzer.inputs.python_can.text_logs import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import MAX_LINE
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 

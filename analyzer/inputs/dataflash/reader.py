@@ -17,7 +17,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.dataflash_format import (
+from analyzer.inputs.dataflash.formats import (
     FMT_LENGTH,
     FMT_TYPE,
     HEAD,
@@ -26,7 +26,7 @@ from analyzer.inputs.dataflash_format import (
     can_columns,
     parse_fmt,
 )
-from analyzer.inputs.dataflash_gps_time import gps_to_utc
+from analyzer.inputs.dataflash.gps_time import gps_to_utc
 from analyzer.inputs.textlines import GZIP_MAGIC, open_lines
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event, diagnostic
 

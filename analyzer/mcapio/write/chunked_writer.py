@@ -36,15 +36,15 @@ from mcap.records import (
     Statistics,
 )
 
-from analyzer.mcapio.chunk_order import (
+from analyzer.mcapio.write.chunk_order import (
     HoldBack,
     messages_in_order,
     rebuild,
     split_by_time,
 )
-from analyzer.mcapio.compression import compressor
-from analyzer.mcapio.options import DEFAULT_COMPRESSION
-from analyzer.mcapio.summary_tail import MAGIC, serialise, summary_tail
+from analyzer.mcapio.write.compression import compressor
+from analyzer.mcapio.write.options import DEFAULT_COMPRESSION
+from analyzer.mcapio.write.summary_tail import MAGIC, serialise, summary_tail
 
 # Message record: opcode, record length, channel id, sequence, log time, publish time.
 _MESSAGE = struct.Struct("<BQHIQQ")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.mcapio.channels import ROLE_KEY, MessageTee, channel_spec
-from analyzer.mcapio.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 
 
 def default_schemas() -> dict[str, dict[str, Any]]:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import itertools
 import operator
 
-from analyzer.mcapio.channel_registry import ChannelRegistry
 from analyzer.mcapio.channels import (
     ROLE_EVENT,
     ROLE_RAW,
@@ -18,8 +17,9 @@ from analyzer.mcapio.channels import (
     time_ns,
 )
 from analyzer.mcapio.channels import encode_json as _ENCODE
-from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
+from analyzer.mcapio.write.channel_registry import ChannelRegistry
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 from analyzer.pipeline import RawItem
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.tally import Tally

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from analyzer.inputs.tcp_reassembly import Gap, Result, TcpDirection
+from analyzer.inputs.pcap.tcp_reassembly import Gap, Result, TcpDirection
 
 MAX_FLOWS = 4096  # connections reassembled at once; the least recently used one is closed
 MAX_PENDING_TOTAL = 32 << 20  # out-of-order bytes held over all connections

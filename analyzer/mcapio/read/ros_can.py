@@ -30,7 +30,7 @@ from analyzer.protocol.types import CanFrame
 ROS2_CAN_FRAME = "can_msgs/msg/Frame"
 ROS1_CAN_FRAME = "can_msgs/Frame"
 ROS2_CANFD_FRAME = "ros2_socketcan_msgs/msg/FdFrame"
-# Channel roles of such channels in an MCAP file (see analyzer.mcapio.stored_message).
+# Channel roles of such channels in an MCAP file (see analyzer.mcapio.read.stored_message).
 ROLE_ROS_CAN = "ros2-can"
 ROLE_ROS1_CAN = "ros1-can"
 ROLE_ROS_CANFD = "ros2-canfd"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import IO, Any
 
 from analyzer.errors import InputError
-from analyzer.mcapio.chunks import OPCODE_DATA_END, RECORD_HEAD
+from analyzer.mcapio.read.records import OPCODE_DATA_END, RECORD_HEAD
 
 MAGIC = b"\x89MCAP0\r\n"
 FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary start, offset start, crc

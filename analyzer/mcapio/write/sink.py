@@ -12,13 +12,13 @@ from typing import Any
 
 from analyzer import PROTOCOL_DOCUMENT, __version__
 from analyzer.errors import SourceError
-from analyzer.mcapio.channel_registry import ChannelRegistry, default_schemas
 from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME, MessageTee
-from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import FoxgloveViews
-from analyzer.mcapio.message_writer import MessageWriter
-from analyzer.mcapio.options import DEFAULT_COMPRESSION
-from analyzer.mcapio.write_failure import format_clock, keep_complete_chunks
+from analyzer.mcapio.write.channel_registry import ChannelRegistry, default_schemas
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.failure import format_clock, keep_complete_chunks
+from analyzer.mcapio.write.message_writer import MessageWriter
+from analyzer.mcapio.write.options import DEFAULT_COMPRESSION
 from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event

@@ -8,9 +8,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from analyzer.mcapio.channels import ROLE_KEY, time_ns
-from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import TIME_SCHEMA
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
 
