@@ -15,8 +15,8 @@ from mcap.reader import NonSeekingReader, make_reader
 
 from analyzer import PROTOCOL_DOCUMENT, __version__, output_file
 from analyzer.errors import SourceError
-from analyzer.mcapio.channels import time_ns
 from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
+from analyzer.mcapio.log_time import time_ns
 from analyzer.mcapio.read.reader import Recording, read_items
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch

@@ -12,13 +12,13 @@ import time
 from collections.abc import Callable
 from typing import IO, Any
 
-from analyzer.commands.video_options import is_camera_event, video_summary
+from analyzer.commands.video_options import video_summary
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
-from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options
+from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options, is_camera_event
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
 DESCRIPTION = f"""\

@@ -5,14 +5,11 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from analyzer.protocol.types import Event
 from analyzer.video.spec import DEFAULT_THUMBNAIL_S, video_specs
 
 if TYPE_CHECKING:
     from analyzer.mcapio.write.sink import McapSink
     from analyzer.mcapio.write.video import VideoRecorder
-
-CAMERA_SOURCE_PREFIX = "camera/"
 
 
 def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | None:
@@ -29,11 +26,6 @@ def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | 
     interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
     streams = [VideoStream(spec, thumbnail_interval=interval or 0.0) for spec in specs]
     return VideoRecorder(mcap, streams)
-
-
-def is_camera_event(event: Event) -> bool:
-    """A diagnostic of a camera stream (not of the telemetry link)."""
-    return event.source.startswith(CAMERA_SOURCE_PREFIX)
 
 
 def video_summary(recorder: VideoRecorder) -> str:

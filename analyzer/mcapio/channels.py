@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS
 from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
 
 TOPIC_CAN_FRAMES = "/can/frames"
@@ -133,16 +134,6 @@ def stream_chunk_from_dict(obj: dict[str, Any]) -> StreamChunk:
     )
 
 
-_MAX_SECONDS = (2**64 - 1) / 1e9
-
-
-def time_ns(seconds: float) -> int:
-    """Event time in seconds -> MCAP log time in nanoseconds (clamped to the uint64 range)."""
-    if 0 < seconds < _MAX_SECONDS:  # False for NaN too
-        return round(seconds * 1e9)
-    return 2**64 - 1 if seconds >= _MAX_SECONDS else 0
-
-
 def schema_name(topic: str) -> str:
     """'/gimbal/command' -> 'gimbal_analyzer.gimbal.command'."""
     return "gimbal_analyzer." + topic.strip("/").replace("/", ".")
@@ -202,8 +193,6 @@ def channel_spec(topic: str, role: str, schemas: dict[str, dict[str, Any]]) -> C
         schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
         name = str(schema["title"])
     elif role == ROLE_VIEW:
-        from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
-
         name, schema = VIEW_SCHEMAS[topic]
     else:
         name = schema_name(topic)
@@ -224,8 +213,6 @@ class MessageTee(Protocol):
 def known_channel_specs(schemas: dict[str, dict[str, Any]]) -> list[ChannelSpec]:
     """Every channel a recording can hold: the raw ones, one per event topic with a schema
     and the Foxglove views (a recording holds those that got messages, as they come)."""
-    from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
-
     return [
         *(channel_spec(topic, ROLE_RAW, schemas) for topic in RAW_TOPICS),
         *(channel_spec(topic, ROLE_EVENT, schemas) for topic in schemas),

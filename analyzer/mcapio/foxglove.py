@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from analyzer.mcapio.channels import time_ns
+from analyzer.mcapio.log_time import time_ns
 from analyzer.protocol.types import (
     BUS_ERROR,
     LINK,

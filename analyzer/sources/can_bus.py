@@ -6,7 +6,7 @@ import contextlib
 from typing import Any
 
 from analyzer.errors import SourceError, UsageError
-from analyzer.inputs.python_can.reader import frame_from_message
+from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.types import CanFrame
 from analyzer.sources.base import MAX_ITEMS_PER_READ, SourceItem, link_event
 from analyzer.sources.spec import CanSpec

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections import Counter, deque
 
-from analyzer.commands.video_options import is_camera_event
 from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
 from analyzer.protocol.ids import CAN_BITRATE
@@ -42,6 +41,7 @@ from analyzer.tui.id_rows import (
     frame_bits,
     stream_key,
 )
+from analyzer.video.spec import is_camera_event
 
 # The names importers know from here; most are defined in the modules above.
 __all__ = [

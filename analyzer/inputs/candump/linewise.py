@@ -14,6 +14,7 @@ from analyzer.inputs.candump.line import (
     parse_screen_line,
 )
 from analyzer.inputs.candump.times import ScreenTimes
+from analyzer.inputs.detect import FORMATS, sniff_format
 from analyzer.inputs.python_can.text_logs import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import MAX_LINE
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
@@ -135,8 +136,6 @@ class CandumpLineParser:
         if self.not_candump:
             return
         self.not_candump = True
-        from analyzer.inputs import FORMATS, sniff_format  # the dispatcher imports us
-
         head = b"\n".join(self._head)
         if b"***BUSMASTER" in head.upper():
             what = (

@@ -9,6 +9,7 @@ from typing import IO, Any
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
+from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
 # format -> (python-can reader class name, text file?)
@@ -21,27 +22,6 @@ READERS: dict[str, tuple[str, bool]] = {
     "csv": ("CSVReader", True),
     "mf4": ("MF4Reader", False),
 }
-
-
-def frame_from_message(msg: Any, channel: str | None = None) -> CanFrame:
-    """A ``can.Message`` -> CanFrame (remote frames carry no data but keep their DLC).
-
-    ``channel`` names the channel when the message does not (a live bus).
-    """
-    if channel is None:
-        channel = msg.channel
-    return CanFrame(
-        float(msg.timestamp or 0.0),
-        int(msg.arbitration_id),
-        b"" if msg.is_remote_frame else bytes(msg.data or b""),
-        bool(msg.is_extended_id),
-        "" if channel is None else str(channel),
-        bool(msg.is_remote_frame),
-        bool(msg.is_error_frame),
-        bool(msg.is_fd),
-        "rx" if msg.is_rx else "tx",
-        int(msg.dlc or 0) if msg.is_remote_frame else 0,
-    )
 
 
 class PythonCanReader(InputReader):

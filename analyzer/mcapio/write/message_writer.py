@@ -14,10 +14,10 @@ from analyzer.mcapio.channels import (
     MessageTee,
     can_frame_json,
     stream_chunk_json,
-    time_ns,
 )
 from analyzer.mcapio.channels import encode_json as _ENCODE
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
+from analyzer.mcapio.log_time import time_ns
 from analyzer.mcapio.write.channel_registry import ChannelRegistry
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 from analyzer.pipeline import RawItem

@@ -7,8 +7,9 @@ import json
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from analyzer.mcapio.channels import ROLE_KEY, time_ns
+from analyzer.mcapio.channels import ROLE_KEY
 from analyzer.mcapio.foxglove import TIME_SCHEMA
+from analyzer.mcapio.log_time import time_ns
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch
