@@ -1,4 +1,4 @@
-"""Capture file readers, one module per format, and ``open_input`` to pick the right one."""
+"""Capture file readers: detection and `open_input` here, one module or package per format."""
 
 from __future__ import annotations
 
