@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
-import threading
 from pathlib import Path
 from typing import IO, Any
 
@@ -168,16 +166,10 @@ def written_by_demo(path: Path) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.stage import analysis_stages
-    from analyzer.capture import OUTPUT_CLOSED, Capture
-    from analyzer.commands.video_options import video_recorder
-    from analyzer.live.attach import (
-        foxglove_status,
-        foxglove_summary,
-        start_foxglove,
-        with_foxglove,
-    )
-    from analyzer.mcapio.write.sink import McapSink, recording_metadata
+    from analyzer.capture import OUTPUT_CLOSED
+    from analyzer.commands.live_recording import Companion, open_live_recording
+    from analyzer.live.attach import foxglove_summary
+    from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
@@ -210,32 +202,20 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
 
-    live = start_foxglove(args)
     source = open_source(str(spec))
-    try:
-        sink = McapSink(
-            path,
-            metadata=recording_metadata(
-                f"demo: simulated gimbal and ground station on {spec}", command="demo"
-            ),
-            compression=args.compression,
-            force=args.force,
-            replaceable=written_by_demo,
-            tee=live,
-            hold_back=hold_back,
-        )
-    except SourceError:
-        source.close()
-        if live is not None:
-            live.close()
-        raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    video = video_recorder(args, sink)
-    sinks: list[Any] = [s for s in (video, sink, printer, live) if s is not None]
-    stages = [*analysis_stages(), *([video.stage] if video else [])]
-    capture = Capture(source, sinks, stages=stages)
-    if video is not None:
-        video.start()
+    recording = open_live_recording(
+        args,
+        source,
+        path,
+        metadata=recording_metadata(
+            f"demo: simulated gimbal and ground station on {spec}", command="demo"
+        ),
+        hold_back=hold_back,
+        sinks_after=lambda sink, video: [printer],
+        replaceable=written_by_demo,
+    )
+    capture, sink, live = recording.capture, recording.sink, recording.live
     try:
         scene = Scene(spec, config)
     except BaseException:
@@ -244,58 +224,22 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
         raise
+    recording.companions.append(Companion(scene.start, scene.stop))
 
-    def finish() -> None:
-        capture.stop()
-        scene.stop()
+    def first_line() -> None:
+        print(
+            f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
+            f"recording {path}; faults: {faults.describe()}; {duration:g} s",
+            flush=True,
+        )
 
-    timer: threading.Timer | None = None
-    if duration is not None:
-        timer = threading.Timer(duration, finish)
-        timer.daemon = True
-    result = 0
-    try:
-        if tui:
-            scene.start()
-            if timer is not None:
-                timer.start()
-            result = int(
-                run_app(
-                    capture,
-                    recording=path,
-                    source_label=with_foxglove(f"demo on {spec}", live),
-                    exit_when_done=args.duration is not None,
-                    live_status=foxglove_status(live),
-                )
-            )
-        else:
-            # Inside the try: a failed write here must still finish the recording.
-            print(
-                f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
-                f"recording {path}; faults: {faults.describe()}; {duration:g} s",
-                flush=True,
-            )
-            capture.start()
-            scene.start()
-            if timer is not None:
-                timer.start()
-            try:
-                capture.wait()
-            except KeyboardInterrupt:
-                capture.stop()
-                print(file=sys.stderr)
-    finally:
-        if timer is not None:
-            timer.cancel()
-        scene.stop()
-        if video is not None:
-            video.stop()
-        if capture.running:
-            capture.stop()
-            capture.join()
-        source.close()  # the capture closes it too; here for a failure before it started
-        with contextlib.suppress(SourceError):  # a write error is reported below
-            sink.close()
+    result = recording.run(
+        duration,
+        tui=run_app if tui else None,
+        label=f"demo on {spec}",
+        exit_when_done=args.duration is not None,
+        started=first_line,
+    )
     if sink.error is not None:
         raise SourceError(sink.error)
     if capture.error is not None:
