@@ -151,6 +151,9 @@ class FoxgloveLive:
             channels.extend([None] * (channel_id + 1 - len(channels)))
         channels[channel_id] = self._channel_for(spec)
 
+    def advertise(self, spec: ChannelSpec) -> None:
+        self._channel_for(spec)
+
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
         channel = self._channels[channel_id] if channel_id < len(self._channels) else None
         if channel is not None:
