@@ -10,7 +10,7 @@ from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
 from analyzer.protocol.types import Event
 from analyzer.scene.overlays import image_annotations, overlay
 from analyzer.scene.scene3d import DEFAULT_ASPECT, frame_transforms, optical_frame, scene_update
-from analyzer.scene.state import AIRCRAFT, COMMAND, FEEDBACK, INPUT_TOPICS, RANGING, GimbalState
+from analyzer.scene.state import COMMAND, FEEDBACK, INPUT_TOPICS, RANGING, GimbalState
 
 FRAME_TRANSFORMS = "foxglove.FrameTransforms"
 SCENE_UPDATE = "foxglove.SceneUpdate"
@@ -53,7 +53,7 @@ class SceneViews:
     def __init__(self) -> None:
         self.state = GimbalState()
         self.optical_frames: list[str] = []
-        self.overlays: dict[str, tuple[int, int]] = {}
+        self.overlays: dict[str, tuple[int, int, bool]] = {}
         self.aspect = DEFAULT_ASPECT
         self._scene_at: float | None = None
         self._scene_key: tuple[Any, ...] = ()
@@ -63,11 +63,13 @@ class SceneViews:
         if frame not in self.optical_frames:
             self.optical_frames.append(frame)
 
-    def add_overlay(self, topic: str, width: int, height: int) -> None:
+    def add_overlay(self, topic: str, width: int, height: int, *, stroked: bool = False) -> None:
+        """Draw on ``topic`` for a ``width`` x ``height`` picture; ``stroked``: the text line
+        as line segments (``analyzer.scene.overlays.image_annotations``)."""
         if width > 0 and height > 0:
             if not self.overlays:
                 self.aspect = width / height
-            self.overlays[topic] = (width, height)
+            self.overlays[topic] = (width, height, stroked)
 
     def views(self, event: Event, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
         if event.topic not in INPUT_TOPICS:
@@ -84,9 +86,10 @@ class SceneViews:
             out.extend(self._scene(event.time, stamp, force=change == RANGING))
         if change in (FEEDBACK, COMMAND) and self.overlays:
             shapes = overlay(self.state)
-            for topic, (width, height) in self.overlays.items():
-                out.append((topic, image_annotations(shapes, width, height, stamp)))
-        return out if change != AIRCRAFT else []
+            for topic, (width, height, stroked) in self.overlays.items():
+                message = image_annotations(shapes, width, height, stamp, stroked=stroked)
+                out.append((topic, message))
+        return out
 
     def _scene(
         self, time: float, stamp: dict[str, int], force: bool

@@ -255,7 +255,9 @@ class VideoRecorder:
             self.mcap.add_overlay(annotations_topic(frame.stream), frame.width, frame.height)
             if any(s.thumbnail_interval > 0 for s in self.streams if s.spec.name == frame.stream):
                 width, height = thumbnail_size(frame.width, frame.height)
-                self.mcap.add_overlay(thumbnail_annotations_topic(frame.stream), width, height)
+                topic = thumbnail_annotations_topic(frame.stream)
+                # the thumbnails are what Foxglove Studio 1.48 shows: it draws lines, no text
+                self.mcap.add_overlay(topic, width, height, stroked=True)
 
     def close(self) -> None:
         self.stop()

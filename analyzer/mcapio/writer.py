@@ -190,12 +190,12 @@ class McapSink:
             if self._views is not None:
                 self._views.scene.add_camera(name)
 
-    def add_overlay(self, topic: str, width: int, height: int) -> None:
+    def add_overlay(self, topic: str, width: int, height: int, *, stroked: bool = False) -> None:
         """Draw the overlays (tracking box, taps, angles) on ``topic``, for a picture of
-        ``width`` x ``height`` pixels, from now on."""
+        ``width`` x ``height`` pixels, from now on (``stroked``: the text as lines)."""
         with self._lock:
             if self._views is not None:
-                self._views.scene.add_overlay(topic, width, height)
+                self._views.scene.add_overlay(topic, width, height, stroked=stroked)
 
     @property
     def tee(self) -> MessageTee | None:

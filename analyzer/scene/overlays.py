@@ -7,9 +7,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from analyzer.scene.state import IMAGE_MAX, GimbalState
+from analyzer.scene.stroke_font import GLYPH_HEIGHT, text_segments, text_width
 
 # foxglove.PointsAnnotationType
 LINE_LOOP = 2
+LINE_LIST = 4
 BOX_COLOUR = (0.25, 1.0, 0.3, 1.0)
 TAP_COLOUR = (0.2, 0.85, 1.0, 1.0)
 TEXT_COLOUR = (1.0, 1.0, 1.0, 1.0)
@@ -50,6 +52,65 @@ def text_size(height: int) -> float:
     return max(MIN_TEXT_PX, round(height * TEXT_SIZE))
 
 
+def line_width(height: int) -> float:
+    """Thickness of the box and the tap circles on a picture ``height`` pixels high."""
+    return max(2.0, round(height / 240))
+
+
+@dataclass(frozen=True, slots=True)
+class TextPlace:
+    """Where the text line goes: its backing rectangle (left, top, right, bottom) and the
+    stroke font's scale (pixels per grid unit), its top left corner and stroke width."""
+
+    rect: tuple[float, float, float, float]
+    left: float
+    top: float
+    scale: float
+    stroke: float
+
+
+def text_place(text: str, height: int) -> TextPlace:
+    """The text line at the picture's top left, glyphs ``text_size`` pixels high."""
+    size = text_size(height)
+    scale = size / GLYPH_HEIGHT
+    pad = size * 0.4
+    rect = (pad, pad, pad * 3 + text_width(text, scale), pad * 3 + size)
+    return TextPlace(rect, pad * 2, pad * 2, scale, max(1.0, round(scale * 0.7, 1)))
+
+
+def stroked_text(shapes: Overlay, height: int, stamp: dict[str, int]) -> list[dict[str, Any]]:
+    """The text line as points annotations (a filled backing box, the glyphs' segments)."""
+    place = text_place(shapes.text, height)
+    left, top, right, bottom = place.rect
+    backing = {
+        "timestamp": stamp,
+        "type": LINE_LOOP,
+        "points": [
+            _point(left, top),
+            _point(right, top),
+            _point(right, bottom),
+            _point(left, bottom),
+        ],
+        "outline_color": _colour(TEXT_BACKGROUND),
+        "outline_colors": [],
+        "fill_color": _colour(TEXT_BACKGROUND),
+        "thickness": 1.0,
+    }
+    points = []
+    for a, b in text_segments(shapes.text, place.left, place.top, place.scale):
+        points += [_point(*a), _point(*b)]
+    glyphs = {
+        "timestamp": stamp,
+        "type": LINE_LIST,
+        "points": points,
+        "outline_color": _colour(TEXT_COLOUR),
+        "outline_colors": [],
+        "fill_color": _colour(TRANSPARENT),
+        "thickness": place.stroke,
+    }
+    return [backing, glyphs]
+
+
 def _colour(rgba: tuple[float, float, float, float]) -> dict[str, float]:
     return {"r": rgba[0], "g": rgba[1], "b": rgba[2], "a": rgba[3]}
 
@@ -59,10 +120,12 @@ def _point(x: float, y: float) -> dict[str, float]:
 
 
 def image_annotations(
-    shapes: Overlay, width: int, height: int, stamp: dict[str, int]
+    shapes: Overlay, width: int, height: int, stamp: dict[str, int], *, stroked: bool = False
 ) -> dict[str, Any]:
     """The ``foxglove.ImageAnnotations`` of ``shapes`` on a ``width`` x ``height`` picture,
-    every field of the schema given (Foxglove Studio 1.48 expects them all)."""
+    every field of the schema given. The text line is a text annotation, or with
+    ``stroked`` line segments of the stroke font (Foxglove Studio 1.48's Image panel draws
+    points and circles but no text annotations)."""
     points = []
     if shapes.box is not None:
         left, top, right, bottom = box_corners(shapes.box, width, height)
@@ -79,7 +142,7 @@ def image_annotations(
                 "outline_color": _colour(BOX_COLOUR),
                 "outline_colors": [],
                 "fill_color": _colour(TRANSPARENT),
-                "thickness": max(2.0, round(height / 240)),
+                "thickness": line_width(height),
             }
         )
     circles = [
@@ -87,12 +150,18 @@ def image_annotations(
             "timestamp": stamp,
             "position": _point(u * width, v * height),
             "diameter": round(TAP_DIAMETER * height, 2),
-            "thickness": max(2.0, round(height / 240)),
+            "thickness": line_width(height),
             "fill_color": _colour(TRANSPARENT),
             "outline_color": _colour(TAP_COLOUR),
         }
         for u, v in shapes.taps
     ]
+    if stroked:
+        return {
+            "circles": circles,
+            "points": [*points, *stroked_text(shapes, height, stamp)],
+            "texts": [],
+        }
     size = text_size(height)
     texts = [
         {

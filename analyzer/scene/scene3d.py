@@ -24,7 +24,7 @@ GIMBAL = "gimbal"  # x along the line of sight
 GIMBAL_DROP_M = 0.15  # the gimbal hangs this far under the aircraft's centre
 HFOV_1X_DEG = 60.0  # horizontal field of view at 1x of the 30x / 35x zoom cameras
 DEFAULT_ASPECT = 16 / 9
-FRUSTUM_M = 15.0  # length of the field of view's lines when no ranging says how far
+FRUSTUM_M = 8.0  # length of the field of view's lines when no ranging says how far
 MAX_FRUSTUM_M = 200.0
 
 # SceneEntityDeletionType, LineType
