@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import json
 import math
+from fractions import Fraction
 from typing import Any
 
+import av
 import jsonschema
 import pytest
 from hypothesis import given, settings
@@ -20,6 +22,7 @@ from hypothesis import strategies as st
 
 from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
 from analyzer.mcapio.foxglove import FoxgloveViews, view_schema
+from analyzer.mcapio.video_reading import Thumbnail
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
@@ -27,9 +30,10 @@ from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.protocol.uav import encode_gps, encode_uav_attitude
 from analyzer.scene.geometry import Quaternion, Vector, azimuth_elevation, multiply, rotate
-from analyzer.scene.overlays import text_place
+from analyzer.scene.overlays import box_corners, text_place
 from analyzer.scene.scene3d import HFOV_1X_DEG, field_of_view
 from analyzer.scene.stroke_font import GLYPHS, text_segments
+from analyzer.scene.timeline import OverlayTimeline
 
 ANNOTATIONS = "/camera/main/annotations"
 THUMBNAIL_ANNOTATIONS = "/camera/main/thumbnail/annotations"
@@ -325,3 +329,57 @@ def test_the_thumbnail_text_is_stroked_inside_its_backing() -> None:
     place = text_place(text, 180)
     assert len(glyphs["points"]) == 2 * len(list(text_segments(text, 0, 0, place.scale)))
     assert set(text) <= set(GLYPHS)
+
+
+# -- the report's pictures ----------------------------------------------------------------------
+
+
+def grey_jpeg(width: int, height: int) -> bytes:
+    """A mid-grey JPEG as the recorder's thumbnails are made (PyAV's MJPEG encoder)."""
+    frame = av.VideoFrame(width, height, "yuvj420p")
+    for plane, value in zip(frame.planes, (128, 128, 128), strict=True):
+        plane.update(bytes([value]) * plane.buffer_size)
+    encoder = av.CodecContext.create("mjpeg", "w")
+    encoder.width, encoder.height, encoder.pix_fmt = width, height, "yuvj420p"
+    encoder.time_base = Fraction(1, 25)
+    return bytes([*encoder.encode(frame), *encoder.encode(None)][0])
+
+
+def rgb_at(jpeg: bytes, x: int, y: int) -> tuple[int, int, int]:
+    frame = av.CodecContext.create("mjpeg", "r").decode(av.Packet(jpeg))[0]
+    rgb = frame.reformat(format="rgb24")
+    plane = rgb.planes[0]
+    i = y * plane.line_size + x * 3
+    data = bytes(plane)
+    return data[i], data[i + 1], data[i + 2]
+
+
+def test_the_report_pictures_show_the_overlay_of_their_moment() -> None:
+    bench = Bench()
+    timeline = OverlayTimeline()
+    events = []
+    events += bench.frames(FEEDBACK_ID, *segments(encode_attitude(pitch_deg=-45, yaw_deg=90)))
+    before = bench.time
+    events += bench.frames(
+        CONTROL_ID, encode_command("tracking", x=4096, y=4096, width=1600, height=1600)
+    )
+    for event in events:
+        timeline.add(event)
+    picture = Thumbnail("main", bench.time + 0.5, grey_jpeg(320, 180))
+    (early,) = timeline.pictures([Thumbnail("main", before, picture.jpeg)])
+    (late,) = timeline.pictures([picture])
+    assert early.overlay.box is None and late.overlay.box is not None  # type: ignore[attr-defined]
+    assert timeline.at(before - 1) is None
+    drawn = late.jpeg
+    left, top, right, bottom = (round(v) for v in box_corners(late.overlay.box, 320, 180))  # type: ignore[attr-defined]
+    red, green, blue = rgb_at(drawn, (left + right) // 2, top)  # the box's top edge
+    assert green > 200 and red < 140 and blue < 140
+    assert all(abs(c - 128) < 12 for c in rgb_at(drawn, (left + right) // 2, (top + bottom) // 2))
+    place = text_place(late.overlay.text, 180)  # type: ignore[attr-defined]
+    ink = [
+        max(rgb_at(drawn, round(a[0]), round(a[1])))
+        for a, _ in text_segments(late.overlay.text, place.left, place.top, place.scale)  # type: ignore[attr-defined]
+    ]
+    assert sorted(ink)[len(ink) // 2] > 200  # the glyphs are drawn white
+    elsewhere = zip(rgb_at(drawn, 300, 170), rgb_at(picture.jpeg, 300, 170), strict=True)
+    assert all(abs(a - b) <= 6 for a, b in elsewhere)  # the rest as it was (JPEG again)
