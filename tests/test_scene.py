@@ -26,9 +26,9 @@ from analyzer.mcapio.video_reading import Thumbnail
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
-from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
+from analyzer.protocol.ids import ALTITUDE_ID, CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import CanFrame, Event
-from analyzer.protocol.uav import encode_gps, encode_uav_attitude
+from analyzer.protocol.uav import encode_altitude, encode_gps, encode_uav_attitude
 from analyzer.scene.geometry import Quaternion, Vector, azimuth_elevation, multiply, rotate
 from analyzer.scene.overlays import box_corners, text_place
 from analyzer.scene.scene3d import HFOV_1X_DEG, field_of_view
@@ -383,3 +383,14 @@ def test_the_report_pictures_show_the_overlay_of_their_moment() -> None:
     assert sorted(ink)[len(ink) // 2] > 200  # the glyphs are drawn white
     elsewhere = zip(rgb_at(drawn, 300, 170), rgb_at(picture.jpeg, 300, 170), strict=True)
     assert all(abs(a - b) <= 6 for a, b in elsewhere)  # the rest as it was (JPEG again)
+
+
+def test_up_is_from_the_first_altitude_even_when_it_comes_after_the_first_fix() -> None:
+    bench = Bench()
+    bench.uav(0.0)
+    bench.frames(GPS_ID, encode_gps(31.0, 118.0))
+    bench.frames(ALTITUDE_ID, encode_altitude(120.0))
+    bench.frames(ALTITUDE_ID, encode_altitude(125.5))
+    bench.frames(GPS_ID, encode_gps(31.0, 118.0))
+    bench.feedback(0.0, 0.0)
+    assert transforms(bench)["uav"][2] == Vector(0.0, 0.0, pytest.approx(5.5))

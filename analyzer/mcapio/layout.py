@@ -116,7 +116,7 @@ def layout() -> dict[str, Any]:
         },
         SCENE: {
             "cameraState": {
-                "distance": 12,
+                "distance": 25,
                 "perspective": True,
                 "phi": 55,
                 "target": [0, 0, 0],

@@ -21,7 +21,7 @@ WORLD = "world"  # east/north/up metres from the aircraft's first fix
 AIRCRAFT = "uav"  # the aircraft's body: x forward, y left, z up
 BASE = "base"  # the fixed mount the gimbal hangs under when no UAV status came
 GIMBAL = "gimbal"  # x along the line of sight
-GIMBAL_DROP_M = 0.15  # the gimbal hangs this far under the aircraft's centre
+GIMBAL_DROP_M = 0.4  # the gimbal hangs this far under the aircraft's centre
 HFOV_1X_DEG = 60.0  # horizontal field of view at 1x of the 30x / 35x zoom cameras
 DEFAULT_ASPECT = 16 / 9
 FRUSTUM_M = 8.0  # length of the field of view's lines when no ranging says how far
@@ -124,7 +124,7 @@ def _aircraft(stamp: dict[str, int], state: GimbalState) -> dict[str, Any]:
     body = {
         "pose": _pose(),
         "size": {"x": 0.9, "y": 0.9, "z": 0.12},
-        "color": _colour(0.6, 0.6, 0.65),
+        "color": _colour(0.6, 0.6, 0.65, 0.6),
     }
     nose = {
         "pose": _pose(),

@@ -77,8 +77,8 @@ def _unit(value: Any, scale: float, offset: float = 0.0) -> float | None:
 @dataclass
 class GimbalState:
     """The gimbal's last feedback, the zoom ratio and tracking box the commands set, the taps
-    still shown, the last ranging and the aircraft's pose (position east/north/up metres
-    from its first fix), each updated by ``observe``."""
+    still shown, the last ranging and the aircraft's pose (east/north metres from its first
+    fix, up from its first altitude), each updated by ``observe``."""
 
     pitch_deg: float | None = None
     yaw_deg: float | None = None
@@ -89,7 +89,8 @@ class GimbalState:
     taps: list[Tap] = field(default_factory=list)
     range_m: float | None = None
     aircraft: tuple[float, float, float] | None = None  # heading, pitch, roll (degrees)
-    origin: tuple[float, float, float] | None = None  # latitude, longitude, altitude
+    origin: tuple[float, float] | None = None  # latitude, longitude of the first fix
+    origin_altitude_m: float | None = None  # the first altitude that came
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     altitude_m: float | None = None
 
@@ -122,6 +123,8 @@ class GimbalState:
             return AIRCRAFT
         if topic == TOPIC_UAV_ALTITUDE:
             self.altitude_m = _number(f.get("altitude_m"))
+            if self.origin_altitude_m is None:
+                self.origin_altitude_m = self.altitude_m
             return ""
         if topic == TOPIC_UAV_GPS:
             return AIRCRAFT if self._fix(f) else ""
@@ -133,11 +136,13 @@ class GimbalState:
             return False
         if lat == 0 and lon == 0:  # what a source sends before it has a fix
             return False
-        altitude = self.altitude_m or 0.0
         if self.origin is None:
-            self.origin = (lat, lon, altitude)
+            self.origin = (lat, lon)
         east, north = east_north(self.origin[0], self.origin[1], lat, lon)
-        self.position = (east, north, altitude - self.origin[2])
+        up = 0.0
+        if self.altitude_m is not None and self.origin_altitude_m is not None:
+            up = self.altitude_m - self.origin_altitude_m
+        self.position = (east, north, up)
         return True
 
     def _command(self, event: Event) -> bool:
