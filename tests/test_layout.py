@@ -14,7 +14,7 @@ from analyzer.mcapio.foxglove import VIEW_SCHEMAS, view_schema
 from analyzer.mcapio.layout import layout
 from analyzer.mcapio.video_channels import thumbnail_annotations_topic, thumbnail_topic
 from analyzer.protocol.schema import topic_schemas
-from analyzer.scene.scene3d import GIMBAL, WORLD
+from analyzer.scene.scene3d import GIMBAL
 
 # Panel types of Foxglove Studio 1.48 (panels/index of @foxglove/studio-base) used here, and
 # the config keys each panel reads.
@@ -98,7 +98,6 @@ def test_the_camera_and_3d_panels_show_the_overlays_and_the_scene() -> None:
     assert scene["topics"] == {TOPIC_SCENE: {"visible": True}}  # scene entities start hidden
     assert VIEW_SCHEMAS[TOPIC_SCENE][0] == "foxglove.SceneUpdate"
     assert VIEW_SCHEMAS[TOPIC_TF][0] == "foxglove.FrameTransforms"
-    assert scene["layers"]["grid"]["frameId"] == WORLD
 
 
 def test_layout_command_writes_and_refuses_to_overwrite(

@@ -116,7 +116,7 @@ def layout() -> dict[str, Any]:
         },
         SCENE: {
             "cameraState": {
-                "distance": 25,
+                "distance": 20,
                 "perspective": True,
                 "phi": 55,
                 "target": [0, 0, 0],
@@ -129,26 +129,10 @@ def layout() -> dict[str, Any]:
             },
             "followMode": "follow-position",
             "followTf": SCENE_FOLLOW_FRAME,
-            "scene": {"transforms": {"showLabel": True, "labelSize": 0.12, "axisScale": 1.5}},
+            "scene": {"transforms": {"showLabel": True, "labelSize": 0.12, "axisScale": 3}},
             "transforms": {},
             "topics": {TOPIC_SCENE: {"visible": True}},
-            "layers": {
-                "grid": {
-                    "layerId": "foxglove.Grid",
-                    "visible": True,
-                    "frameLocked": True,
-                    "label": "Grid (world, 5 m)",
-                    "instanceId": "grid",
-                    "frameId": "world",
-                    "size": 100,
-                    "divisions": 20,
-                    "lineWidth": 1,
-                    "color": "#248eff",
-                    "position": [0, 0, 0],
-                    "rotation": [0, 0, 0],
-                    "order": 1,
-                }
-            },
+            "layers": {},  # a grid at the world origin is far behind a flying aircraft
         },
     }
     mosaic = {

@@ -21,7 +21,7 @@ WORLD = "world"  # east/north/up metres from the aircraft's first fix
 AIRCRAFT = "uav"  # the aircraft's body: x forward, y left, z up
 BASE = "base"  # the fixed mount the gimbal hangs under when no UAV status came
 GIMBAL = "gimbal"  # x along the line of sight
-GIMBAL_DROP_M = 0.4  # the gimbal hangs this far under the aircraft's centre
+GIMBAL_DROP_M = 0.6  # the gimbal hangs this far under the aircraft's centre
 HFOV_1X_DEG = 60.0  # horizontal field of view at 1x of the 30x / 35x zoom cameras
 DEFAULT_ASPECT = 16 / 9
 FRUSTUM_M = 8.0  # length of the field of view's lines when no ranging says how far
@@ -123,19 +123,19 @@ def _aircraft(stamp: dict[str, int], state: GimbalState) -> dict[str, Any]:
     frame = AIRCRAFT if state.aircraft is not None else BASE
     body = {
         "pose": _pose(),
-        "size": {"x": 0.9, "y": 0.9, "z": 0.12},
+        "size": {"x": 2.0, "y": 2.0, "z": 0.25},
         "color": _colour(0.6, 0.6, 0.65, 0.6),
     }
     nose = {
         "pose": _pose(),
-        "shaft_length": 0.7,
-        "shaft_diameter": 0.05,
-        "head_length": 0.2,
-        "head_diameter": 0.12,
+        "shaft_length": 1.6,
+        "shaft_diameter": 0.12,
+        "head_length": 0.5,
+        "head_diameter": 0.3,
         "color": _colour(0.95, 0.45, 0.3),
     }
     label = "aircraft" if state.aircraft is not None else "gimbal mount (no UAV status)"
-    texts = [_text(label, _pose(0.0, 0.0, 0.4), 12.0)]
+    texts = [_text(label, _pose(0.0, 0.0, 0.8), 12.0)]
     return _entity(stamp, frame, ENTITY_AIRCRAFT, cubes=[body], arrows=[nose], texts=texts)
 
 
