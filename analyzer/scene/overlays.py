@@ -78,11 +78,16 @@ def text_place(text: str, height: int) -> TextPlace:
     return TextPlace(rect, pad * 2, pad * 2, scale, max(1.0, round(scale * 0.7, 1)))
 
 
-def stroked_text(shapes: Overlay, height: int, stamp: dict[str, int]) -> list[dict[str, Any]]:
-    """The text line as points annotations (a filled backing box, the glyphs' segments)."""
-    place = text_place(shapes.text, height)
-    left, top, right, bottom = place.rect
-    backing = {
+def _rectangle(
+    stamp: dict[str, int],
+    rect: tuple[float, float, float, float],
+    outline: tuple[float, float, float, float],
+    fill: tuple[float, float, float, float],
+    thickness: float,
+) -> dict[str, Any]:
+    """A closed outline of the rectangle (left, top, right, bottom), filled with ``fill``."""
+    left, top, right, bottom = rect
+    return {
         "timestamp": stamp,
         "type": LINE_LOOP,
         "points": [
@@ -91,11 +96,17 @@ def stroked_text(shapes: Overlay, height: int, stamp: dict[str, int]) -> list[di
             _point(right, bottom),
             _point(left, bottom),
         ],
-        "outline_color": _colour(TEXT_BACKGROUND),
+        "outline_color": _colour(outline),
         "outline_colors": [],
-        "fill_color": _colour(TEXT_BACKGROUND),
-        "thickness": 1.0,
+        "fill_color": _colour(fill),
+        "thickness": thickness,
     }
+
+
+def stroked_text(shapes: Overlay, height: int, stamp: dict[str, int]) -> list[dict[str, Any]]:
+    """The text line as points annotations (a filled backing box, the glyphs' segments)."""
+    place = text_place(shapes.text, height)
+    backing = _rectangle(stamp, place.rect, TEXT_BACKGROUND, TEXT_BACKGROUND, 1.0)
     points = []
     for a, b in text_segments(shapes.text, place.left, place.top, place.scale):
         points += [_point(*a), _point(*b)]
@@ -128,23 +139,8 @@ def image_annotations(
     points and circles but no text annotations)."""
     points = []
     if shapes.box is not None:
-        left, top, right, bottom = box_corners(shapes.box, width, height)
-        points.append(
-            {
-                "timestamp": stamp,
-                "type": LINE_LOOP,
-                "points": [
-                    _point(left, top),
-                    _point(right, top),
-                    _point(right, bottom),
-                    _point(left, bottom),
-                ],
-                "outline_color": _colour(BOX_COLOUR),
-                "outline_colors": [],
-                "fill_color": _colour(TRANSPARENT),
-                "thickness": line_width(height),
-            }
-        )
+        corners = box_corners(shapes.box, width, height)
+        points.append(_rectangle(stamp, corners, BOX_COLOUR, TRANSPARENT, line_width(height)))
     circles = [
         {
             "timestamp": stamp,
