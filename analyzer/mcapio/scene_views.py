@@ -43,9 +43,9 @@ def is_annotation_topic(topic: str) -> bool:
 
 class SceneViews:
     """Follows the gimbal (``analyzer.scene.state``) and gives, at the time of each event,
-    the messages it calls for: with every feedback the transforms, the overlays and (when
-    it changed, or every ``SCENE_EVERY_S``) the scene; with a tracking, tap or zoom command
-    the overlays (and the scene for a new zoom); with a ranging the scene.
+    the messages it calls for: with every feedback the transforms and the overlays, with a
+    tracking, tap or zoom command the overlays, and with any of them or a ranging the scene
+    when it changed shape or once ``SCENE_EVERY_S`` has passed.
 
     The camera streams are told by ``add_camera`` (their optical frames hang under the
     gimbal) and ``add_overlay`` (a topic to draw the overlays on, with its picture size)."""
@@ -83,7 +83,7 @@ class SceneViews:
             if transforms is not None:
                 out.append((TOPIC_TF, transforms))
         if change in (FEEDBACK, COMMAND, RANGING):
-            out.extend(self._scene(event.time, stamp, force=change == RANGING))
+            out.extend(self._scene(event.time, stamp))
         if change in (FEEDBACK, COMMAND) and self.overlays:
             shapes = overlay(self.state)
             for topic, (width, height, stroked) in self.overlays.items():
@@ -91,15 +91,15 @@ class SceneViews:
                 out.append((topic, message))
         return out
 
-    def _scene(
-        self, time: float, stamp: dict[str, int], force: bool
-    ) -> list[tuple[str, dict[str, Any]]]:
+    def _scene(self, time: float, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
+        """The scene when its shape changed (zoom, a target found or lost, UAV status), else
+        at most every ``SCENE_EVERY_S`` (a new laser range, a viewer that joined late)."""
         state = self.state
         if state.pitch_deg is None:  # nothing to hang the scene on before the first feedback
             return []
-        key = (state.zoom, state.range_m, state.aircraft is not None, self.aspect)
+        key = (state.zoom, state.range_m is None, state.aircraft is not None, self.aspect)
         due = self._scene_at is None or time - self._scene_at >= SCENE_EVERY_S
-        if not (force or due or key != self._scene_key):
+        if not (due or key != self._scene_key):
             return []
         self._scene_at, self._scene_key = time, key
         return [(TOPIC_SCENE, scene_update(state, stamp, self.aspect))]

@@ -47,8 +47,13 @@ def _transform(
         "timestamp": stamp,
         "parent_frame_id": parent,
         "child_frame_id": child,
-        "translation": {"x": at.x, "y": at.y, "z": at.z},
-        "rotation": {"x": q.x, "y": q.y, "z": q.z, "w": q.w},
+        "translation": {"x": round(at.x, 3), "y": round(at.y, 3), "z": round(at.z, 3)},
+        "rotation": {
+            "x": round(q.x, 7),
+            "y": round(q.y, 7),
+            "z": round(q.z, 7),
+            "w": round(q.w, 7),
+        },
     }
 
 
@@ -144,6 +149,7 @@ def _frustum(stamp: dict[str, int], state: GimbalState, aspect: float) -> dict[s
     hfov, vfov = field_of_view(state.zoom, aspect)
     dy = depth * math.tan(math.radians(hfov) / 2)
     dz = depth * math.tan(math.radians(vfov) / 2)
+    depth, dy, dz = round(depth, 3), round(dy, 3), round(dz, 3)  # millimetres are plenty
     corners = [(depth, dy, dz), (depth, -dy, dz), (depth, -dy, -dz), (depth, dy, -dz)]
     points: list[dict[str, float]] = []
     for i, corner in enumerate(corners):
