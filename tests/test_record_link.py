@@ -54,7 +54,27 @@ def test_link_status_says_refused_then_counts_down_the_retry() -> None:
             link(T0 + 10, "reconnecting", "reconnecting in 0.5 s", retry_in_s=0.5),
         ]
     )
-    assert status.describe(T0 + 10.2) == "connection lost: reset by peer; retrying in 0.3 s"
+    gone = "(gone 0.2 s, since 22:13:30.000Z)"
+    assert status.describe(T0 + 10.2) == f"connection lost: reset by peer {gone}; retrying in 0.3 s"
+    status.fold(
+        [
+            link(T0 + 10.5, "connect_failed", "cannot connect to 127.0.0.1:9: timed out"),
+            link(T0 + 10.5, "reconnecting", "reconnecting in 1.0 s", retry_in_s=1.0),
+        ]
+    )
+    assert status.describe(T0 + 11.0) == (
+        "cannot connect to 127.0.0.1:9: timed out (gone 1.0 s, since 22:13:30.000Z); "
+        "retrying in 0.5 s"
+    )
+    status.note(link(T0 + 12, "connected", "connected to 127.0.0.1:9 again after 2.0 s without it"))
+    assert status.describe(T0 + 20) == (
+        "connected to 127.0.0.1:9 again after 2.0 s without it "
+        "(lost 22:13:30.000Z, back 22:13:32.000Z)"
+    )
+    status.note(link(T0 + 30, "lost", "connection lost: timed out"))  # a second loss
+    assert status.describe(T0 + 31) == (
+        "connection lost: timed out (gone 1.0 s, since 22:13:50.000Z)"
+    )
 
 
 class Stats:

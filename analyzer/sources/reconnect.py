@@ -55,16 +55,33 @@ def _first_line(exc: BaseException) -> str:
     return lines[0].strip() if lines else exc.__class__.__name__
 
 
+def _root(exc: BaseException) -> BaseException:
+    """The error at the bottom of a chain of errors raised while handling one another."""
+    seen = {id(exc)}
+    while True:
+        under = exc.__cause__ or (None if exc.__suppress_context__ else exc.__context__)
+        if under is None or id(under) in seen:
+            return exc
+        seen.add(id(under))
+        exc = under
+
+
 def error_words(exc: BaseException) -> str:
-    """A driver error in one line, with the OS / pyserial error under it when there is one
-    (python-can says "Could not read from serial device" and keeps the why as the cause)."""
-    text = _first_line(exc)
-    cause = exc.__cause__
-    if cause is not None:
-        under = _first_line(cause)
-        if under and under not in text:
-            text = f"{text} ({under})"
-    return text
+    """A driver error in one line, with the OS / pyserial error under it when there is one.
+
+    python-can says "Could not read from serial device" and keeps the why underneath:
+    "Could not read from serial device: Input/output error". Where the message repeats
+    the OS error among paths ("could not open port /dev/x: [Errno 2] No such file or
+    directory: '/dev/x'"), the OS error alone is clearer.
+    """
+    top = _first_line(exc)
+    root = _root(exc)
+    if root is exc:
+        return top
+    if isinstance(root, OSError) and root.strerror and root.strerror in top:
+        return root.strerror
+    why = _first_line(root)
+    return top if why in top else f"{top}: {why}"
 
 
 class ReconnectingSource(QueuedSource):
