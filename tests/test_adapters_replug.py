@@ -254,7 +254,11 @@ def test_an_adapter_that_never_comes_back_ends_with_duration(
     finally:
         device.close()
     assert code == 0, "\n".join(recorder.lines)
-    assert recorder.lines[-1].endswith("ended: stopped")
+    assert recorder.lines[-2].endswith("ended: stopped")
+    assert recorder.lines[-1].startswith(
+        f"gimbal-analyzer record: warning: {spec} had not come back when the capture ended "
+        f"(cannot open {spec}: No such file or directory (gone "
+    )
     assert any(" lost: " in line and "(gone " in line for line in recorder.lines)
     chunks = [i for i in read_replay(tmp_path / "uart.mcap") if isinstance(i, StreamChunk)]
     assert b"".join(c.data for c in chunks) == wrap_control(bytes(8))

@@ -362,6 +362,13 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         result = EXIT_FAILED
+    if not nothing_received and not inputs and link.status.failing:
+        # an adapter unplugged and not back: the recording ends at the loss, say so
+        print(
+            f"gimbal-analyzer record: warning: {description} had not come back when the "
+            f"capture ended ({link.status.describe(time.time())})",
+            file=sys.stderr,
+        )
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "
