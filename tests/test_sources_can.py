@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 import uuid
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import can
@@ -12,8 +13,9 @@ import pytest
 
 from analyzer.errors import SourceError, UsageError
 from analyzer.protocol.types import LINK, TOPIC_DIAGNOSTICS, CanFrame, Event
-from analyzer.sources import open_source
+from analyzer.sources import can_bus, open_source
 from analyzer.sources.can_bus import CanSource, listen_only_kwargs
+from analyzer.sources.socketcan_links import socketcan_down
 from analyzer.sources.spec import CanSpec
 
 DEADLINE_S = 5.0
@@ -190,6 +192,43 @@ def test_a_bus_failing_mid_capture_is_reopened_with_the_same_arguments(
     assert links[5].fields["down_s"] >= 0.01
     assert links[5].fields["lost_at"] == links[1].time
     assert next(i for i in items if isinstance(i, CanFrame)).can_id == 0x00000F01
+
+
+def test_a_socketcan_interface_that_is_down_is_not_open(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    class Bus:
+        closed = 0
+
+        def recv(self, timeout: float | None = None) -> None:
+            return None
+
+        def shutdown(self) -> None:
+            Bus.closed += 1
+
+    down = {"can0"}
+    monkeypatch.setattr(can_bus, "socketcan_down", lambda name: name in down)
+    spec = CanSpec("socketcan", "can0", None)
+    with pytest.raises(
+        SourceError,
+        match=r"^cannot open can:socketcan:can0: can0 is down \(sudo ip link set can0 up\)$",
+    ):
+        CanSource(spec, open_bus=lambda spec: Bus())
+    assert Bus.closed == 1
+    down.clear()  # ip link set can0 up
+    source = CanSource(spec, open_bus=lambda spec: Bus())
+    source.close()
+    assert Bus.closed == 2
+
+
+def test_sysfs_says_whether_an_interface_is_down(tmp_path: Path) -> None:
+    (tmp_path / "can0").mkdir()
+    (tmp_path / "can0" / "flags").write_text("0x80\n")
+    (tmp_path / "can1").mkdir()
+    (tmp_path / "can1" / "flags").write_text("0x40081\n")
+    assert socketcan_down("can0", tmp_path)
+    assert not socketcan_down("can1", tmp_path)
+    assert not socketcan_down("vcan9", tmp_path)
 
 
 def read_until_state(source: Any, state: str, count: int) -> list[Any]:

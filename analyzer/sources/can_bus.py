@@ -10,6 +10,7 @@ from typing import Any
 from analyzer.errors import UsageError
 from analyzer.inputs.python_can import frame_from_message
 from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
+from analyzer.sources.socketcan_links import socketcan_down
 from analyzer.sources.spec import CanSpec
 
 RECV_POLL_S = 0.25  # how long one recv waits, so that close() is heard in time
@@ -87,6 +88,12 @@ class CanLink:
 
     def open(self) -> None:
         bus = self.opener(self.spec)
+        channel = self.spec.channel
+        if self.spec.interface == "socketcan" and socketcan_down(channel):
+            # bound to a down interface, the socket would wait in silence
+            with contextlib.suppress(Exception):
+                bus.shutdown()
+            raise ConnectionError(f"{channel} is down (sudo ip link set {channel} up)")
         with self._lock:
             self._bus = bus
 

@@ -7,10 +7,10 @@ import logging
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from analyzer.sources.can_bus import LISTEN_ONLY_OPTIONS
+from analyzer.sources.socketcan_links import socketcan_links
 from analyzer.sources.spec import DEFAULT_CAN_BITRATE, DEFAULT_SERIAL_BAUDRATE
 
 # python-can "interfaces" that are no adapter: software buses, and its own serial
@@ -20,8 +20,6 @@ NOT_ADAPTERS = frozenset({"virtual", "udp_multicast", "serial"})
 NOT_SEARCHED = NOT_ADAPTERS | {"socketcand"}
 # Interfaces whose bitrate is not python-can's to set (set on the link, or none at all).
 NO_BITRATE = frozenset({"socketcan", "virtual", "udp_multicast"})
-ARPHRD_CAN = 280  # /sys/class/net/IF/type of a CAN interface
-IFF_UP = 0x1
 BY_ID = "/dev/serial/by-id"
 DETECT_TIMEOUT_S = 5.0
 
@@ -139,22 +137,6 @@ def python_can_configs(timeout: float = DETECT_TIMEOUT_S) -> list[dict[str, Any]
         return [dict(c) for c in can.detect_available_configs(searched, timeout=timeout)]
     finally:
         quiet.setLevel(level)
-
-
-def socketcan_links(sys_net: Path = Path("/sys/class/net")) -> dict[str, str]:
-    """Every SocketCAN interface, up or down: name -> "up" / "down" (python-can lists only
-    the ones that are up, and a down can0 is the first thing to tell a user about)."""
-    links: dict[str, str] = {}
-    with contextlib.suppress(OSError):
-        for entry in sorted(sys_net.iterdir()):
-            try:
-                if int((entry / "type").read_text().strip()) != ARPHRD_CAN:
-                    continue
-                flags = int((entry / "flags").read_text().strip(), 16)
-            except (OSError, ValueError):
-                continue
-            links[entry.name] = "up" if flags & IFF_UP else "down"
-    return links
 
 
 def can_adapters(
