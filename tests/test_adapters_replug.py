@@ -14,13 +14,16 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import can
 import pytest
+from mcap.reader import make_reader
 
 from analyzer.mcapio.reader import read_replay
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk
+from tests.mcap_doctor import examine
 from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -282,3 +285,45 @@ def test_an_adapter_that_is_not_there_fails_at_start(tmp_path: Path) -> None:
         )
         assert "No such file or directory" in lines[0]
         assert not (tmp_path / "x.mcap").exists()
+
+
+def test_the_camera_video_goes_on_while_the_adapter_is_away(
+    rtsp_camera: Any, tmp_path: Path, recorders: list[Recorder]
+) -> None:
+    device = SerialGimbal(tmp_path / "serial" / "by-id" / FTDI)
+    device.plug()
+    spec = f"serial:{device.link}@115200"
+    camera = ["--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}"]
+    recorder = Recorder(tmp_path, "--source", spec, "-o", "flight.mcap", *camera)
+    recorders.append(recorder)
+    try:
+        recorder.wait_for("opened ")
+        time.sleep(1.0)
+        device.write(wrap_control(bytes(8)))
+        device.wait_read()
+        device.unplug()
+        recorder.wait_for(f"{spec} lost: ")
+        time.sleep(2.0)
+        device.plug()
+        recorder.wait_for(" again after ")
+        time.sleep(0.3)
+        device.write(wrap_control(bytes(8)))
+        device.wait_read()
+        time.sleep(1.0)
+        code = recorder.stop(signal.SIGINT)
+    finally:
+        device.close()
+    assert code == 0, "\n".join(recorder.lines)
+    recording = tmp_path / "flight.mcap"
+    links = link_states(recording)
+    lost = next(e.time for e in links if e.fields["state"] == "lost")
+    back = [e.time for e in links if e.fields.get("down_s") is not None][-1]
+    assert back - lost > 2.0
+    video = [
+        message.log_time / 1e9
+        for _, channel, message in make_reader(recording.open("rb")).iter_messages()
+        if channel.topic == "/camera/main"
+    ]
+    # the camera kept being recorded while the adapter was away: at least 25 fps
+    assert sum(lost < t < back for t in video) >= 25 * (back - lost) * 0.8
+    assert examine(recording).errors == []
