@@ -6,6 +6,7 @@ driven by python-can's own ``slcan`` interface and by pyserial, as on a field la
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -17,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import can
+import jsonschema
 import pytest
 from mcap.reader import make_reader
 
@@ -97,6 +99,21 @@ def link_states(path: Path) -> list[Event]:
         for item in read_replay(path)
         if isinstance(item, Event) and item.fields.get("kind") == LINK
     ]
+
+
+def assert_diagnostics_match_their_schema(path: Path) -> None:
+    """Every /diagnostics message validates against the JSON Schema its channel carries
+    (what Foxglove reads), the fields of a link that came back included."""
+    checked = 0
+    with path.open("rb") as f:
+        for schema, _channel, message in make_reader(f).iter_messages(topics=["/diagnostics"]):
+            assert schema is not None
+            data = json.loads(message.data)
+            jsonschema.validate(data, json.loads(schema.data))
+            schema_fields = json.loads(schema.data)["properties"]
+            assert set(data) <= set(schema_fields), set(data) - set(schema_fields)
+            checked += 1
+    assert checked
 
 
 def test_the_simulated_adapter_answers_as_slcan_firmware(tmp_path: Path) -> None:
@@ -183,6 +200,7 @@ def test_record_keeps_every_frame_across_an_unplugged_slcan_adapter(
     assert states[-1] == "open" and "connect_failed" in states
     assert links[-1].fields["down_s"] >= 1.0
     assert links[-1].fields["lost_at"] == links[1].time
+    assert_diagnostics_match_their_schema(recording)
     # opened listen-only both times, with the same bitrate; never asked to transmit
     assert adapter.commands.count(b"L") >= 2 and b"O" not in adapter.commands
     assert adapter.commands.count(b"S8") == 2

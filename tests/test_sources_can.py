@@ -191,6 +191,7 @@ def test_a_bus_failing_mid_capture_is_reopened_with_the_same_arguments(
     assert details[5].startswith(f"opened can:virtual:{channel} (receive-only) again after ")
     assert links[5].fields["down_s"] >= 0.01
     assert links[5].fields["lost_at"] == links[1].time
+    assert links[5].time - links[1].time == pytest.approx(links[5].fields["down_s"], abs=1e-3)
     assert next(i for i in items if isinstance(i, CanFrame)).can_id == 0x00000F01
 
 

@@ -144,10 +144,12 @@ class ReconnectingSource(QueuedSource):
         if lost_at is None:
             self._link(detail, self.link.open_state)
             return
-        down = max(0.0, time.time() - lost_at)
+        now = time.time()
+        down = max(0.0, now - lost_at)
         self._link(
             f"{detail} again after {down:.1f} s without it",
             self.link.open_state,
+            at=now,
             down_s=round(down, 3),
             lost_at=lost_at,
         )
