@@ -191,6 +191,8 @@ def test_record_keeps_every_frame_across_an_unplugged_slcan_adapter(
     assert f"opened {spec} (listen-only) again after " in back
     assert recorder.lines[-1].startswith("recorded 629 frames"), recorder.lines[-1]
     assert recorder.lines[-1].endswith("ended: SIGINT")
+    noise = [line for line in recorder.lines if not line.startswith(("recording ", "recorded "))]
+    assert noise == []  # no driver warnings, no traceback: status lines and the summary
     recording = tmp_path / "flight.mcap"
     frames = [item for item in read_replay(recording) if isinstance(item, CanFrame)]
     assert [(f.can_id, f.data) for f in frames] == before + after
