@@ -48,7 +48,7 @@ def field_laptop(monkeypatch: pytest.MonkeyPatch) -> None:
         usb_port("/dev/ttyACM0", 0x16D0, 0x117E, "0037001A5948", "CANable2 b158aa7", "canable.io"),
     ]
     stable = {"/dev/ttyACM0": CANABLE_BY_ID, "/dev/ttyUSB0": FTDI_BY_ID}
-    monkeypatch.setattr(detect, "python_can_configs", lambda: configs)
+    monkeypatch.setattr(detect, "python_can_configs", lambda problems: configs)
     monkeypatch.setattr(detect, "socketcan_links", lambda: {"can0": "up", "can1": "down"})
     monkeypatch.setattr(detect, "pyserial_ports", lambda: ports)
     monkeypatch.setattr(detect, "by_id_links", lambda: stable)
@@ -116,6 +116,31 @@ def test_json_lists_the_same(field_laptop: None, capsys: pytest.CaptureFixture[s
         assert parse_source(port["slcan_source"]) == CanSpec(
             "slcan", port["stable_path"] or port["device"], 1_000_000
         )
+
+
+def test_a_backend_whose_detection_fails_is_named_and_the_rest_listed(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import can
+
+    def detect_available_configs(interfaces: Any, timeout: float = 5.0) -> list[Any]:
+        if interfaces == "kvaser" or "kvaser" in interfaces:
+            raise can.CanInterfaceNotImplementedError("canlib: driver crashed")
+        if interfaces == "pcan":
+            return [{"interface": "pcan", "channel": "PCAN_USBBUS1"}]
+        return []
+
+    monkeypatch.setattr(can, "detect_available_configs", detect_available_configs)
+    monkeypatch.setattr(detect, "socketcan_links", lambda: {})
+    monkeypatch.setattr(detect, "pyserial_ports", lambda: [])
+    assert main(["interfaces"]) == 0
+    out = capsys.readouterr().out
+    assert "  pcan PCAN_USBBUS1\n      --source can:pcan:PCAN_USBBUS1@1000000\n" in out
+    assert (
+        "Not searched completely:\n  python-can kvaser: detection failed: canlib: driver crashed\n"
+        in out
+    )
+    assert "Serial ports (pyserial):\n  none found\n" in out
 
 
 def test_socketcan_links_up_and_down_from_sysfs(tmp_path: Path) -> None:

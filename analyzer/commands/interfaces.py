@@ -76,6 +76,9 @@ def render(inventory: Any) -> str:
             lines.append(f"      the gimbal's UART: --source {port.serial_source}")
             if port.usb:
                 lines.append(f"      if it is an slcan CAN adapter: --source {port.slcan_source}")
+    if inventory.problems:
+        lines += ["", "Not searched completely:"]
+        lines += [f"  {problem}" for problem in inventory.problems]
     lines += ["", *NOTES]
     return "\n".join(lines)
 

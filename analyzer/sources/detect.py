@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.sources.can_bus import LISTEN_ONLY_OPTIONS
+from analyzer.sources.reconnect import error_words
 from analyzer.sources.socketcan_links import socketcan_links
 from analyzer.sources.spec import DEFAULT_CAN_BITRATE, DEFAULT_SERIAL_BAUDRATE
 
@@ -122,19 +123,31 @@ def can_source(interface: str, channel: str) -> str:
     return f"can:{interface}:{channel}{rate}"
 
 
-def python_can_configs(timeout: float = DETECT_TIMEOUT_S) -> list[dict[str, Any]]:
+def python_can_configs(
+    problems: list[str], timeout: float = DETECT_TIMEOUT_S
+) -> list[dict[str, Any]]:
     """python-can's ``detect_available_configs``, without the warnings of every backend
-    that is not installed (they are no news to someone asking what is plugged in)."""
+    that is not installed (they are no news to someone asking what is plugged in). A
+    backend whose detection fails is asked alone, and what went wrong is added to
+    ``problems``; the others are listed all the same."""
     import can
+    from can.interfaces import BACKENDS
 
     quiet = logging.getLogger("can")
     level = quiet.level
     quiet.setLevel(logging.CRITICAL)
+    searched = [name for name in BACKENDS if name not in NOT_SEARCHED]
     try:
-        from can.interfaces import BACKENDS
-
-        searched = [name for name in BACKENDS if name not in NOT_SEARCHED]
-        return [dict(c) for c in can.detect_available_configs(searched, timeout=timeout)]
+        try:
+            return [dict(c) for c in can.detect_available_configs(searched, timeout=timeout)]
+        except Exception:  # one backend's driver failed: find which, keep the rest
+            found: list[dict[str, Any]] = []
+            for name in searched:
+                try:
+                    found += [dict(c) for c in can.detect_available_configs(name, timeout)]
+                except Exception as exc:
+                    problems.append(f"python-can {name}: detection failed: {error_words(exc)}")
+            return found
     finally:
         quiet.setLevel(level)
 
@@ -225,17 +238,21 @@ class Inventory:
 
     can: list[CanAdapter]
     serial: list[SerialPort]
+    problems: list[str] = field(default_factory=list)  # detections that failed, in words
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "can": [a.to_dict() for a in self.can],
             "serial": [p.to_dict() for p in self.serial],
+            "problems": list(self.problems),
         }
 
 
 def detect() -> Inventory:
     """Look at this machine: python-can's adapters, SocketCAN links, pyserial's ports."""
+    problems: list[str] = []
     return Inventory(
-        can_adapters(python_can_configs(), socketcan_links()),
+        can_adapters(python_can_configs(problems), socketcan_links()),
         serial_ports(pyserial_ports(), by_id_links()),
+        problems,
     )
