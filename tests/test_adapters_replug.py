@@ -116,6 +116,24 @@ def assert_diagnostics_match_their_schema(path: Path) -> None:
     assert checked
 
 
+def pull_out_and_back(
+    device: PtyDevice, recorder: Recorder, spec: str, away_s: float = 0.0
+) -> tuple[str, str]:
+    """The cable pulled once the host has read everything, and plugged in again (a new tty
+    behind the same by-id link) after a retry failed and ``away_s`` more seconds; returns
+    record's status lines of the loss and of the return."""
+    device.wait_read()
+    device.unplug()
+    lost = recorder.wait_for(f"{spec} lost: ")
+    recorder.wait_for("cannot open " + spec)  # the link is gone: each retry says why
+    time.sleep(away_s)
+    device.plug()
+    if isinstance(device, SlcanAdapter):
+        device.wait_open()  # python-can waits 2 s after opening the port
+    back = recorder.wait_for(" again after ")
+    return lost, back
+
+
 def test_the_simulated_adapter_answers_as_slcan_firmware(tmp_path: Path) -> None:
     adapter = SlcanAdapter(tmp_path / "serial" / "by-id" / CANABLE)
     adapter.plug()
@@ -170,15 +188,7 @@ def test_record_keeps_every_frame_across_an_unplugged_slcan_adapter(
         adapter.wait_open(DEADLINE_S)  # python-can waits 2 s after opening the port
         for can_id, data in before:
             adapter.frame(can_id, data)
-        adapter.wait_read()
-        adapter.unplug()
-        lost = recorder.wait_for(" lost: ")
-        assert "Could not read from serial device" in lost
-        recorder.wait_for("cannot open " + spec)  # the link is gone: each retry says why
-        time.sleep(1.0)
-        adapter.plug()  # a new tty behind the same by-id link
-        adapter.wait_open(DEADLINE_S)
-        back = recorder.wait_for(" again after ")
+        lost, back = pull_out_and_back(adapter, recorder, spec, away_s=1.0)
         for can_id, data in after:
             adapter.frame(can_id, data)
         adapter.wait_read()
@@ -187,6 +197,7 @@ def test_record_keeps_every_frame_across_an_unplugged_slcan_adapter(
     finally:
         adapter.close()
     assert code == 0, "\n".join(recorder.lines)
+    assert "Could not read from serial device" in lost
     assert "(gone " in lost or "(gone " in recorder.wait_for("retrying in")
     assert f"opened {spec} (listen-only) again after " in back
     assert recorder.lines[-1].startswith("recorded 629 frames"), recorder.lines[-1]
@@ -234,12 +245,7 @@ def test_record_keeps_every_byte_across_an_unplugged_serial_adapter(
         time.sleep(0.3)  # pyserial has set the port up (raw, 115200)
         for message in messages[:30]:
             device.write(message)
-        device.wait_read()
-        device.unplug()
-        recorder.wait_for(f"{spec} lost: ")
-        recorder.wait_for("cannot open " + spec)
-        device.plug()
-        recorder.wait_for(" again after ")
+        pull_out_and_back(device, recorder, spec)
         time.sleep(0.3)
         for message in messages[30:]:
             device.write(message)
@@ -320,12 +326,7 @@ def test_the_camera_video_goes_on_while_the_adapter_is_away(
         recorder.wait_for("opened ")
         time.sleep(1.0)
         device.write(wrap_control(bytes(8)))
-        device.wait_read()
-        device.unplug()
-        recorder.wait_for(f"{spec} lost: ")
-        time.sleep(2.0)
-        device.plug()
-        recorder.wait_for(" again after ")
+        pull_out_and_back(device, recorder, spec, away_s=1.5)
         time.sleep(0.3)
         device.write(wrap_control(bytes(8)))
         device.wait_read()
