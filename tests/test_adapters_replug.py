@@ -30,7 +30,7 @@ from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
 
 ROOT = Path(__file__).resolve().parent.parent
 DEADLINE_S = 20.0
-CANABLE = by_id_name("CANable.io", "canable_gs_usb", "0037001A5948")
+CANABLE = by_id_name("canable.io", "CANable_8c005eb", "0037001A5948")
 FTDI = by_id_name("FTDI", "FT232R_USB_UART", "A10KZP4M")
 
 

@@ -17,7 +17,7 @@ from analyzer.sources import detect
 from analyzer.sources.spec import CanSpec, SerialSpec, parse_source
 
 ROOT = Path(__file__).resolve().parent.parent
-CANABLE_BY_ID = "/dev/serial/by-id/usb-CANable.io_canable_gs_usb_0037001A5948-if00"
+CANABLE_BY_ID = "/dev/serial/by-id/usb-canable.io_CANable_8c005eb_0037001A5948-if00"
 FTDI_BY_ID = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A10KZP4M-if00"
 
 
@@ -45,7 +45,7 @@ def field_laptop(monkeypatch: pytest.MonkeyPatch) -> None:
     ports = [
         ListPortInfo("/dev/ttyS0", skip_link_detection=True),
         usb_port("/dev/ttyUSB0", 0x0403, 0x6001, "A10KZP4M", "FT232R USB UART", "FTDI"),
-        usb_port("/dev/ttyACM0", 0x16D0, 0x117E, "0037001A5948", "CANable2 b158aa7", "canable.io"),
+        usb_port("/dev/ttyACM0", 0x16D0, 0x117E, "0037001A5948", "CANable 8c005eb", "canable.io"),
     ]
     stable = {"/dev/ttyACM0": CANABLE_BY_ID, "/dev/ttyUSB0": FTDI_BY_ID}
     monkeypatch.setattr(detect, "python_can_configs", lambda problems: configs)
@@ -70,7 +70,7 @@ def test_each_adapter_with_its_source_line(
     serial = out[out.index("Serial ports (pyserial):") :]
     # USB ports first, each with vendor:product, serial number and its by-id name
     assert serial.index("/dev/ttyACM0") < serial.index("/dev/ttyUSB0") < serial.index("ttyS0")
-    assert "  /dev/ttyACM0  CANable2 b158aa7  USB 16d0:117e  serial 0037001A5948" in out
+    assert "  /dev/ttyACM0  CANable 8c005eb  USB 16d0:117e  serial 0037001A5948" in out
     assert (
         "CANable / CANtact with slcan firmware: "
         f"--source can:slcan:{CANABLE_BY_ID}@1000000  (listen-only)"
@@ -94,13 +94,13 @@ def test_json_lists_the_same(field_laptop: None, capsys: pytest.CaptureFixture[s
     assert canable == {
         "device": "/dev/ttyACM0",
         "stable_path": CANABLE_BY_ID,
-        "description": "CANable2 b158aa7",
+        "description": "CANable 8c005eb",
         "usb": "16d0:117e",
         "vid": 0x16D0,
         "pid": 0x117E,
         "serial_number": "0037001A5948",
         "manufacturer": "canable.io",
-        "product": "CANable2 b158aa7",
+        "product": "CANable 8c005eb",
         "slcan_adapter": "CANable / CANtact with slcan firmware",
         "source": f"can:slcan:{CANABLE_BY_ID}@1000000",
         "serial_source": f"serial:{CANABLE_BY_ID}@115200",
@@ -162,9 +162,9 @@ def test_stable_names_from_by_id_links(tmp_path: Path) -> None:
     device.touch()
     by_id = tmp_path / "by-id"
     by_id.mkdir()
-    (by_id / "usb-CANable.io_canable_gs_usb_0037001A5948-if00").symlink_to(device)
+    (by_id / "usb-canable.io_CANable_8c005eb_0037001A5948-if00").symlink_to(device)
     stable = detect.by_id_links(str(by_id))
-    assert stable == {str(device): str(by_id / "usb-CANable.io_canable_gs_usb_0037001A5948-if00")}
+    assert stable == {str(device): str(by_id / "usb-canable.io_CANable_8c005eb_0037001A5948-if00")}
     ports = detect.serial_ports([ListPortInfo(str(device), skip_link_detection=True)], stable)
     assert ports[0].serial_source == f"serial:{by_id}/{os.listdir(by_id)[0]}@115200"
 
