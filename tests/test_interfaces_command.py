@@ -63,7 +63,9 @@ def test_each_adapter_with_its_source_line(
     assert "      --source can:socketcan:can0\n" in out
     assert "sudo ip link set can0 type can bitrate 1000000 listen-only on" in out
     assert "  socketcan can1 (down)\n" in out
-    assert "the link is down: sudo ip link set can1 up" in out
+    assert (
+        "the link is down: sudo ip link set can1 up type can bitrate 1000000 listen-only on"
+    ) in out
     assert "  pcan PCAN_USBBUS1\n      --source can:pcan:PCAN_USBBUS1@1000000\n" in out
     assert "listen-only: requested from the adapter" in out
     assert "virtual" not in out and "udp_multicast" not in out  # no adapters

@@ -212,7 +212,8 @@ def test_a_socketcan_interface_that_is_down_is_not_open(
     spec = CanSpec("socketcan", "can0", None)
     with pytest.raises(
         SourceError,
-        match=r"^cannot open can:socketcan:can0: can0 is down \(sudo ip link set can0 up\)$",
+        match=r"^cannot open can:socketcan:can0: can0 is down "
+        r"\(sudo ip link set can0 up type can bitrate 1000000 listen-only on\)$",
     ):
         CanSource(spec, open_bus=lambda spec: Bus())
     assert Bus.closed == 1

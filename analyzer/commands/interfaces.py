@@ -51,6 +51,8 @@ def _usb_words(port: Any) -> str:
 
 def render(inventory: Any) -> str:
     """The inventory as the text ``interfaces`` prints."""
+    from analyzer.sources.socketcan_links import bring_up
+
     lines = ["CAN adapters (python-can):"]
     if not inventory.can:
         lines.append("  none found (a USB slcan adapter shows up among the serial ports)")
@@ -60,7 +62,7 @@ def render(inventory: Any) -> str:
         lines.append(f"      --source {adapter.source}")
         lines.append(f"      listen-only: {adapter.listen_only}")
         if adapter.state == "down":
-            lines.append(f"      the link is down: sudo ip link set {adapter.channel} up")
+            lines.append(f"      the link is down: {bring_up(adapter.channel)}")
     lines += ["", "Serial ports (pyserial):"]
     if not inventory.serial:
         lines.append("  none found")

@@ -10,7 +10,7 @@ from typing import Any
 from analyzer.errors import UsageError
 from analyzer.inputs.python_can import frame_from_message
 from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
-from analyzer.sources.socketcan_links import socketcan_down
+from analyzer.sources.socketcan_links import bring_up, socketcan_down
 from analyzer.sources.spec import CanSpec
 
 RECV_POLL_S = 0.25  # how long one recv waits, so that close() is heard in time
@@ -93,7 +93,7 @@ class CanLink:
             # bound to a down interface, the socket would wait in silence
             with contextlib.suppress(Exception):
                 bus.shutdown()
-            raise ConnectionError(f"{channel} is down (sudo ip link set {channel} up)")
+            raise ConnectionError(f"{channel} is down ({bring_up(channel)})")
         with self._lock:
             self._bus = bus
 

@@ -5,9 +5,16 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
+from analyzer.sources.spec import DEFAULT_CAN_BITRATE
+
 SYS_NET = Path("/sys/class/net")
 ARPHRD_CAN = 280  # /sys/class/net/IF/type of a CAN interface
 IFF_UP = 0x1
+
+
+def bring_up(name: str) -> str:
+    """The command that brings a SocketCAN interface up at the gimbal's bitrate, listening."""
+    return f"sudo ip link set {name} up type can bitrate {DEFAULT_CAN_BITRATE} listen-only on"
 
 
 def socketcan_links(sys_net: Path = SYS_NET) -> dict[str, str]:
