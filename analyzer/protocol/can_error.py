@@ -150,17 +150,16 @@ def decode_error_frame(can_id: int, data: bytes) -> CanError:
     problems: list[str] = []
     if classes & ~KNOWN_CLASSES:
         problems.append(f"unknown error class bits 0x{classes & ~KNOWN_CLASSES:08X}")
-    if len(data) > CAN_ERR_DLC:
-        problems.append(f"{len(data)} data bytes; an error frame has {CAN_ERR_DLC}")
     if classes == 0 and not data:
         return CanError(UNSPECIFIED, (UNSPECIFIED,))
-    short = [
-        CLASS_NAMES[mask.bit_length() - 1]
-        for mask, index in _CLASS_BYTE.items()
-        if classes & mask and len(data) <= index
-    ]
-    if short:
-        problems.append(f"{len(data)} data bytes, too short for the details of {', '.join(short)}")
+    if len(data) != CAN_ERR_DLC:
+        short = [
+            CLASS_NAMES[mask.bit_length() - 1]
+            for mask, index in _CLASS_BYTE.items()
+            if classes & mask and len(data) <= index
+        ]
+        missing = f" (no details for {', '.join(short)})" if short else ""
+        problems.append(f"{len(data)} data bytes; an error frame has {CAN_ERR_DLC}{missing}")
     padded = (bytes(data) + bytes(CAN_ERR_DLC))[:CAN_ERR_DLC]
     names = _bits(classes, CLASS_NAMES)
     parts: list[str] = []

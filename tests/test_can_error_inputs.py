@@ -1,0 +1,217 @@
+"""Error frames from every place they come: candump logs, SocketCAN pcaps, python-can's live
+socketcan interface, and python-can's ASC and BLF files, as ``decode`` shows them.
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import struct
+from pathlib import Path
+from typing import Any
+
+import can
+import dpkt
+import pytest
+from can.interfaces.socketcan import constants, socketcan
+
+from analyzer.cli import main
+from analyzer.inputs.python_can import frame_from_message
+from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.types import TOPIC_CAN_BUS_STATE, TOPIC_DIAGNOSTICS
+
+CAN_ERR_FLAG = 0x20000000
+T0 = 1700000000.0
+# The frames of a field laptop's bus: rx-error-passive, no ACK, bus-off, lost arbitration
+# with the error counters at 128 / 136 (candump -L lines).
+ISSUE_FRAMES = [
+    (0x004, "0010000000000000"),
+    (0x020, "0000000000000000"),
+    (0x040, "0000000000000000"),
+    (0x202, "0500000000008088"),
+]
+ISSUE_TEXTS = [
+    "controller-problem{rx-error-passive}",
+    "no-acknowledgement-on-tx",
+    "bus-off",
+    "lost-arbitration{at bit 5},error-counter-tx-rx{{128}{136}}",
+]
+
+
+def candump_log(path: Path, frames: list[tuple[int, str]] = ISSUE_FRAMES) -> Path:
+    lines = [
+        f"({T0 + i * 0.1:.6f}) can0 {CAN_ERR_FLAG | can_id:08X}#{data}\n"
+        for i, (can_id, data) in enumerate(frames)
+    ]
+    path.write_text("".join(lines))
+    return path
+
+
+def decoded(path: Path, capsys: pytest.CaptureFixture[str]) -> tuple[list[dict[str, Any]], str]:
+    assert main(["decode", str(path), "--json"]) == 0
+    captured = capsys.readouterr()
+    return [json.loads(line) for line in captured.out.splitlines()], captured.err
+
+
+def bus_errors(events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    return [e for e in events if e["topic"] == TOPIC_DIAGNOSTICS and e["kind"] == "bus_error"]
+
+
+def test_candump_log_error_frames(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    events, err = decoded(candump_log(tmp_path / "bus.log"), capsys)
+    errors = bus_errors(events)
+    assert [e["error"] for e in errors] == ISSUE_TEXTS
+    assert [e["bus_state"] for e in errors] == [
+        "error-passive",
+        "error-passive",
+        "bus-off",
+        "bus-off",
+    ]
+    assert errors[0]["classes"] == ["controller-problem"]
+    assert errors[0]["controller"] == ["rx-error-passive"]
+    assert (errors[3]["tx_errors"], errors[3]["rx_errors"]) == (128, 136)
+    assert errors[3]["raw"] == "05 00 00 00 00 00 80 88"
+    states = [e for e in events if e["topic"] == TOPIC_CAN_BUS_STATE]
+    assert [s["state"] for s in states] == ["error-passive", "bus-off", "bus-off"]
+    assert states[-1]["tx_errors"] == 128
+    # Error frames are no reason to doubt the bus; the hints say what to do instead.
+    assert "is this the gimbal's bus" not in err
+    assert "nothing on the bus acknowledges" in err
+    assert "went bus-off at 2023-11-14 22:13:20.200Z and stayed there" in err
+
+
+def test_a_protocol_violation_in_text_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = candump_log(tmp_path / "stuff.log", [(0x088, "0000041900000000")])
+    assert main(["decode", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "BUS_ERROR        CAN error frame: protocol-violation{{bit-stuffing-error}"
+        "{acknowledge-slot}},bus-error; bus error-active  raw 00 00 04 19 00 00 00 00"
+    ) in out
+
+
+def test_summary_names_worst_state_counts_and_hints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = candump_log(tmp_path / "bus.log")
+    assert main(["decode", str(path), "--summary"]) == 0
+    out = capsys.readouterr().out
+    assert "4 CAN frames (0 protocol, 0 other, 4 error frames)" in out
+    assert "worst bus-off at 2023-11-14 22:13:20.200Z, now bus-off" in out
+    assert "error counters up to tx 128 rx 136" in out
+    assert "no-acknowledgement-on-tx 1" in out
+    assert "hint" in out and "1 Mbit/s" in out
+    assert main(["decode", str(path), "--summary", "--json"]) == 0
+    bus = json.loads(capsys.readouterr().out)["bus"]
+    assert (bus["worst_state"], bus["worst_time"]) == ("bus-off", T0 + 0.2)
+    assert bus["classes"]["bus-off"] == 1
+
+
+def test_only_error_frames_means_another_bitrate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An adapter at 500 kbit/s on the gimbal's 1 Mbit/s bus sees nothing but errors."""
+    stuff = [(0x088, "0000040a00000000")] * 20
+    _, err = decoded(candump_log(tmp_path / "bitrate.log", stuff), capsys)
+    assert "received only error frames (20), no data frame: its bitrate is not the bus's" in err
+    assert "is this the gimbal's bus" not in err
+
+
+def test_many_stuff_errors_among_data_frames_mean_bitrate_or_termination(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "noisy.log"
+    lines = [f"({T0 + i * 0.01:.6f}) can0 00000F01#0F04000000000000\n" for i in range(5)]
+    lines += [f"({T0 + 1 + i * 0.01:.6f}) can0 20000088#0000020a00000000\n" for i in range(12)]
+    path.write_text("".join(lines))
+    _, err = decoded(path, capsys)
+    assert "12 stuff / form / bit errors: the bitrate or the termination is wrong" in err
+
+
+def test_malformed_error_frame_is_a_diagnostic_with_its_bytes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "bad.log"
+    path.write_text(f"({T0:.6f}) can0 20000C04#0010\n")
+    events, _ = decoded(path, capsys)
+    (error,) = bus_errors(events)
+    assert error["raw"] == "00 10"
+    assert "unknown error class bits 0x00000C00" in error["malformed"]
+    assert "2 data bytes; an error frame has 8" in error["malformed"]
+    assert error["detail"].startswith("malformed CAN error frame")
+
+
+def test_socketcan_pcap(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Wireshark / tcpdump on can0 (LINKTYPE_CAN_SOCKETCAN, IDs in network byte order):
+    the kernel's error frames carry CAN_ERR_FLAG and no CAN_EFF_FLAG."""
+    path = tmp_path / "can0.pcap"
+    with path.open("wb") as handle:
+        writer = dpkt.pcap.Writer(handle, linktype=227)
+        for i, (can_id, data) in enumerate(ISSUE_FRAMES):
+            packet = struct.pack(">IB3x", CAN_ERR_FLAG | can_id, 8) + bytes.fromhex(data)
+            writer.writepkt(packet, ts=T0 + i * 0.1)
+    events, _ = decoded(path, capsys)
+    assert [e["error"] for e in bus_errors(events)] == ISSUE_TEXTS
+
+
+def test_live_socketcan_through_python_can(tmp_path: Path) -> None:
+    """python-can's socketcan receive code (``capture_message``) on the bytes a CAN_RAW
+    socket delivers (struct can_frame plus its SO_TIMESTAMPNS), then the decoder."""
+    sender, receiver = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
+    receiver.setsockopt(socket.SOL_SOCKET, constants.SO_TIMESTAMPNS, 1)
+    decoder = Decoder()
+    texts = []
+    try:
+        for can_id, data in ISSUE_FRAMES:
+            sender.send(struct.pack("=IB3x8s", CAN_ERR_FLAG | can_id, 8, bytes.fromhex(data)))
+            message = socketcan.capture_message(receiver, get_channel=False)
+            assert message is not None and message.is_error_frame
+            frame = frame_from_message(message, "can0")
+            texts.extend(
+                e.fields["error"] for e in decoder.feed(frame) if e.topic == TOPIC_DIAGNOSTICS
+            )
+    finally:
+        sender.close()
+        receiver.close()
+    assert texts == ISSUE_TEXTS
+
+
+def messages() -> list[can.Message]:
+    return [
+        can.Message(
+            timestamp=T0 + i * 0.1,
+            arbitration_id=can_id,
+            is_extended_id=False,
+            is_error_frame=True,
+            data=bytes.fromhex(data),
+            channel=0,
+        )
+        for i, (can_id, data) in enumerate(ISSUE_FRAMES)
+    ]
+
+
+def test_blf_written_by_python_can(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "bus.blf"
+    with can.BLFWriter(str(path)) as writer:
+        for message in messages():
+            writer.on_message_received(message)
+    events, _ = decoded(path, capsys)
+    assert [e["error"] for e in bus_errors(events)] == ISSUE_TEXTS
+
+
+def test_asc_error_frames_written_by_python_can(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """ASC keeps only that an error frame was seen (``ErrorFrame``): unspecified errors."""
+    path = tmp_path / "bus.asc"
+    with can.ASCWriter(str(path)) as writer:
+        for message in messages():
+            writer.on_message_received(message)
+    assert path.read_text().count("ErrorFrame") == 4
+    events, err = decoded(path, capsys)
+    errors = bus_errors(events)
+    assert [e["error"] for e in errors] == ["unspecified"] * 4
+    assert "malformed" not in errors[0]
+    assert "received only error frames (4)" in err
