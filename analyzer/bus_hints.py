@@ -20,6 +20,10 @@ _RATE = f"{CAN_BITRATE // 1_000_000} Mbit/s"
 _SOURCE = f"--source can:socketcan:can0@{CAN_BITRATE}"
 
 
+def _frames(count: int) -> str:
+    return f"{count:,} error frame" + ("" if count == 1 else "s")
+
+
 def bus_hints(bus: BusFigures, frames: int) -> list[str]:
     """Hints from the error frames of a run that read ``frames`` CAN frames in all."""
     if not bus:
@@ -38,7 +42,7 @@ def bus_hints(bus: BusFigures, frames: int) -> list[str]:
         )
     if no_ack:
         hints.append(
-            f"no acknowledgement ({no_ack:,} error frames): nothing on the bus acknowledges "
+            f"no acknowledgement ({_frames(no_ack)}): nothing on the bus acknowledges "
             "the frames sent; is the gimbal powered, wired to this bus (CAN-H, CAN-L, "
             f"ground) and at the same bitrate? The gimbal's protocol runs at {_RATE}"
         )

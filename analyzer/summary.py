@@ -71,12 +71,16 @@ def _rate(track: FeedbackTrack, alarm: Style) -> str:
     return text
 
 
+def _count(n: int, word: str) -> str:
+    return f"{n:,} {word}" + ("" if n == 1 else "s")
+
+
 def bus_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
     """The CAN buses' error frames: worst state and when, counts by class, and hints."""
     bus = tally.bus
     if not bus:
         return []
-    lines = [f"  {'CAN bus':<15}{bus.error_frames:,} error frames"]
+    lines = [f"  {'CAN bus':<15}{_count(bus.error_frames, 'error frame')}"]
     for name, channel in sorted(bus.channels.items()):
         worst = channel.worst
         when = format_datetime(channel.worst_time) if channel.worst_time is not None else "?"
@@ -89,7 +93,7 @@ def bus_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
                 f", error counters up to tx {channel.tx_errors_max} rx {channel.rx_errors_max}"
             )
         lines.append(
-            f"    {printable(name):<11}{channel.error_frames:,} error frames, {words}, "
+            f"    {printable(name):<11}{_count(channel.error_frames, 'error frame')}, {words}, "
             f"now {channel.state}{counters}"
         )
         by_class = ", ".join(f"{k} {v:,}" for k, v in channel.classes.most_common())

@@ -202,3 +202,25 @@ def test_only_bus_off_classes_reach_bus_off(frames: list[tuple[int, bytes]]) -> 
         if after == BUS_OFF and state != BUS_OFF:
             assert can_id & 0x040
         state = after
+
+
+# -- the monitor's status line ------------------------------------------------------------------
+
+
+def test_status_line_shows_state_worst_and_classes() -> None:
+    from analyzer.pipeline import Batch
+    from analyzer.tui.state import MonitorState
+    from analyzer.tui.status_bar import StatusInfo, render_status
+
+    decoder = Decoder()
+    state = MonitorState()
+    frames = [
+        frame(0x040, "00" * 8, 1700000000.0),
+        frame(0x100, "00" * 8, 1700000002.0),
+        frame(0x020, "00" * 8, 1700000003.0),
+    ]
+    events = [e for f in frames for e in decoder.feed(f)]
+    state.fold(Batch(list(frames), events), wall_time=1700000003.0)
+    text = render_status(state, StatusInfo(source="can:socketcan:can0")).plain
+    assert "CAN error-active  worst bus-off 22:13:20.000Z" in text
+    assert "3 error frames: bus-off 1, restarted-after-bus-off 1" in text

@@ -12,6 +12,7 @@ from typing import Any
 
 import can
 import dpkt
+import duckdb
 import pytest
 from can.interfaces.socketcan import constants, socketcan
 
@@ -215,3 +216,34 @@ def test_asc_error_frames_written_by_python_can(
     assert [e["error"] for e in errors] == ["unspecified"] * 4
     assert "malformed" not in errors[0]
     assert "received only error frames (4)" in err
+
+
+def test_report_names_the_worst_state_and_what_to_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "report.html"
+    assert main(["report", str(candump_log(tmp_path / "bus.log")), "-o", str(out)]) == 0
+    page = out.read_text()
+    assert "worst bus-off at 2023-11-14 22:13:20.200Z on can0" in page
+    assert "nothing on the bus acknowledges the frames sent" in page
+
+
+def test_fleet_table_has_the_worst_state_per_recording(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    flights = tmp_path / "flights"
+    flights.mkdir()
+    candump_log(flights / "bus.log")
+    dataset = tmp_path / "dataset"
+    assert main(["table", str(flights), "-o", str(dataset)]) == 0
+    pattern = dataset / "recordings" / "*.parquet"
+    ((state, when, errors),) = duckdb.sql(
+        f"SELECT bus_worst_state, epoch_ms(bus_worst_time), diag_bus_error "
+        f"FROM read_parquet('{pattern}')"
+    ).fetchall()
+    assert (state, when, errors) == ("bus-off", round((T0 + 0.2) * 1000), 4)
+    pattern = dataset / "diagnostics" / "*.parquet"
+    ((text, classes),) = duckdb.sql(
+        f"SELECT error, classes FROM read_parquet('{pattern}') WHERE tx_errors = 128"
+    ).fetchall()
+    assert text == ISSUE_TEXTS[3] and classes == ["lost-arbitration", "error-counter-tx-rx"]
