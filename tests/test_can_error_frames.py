@@ -224,3 +224,20 @@ def test_status_line_shows_state_worst_and_classes() -> None:
     text = render_status(state, StatusInfo(source="can:socketcan:can0")).plain
     assert "CAN error-active  worst bus-off 22:13:20.000Z" in text
     assert "3 error frames: bus-off 1, restarted-after-bus-off 1" in text
+
+
+def test_foxglove_log_levels_follow_the_state() -> None:
+    from analyzer.mcapio.foxglove import LOG_ERROR, LOG_INFO, LOG_WARNING, log_level
+
+    decoder = Decoder()
+    levels = [
+        log_level(e)
+        for f in [
+            frame(0x020, "00" * 8, 1.0),  # no ACK on a healthy controller
+            frame(0x040, "00" * 8, 2.0),  # bus-off
+            frame(0x100, "00" * 8, 3.0),  # restarted
+        ]
+        for e in decoder.feed(f)
+        if e.topic == TOPIC_DIAGNOSTICS
+    ]
+    assert levels == [LOG_WARNING, LOG_ERROR, LOG_INFO]

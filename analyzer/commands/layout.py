@@ -14,7 +14,7 @@ Write a Foxglove Studio layout for gimbal-analyzer recordings:
   Map                UAV track (/uav/gps/fix) and laser-ranging target (/gimbal/ranging/fix)
   Log                diagnostics (/diagnostics/log)
   Plot               gimbal pitch and yaw with the commanded pan / tilt speeds
-  State Transitions  control mode, tracking, command names and CAN bus state over time
+  State Transitions  control mode, tracking and command names over time
   Plot (CAN bus)     the CAN controller's state, 0 error-active .. 3 bus-off (/can/bus_state)
   Indicator          tracking on / off
   Raw Messages       /gimbal/command

@@ -37,7 +37,6 @@ STATE_SERIES = (
     (TOPIC_GIMBAL_ATTITUDE, "control_mode"),
     (TOPIC_GIMBAL_ATTITUDE, "tracking"),
     (TOPIC_COMMAND, "name"),
-    (TOPIC_CAN_BUS_STATE, "state"),
 )
 # The CAN controller's state as a number: 0 error-active .. 3 bus-off.
 BUS_SERIES = ((TOPIC_CAN_BUS_STATE, "level"),)
