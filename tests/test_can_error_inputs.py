@@ -247,3 +247,50 @@ def test_fleet_table_has_the_worst_state_per_recording(
         f"SELECT error, classes FROM read_parquet('{pattern}') WHERE tx_errors = 128"
     ).fetchall()
     assert text == ISSUE_TEXTS[3] and classes == ["lost-arbitration", "error-counter-tx-rx"]
+
+
+def test_live_capture_records_the_bus_state(tmp_path: Path) -> None:
+    """Error frames from a live python-can bus, through the capture engine into a recording
+    whose /can/bus_state messages match their schema and whose record names the bus-off."""
+    import time
+    import uuid
+
+    import jsonschema
+    from mcap.reader import make_reader
+
+    from analyzer.capture import Capture
+    from analyzer.mcapio.info import recording_info
+    from analyzer.mcapio.writer import McapSink
+    from analyzer.protocol.schema import topic_schemas
+    from analyzer.sources import open_source
+
+    channel = f"err-{uuid.uuid4().hex[:8]}"
+    sender = can.Bus(interface="virtual", channel=channel)
+    source = open_source(f"can:virtual:{channel}")
+    path = tmp_path / "bus.mcap"
+    capture = Capture(source, [McapSink(path, metadata={"source": source.description})])
+    capture.start()
+    try:
+        for message in messages():
+            sender.send(message)
+        deadline = time.monotonic() + 5.0
+        while capture.stats.frames < len(ISSUE_FRAMES):
+            assert time.monotonic() < deadline, "timed out"
+            time.sleep(0.01)
+    finally:
+        capture.stop()
+        assert capture.join(5.0)
+        sender.shutdown()
+    assert capture.error is None
+    validator = jsonschema.Draft202012Validator(topic_schemas()[TOPIC_CAN_BUS_STATE])
+    with path.open("rb") as handle:
+        states = [
+            json.loads(message.data)
+            for _, ch, message in make_reader(handle).iter_messages()
+            if ch.topic == TOPIC_CAN_BUS_STATE
+        ]
+    for state in states:
+        validator.validate(state)
+    assert [s["state"] for s in states] == ["error-passive", "bus-off", "bus-off"]
+    bus = recording_info(path).tally.bus.figures()
+    assert bus["worst_state"] == "bus-off" and bus["error_frames"] == 4
