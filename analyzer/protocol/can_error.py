@@ -43,6 +43,7 @@ CLASS_NAMES = (
 )
 KNOWN_CLASSES = (1 << len(CLASS_NAMES)) - 1
 UNSPECIFIED = "unspecified"  # the class of an error frame that names none
+UNKNOWN_CLASS = "unknown-class"  # class bits linux/can/error.h does not define
 CONTROLLER_PROBLEMS = (
     "rx-overflow",
     "tx-overflow",
@@ -199,7 +200,8 @@ def decode_error_frame(can_id: int, data: bytes) -> CanError:
         parts.append(f"error-counter-tx-rx{{{{{padded[6]}}}{{{padded[7]}}}}}")
     unknown = classes & ~KNOWN_CLASSES
     if unknown:
-        parts.append(f"unknown-class{{0x{unknown:08X}}}")
+        parts.append(f"{UNKNOWN_CLASS}{{0x{unknown:08X}}}")
+        names = (*names, UNKNOWN_CLASS)
     if not names and not unknown:
         names = (UNSPECIFIED,)
         parts.insert(0, UNSPECIFIED)

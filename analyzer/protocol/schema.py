@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.protocol.bus_state import BUS_STATES, count_key
-from analyzer.protocol.can_error import CLASS_NAMES, UNSPECIFIED
+from analyzer.protocol.can_error import CLASS_NAMES, UNKNOWN_CLASS, UNSPECIFIED
 from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
@@ -199,7 +199,8 @@ def bus_state_schema() -> dict[str, Any]:
         "error counters) and at least every second while error frames come in.",
     )
     counts = {
-        count_key(name): {"type": "integer", "minimum": 0} for name in (*CLASS_NAMES, UNSPECIFIED)
+        count_key(name): {"type": "integer", "minimum": 0}
+        for name in (*CLASS_NAMES, UNSPECIFIED, UNKNOWN_CLASS)
     }
     schema["properties"].update(
         {
