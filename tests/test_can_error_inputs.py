@@ -226,6 +226,7 @@ def test_report_names_the_worst_state_and_what_to_do(
     page = out.read_text()
     assert "worst bus-off at 2023-11-14 22:13:20.200Z on can0" in page
     assert "nothing on the bus acknowledges the frames sent" in page
+    assert "received only error frames (4)" in page
 
 
 def test_fleet_table_has_the_worst_state_per_recording(

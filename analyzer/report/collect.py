@@ -66,6 +66,7 @@ class ReportData:
     notes: list[str] = field(default_factory=list)
     pictures: list[Any] = field(default_factory=list)  # camera thumbnails (report.camera)
     bus: BusFigures = field(default_factory=BusFigures)  # what the CAN error frames say
+    frames: int = 0  # CAN frames read, error frames included (for the bus hints)
 
     def add(self, event: Event) -> None:
         t, topic, fields = event.time, event.topic, event.fields

@@ -152,7 +152,7 @@ def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
         ("CAN bus", f"worst {_e(state)}{at} on {_e(channel)}"),
         ("error frames", f"{data.bus.error_frames:,}: {classes}"),
     ]
-    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, 0)]
+    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames)]
     return rows
 
 
