@@ -80,10 +80,12 @@ def test_transceiver_status() -> None:
     assert error.transceiver == "canl-no-wire"
 
 
-def test_an_error_frame_without_class_or_data_is_unspecified() -> None:
-    """An ASC ``ErrorFrame`` line, or an adapter that says no more than "error frame"."""
-    error = decode_error_frame(0, b"")
-    assert (error.text, error.classes, error.problems) == ("unspecified", ("unspecified",), ())
+def test_an_error_frame_without_class_is_unspecified() -> None:
+    """An ASC ``ErrorFrame`` line, or an adapter that encodes errors its own way."""
+    for data in (b"", bytes.fromhex("0400000000000080")):
+        error = decode_error_frame(0, data)
+        assert (error.text, error.classes, error.problems) == ("unspecified", ("unspecified",), ())
+        assert error.tx_errors is None
 
 
 def test_unknown_class_bits_and_short_data_are_said() -> None:
@@ -104,11 +106,11 @@ def test_any_id_and_data_decode_without_an_exception(can_id: int, data: bytes) -
     well_formed = not can_id & ~KNOWN_CLASSES and len(data) == 8
     if well_formed and data[3] < 32 and data[1] < 0x80:
         assert error.problems == ()
-    if can_id & ~KNOWN_CLASSES or (len(data) != 8 and (can_id or data)):
+    if can_id & ~KNOWN_CLASSES or (len(data) != 8 and can_id):
         assert error.problems
     for i, name in enumerate(CLASS_NAMES):
         assert (name in error.classes) == bool(can_id >> i & 1)
-    if len(data) >= 8 and (can_id & 0x200 or data[6] or data[7]):
+    if can_id and len(data) >= 8 and (can_id & 0x200 or data[6] or data[7]):
         assert (error.tx_errors, error.rx_errors) == (data[6], data[7])
     else:
         assert error.tx_errors is None

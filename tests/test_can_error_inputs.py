@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import socket
 import struct
+import time
 from pathlib import Path
 from typing import Any
 
@@ -253,7 +254,6 @@ def test_fleet_table_has_the_worst_state_per_recording(
 def test_live_capture_records_the_bus_state(tmp_path: Path) -> None:
     """Error frames from a live python-can bus, through the capture engine into a recording
     whose /can/bus_state messages match their schema and whose record names the bus-off."""
-    import time
     import uuid
 
     import jsonschema
@@ -295,3 +295,31 @@ def test_live_capture_records_the_bus_state(tmp_path: Path) -> None:
     assert [s["state"] for s in states] == ["error-passive", "bus-off", "bus-off"]
     bus = recording_info(path).tally.bus.figures()
     assert bus["worst_state"] == "bus-off" and bus["error_frames"] == 4
+
+
+def test_error_frames_of_an_adapter_with_its_own_encoding_are_unspecified() -> None:
+    """PCAN puts its error type in the ID (4: stuff error) and its counters elsewhere: that
+    is no SocketCAN class, so the frame counts as an unspecified error, bytes kept."""
+    import uuid
+
+    from analyzer.sources.can_bus import CanSource
+    from analyzer.sources.spec import CanSpec
+
+    channel = f"pcan-{uuid.uuid4().hex[:8]}"
+    sender = can.Bus(interface="virtual", channel=channel)
+    bus = can.Bus(interface="virtual", channel=channel)
+    source = CanSource(CanSpec("pcan", "PCAN_USBBUS1", 1_000_000), bus=bus)
+    try:
+        sender.send(can.Message(arbitration_id=4, is_error_frame=True, data=b"\x00\x00\x07\x02"))
+        deadline = time.monotonic() + 5.0
+        frames: list[Any] = []
+        while not frames:
+            assert time.monotonic() < deadline, "timed out"
+            frames = [i for i in source.read(0.05) if getattr(i, "is_error", False)]
+    finally:
+        source.close()
+        sender.shutdown()
+    assert (frames[0].can_id, frames[0].data) == (0, b"\x00\x00\x07\x02")
+    (diagnostic, _state) = Decoder().feed(frames[0])
+    assert diagnostic.fields["error"] == "unspecified"
+    assert diagnostic.fields["raw"] == "00 00 07 02" and "malformed" not in diagnostic.fields

@@ -7,8 +7,8 @@ location (data[2], data[3]), transceiver status (data[4]) and the TX / RX error 
 (data[6], data[7]). :func:`decode_error_frame` is a pure function of ID and data; it
 never raises, and whatever does not fit the header becomes a ``problems`` entry.
 
-An error frame with no class bits and no data (an ASC ``ErrorFrame`` line, an adapter
-that only says "an error frame was seen") is a well-formed ``unspecified`` error.
+An error frame with no class bits (an ASC ``ErrorFrame`` line, an adapter that encodes
+errors its own way) is a well-formed ``unspecified`` error, whatever its data.
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ def decode_error_frame(can_id: int, data: bytes) -> CanError:
     problems: list[str] = []
     if classes & ~KNOWN_CLASSES:
         problems.append(f"unknown error class bits 0x{classes & ~KNOWN_CLASSES:08X}")
-    if classes == 0 and not data:
+    if classes == 0:  # no SocketCAN class: whatever the bytes are, they are not its details
         return CanError(UNSPECIFIED, (UNSPECIFIED,))
     if len(data) != CAN_ERR_DLC:
         short = [
@@ -202,9 +202,6 @@ def decode_error_frame(can_id: int, data: bytes) -> CanError:
     if unknown:
         parts.append(f"{UNKNOWN_CLASS}{{0x{unknown:08X}}}")
         names = (*names, UNKNOWN_CLASS)
-    if not names and not unknown:
-        names = (UNSPECIFIED,)
-        parts.insert(0, UNSPECIFIED)
     return CanError(
         ",".join(parts),
         names,
