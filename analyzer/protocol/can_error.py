@@ -145,14 +145,19 @@ def _bits(value: int, names: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(name for i, name in enumerate(names) if value >> i & 1)
 
 
+def _counters(data: bytes) -> str:
+    """``{{128}{136}}``: the TX and RX error counters as candump -e writes them."""
+    return f"{{{{{data[6]}}}{{{data[7]}}}}}"
+
+
 def decode_error_frame(can_id: int, data: bytes) -> CanError:
     """The error frame with class bits ``can_id`` (without CAN_ERR_FLAG) and ``data``."""
     classes = can_id & 0x1FFFFFFF
+    if classes == 0:  # no SocketCAN class: whatever the bytes are, they are not its details
+        return CanError(UNSPECIFIED, (UNSPECIFIED,))
     problems: list[str] = []
     if classes & ~KNOWN_CLASSES:
         problems.append(f"unknown error class bits 0x{classes & ~KNOWN_CLASSES:08X}")
-    if classes == 0:  # no SocketCAN class: whatever the bytes are, they are not its details
-        return CanError(UNSPECIFIED, (UNSPECIFIED,))
     if len(data) != CAN_ERR_DLC:
         short = [
             CLASS_NAMES[mask.bit_length() - 1]
@@ -194,10 +199,10 @@ def decode_error_frame(can_id: int, data: bytes) -> CanError:
             else:
                 transceiver = UNSPECIFIED
         elif name == "error-counter-tx-rx":
-            text += f"{{{{{padded[6]}}}{{{padded[7]}}}}}" if whole else "{?}"
+            text += _counters(padded) if whole else "{?}"
         parts.append(text)
     if counters and not classes & CAN_ERR_CNT:
-        parts.append(f"error-counter-tx-rx{{{{{padded[6]}}}{{{padded[7]}}}}}")
+        parts.append("error-counter-tx-rx" + _counters(padded))
     unknown = classes & ~KNOWN_CLASSES
     if unknown:
         parts.append(f"{UNKNOWN_CLASS}{{0x{unknown:08X}}}")
