@@ -243,3 +243,15 @@ def test_foxglove_log_levels_follow_the_state() -> None:
         if e.topic == TOPIC_DIAGNOSTICS
     ]
     assert levels == [LOG_WARNING, LOG_ERROR, LOG_INFO]
+
+
+def test_status_line_says_when_a_bus_went_off_while_it_still_is() -> None:
+    from analyzer.pipeline import Batch
+    from analyzer.tui.state import MonitorState
+    from analyzer.tui.status_bar import StatusInfo, render_status
+
+    state = MonitorState()
+    bus_off = frame(0x040, "00" * 8, 1700000000.0)
+    state.fold(Batch([bus_off], Decoder().feed(bus_off)), wall_time=1700000000.5)
+    text = render_status(state, StatusInfo(source="can:socketcan:can0")).plain
+    assert "CAN bus-off  worst bus-off 22:13:20.000Z  1 error frame: bus-off 1" in text

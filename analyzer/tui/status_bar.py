@@ -59,12 +59,13 @@ def bus_cell(bus: BusFigures) -> Text | None:
     now = max((b.state for b in bus.channels.values()), key=lambda s: LEVELS.get(s, 0))
     cell = Text(f" CAN {now} ", BUS_STYLES[LEVELS.get(now, 0)])
     worst = bus.worst()
-    if worst is not None and worst[0] != now and worst[1] is not None:
+    if worst is not None and LEVELS.get(worst[0], 0) and worst[1] is not None:
         cell.append(
             f" worst {worst[0]} {format_time(worst[1]).strip()}", BUS_STYLES[LEVELS[worst[0]]]
         )
     classes = ", ".join(f"{name} {n:,}" for name, n in bus.classes().most_common(2))
-    cell.append(f"  {bus.error_frames:,} error frames: {classes}", "dim")
+    count = bus.error_frames
+    cell.append(f"  {count:,} error frame{'' if count == 1 else 's'}: {classes}", "dim")
     return cell
 
 
