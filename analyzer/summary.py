@@ -284,7 +284,7 @@ class Summary:
             errors = self.tally.bus.error_frames
             other = frames - protocol - errors
             kinds = f"{protocol:,} protocol, {other:,} other" + (
-                f", {errors:,} error frames" if errors else ""
+                f", {_count(errors, 'error frame')}" if errors else ""
             )
             parts.append(f"{frames:,} CAN frames ({kinds})")
         if s.get("recorded_events"):
