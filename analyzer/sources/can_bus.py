@@ -8,7 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 from analyzer.errors import UsageError
-from analyzer.inputs.python_can import frame_from_message
+from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
 from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
 from analyzer.sources.socketcan_links import bring_up, socketcan_down
 from analyzer.sources.spec import CanSpec
@@ -101,6 +101,8 @@ class CanLink:
         bus = self._bus
         got_data = False
         channel = self.spec.channel
+        # error frames of these interfaces carry linux/can/error.h classes in their ID
+        socketcan_errors = self.spec.interface in SOCKETCAN_ERROR_INTERFACES
         while not stopping.is_set():
             try:
                 msg = bus.recv(timeout=RECV_POLL_S)
@@ -108,7 +110,7 @@ class CanLink:
                 return got_data, error_words(exc)
             if msg is not None:
                 got_data = True
-                put(frame_from_message(msg, channel))
+                put(frame_from_message(msg, channel, socketcan_errors=socketcan_errors))
         return got_data, "capture stopped"
 
     def release(self) -> None:
