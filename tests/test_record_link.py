@@ -189,3 +189,31 @@ def test_the_monitor_status_bar_says_the_same() -> None:
     state.advance(T0 + 1.0)
     text = render_status(state, StatusInfo(source="tcp:127.0.0.1:9")).plain
     assert f"{refused}; retrying in 3.0 s" in text
+
+
+def test_the_monitor_status_bar_says_how_long_an_adapter_was_gone() -> None:
+    from analyzer.tui.state import MonitorState
+    from analyzer.tui.status_bar import StatusInfo, render_status
+
+    state = MonitorState()
+    source = "can:slcan:/dev/serial/by-id/usb-canable.io_CANable_8c005eb_0037001A5948-if00"
+    lost = f"{source}@1000000 lost: Could not read from serial device: Input/output error"
+    state.fold(
+        Batch(
+            [],
+            [
+                link(T0, "lost", lost),
+                link(T0, "reconnecting", "reconnecting in 0.5 s", retry_in_s=0.5),
+            ],
+            T0,
+        ),
+        T0,
+    )
+    state.advance(T0 + 2.0)
+    text = render_status(state, StatusInfo(source=source)).plain
+    assert f"{lost} (gone 2.0 s, since 22:13:20.000Z); connecting again" in text
+    back = f"opened {source}@1000000 (listen-only) again after 5.5 s without it"
+    state.fold(Batch([], [link(T0 + 5.5, "open", back, down_s=5.5, lost_at=T0)], T0 + 5.5), T0)
+    state.advance(T0 + 6.0)
+    text = render_status(state, StatusInfo(source=source)).plain
+    assert f"{back} (lost 22:13:20.000Z, back 22:13:25.500Z)" in text
