@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from analyzer.sources.detect import Inventory, SerialPort
 
 HELP = "list the CAN adapters and serial ports of this machine, with the --source for each"
 DESCRIPTION = """\
@@ -38,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def _usb_words(port: Any) -> str:
+def _usb_words(port: SerialPort) -> str:
     parts = [port.description or port.product or ""]
     if port.usb:
         parts.append(f"USB {port.usb}")
@@ -49,7 +52,7 @@ def _usb_words(port: Any) -> str:
     return "  ".join(p for p in parts if p)
 
 
-def render(inventory: Any) -> str:
+def render(inventory: Inventory) -> str:
     """The inventory as the text ``interfaces`` prints."""
     from analyzer.sources.socketcan_links import bring_up
 

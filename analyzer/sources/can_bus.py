@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from analyzer.errors import UsageError
 from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
@@ -31,7 +31,16 @@ LISTEN_ONLY_OPTIONS: dict[str, dict[str, Any]] = {
     "systec": {"state": "PASSIVE"},
 }
 
-BusOpener = Callable[[CanSpec], Any]
+
+class ReceivingBus(Protocol):
+    """What a capture uses of a ``can.BusABC``: receive and shut down, never send."""
+
+    def recv(self, timeout: float | None = None) -> Any: ...  # a can.Message or None
+
+    def shutdown(self) -> None: ...
+
+
+BusOpener = Callable[[CanSpec], ReceivingBus]
 
 
 def listen_only_kwargs(interface: str) -> dict[str, Any]:
@@ -57,12 +66,13 @@ def bus_arguments(spec: CanSpec) -> dict[str, Any]:
     return kwargs
 
 
-def open_bus(spec: CanSpec) -> Any:
+def open_bus(spec: CanSpec) -> ReceivingBus:
     """``can.Bus`` for ``spec``; an interface python-can does not know is a UsageError."""
     import can
 
     try:
-        return can.Bus(**bus_arguments(spec))
+        bus: ReceivingBus = can.Bus(**bus_arguments(spec))
+        return bus
     except (can.CanInterfaceNotImplementedError, NotImplementedError) as exc:
         if spec.interface not in can.VALID_INTERFACES:
             known = ", ".join(sorted(can.VALID_INTERFACES))
@@ -83,7 +93,7 @@ class CanLink:
         rate = f"@{spec.bitrate}" if spec.bitrate else ""
         self.description = f"can:{spec.interface}:{spec.channel}{rate}"
         self.listen_only = bool(LISTEN_ONLY_OPTIONS.get(spec.interface))
-        self._bus: Any = None
+        self._bus: ReceivingBus | None = None
         self._lock = threading.Lock()
 
     def open(self) -> None:
@@ -99,6 +109,8 @@ class CanLink:
 
     def receive(self, put: Put, stopping: threading.Event) -> tuple[bool, str]:
         bus = self._bus
+        if bus is None:
+            return False, "not open"
         got_data = False
         channel = self.spec.channel
         # error frames of these interfaces carry linux/can/error.h classes in their ID

@@ -6,7 +6,7 @@ import contextlib
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Protocol
 
 from analyzer.protocol.types import StreamChunk
 from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
@@ -14,14 +14,27 @@ from analyzer.sources.spec import SerialSpec
 
 POLL_S = 0.1
 
-PortOpener = Callable[[SerialSpec], Any]
+
+class ReadablePort(Protocol):
+    """What a capture uses of a pyserial port: read and close, never write."""
+
+    @property
+    def in_waiting(self) -> int: ...
+
+    def read(self, size: int = 1) -> bytes: ...
+
+    def close(self) -> None: ...
 
 
-def open_port(spec: SerialSpec) -> Any:
+PortOpener = Callable[[SerialSpec], ReadablePort]
+
+
+def open_port(spec: SerialSpec) -> ReadablePort:
     """pyserial's port for ``spec`` (any pyserial URL), with a short read timeout."""
     import serial
 
-    return serial.serial_for_url(spec.url, baudrate=spec.baudrate, timeout=POLL_S)
+    port: ReadablePort = serial.serial_for_url(spec.url, baudrate=spec.baudrate, timeout=POLL_S)
+    return port
 
 
 class SerialLink:
@@ -34,13 +47,15 @@ class SerialLink:
         self.source_name = source_name
         self.opener = opener
         self.description = f"serial:{spec.url}@{spec.baudrate}"
-        self.port: Any = None
+        self.port: ReadablePort | None = None
 
     def open(self) -> None:
         self.port = self.opener(self.spec)
 
     def receive(self, put: Put, stopping: threading.Event) -> tuple[bool, str]:
         port = self.port
+        if port is None:
+            return False, "not open"
         got_data = False
         source = self.source_name
         while not stopping.is_set():
@@ -105,6 +120,6 @@ class SerialSource(ReconnectingSource):
         )
 
     @property
-    def port(self) -> Any:
+    def port(self) -> ReadablePort | None:
         """The open pyserial port (None while the adapter is away)."""
         return self.serial_link.port
