@@ -9,7 +9,7 @@ from typing import Any, Protocol
 
 from analyzer.errors import UsageError
 from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
-from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
+from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
 from analyzer.sources.socketcan_links import bring_up, socketcan_down
 from analyzer.sources.spec import CanSpec
 
@@ -82,10 +82,9 @@ def open_bus(spec: CanSpec) -> ReceivingBus:
         raise
 
 
-class CanLink:
-    """One python-can bus at a time: only ``recv`` and ``shutdown`` are ever called on it."""
-
-    open_state = "open"
+class CanLink(DeviceLink):
+    """One python-can bus at a time: only ``recv`` and ``shutdown`` are ever called on it
+    (python-can buses are not thread-safe: ``recv`` polls, so ``close`` is heard)."""
 
     def __init__(self, spec: CanSpec, opener: BusOpener) -> None:
         self.spec = spec
@@ -132,18 +131,9 @@ class CanLink:
             with contextlib.suppress(Exception):  # an unplugged adapter cannot say goodbye
                 bus.shutdown()
 
-    def interrupt(self) -> None:
-        """Nothing: python-can buses are not thread-safe; ``recv`` returns within 0.25 s."""
-
     def opened_words(self) -> str:
         mode = "listen-only" if self.listen_only else "receive-only"
         return f"opened {self.description} ({mode})"
-
-    def cannot_open_words(self, reason: str) -> str:
-        return f"cannot open {self.description}: {reason}"
-
-    def lost_words(self, reason: str) -> str:
-        return f"{self.description} lost: {reason}"
 
 
 class CanSource(ReconnectingSource):

@@ -48,6 +48,23 @@ class Link(Protocol):
     def lost_words(self, reason: str) -> str: ...
 
 
+class DeviceLink:
+    """The words of a link to a local device (a CAN adapter, a serial port), whose reads
+    return within a short poll: nothing to interrupt from another thread."""
+
+    description: str = ""
+    open_state = "open"
+
+    def interrupt(self) -> None:
+        """Nothing: the reader's own short poll hears ``close``."""
+
+    def cannot_open_words(self, reason: str) -> str:
+        return f"cannot open {self.description}: {reason}"
+
+    def lost_words(self, reason: str) -> str:
+        return f"{self.description} lost: {reason}"
+
+
 def _first_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.strerror:
         return f"{exc.strerror}: {exc.filename}" if exc.filename else exc.strerror

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from analyzer.protocol.types import StreamChunk
-from analyzer.sources.reconnect import Put, ReconnectingSource, error_words
+from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
 from analyzer.sources.spec import SerialSpec
 
 POLL_S = 0.1
@@ -37,10 +37,8 @@ def open_port(spec: SerialSpec) -> ReadablePort:
     return port
 
 
-class SerialLink:
-    """One pyserial port at a time: only read, never written."""
-
-    open_state = "open"
+class SerialLink(DeviceLink):
+    """One pyserial port at a time: only read, never written (reads return within POLL_S)."""
 
     def __init__(self, spec: SerialSpec, opener: PortOpener, source_name: str) -> None:
         self.spec = spec
@@ -75,17 +73,8 @@ class SerialLink:
             with contextlib.suppress(Exception):
                 port.close()
 
-    def interrupt(self) -> None:
-        """Nothing: a read returns within POLL_S."""
-
     def opened_words(self) -> str:
         return f"opened {self.spec.url} at {self.spec.baudrate} baud"
-
-    def cannot_open_words(self, reason: str) -> str:
-        return f"cannot open {self.description}: {reason}"
-
-    def lost_words(self, reason: str) -> str:
-        return f"{self.description} lost: {reason}"
 
 
 class SerialSource(ReconnectingSource):
