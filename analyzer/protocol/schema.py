@@ -278,6 +278,14 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
             },
             "peer": {"type": "string", "description": "link diagnostics: the other end"},
             "retry_in_s": {"type": "number", "description": "link diagnostics: next attempt"},
+            "down_s": {
+                "type": "number",
+                "description": "link diagnostics: how long a lost link was gone, once back",
+            },
+            "lost_at": {
+                "type": "number",
+                "description": "link diagnostics: when a link that is back was lost (Unix s)",
+            },
             "packets": {"type": "integer", "description": "pcap packets concerned"},
             "packets_read": {"type": "integer", "description": "pcap packets read until then"},
             "frames_read": {"type": "integer", "description": "frames read until then"},
