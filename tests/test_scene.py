@@ -394,3 +394,40 @@ def test_up_is_from_the_first_altitude_even_when_it_comes_after_the_first_fix() 
     bench.frames(GPS_ID, encode_gps(31.0, 118.0))
     bench.feedback(0.0, 0.0)
     assert transforms(bench)["uav"][2] == Vector(0.0, 0.0, pytest.approx(5.5))
+
+
+_ANY_VALUE = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-(2**40), 2**40),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=8),
+)
+_FIELDS = (
+    "name", "x", "y", "width", "height", "x_pct", "y_pct", "action", "axis", "zoom",
+    "pitch_deg", "yaw_deg", "motor_yaw_deg", "roll_deg", "tracking", "success", "distance_m",
+    "latitude_deg", "longitude_deg", "altitude_m",
+)  # fmt: skip
+_TOPICS = (
+    "/gimbal/command", "/gimbal/attitude", "/gimbal/ranging", "/uav/attitude", "/uav/gps",
+    "/uav/altitude",
+)  # fmt: skip
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.sampled_from(_TOPICS), st.dictionaries(st.sampled_from(_FIELDS), _ANY_VALUE)),
+        max_size=12,
+    )
+)
+def test_any_field_values_give_valid_views_and_never_raise(
+    events: list[tuple[str, dict[str, Any]]],
+) -> None:
+    bench = Bench()
+    timeline = OverlayTimeline()
+    for n, (topic, fields) in enumerate(events):
+        event = Event(topic, 1_700_000_000.0 + n, "test", dict(fields))
+        timeline.add(event)
+        for view_topic, message in bench.views.views(event):
+            VALIDATORS[view_topic].validate(json.loads(json.dumps(message, allow_nan=False)))

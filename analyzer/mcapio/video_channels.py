@@ -210,7 +210,7 @@ class VideoRecorder:
         self.stage = _LinkStage(self)
         self.frames_written = 0
         self._frames: list[VideoFrame] = []
-        self._sized: set[str] = set()  # streams whose overlays have their picture sizes
+        self._sizes: dict[str, tuple[int, int]] = {}  # the picture size the overlays are for
         for stream in self.streams:
             name = stream.spec.name
             mcap.add_camera(name)
@@ -245,16 +245,18 @@ class VideoRecorder:
             self.frames_written += len(frames)
 
     def _size_overlays(self, frames: Sequence[VideoFrame]) -> None:
-        """The overlays of a stream are drawn once its picture size is known."""
+        """The overlays of a stream are drawn for its picture size, known from its frames
+        (and changed with it, should the camera come back with another size)."""
         for frame in frames:
-            if frame.stream in self._sized or frame.width <= 0 or frame.height <= 0:
+            size = (frame.width, frame.height)
+            if self._sizes.get(frame.stream) == size or frame.width <= 0 or frame.height <= 0:
                 continue
             from analyzer.video.thumbnail import thumbnail_size  # PyAV: video is recorded
 
-            self._sized.add(frame.stream)
-            self.mcap.add_overlay(annotations_topic(frame.stream), frame.width, frame.height)
+            self._sizes[frame.stream] = size
+            self.mcap.add_overlay(annotations_topic(frame.stream), *size)
             if any(s.thumbnail_interval > 0 for s in self.streams if s.spec.name == frame.stream):
-                width, height = thumbnail_size(frame.width, frame.height)
+                width, height = thumbnail_size(*size)
                 topic = thumbnail_annotations_topic(frame.stream)
                 # the thumbnails are what Foxglove Studio 1.48 shows: it draws lines, no text
                 self.mcap.add_overlay(topic, width, height, stroked=True)
