@@ -4,6 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.protocol.check_fields import (
+    FIGURES,
+    REQUIRED_FIELDS,
+    STEP_FIELDS,
+    STEP_NAMES,
+    STEP_VERDICTS,
+)
 from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
@@ -12,6 +19,7 @@ from analyzer.protocol.response_fields import CHECKS, FIELD_ENUMS, OPTIONAL_FIEL
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_UAV_TEXT,
@@ -155,6 +163,24 @@ def response_schema() -> dict[str, Any]:
     return schema
 
 
+def check_steps_schema() -> dict[str, Any]:
+    """Steps of the bench check (`gimbal-analyzer check`): verdict and measured figures."""
+    schema = _envelope(
+        TOPIC_CHECK_STEPS,
+        "bench check step",
+        "One step of `gimbal-analyzer check`, judged by the response analysis and the "
+        "figures measured from the feedback; 'time' is when the step was decided.",
+    )
+    props = schema["properties"]
+    for name, (kind, description) in {**STEP_FIELDS, **FIGURES}.items():
+        props[name] = {"type": kind, "description": description}
+    props["step"]["enum"] = list(STEP_NAMES)
+    props["verdict"]["enum"] = list(STEP_VERDICTS)
+    props["findings"]["items"] = {"type": "string"}
+    schema["required"] += list(REQUIRED_FIELDS)
+    return schema
+
+
 def topic_schemas() -> dict[str, dict[str, Any]]:
     """Topic -> JSON Schema of its events."""
     out: dict[str, dict[str, Any]] = {TOPIC_COMMAND: command_schema()}
@@ -212,6 +238,7 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
     diag["required"] += ["kind", "detail", "raw"]
     out[TOPIC_DIAGNOSTICS] = diag
     out[TOPIC_ANALYSIS_RESPONSE] = response_schema()
+    out[TOPIC_CHECK_STEPS] = check_steps_schema()
     assert set(out) == set(TOPICS)
     return out
 

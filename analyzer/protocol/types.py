@@ -16,6 +16,7 @@ TOPIC_UAV_TEXT = "/uav/text"
 TOPIC_DIAGNOSTICS = "/diagnostics"
 TOPIC_CAN_OTHER = "/can/other"
 TOPIC_ANALYSIS_RESPONSE = "/analysis/response"  # findings of the response analysis
+TOPIC_CHECK_STEPS = "/check/steps"  # verdicts of the bench check's steps
 
 TOPICS = (
     TOPIC_COMMAND,
@@ -27,6 +28,7 @@ TOPICS = (
     TOPIC_UAV_TEXT,
     TOPIC_DIAGNOSTICS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_CHECK_STEPS,
 )
 
 # Diagnostic kinds (the ``kind`` field of /diagnostics events).
