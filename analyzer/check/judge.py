@@ -96,7 +96,9 @@ def judge_feedback(evidence: Evidence) -> tuple[str, str, dict[str, Any]]:
     numbers: dict[str, Any] = dict(figures.as_dict())
     span = end - start
     if not figures.messages:
-        return FAIL, f"no feedback: nothing came in {span:.1f} s of listening", numbers
+        damaged = f", {figures.crc_errors} damaged" if figures.crc_errors else ""
+        text = f"no feedback: no whole message in {span:.1f} s ({figures.lost} lost{damaged})"
+        return FAIL, text, numbers
     problems = []
     period = figures.period_s
     if period is not None and abs(period - PERIOD_S) > FEEDBACK_TOLERANCE * PERIOD_S:

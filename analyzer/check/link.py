@@ -34,6 +34,7 @@ class CheckLink(QueuedSource):
         self.description = self.link.name
         self.source_name = spec.channel if spec.kind == "can" else self.link.name
         self.sent = 0
+        self.last_sent = 0.0  # time of the newest command sent
         self._send_lock = threading.Lock()
         self._put(link_event(self.source_name, f"opened {self.link.name} for the check", "open"))
         self._start()
@@ -56,6 +57,7 @@ class CheckLink(QueuedSource):
             self.link.send(CONTROL_ID, data)
             now = time.time()
             self.sent += 1
+            self.last_sent = now
         if self.spec.kind == "can":
             self._put(CanFrame(now, CONTROL_ID, data, True, self.source_name, direction="tx"))
         else:

@@ -14,6 +14,7 @@ from analyzer.protocol.types import (
     INCOMPLETE,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CHECK_STEPS,
+    TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
     TOPIC_GIMBAL_RANGING,
@@ -40,6 +41,7 @@ class Observer:
         self.events: list[Event] = []
         self.keep_events = keep_events
         self.steps_seen = 0  # /check/steps events that went through the pipeline
+        self.commands_until = 0.0  # time of the newest command that went through it
         self.closed = False
         self._changed = threading.Condition()
 
@@ -56,6 +58,8 @@ class Observer:
                     self.feedback_times.append(event.time)
                 elif topic == TOPIC_ANALYSIS_RESPONSE:
                     self.findings.append(event.to_dict())
+                elif topic == TOPIC_COMMAND:
+                    self.commands_until = max(self.commands_until, event.time)
                 elif topic == TOPIC_CHECK_STEPS:
                     self.steps_seen += 1
                 elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED:

@@ -234,8 +234,12 @@ def _run_check(args: argparse.Namespace, steps: Any, options: Any, limits: Any) 
         if not completed:  # Ctrl-C, a link that failed: stop the gimbal, centre it
             with contextlib.suppress(Exception):
                 runner.centre(wait=False)
-        noted = len(runner.results)
-        observer.wait(lambda: observer.steps_seen >= noted, time.monotonic() + 2.0)
+        # Everything sent and every verdict through the pipeline before it stops.
+        noted, sent = len(runner.results), link.last_sent
+        observer.wait(
+            lambda: observer.steps_seen >= noted and observer.commands_until >= sent,
+            time.monotonic() + 2.0,
+        )
         capture.stop()
         capture.join(10.0)
         with contextlib.suppress(SourceError):
