@@ -81,6 +81,7 @@ class CheckRunner:
             running = _Running(index, step, plan, time.time())
             for action in plan.actions:
                 self._act(action, running)
+                self._flush(force=False)  # an earlier step decided by this action's command
             running.ended_at = time.time()
             self._pending.append(running)
             self._flush(force=False)
