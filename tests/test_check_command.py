@@ -14,6 +14,7 @@ import contextlib
 import io
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -66,7 +67,7 @@ class Gimbal:
         self._thread.start()
 
     def _run(self) -> None:
-        if isinstance(self.link, TcpServerLink):
+        if isinstance(self.link, TcpServerLink):  # the gimbal starts when the check connects
             while not self.link.peers and not self._stop.is_set():
                 self.link.receive(0.02)  # accepts the ground station
         runner = SimulatorRunner(
@@ -87,6 +88,35 @@ class Gimbal:
             self.runner.stop()
         self._thread.join(5.0)
         self.link.close()
+
+
+class SerialPair:
+    """Two pseudo-terminals wired back to back: a serial cable between two devices."""
+
+    def __init__(self) -> None:
+        pairs = [os.openpty() for _ in range(2)]
+        self.masters = [master for master, _ in pairs]
+        self._slaves = [slave for _, slave in pairs]
+        self.paths = [os.ttyname(slave) for slave in self._slaves]
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._relay, daemon=True)
+        self._thread.start()
+
+    def _relay(self) -> None:
+        a, b = self.masters
+        while not self._stop.is_set():
+            ready, _, _ = select.select([a, b], [], [], 0.05)
+            for fd in ready:
+                with contextlib.suppress(OSError):
+                    data = os.read(fd, 4096)
+                    os.write(b if fd == a else a, data)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(2.0)
+        for fd in self.masters + self._slaves:
+            with contextlib.suppress(OSError):
+                os.close(fd)
 
 
 @dataclass
@@ -391,3 +421,25 @@ def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
     commands = [e.fields for e in gimbal.received if e.topic == "/gimbal/command"]
     centred_last(commands)
     centred_last(messages(run.output, "/gimbal/command"))  # and the recording is finished
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs pseudo-terminals")
+def test_a_gimbal_on_a_serial_line_is_checked_the_same_way(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # the recording gets its default, timestamped name here
+    cable = SerialPair()
+    try:
+        gimbal = Gimbal(f"serial:{cable.paths[0]}@115200")
+        to = f"serial:{cable.paths[1]}@115200"
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+            code = main(["check", "--to", to, "--json", *FAST, "--steps", "pitch_angle"])
+        gimbal.close()
+    finally:
+        cable.close()
+    (step,) = [json.loads(line) for line in out.getvalue().splitlines()]
+    assert code == 0 and step["verdict"] == "pass", step
+    assert step["slew_dps"] == pytest.approx(SLEW_DPS, rel=0.15)
+    (recording,) = tmp_path.glob("check-*.mcap")
+    assert [m["step"] for m in messages(recording, "/check/steps")] == ["pitch_angle"]

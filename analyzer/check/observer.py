@@ -96,15 +96,6 @@ class Observer:
         with self._changed:
             return [s for s in self.samples if start < s.time <= end]
 
-    def before(self, t: float) -> Sample | None:
-        with self._changed:
-            found = None
-            for s in self.samples:
-                if s.time > t:
-                    break
-                found = s
-            return found
-
     def findings_for(self, command: str, first: float, last: float) -> list[dict[str, Any]]:
         """The findings about ``command`` sent from ``first`` to ``last`` (the analysis dates
         a finding with its command's time: a burst's first, its stop's for ``stop``)."""

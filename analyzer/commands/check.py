@@ -58,6 +58,12 @@ failed, 2 usage errors (no --to, a bad option), 130 interrupted (gimbal centred)
 
 DEFAULT_MIN_SLEW = 30.0
 DEFAULT_SPEED_TOLERANCE = 0.25
+# What the steps ask for: option, default, unit, what it sets.
+STEP_OPTIONS = (
+    ("--speed", 20.0, "DPS", "pan / tilt speed of the speed steps, at most 100"),
+    ("--speed-for", 2.0, "S", "how long the speed steps turn"),
+    ("--listen", 3.0, "S", "how long the feedback step listens"),
+)
 
 
 def _number(low: float, what: str) -> Any:
@@ -117,27 +123,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"(default {DEFAULT_SPEED_TOLERANCE:g}, i.e. {DEFAULT_SPEED_TOLERANCE * 100:g} %%)",
     )
     steps = parser.add_argument_group("what the steps ask for")
-    steps.add_argument(
-        "--speed",
-        type=_number(0.0, "deg/s"),
-        default=20.0,
-        metavar="DPS",
-        help="pan / tilt speed of the speed steps (default 20 deg/s, at most 100)",
-    )
-    steps.add_argument(
-        "--speed-for",
-        type=_number(0.0, "s"),
-        default=2.0,
-        metavar="S",
-        help="how long the speed steps turn (default 2 s)",
-    )
-    steps.add_argument(
-        "--listen",
-        type=_number(0.0, "s"),
-        default=3.0,
-        metavar="S",
-        help="how long the feedback step listens (default 3 s)",
-    )
+    for flag, default, metavar, words in STEP_OPTIONS:
+        steps.add_argument(
+            flag,
+            type=_number(0.0, metavar),
+            default=default,
+            metavar=metavar,
+            help=f"{words} (default {default:g} {'deg/s' if metavar == 'DPS' else 's'})",
+        )
 
 
 def default_output(now: float | None = None) -> Path:
