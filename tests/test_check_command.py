@@ -59,6 +59,7 @@ class Gimbal:
             behaviour=simulate.behaviour(args),
             heading_deg=args.heading,
         )
+        self.duration: float | None = args.duration  # then it goes away, link and all
         self.link: Link = open_gimbal_link(parse_link(on))
         self.to = on if on.startswith("can:") else self.link.name
         self.runner: SimulatorRunner | None = None
@@ -76,7 +77,9 @@ class Gimbal:
         runner.keep_received = True
         self.runner = runner
         if not self._stop.is_set():
-            runner.run()
+            runner.run(self.duration)
+        if self.duration is not None:
+            self.link.close()
 
     @property
     def received(self) -> list[Event]:
@@ -87,7 +90,8 @@ class Gimbal:
         if self.runner is not None:
             self.runner.stop()
         self._thread.join(5.0)
-        self.link.close()
+        with contextlib.suppress(OSError):
+            self.link.close()
 
 
 class SerialPair:
@@ -165,6 +169,7 @@ TCP_RUNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "drop": (("--drop", "0.3", "--seed", "1"), ("--steps", "feedback", "--listen", "6")),
     # Silent from 2.5 s to 7.5 s after the check connected: the step that starts in it
     # fails as "no feedback", the one after it passes.
+    "link_lost": (("--duration", "5"), ("--steps", "pitch_angle,yaw_airframe,look_down")),
     "silence": (
         ("--stop-feedback-at", "2.5", "--stop-feedback-for", "5"),
         ("--steps", "pitch_angle,yaw_airframe,look_down"),
@@ -443,3 +448,14 @@ def test_a_gimbal_on_a_serial_line_is_checked_the_same_way(
     assert step["slew_dps"] == pytest.approx(SLEW_DPS, rel=0.15)
     (recording,) = tmp_path.glob("check-*.mcap")
     assert [m["step"] for m in messages(recording, "/check/steps")] == ["pitch_angle"]
+
+
+def test_a_link_lost_midway_ends_the_check_with_one_line(tcp_runs: dict[str, Run]) -> None:
+    run = tcp_runs["link_lost"].finish()
+    assert run.code == 1
+    assert run.steps[0]["step"] == "pitch_angle" and run.steps[0]["verdict"] == "pass"
+    (error,) = [line for line in run.stderr.splitlines() if "error:" in line]
+    assert "closed the connection" in error and "keeps everything up to then" in error
+    assert "Traceback" not in run.stderr
+    # The recording is finished and readable, with what was sent up to then.
+    assert messages(run.output, "/gimbal/command")

@@ -54,6 +54,8 @@ class CheckLink(QueuedSource):
     def send(self, data: bytes) -> float:
         """Transmit one command's 8 data bytes; returns the time it was sent (Unix s)."""
         with self._send_lock:
+            if self._error is not None:  # the receiving side found the link broken
+                raise SourceError(self._error)
             self.link.send(CONTROL_ID, data)
             now = time.time()
             self.sent += 1

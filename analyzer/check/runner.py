@@ -56,12 +56,14 @@ class CheckRunner:
         limits: Limits,
         options: Options,
         report: Callable[[StepResult], None],
+        notice: Callable[[str], None] = print,
     ) -> None:
         self.link = link
         self.observer = observer
         self.limits = limits
         self.options = options
         self.report = report
+        self.notice = notice
         self.results: list[StepResult] = []
         self._pending: list[_Running] = []
         self.centred: bool | None = None
@@ -73,9 +75,12 @@ class CheckRunner:
     # -- the sequence ----------------------------------------------------------------------
 
     def run(self, steps: tuple[Step, ...]) -> list[StepResult]:
-        self.observer.wait(
-            lambda: bool(self.observer.samples), time.monotonic() + FIRST_FEEDBACK_WAIT_S
-        )
+        first = time.monotonic() + FIRST_FEEDBACK_WAIT_S
+        if not self.observer.wait(lambda: bool(self.observer.samples), first):
+            self.notice(
+                f"no attitude feedback in {FIRST_FEEDBACK_WAIT_S:g} s: is the gimbal on this "
+                "link and powered? The steps go on and fail as 'no feedback'"
+            )
         for index, step in enumerate(steps, 1):
             plan = step.plan(self.attitude(), self.options)
             running = _Running(index, step, plan, time.time())

@@ -215,7 +215,9 @@ def _run_check(args: argparse.Namespace, steps: Any, options: Any, limits: Any) 
     observer = Observer(keep_events=args.report is not None)
     capture = Capture(link, [sink, observer], stages=analysis_stages(limits.settings))
     printer = JsonPrinter(sys.stdout) if args.json else TablePrinter(sys.stdout)
-    runner = CheckRunner(link, observer, limits, options, printer)
+    runner = CheckRunner(
+        link, observer, limits, options, printer, lambda text: print(f"warning: {text}", file=say)
+    )
     names = ", ".join(step.name for step in steps)
     print(f"check over {link.description}: {names}; recording {path}", file=say, flush=True)
     capture.start()
@@ -223,6 +225,11 @@ def _run_check(args: argparse.Namespace, steps: Any, options: Any, limits: Any) 
     try:
         runner.run(steps)
         completed = True
+    except SourceError as exc:
+        raise SourceError(
+            f"{exc}; the check stopped (the gimbal may not be centred); the recording "
+            f"{path} keeps everything up to then"
+        ) from None
     finally:
         if not completed:  # Ctrl-C, a link that failed: stop the gimbal, centre it
             with contextlib.suppress(Exception):
