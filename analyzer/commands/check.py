@@ -6,10 +6,17 @@ import argparse
 import contextlib
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, cast
 
 from analyzer.errors import SourceError, UsageError
+
+if TYPE_CHECKING:
+    from analyzer.check.judge import Limits, StepResult
+    from analyzer.check.observer import Observer
+    from analyzer.check.steps import Options, Step
+    from analyzer.sim.transports import LinkSpec
 
 HELP = "bench acceptance check: drive the gimbal through built-in steps and judge each one"
 DESCRIPTION = """\
@@ -66,7 +73,7 @@ STEP_OPTIONS = (
 )
 
 
-def _number(low: float, what: str) -> Any:
+def _number(low: float, what: str) -> Callable[[str], float]:
     def parse(text: str) -> float:
         try:
             value = (
@@ -182,7 +189,9 @@ def run(args: argparse.Namespace) -> int:
     return _run_check(args, steps, options, limits)
 
 
-def _run_check(args: argparse.Namespace, steps: Any, options: Any, limits: Any) -> int:
+def _run_check(
+    args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
+) -> int:
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
@@ -262,7 +271,12 @@ def _run_check(args: argparse.Namespace, steps: Any, options: Any, limits: Any) 
 
 
 def _write_report(
-    target: str, force: bool, observer: Any, results: Any, spec: Any, limits: Any
+    target: str,
+    force: bool,
+    observer: Observer,
+    results: list[StepResult],
+    spec: LinkSpec,
+    limits: Limits,
 ) -> None:
     from typing import IO
 
