@@ -329,6 +329,12 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     assert console == []
     assert dom.index('id="check-steps"') < dom.index("<h2>Overview</h2>")
     assert dom.count('class="v st-pass"') == 9
+    # `report` of the recording later shows the same steps on top.
+    later = tmp_path / "later.html"
+    assert main(["report", str(output), "-o", str(later)]) == 0
+    text = later.read_text()
+    assert text.index('id="check-steps"') < text.index("<h2>Overview</h2>")
+    assert text.count('class="v st-pass"') == 9
 
 
 def test_healthy_gimbal_over_tcp_passes_every_step(tcp_runs: dict[str, Run]) -> None:

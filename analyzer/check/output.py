@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import html
 import json
 from typing import IO, Any
@@ -98,3 +99,33 @@ def steps_table_html(results: list[StepResult], title: str) -> str:
         f'<p class="sub">{e(summary(results))}</p>'
         f'<table id="check-steps">{head}{"".join(rows)}</table>'
     )
+
+
+def result_from_fields(fields: dict[str, Any]) -> StepResult:
+    """A /check/steps message back as a StepResult (figures: the keys that are figures)."""
+    from analyzer.protocol.check_fields import FIGURES
+
+    return StepResult(
+        step=str(fields.get("step", "")),
+        verdict=str(fields.get("verdict", "")),
+        detail=str(fields.get("detail", "")),
+        figures={k: v for k, v in fields.items() if k in FIGURES},
+        index=int(fields.get("index", 0)),
+        started_at=float(fields.get("started_at", 0.0)),
+        duration_s=float(fields.get("duration_s", 0.0)),
+        findings=[str(f) for f in fields.get("findings", [])],
+    )
+
+
+def recorded_steps_html(path: str) -> str:
+    """The steps table of a recording `check` made ('' for any other recording)."""
+    from analyzer.mcapio.reader import Recording
+    from analyzer.protocol.types import TOPIC_CHECK_STEPS
+
+    results = []
+    for message in Recording(path).messages({TOPIC_CHECK_STEPS}):
+        with contextlib.suppress(ValueError, TypeError):
+            fields = json.loads(message.data)
+            if isinstance(fields, dict):
+                results.append(result_from_fields(fields))
+    return steps_table_html(results, "Bench check") if results else ""
