@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from analyzer.analysis.response import STOP_GRACE_S, STOP_OBSERVE_S
 from analyzer.check.runner import AFTER_DEADLINE_S, encode
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Send, Step
 from analyzer.protocol.framing import wrap_control
@@ -43,7 +42,7 @@ def dry_run_lines(steps: tuple[Step, ...], options: Options, allowed_s: float) -
                 stop = {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}
                 what = Send("gimbal_control", stop).describe()
                 lines.append(_line(at, step.name, what, encode("gimbal_control", stop)))
-                at += STOP_GRACE_S + STOP_OBSERVE_S + 2 * AFTER_DEADLINE_S
+                at += wait  # the rate and stop findings come within the time allowed
             else:
                 data = encode(action.name, action.params)
                 lines.append(_line(at, step.name, action.describe(), data))

@@ -7,7 +7,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.analysis.response import STOP_GRACE_S, STOP_OBSERVE_S
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.targets import SETTLED_S, STILL_DEG
 from analyzer.analysis.yaw_geometry import angle_error, psi_offset
@@ -159,7 +158,8 @@ class CheckRunner:
         )
         number = len(running.judged)
         running.judged.append((action, first, stop))
-        until = time.monotonic() + STOP_GRACE_S + STOP_OBSERVE_S + 2 * AFTER_DEADLINE_S
+        # The analysis watches a while after the stop, well within the time allowed.
+        until = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
         self.observer.wait(lambda: self._decided(running, number), until)
 
     # -- what the feedback shows -----------------------------------------------------------
