@@ -141,7 +141,9 @@ def feedback_figures(
     gaps = [b - a for a, b in itertools.pairwise(inside)]
     edges = [inside[0] - start, end - inside[-1]] if inside else [end - start]
     lost = sum(max(0, round(gap / period) - 1) for gap in gaps)
-    lost += sum(max(0, int(edge / period + 0.5) - 1) for edge in edges)
+    lost += sum(max(0, int(edge / period + 0.5) - 1) for edge in edges) if inside else 0
+    if not inside:  # every message the window should have held
+        lost = int((end - start) / period)
     median = statistics.median(gaps) if gaps else None
     longest = max([*gaps, *edges]) if inside else end - start
     return FeedbackFigures(len(inside), median, lost, damaged, longest)

@@ -130,12 +130,10 @@ def _move_axis(plan: Plan, findings: list[dict[str, Any]]) -> str:
     return plan.axis
 
 
-def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
-    """Verdict, detail, figures and finding lines of a step that sends judged commands."""
+def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[str]]:
+    """The figures of a step's judged commands, and how they miss the pass limits."""
     plan = evidence.plan
     figures: dict[str, Any] = {}
-    all_findings = [f for fs in evidence.findings.values() for f in fs]
-    lines = [_finding_line(f) for f in all_findings]
     tolerance = limits.settings.tolerance_deg
     problems: list[str] = []
     for number, (action, first, last) in enumerate(evidence.judged):
@@ -178,6 +176,13 @@ def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str
                     f"moved at {move.slew_dps:.1f} deg/s, slower than the minimum "
                     f"{limits.min_slew_dps:g} deg/s"
                 )
+    return figures, problems
+
+
+def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
+    """Verdict, detail, figures and finding lines of a step that sends judged commands."""
+    figures, problems = measure(evidence, limits)
+    lines = [_finding_line(f) for fs in evidence.findings.values() for f in fs]
     silence, since = longest_silence(
         evidence.feedback_times, evidence.started_at, evidence.ended_at
     )
