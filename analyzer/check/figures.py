@@ -140,9 +140,10 @@ def feedback_figures(
     inside = sorted(t for t in times if start <= t <= end)
     gaps = [b - a for a, b in itertools.pairwise(inside)]
     edges = [inside[0] - start, end - inside[-1]] if inside else [end - start]
-    lost = sum(max(0, round(gap / period) - 1) for gap in gaps)
-    lost += sum(max(0, int(edge / period + 0.5) - 1) for edge in edges) if inside else 0
-    if not inside:  # every message the window should have held
+    if inside:
+        lost = sum(max(0, round(gap / period) - 1) for gap in gaps)
+        lost += sum(max(0, int(edge / period + 0.5) - 1) for edge in edges)
+    else:  # every message the window should have held
         lost = int((end - start) / period)
     median = statistics.median(gaps) if gaps else None
     longest = max([*gaps, *edges]) if inside else end - start
