@@ -26,7 +26,7 @@ analysis as `gimbal-analyzer analyze` (its tolerance, time allowed and yaw
 reference), plus the figures measured from the feedback.
 
   gimbal-analyzer check --to can:socketcan:can0
-  gimbal-analyzer check --to tcp:192.168.144.108:2000 --report bench.html
+  gimbal-analyzer check --to tcp:192.168.42.200:2000 --report bench.html
   gimbal-analyzer check --to tcp:127.0.0.1:2000 --steps pitch_angle,pan_speed --json
   gimbal-analyzer check --dry-run                 the frames it would send, nothing sent
 
