@@ -5,7 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
-from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+from analyzer.protocol.types import (
+    TOPIC_CHECK_STEPS,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+)
 
 # Panel ids are "<panel type>!<name>"; the types are those of Foxglove Studio 1.48.
 MAP = "map!gimbal-map"
@@ -15,6 +20,7 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
+CHECK_STEPS = "Table!check-steps"  # the steps of a bench check (empty in other recordings)
 IMAGE = "ImageViewPanel!gimbal-camera"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
 # CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
@@ -97,6 +103,7 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+        CHECK_STEPS: {"topicPath": TOPIC_CHECK_STEPS},
         IMAGE: {
             "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
             "enabledMarkerTopics": [],
@@ -139,7 +146,12 @@ def layout() -> dict[str, Any]:
                     "direction": "row",
                     "splitPercentage": 50,
                     "first": RAW,
-                    "second": TABLE,
+                    "second": {
+                        "direction": "column",
+                        "splitPercentage": 60,
+                        "first": TABLE,
+                        "second": CHECK_STEPS,
+                    },
                 },
             },
         },
