@@ -88,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
         data.add(finding)
     data.notes.extend(reader.notes)
     lead = ""
+    data.frames = pipeline.tally.frames
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
         from analyzer.check.output import recorded_steps_html
         from analyzer.mcapio.video_reading import read_thumbnails

@@ -6,6 +6,7 @@ from typing import Any
 
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
 from analyzer.protocol.types import (
+    TOPIC_CAN_BUS_STATE,
     TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -22,6 +23,7 @@ RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
 CHECK_STEPS = "Table!check-steps"  # the steps of a bench check (empty in other recordings)
 IMAGE = "ImageViewPanel!gimbal-camera"
+BUS_PLOT = "Plot!can-bus-state"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
 # CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
 CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
@@ -38,6 +40,8 @@ STATE_SERIES = (
     (TOPIC_GIMBAL_ATTITUDE, "tracking"),
     (TOPIC_COMMAND, "name"),
 )
+# The CAN controller's state as a number: 0 error-active .. 3 bus-off.
+BUS_SERIES = ((TOPIC_CAN_BUS_STATE, "level"),)
 TRACKING = (TOPIC_GIMBAL_ATTITUDE, "tracking")
 
 _COLOURS = ("#4e98e2", "#f5774d", "#61cbff", "#f7df71")
@@ -115,6 +119,21 @@ def layout() -> dict[str, Any]:
             "zoom": 1,
         },
     }
+    config_by_id[BUS_PLOT] = {
+        **config_by_id[PLOT],
+        "title": "CAN bus state (0 error-active .. 3 bus-off)",
+        "paths": [
+            {
+                "value": message_path(topic, field),
+                "enabled": True,
+                "timestampMethod": "receiveTime",
+                "color": colour,
+            }
+            for (topic, field), colour in zip(BUS_SERIES, _COLOURS[3:], strict=False)
+        ],
+        "minYValue": 0,
+        "maxYValue": 3,
+    }
     mosaic = {
         "direction": "row",
         "splitPercentage": 38,
@@ -141,7 +160,12 @@ def layout() -> dict[str, Any]:
             "second": {
                 "direction": "column",
                 "splitPercentage": 42,
-                "first": STATES,
+                "first": {
+                    "direction": "row",
+                    "splitPercentage": 60,
+                    "first": STATES,
+                    "second": BUS_PLOT,
+                },
                 "second": {
                     "direction": "row",
                     "splitPercentage": 50,
