@@ -73,5 +73,7 @@ def test_feedback_figures_count_the_messages_missing_from_the_rhythm() -> None:
     assert figures.messages == 5 and figures.lost == 2 and figures.crc_errors == 1
     assert figures.period_s == pytest.approx(0.5)
     assert longest_silence(times, 10.0, 13.2) == (pytest.approx(1.5), 11.0)
+    late_together = feedback_figures([10.0, 10.5, 11.5, 11.5, 12.0], 0, 10.0, 12.2, 0.5)
+    assert late_together.lost == 0  # two read at once after a stall: none missing
     silent = feedback_figures([], 0, 0.0, 2.0, 0.5)
     assert silent.messages == 0 and silent.lost == 4 and silent.period_s is None
