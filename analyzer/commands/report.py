@@ -89,17 +89,21 @@ def run(args: argparse.Namespace) -> int:
     for finding in kept.findings:
         data.add(finding)
     data.notes.extend(reader.notes)
+    lead = ""
     data.frames = pipeline.tally.frames
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
+        from analyzer.check.output import recorded_steps_html
         from analyzer.mcapio.video_reading import read_thumbnails
 
         data.pictures.extend(overlays.pictures(read_thumbnails(args.file)))
+        lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
     if data.first is not None and data.first == data.last and data.findings:
         data.findings.clear()
         data.notes.append("the input carries no timestamps: responses cannot be timed")
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
+        lead,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:

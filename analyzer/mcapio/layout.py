@@ -8,6 +8,7 @@ from analyzer.mcapio.channels import TOPIC_SCENE
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
 from analyzer.protocol.types import (
     TOPIC_CAN_BUS_STATE,
+    TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -21,6 +22,7 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
+CHECK_STEPS = "Table!check-steps"  # the steps of a bench check (empty in other recordings)
 IMAGE = "ImageViewPanel!gimbal-camera"
 SCENE = "3D!gimbal-scene"
 BUS_PLOT = "Plot!can-bus-state"
@@ -112,6 +114,7 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+        CHECK_STEPS: {"topicPath": TOPIC_CHECK_STEPS},
         IMAGE: {
             "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
             "enabledMarkerTopics": [CAMERA_THUMBNAIL_ANNOTATIONS],
@@ -199,7 +202,12 @@ def layout() -> dict[str, Any]:
                     "direction": "row",
                     "splitPercentage": 50,
                     "first": RAW,
-                    "second": TABLE,
+                    "second": {
+                        "direction": "column",
+                        "splitPercentage": 60,
+                        "first": TABLE,
+                        "second": CHECK_STEPS,
+                    },
                 },
             },
         },
