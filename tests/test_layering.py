@@ -16,11 +16,22 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("the sans-IO protocol core", ("protocol",)),
     (
         "shared plumbing",
-        ("errors", "timefmt", "terminal_text", "stdio", "output_file", "tally", "pipeline"),
+        (
+            "errors",
+            "timefmt",
+            "terminal_text",
+            "stdio",
+            "output_file",
+            "bus_figures",
+            "bus_hints",
+            "tally",
+            "pipeline",
+        ),
     ),
     (
         "sources, inputs and sinks",
         (
+            "scene",  # where the gimbal points, from the events: drawn by mcapio and report
             "sources",
             "video",
             "mcapio",
@@ -34,7 +45,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ),
     ("analysis", ("analysis",)),
     ("engines", ("capture", "live", "sim", "samplegen")),
-    ("user interfaces", ("report", "tui", "fleet")),
+    ("user interfaces", ("report", "tui", "fleet", "check")),
     ("commands", ("commands", "cli", "__main__")),
 )
 ORDER = [package for _, packages in LAYERS for package in packages]

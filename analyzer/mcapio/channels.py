@@ -7,12 +7,14 @@ import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from analyzer.mcapio.foxglove import VIEW_SCHEMAS
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS, view_schema
 from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
 
 TOPIC_CAN_FRAMES = "/can/frames"
 TOPIC_STREAM_BYTES = "/stream/bytes"
 RAW_TOPICS = (TOPIC_CAN_FRAMES, TOPIC_STREAM_BYTES)
+# Where the gimbal points (views of the feedback, commands and UAV status): the frames of
+# world, aircraft, gimbal and camera, and the 3D scene (aircraft, field of view, target).
 
 # Name of the metadata record describing the recording, and of the one written at the end
 # with counts gathered while writing (so `info` needs no scan of a finalised file).
@@ -193,7 +195,7 @@ def channel_spec(topic: str, role: str, schemas: dict[str, dict[str, Any]]) -> C
         schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
         name = str(schema["title"])
     elif role == ROLE_VIEW:
-        name, schema = VIEW_SCHEMAS[topic]
+        name, schema = view_schema(topic)
     else:
         name = schema_name(topic)
         schema = schemas.get(topic) or permissive_schema(topic)
@@ -206,6 +208,9 @@ class MessageTee(Protocol):
     (the live Foxglove server, ``analyzer.live.server``)."""
 
     def add_channel(self, channel_id: int, spec: ChannelSpec) -> None: ...
+
+    def advertise(self, spec: ChannelSpec) -> None:
+        """A channel the recording will have (a camera's), told before its first message."""
 
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None: ...
 
