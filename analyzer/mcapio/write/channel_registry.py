@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from analyzer.mcapio.channels import ROLE_KEY, MessageTee, channel_spec
+from analyzer.mcapio.channels import ROLE_KEY, ChannelSpec, MessageTee, channel_spec
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 
 
@@ -42,7 +42,14 @@ class ChannelRegistry:
         channel_id = self.ids.get(topic)
         if channel_id is not None:
             return channel_id
-        spec = channel_spec(topic, role, self._schemas)
+        return self.register(channel_spec(topic, role, self._schemas))
+
+    def register(self, spec: ChannelSpec, metadata: dict[str, str] | None = None) -> int:
+        """The channel id of ``spec.topic``, registered with its schema and ``metadata`` (next
+        to its role) the first time: every channel of the file, camera video included."""
+        channel_id = self.ids.get(spec.topic)
+        if channel_id is not None:
+            return channel_id
         schema_id = self._schema_ids.get(spec.schema_name)
         if schema_id is None:
             schema_id = self._writer.register_schema(
@@ -50,10 +57,17 @@ class ChannelRegistry:
             )
             self._schema_ids[spec.schema_name] = schema_id
         channel_id = self._writer.register_channel(
-            topic, spec.message_encoding, schema_id, {ROLE_KEY: role}
+            spec.topic, spec.message_encoding, schema_id, {ROLE_KEY: spec.role, **(metadata or {})}
         )
         if self._tee is not None:
             self._tee.add_channel(channel_id, spec)
-        self.ids[topic] = channel_id
+        self.ids[spec.topic] = channel_id
         self.sequence[channel_id] = 0
         return channel_id
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
+        """One message on a registered channel, numbered in its sequence (also to the tee)."""
+        self.sequence[channel_id] += 1
+        self._writer.add_message(channel_id, log_time, data, log_time, self.sequence[channel_id])
+        if self._tee is not None:
+            self._tee.add_message(channel_id, log_time, data)

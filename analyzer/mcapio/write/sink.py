@@ -123,9 +123,10 @@ class McapSink:
                 live_summary=flush_interval is not None,
                 hold_back=round(hold_back * 1e9),
             )
+            self._channels = ChannelRegistry(self._writer, self._schemas, self._tee)
             self._messages = MessageWriter(
                 self._writer,
-                ChannelRegistry(self._writer, self._schemas, self._tee),
+                self._channels,
                 self.tally,
                 self._views,
                 self._tee,
@@ -202,15 +203,15 @@ class McapSink:
         """What gets every channel and message written (the live server), if anything."""
         return self._tee
 
-    def write_with(self, write: Callable[[ChunkedWriter], None]) -> None:
-        """Run ``write`` on the file's writer under the sink's lock, for channels other
-        modules own (camera video); a write error stops the recording as ``handle`` does."""
+    def write_with(self, write: Callable[[ChannelRegistry], None]) -> None:
+        """Run ``write`` with the file's channels under the sink's lock, for messages other
+        modules make (camera video); a write error stops the recording as ``handle`` does."""
         with self._lock:
             if self._closed:
                 self._raise_pending()
                 return
             try:
-                write(self._writer)
+                write(self._channels)
                 self._messages.dirty = True
             except OSError as exc:
                 self._stop_after(exc)

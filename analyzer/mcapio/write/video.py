@@ -8,15 +8,13 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from analyzer.mcapio.channels import (
-    ROLE_KEY,
     ROLE_VIEW,
     ChannelSpec,
-    MessageTee,
     channel_spec,
 )
 from analyzer.mcapio.foxglove import TIME_SCHEMA
 from analyzer.mcapio.log_time import time_ns
-from analyzer.mcapio.write.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.channel_registry import ChannelRegistry
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
@@ -141,56 +139,18 @@ def message_json(name: str, time: float, data: bytes, fmt: str) -> bytes:
     return json.dumps(message, separators=(",", ":")).encode()
 
 
-class VideoChannels:
-    """Registers the camera channels on first use and writes frames and thumbnails; a
-    ``tee`` (the live server) gets every channel and message with the very bytes written."""
-
-    def __init__(self, tee: MessageTee | None = None) -> None:
-        self._tee = tee
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
-        self._sequence: dict[int, int] = {}
-
-    def write(self, writer: ChunkedWriter, frames: Sequence[VideoFrame]) -> None:
-        for frame in frames:
-            log_time = time_ns(frame.time)
-            metadata = {
-                ROLE_KEY: ROLE_VIDEO,
-                "codec": frame.codec,
-                "width": str(frame.width),
-                "height": str(frame.height),
-            }
-            topic = video_topic(frame.stream)
-            channel = self._channel(writer, _spec(topic, ROLE_VIDEO), metadata)
-            data = message_json(frame.stream, frame.time, frame.data, frame.codec)
-            self._add(writer, channel, log_time, data)
-            if frame.thumbnail is not None:
-                topic = thumbnail_topic(frame.stream)
-                meta = {ROLE_KEY: ROLE_THUMBNAIL}
-                channel = self._channel(writer, _spec(topic, ROLE_THUMBNAIL), meta)
-                data = message_json(frame.stream, frame.time, frame.thumbnail, "jpeg")
-                self._add(writer, channel, log_time, data)
-
-    def _add(self, writer: ChunkedWriter, channel: int, log_time: int, data: bytes) -> None:
-        self._sequence[channel] += 1
-        writer.add_message(channel, log_time, data, log_time, self._sequence[channel])
-        if self._tee is not None:
-            self._tee.add_message(channel, log_time, data)
-
-    def _channel(self, writer: ChunkedWriter, spec: ChannelSpec, metadata: dict[str, str]) -> int:
-        channel = self._channels.get(spec.topic)
-        if channel is not None:
-            return channel
-        schema_id = self._schemas.get(spec.schema_name)
-        if schema_id is None:
-            schema_id = writer.register_schema(spec.schema_name, spec.schema_encoding, spec.schema)
-            self._schemas[spec.schema_name] = schema_id
-        channel = writer.register_channel(spec.topic, spec.message_encoding, schema_id, metadata)
-        self._channels[spec.topic] = channel
-        self._sequence[channel] = 0
-        if self._tee is not None:
-            self._tee.add_channel(channel, spec)
-        return channel
+def write_frames(channels: ChannelRegistry, frames: Sequence[VideoFrame]) -> None:
+    """Camera frames (and their thumbnails) on their channels, registered at first use."""
+    for frame in frames:
+        log_time = time_ns(frame.time)
+        metadata = {"codec": frame.codec, "width": str(frame.width), "height": str(frame.height)}
+        channel = channels.register(_spec(video_topic(frame.stream), ROLE_VIDEO), metadata)
+        data = message_json(frame.stream, frame.time, frame.data, frame.codec)
+        channels.add_message(channel, log_time, data)
+        if frame.thumbnail is not None:
+            channel = channels.register(_spec(thumbnail_topic(frame.stream), ROLE_THUMBNAIL))
+            data = message_json(frame.stream, frame.time, frame.thumbnail, "jpeg")
+            channels.add_message(channel, log_time, data)
 
 
 class VideoRecorder:
@@ -206,7 +166,6 @@ class VideoRecorder:
     def __init__(self, mcap: McapSink, streams: Sequence[VideoStream]) -> None:
         self.mcap = mcap
         self.streams = list(streams)
-        self.channels = VideoChannels(mcap.tee)
         self.stage = _LinkStage(self)
         self.frames_written = 0
         self._frames: list[VideoFrame] = []
@@ -241,7 +200,7 @@ class VideoRecorder:
         if frames:
             frames.sort(key=lambda f: f.time)
             self._size_overlays(frames)
-            self.mcap.write_with(lambda writer: self.channels.write(writer, frames))
+            self.mcap.write_with(lambda channels: write_frames(channels, frames))
             self.frames_written += len(frames)
 
     def _size_overlays(self, frames: Sequence[VideoFrame]) -> None:
