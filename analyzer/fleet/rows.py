@@ -11,10 +11,11 @@ import os
 import socket
 import sys
 import time
+from collections import Counter
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import pyarrow as pa
 
@@ -29,7 +30,10 @@ from analyzer.fleet.columns import (
     recordings_schema,
     verdict_column,
 )
-from analyzer.protocol.types import DIAGNOSTIC_KINDS, TOPIC_ANALYSIS_RESPONSE, Event
+from analyzer.output_file import OutputWriteError
+from analyzer.protocol.types import DIAGNOSTIC_KINDS, TOPIC_ANALYSIS_RESPONSE
+
+GROUP_ROWS = 65_536  # rows of one Parquet row group: what a table holds in memory at most
 
 _KEYS = frozenset(f.name for f in KEY_FIELDS) | {"topic", EXTRA}
 _PY_TYPES: dict[pa.DataType, tuple[type, ...]] = {
@@ -97,6 +101,13 @@ class TableColumns:
         unknown = fields.keys() - self.known
         self.extra.append({k: fields[k] for k in sorted(unknown)} if unknown else None)
 
+    def clear(self) -> None:
+        self.times.clear()
+        self.sources.clear()
+        for values in self.columns.values():
+            values.clear()
+        self.extra.clear()
+
     def table(self, recording: str, content_hash: str) -> pa.Table:
         n = len(self.times)
         arrays: list[pa.Array] = [
@@ -144,26 +155,79 @@ def timestamps(seconds: Sequence[float | None]) -> pa.Array:
     return pa.array(micros, pa.int64()).cast(TIME)
 
 
-class ColumnSink:
-    """A pipeline sink filing every decoded event under its table (findings come apart)."""
+class TablesOut(Protocol):
+    """Where an input's row groups go: files of the dataset, or back to the caller."""
+
+    def write(self, name: str, table: pa.Table) -> None: ...
+
+    def discard(self, name: str) -> None: ...
+
+
+class CollectedTables:
+    """Row groups kept for the caller (a Dask worker sending its rows back)."""
 
     def __init__(self) -> None:
+        self.parts: dict[str, list[pa.Table]] = {}
+
+    def write(self, name: str, table: pa.Table) -> None:
+        self.parts.setdefault(name, []).append(table)
+
+    def discard(self, name: str) -> None:
+        self.parts.pop(name, None)
+
+    def tables(self) -> dict[str, pa.Table]:
+        return {name: pa.concat_tables(parts) for name, parts in self.parts.items()}
+
+
+class ColumnSink:
+    """A pipeline sink filing every decoded event and finding under its table, a row group
+    at a time into ``out`` as the rows come (memory: one row group per table)."""
+
+    def __init__(
+        self, out: TablesOut, recording: str, content_hash: str, group_rows: int | None = None
+    ) -> None:
+        self.out = out
+        self.recording = recording
+        self.content_hash = content_hash
+        self.group_rows = group_rows or GROUP_ROWS
         self.tables: dict[str, TableColumns] = {}
+        self.rows = 0
+        self.verdicts: Counter[str] = Counter()
 
     def handle(self, batch: Any) -> None:
         tables = self.tables
         for event in batch.events:
             topic = event.topic
             name = TOPIC_TABLES.get(topic)
-            if name is None or topic == TOPIC_ANALYSIS_RESPONSE:
+            if name is None:
                 continue
+            if topic == TOPIC_ANALYSIS_RESPONSE:
+                self.verdicts[str(event.fields["verdict"])] += 1
             columns = tables.get(name)
             if columns is None:
                 columns = tables[name] = TableColumns(topic)
             columns.add(event.time, event.source, event.fields, event.warnings)
+            if len(columns.times) >= self.group_rows:
+                self._flush(name, columns)
 
     def close(self) -> None:
-        pass
+        for name, columns in self.tables.items():
+            if columns.times:
+                self._flush(name, columns)
+
+    def drop_findings(self) -> None:
+        """Forget every finding written (an input without a clock cannot time them)."""
+        name = TOPIC_TABLES[TOPIC_ANALYSIS_RESPONSE]
+        self.out.discard(name)
+        self.rows -= self.verdicts.total()
+        self.verdicts.clear()
+        self.tables.pop(name, None)
+
+    def _flush(self, name: str, columns: TableColumns) -> None:
+        table = columns.table(self.recording, self.content_hash)
+        columns.clear()
+        self.rows += table.num_rows
+        self.out.write(name, table)
 
 
 def worker_name() -> str:
@@ -178,35 +242,53 @@ def worker_name() -> str:
     return f"{socket.gethostname()} pid {os.getpid()}"
 
 
-def file_rows(work: FileWork) -> FileRows:
-    """Decode and analyse one file; a file that cannot be read is one row with its error."""
+def file_rows(work: FileWork, out: TablesOut | None = None) -> FileRows:
+    """Decode and analyse one file; a file that cannot be read is one row with its error.
+
+    The event and finding rows go to ``out`` as they come (default: kept and returned in
+    ``tables``); the ``recordings`` row is returned, for the caller to write last.
+    """
     started = time.perf_counter()
     result = FileRows(work, worker=worker_name())
+    kept = CollectedTables() if out is None else None
+    target: TablesOut = kept if kept is not None else out  # type: ignore[assignment]
     if work.error is not None:
         result.error = work.error
     else:
         try:
             with local_file(work.path) as path:
-                _decode(work, path, result)
+                _decode(work, path, result, target)
+        except OutputWriteError:  # the dataset cannot be written: the run stops
+            raise
         except Exception as exc:  # any failure of one file is that file's row, not the run's
-            result.tables = {}
             result.error = error_text(exc)
     if result.error is not None:
         result.tables = {RECORDINGS: recording_row(work, None, error=result.error)}
+        result.row_count = 1
+    elif kept is not None:
+        result.tables.update(kept.tables())
     result.seconds = time.perf_counter() - started
     return result
 
 
 def error_text(exc: BaseException) -> str:
-    text = str(exc).strip() or type(exc).__name__
-    if type(exc).__name__ not in ("UsageError", "InputError", "SourceError"):
-        text = f"{type(exc).__name__}: {text}"
+    """One line for the user: the message, never the exception's class name."""
+    text = str(exc).strip()
+    if not text:
+        text = _ERROR_WORDS.get(type(exc).__name__, "failed without a message")
     return text.splitlines()[0]
 
 
-def _decode(work: FileWork, path: str, result: FileRows) -> None:
+_ERROR_WORDS = {
+    "MemoryError": "out of memory",
+    "RecursionError": "too deeply nested",
+    "EOFError": "ended too early",
+}
+
+
+def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None:
     from analyzer.analysis.response import ResponseAnalyzer, Settings
-    from analyzer.commands.analyze import KeepFindings, untimed
+    from analyzer.commands.analyze import untimed
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.protocol.ids import PROTOCOL_IDS
@@ -219,10 +301,9 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
         knobs["time_allowed_s"] = work.time_allowed_s
     settings = Settings(**knobs)
     reader = open_input(path, work.fmt, work.port, wanted_ids=PROTOCOL_IDS)
-    analyzer = ResponseAnalyzer(settings)
-    kept = KeepFindings(analyzer)
-    sink = ColumnSink()
-    pipeline = Pipeline([sink], stages=[kept])  # what decode, analyze and report run
+    sink = ColumnSink(out, work.recording, work.content_hash)
+    # What decode, analyze and report run; findings reach the sink as they are made.
+    pipeline = Pipeline([sink], stages=[ResponseAnalyzer(settings)])
     try:
         run_items(reader, pipeline)
     finally:
@@ -237,34 +318,21 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
         last_time=reader.last_time,
         time_base=reader.time_base,
     )
-    findings: list[Event] = sorted(kept.findings, key=lambda e: e.time)
     notes = list(reader.notes)
-    if untimed(pipeline.tally, findings):
-        findings = []
+    if untimed(pipeline.tally, [True] if sink.verdicts else []):
+        sink.drop_findings()
         notes.append("the input carries no timestamps: responses cannot be timed")
-    found = TableColumns(TOPIC_ANALYSIS_RESPONSE)
-    for finding in findings:
-        found.add(finding.time, finding.source, finding.fields, finding.warnings)
-    columns = dict(sink.tables)
-    if findings:
-        columns[TOPIC_TABLES[TOPIC_ANALYSIS_RESPONSE]] = found
-    for name, gathered in columns.items():
-        result.tables[name] = gathered.table(work.recording, work.content_hash)
-    figures = summary.to_dict()
-    verdicts: dict[str, int] = {}
-    for finding in findings:
-        verdict = str(finding.fields["verdict"])
-        verdicts[verdict] = verdicts.get(verdict, 0) + 1
     row = {
         "source": reader.source,
         "format": reader.format_name,
-        "figures": figures,
+        "figures": summary.to_dict(),
         "items": pipeline.tally.items(),
-        "verdicts": verdicts,
-        "findings": len(findings),
+        "verdicts": dict(sink.verdicts),
+        "findings": sink.verdicts.total(),
         "notes": notes,
     }
     result.tables[RECORDINGS] = recording_row(work, row)
+    result.row_count = sink.rows + 1
 
 
 def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None = None) -> pa.Table:
