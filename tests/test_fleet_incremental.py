@@ -165,7 +165,9 @@ def test_a_failed_input_is_skipped_next_time_unless_retried(
     args = ("table", str(lost), str(cut), "-o", str(dataset), "--workers", "1")
     code, out, err = cli(*args)
     assert code == 1 and "2 input(s), 0 added (0 rows), 0 skipped" in out
-    assert err == "gimbal-analyzer table: error: every input to add failed (2); their rows say why\n"
+    assert (
+        err == "gimbal-analyzer table: error: every input to add failed (2); their rows say why\n"
+    )
     assert "2 with errors" in out
     row = recording(dataset, "lost.log")
     assert row["error"].startswith(f"cannot read {lost}: ") and row["frames"] is None
