@@ -64,7 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--csv needs it: one table per CSV",
     )
     parser.add_argument("--html", metavar="FILE", help="write the fleet report to FILE")
-    parser.add_argument("--force", action="store_true", help="replace the --html file if it exists")
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="replace the --html file if it exists"
+    )
     parser.add_argument(
         "--dask",
         metavar="ADDRESS",

@@ -188,7 +188,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration", type=seconds_value, metavar="S", help="stop after S seconds (default: Ctrl-C)"
     )
     parser.add_argument(
-        "--quiet", action="store_true", help="print only the start and the end, not each command"
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print only the start and the end, not each command",
     )
     add_heading_argument(parser)
     add_fault_arguments(parser)
