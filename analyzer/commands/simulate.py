@@ -100,15 +100,21 @@ def heading_value(text: str) -> float:
     return value % 360.0
 
 
-def add_heading_argument(parser: argparse.ArgumentParser) -> None:
+def add_heading_argument(parser: argparse.ArgumentParser, *, uav_always: bool = False) -> None:
+    """--heading; ``uav_always``: the command always plays the UAV (demo has no --uav)."""
+    flying = (
+        "the simulated aircraft keeps its nose that way while it flies (default: ahead "
+        "along the orbit)"
+        if uav_always
+        else "with --uav the aircraft keeps its nose that way while it flies (default: 0 "
+        "alone, ahead along the orbit with --uav)"
+    )
     parser.add_argument(
         "--heading",
         type=heading_value,
         metavar="DEG",
         help="the aircraft's heading, degrees from north: the gimbal's yaw from north (psi) "
-        "is then the heading plus its yaw motor angle, as on a real aircraft; with --uav "
-        "the aircraft keeps its nose that way while it flies (default: 0 alone, ahead "
-        "along the orbit with --uav)",
+        f"is then the heading plus its yaw motor angle, as on a real aircraft; {flying}",
     )
 
 
