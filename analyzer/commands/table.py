@@ -51,10 +51,17 @@ same path (checked first); this process writes each input's recordings row last.
 --client-writes is for a DIR the workers cannot reach: they send the rows back and
 this process writes them. A wrong address stops before DIR is made.
 
-An input that could not be read at all is a row too (its error, keyed by its
-path): the next runs skip it and say so. One that failed to decode is skipped
-as content already there. --retry-failed decodes every input whose row has an
-error again; a file unreadable before is taken by itself once it reads.
+An input that could not be read at all (keyed by its path) or failed to decode
+is a row too, with its error; the next runs skip it and say it failed before.
+--retry-failed decodes every input whose row has an error again; a file
+unreadable before is taken by itself once it reads. A run in which every input
+it had to add failed exits with code 1.
+
+Rows are written as they are decoded, a Parquet row group at a time: memory
+does not grow with the length of a flight.
+
+Tags stay with the content: an input already in DIR keeps its tags (a warning
+when this run gives others); --retag gives it this run's tags.
 
   gimbal-analyzer table flights/ -o fleet --dask tcp://scheduler:8786 --client-writes
   gimbal-analyzer table flights/ -o fleet --retry-failed
