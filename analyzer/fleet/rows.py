@@ -33,7 +33,7 @@ from analyzer.fleet.columns import (
 from analyzer.output_file import OutputWriteError
 from analyzer.protocol.types import DIAGNOSTIC_KINDS, TOPIC_ANALYSIS_RESPONSE
 
-GROUP_ROWS = 65_536  # rows of one Parquet row group: what a table holds in memory at most
+GROUP_ROWS = 16_384  # rows of one Parquet row group: what a table holds in memory at most
 
 _KEYS = frozenset(f.name for f in KEY_FIELDS) | {"topic", EXTRA}
 _PY_TYPES: dict[pa.DataType, tuple[type, ...]] = {
@@ -182,6 +182,8 @@ class CollectedTables:
 class ColumnSink:
     """A pipeline sink filing every decoded event and finding under its table, a row group
     at a time into ``out`` as the rows come (memory: one row group per table)."""
+
+    keeps_items = False  # events only: the reader may hand its frames on as runs
 
     def __init__(
         self, out: TablesOut, recording: str, content_hash: str, group_rows: int | None = None
