@@ -200,3 +200,16 @@ def test_collected_tables_join_their_row_groups() -> None:
     kept.write("u", pa.table({"a": [9]}))
     kept.discard("u")
     assert {n: t.to_pydict() for n, t in kept.tables().items()} == {"t": {"a": [1, 2, 3]}}
+
+
+def test_a_cluster_failure_is_one_line_without_a_class_name() -> None:
+    from analyzer.fleet.runner import cluster_error
+
+    class Scheduler:
+        address = "tcp://127.0.0.1:1"
+
+    class Client:
+        scheduler = Scheduler()
+
+    error = cluster_error(Client(), RuntimeError("the task lost its worker\nTraceback ..."))  # type: ignore[arg-type]
+    assert str(error) == "the Dask cluster at tcp://127.0.0.1:1 failed: the task lost its worker"

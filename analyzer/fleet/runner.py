@@ -170,8 +170,7 @@ def cluster_error(client: Client, exc: BaseException) -> SourceError:
             f"the Dask cluster at {address} cannot run gimbal-analyzer's tasks: install the "
             "package where its scheduler and workers run (pip install 'gimbal-analyzer[cluster]')"
         )
-    first = next((line for line in str(exc).splitlines() if line.strip()), "")
-    return SourceError(f"the Dask cluster at {address} failed: {type(exc).__name__}: {first}")
+    return SourceError(f"the Dask cluster at {address} failed: {error_text(exc)}")
 
 
 def workers_reach(client: Client, root: str) -> None:
