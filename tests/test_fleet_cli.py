@@ -16,9 +16,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from analyzer.fleet import rows as fleet_rows
+from analyzer.fleet import column_sink
+from analyzer.fleet.column_sink import CollectedTables, ColumnSink
 from analyzer.fleet.columns import CRC_RATE_UNIT
-from analyzer.fleet.rows import CollectedTables, ColumnSink, FileWork, error_text, file_rows
+from analyzer.fleet.rows import FileWork, error_text, file_rows
 from analyzer.mcapio.file_end import RecordingError
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, Event
@@ -169,7 +170,7 @@ def test_rows_leave_the_sink_a_row_group_at_a_time() -> None:
 def test_row_groups_give_the_same_dataset_and_answers(
     fleet: dict[str, Any], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(fleet_rows, "GROUP_ROWS", 2)
+    monkeypatch.setattr(column_sink, "GROUP_ROWS", 2)
     flights = fleet["root"] / "flights"
     dataset = tmp_path / "fleet"
     for folder, tags in (("A", ("gimbal=A", "firmware=1.2")), ("B", ("gimbal=B", "firmware=1.3"))):
