@@ -37,6 +37,8 @@ COMMANDS: dict[str, str] = {
     "monitor": "analyzer.commands.monitor",
     "simulate": "analyzer.commands.simulate",
     "send": "analyzer.commands.send",
+    "check": "analyzer.commands.check",
+    "interfaces": "analyzer.commands.interfaces",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",
     "layout": "analyzer.commands.layout",
