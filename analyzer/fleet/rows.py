@@ -83,8 +83,8 @@ def file_rows(work: FileWork, out: TablesOut | None = None) -> FileRows:
     """
     started = time.perf_counter()
     result = FileRows(work, worker=worker_name())
-    kept = CollectedTables() if out is None else None
-    target: TablesOut = kept if kept is not None else out  # type: ignore[assignment]
+    kept = CollectedTables()
+    target: TablesOut = out if out is not None else kept
     if work.error is not None:
         result.error = work.error
     else:
@@ -98,7 +98,7 @@ def file_rows(work: FileWork, out: TablesOut | None = None) -> FileRows:
     if result.error is not None:
         result.tables = {RECORDINGS: recording_row(work, None, error=result.error)}
         result.row_count = 1
-    elif kept is not None:
+    elif out is None:
         result.tables.update(kept.tables())
     result.seconds = time.perf_counter() - started
     return result
