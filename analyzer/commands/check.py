@@ -109,7 +109,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the recording (default check-YYYYMMDD-HHMMSS.mcap, never replacing a file)",
     )
     parser.add_argument(
-        "--force", action="store_true", help="replace an existing -o / --report file"
+        "-f", "--force", action="store_true", help="replace an existing -o / --report file"
     )
     parser.add_argument("--report", metavar="FILE", help="also write the flight report (HTML)")
     limits = parser.add_argument_group("pass limits (with --tolerance and --time-allowed)")

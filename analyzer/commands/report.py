@@ -38,7 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="the HTML file to write (default report.html)",
     )
-    parser.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="replace the output file if it exists"
+    )
     add_settings_arguments(parser)
 
 
