@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import struct
 from collections.abc import Iterator
 from typing import IO, Any
 
@@ -13,6 +14,9 @@ from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagno
 
 # format -> (python-can reader class name, text file?)
 _BLF_OBJECT_HEADER = 16  # signature, header size and version, object size and type
+_BLF_FILE_HEADER = struct.Struct("<4sL")  # python-can's blf.py: "LOGG", header size
+_BLF_HEADER_MIN = 72  # python-can reads this much (its FILE_HEADER_STRUCT) before the rest
+_READ_PIECE = 1 << 20  # a larger read is made in pieces of this size
 
 READERS: dict[str, tuple[str, bool]] = {
     "asc": ("ASCReader", True),
@@ -86,6 +90,8 @@ class PythonCanReader(InputReader):
             self._closers.append(handle)
         self._raw.seek(0)
         if fmt == "blf":  # BLF objects are read one by one: a cut shows as a short read
+            if handle is self._raw:
+                _check_blf_header(handle, self.path, self.size_bytes)
             self._watch = _ShortReads(handle)
         watched = self._watch if self._watch is not None else handle
         self._reader = self._check(lambda: self._reader_class(watched))
@@ -202,8 +208,25 @@ class PythonCanReader(InputReader):
         }
 
 
+def _check_blf_header(handle: IO[bytes], path: str, size: int | None) -> None:
+    """Refuse a BLF file whose header claims more bytes than the file has (python-can
+    would allocate what it claims before reading it)."""
+    head = handle.read(_BLF_FILE_HEADER.size)
+    handle.seek(0)
+    if len(head) < _BLF_FILE_HEADER.size or head[:4] != b"LOGG":
+        return  # python-can says what is wrong with it
+    _, header_size = _BLF_FILE_HEADER.unpack(head)
+    if header_size < _BLF_HEADER_MIN or (size is not None and header_size > size):
+        raise UsageError(
+            f"cannot read {path} as blf: its header claims to be {header_size:,} bytes long "
+            f"in a file of {size:,} bytes (a damaged or not a BLF file)"
+        )
+
+
 class _ShortReads:
-    """A binary file that notes where a read first came back shorter than asked."""
+    """A binary file that notes where a read first came back shorter than asked, and
+    reads a large request in pieces (a damaged size field costs no memory it does not
+    fill)."""
 
     def __init__(self, handle: IO[bytes]) -> None:
         self._handle = handle
@@ -212,7 +235,17 @@ class _ShortReads:
         self._after_header = False
 
     def read(self, size: int = -1) -> bytes:
-        data = self._handle.read(size)
+        if size is None or size < 0:
+            data = self._handle.read()
+        elif size <= _READ_PIECE:
+            data = self._handle.read(size)
+        else:
+            pieces = []
+            left = size
+            while left and (piece := self._handle.read(min(left, _READ_PIECE))):
+                pieces.append(piece)
+                left -= len(piece)
+            data = b"".join(pieces)
         # The end of the file is fine between objects (an empty read of the next header)
         # and at the padding after the last one (under 4 bytes).
         short = len(data) < size and (bool(data) or self._after_header) and size >= 4
