@@ -8,7 +8,8 @@ from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.base import InputItem, InputReader, time_problem
+from analyzer.inputs.library_log import LibraryLog, library_log
 from analyzer.inputs.python_can_text import DELTA, LineFeed, TextLogReading, text_lines
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
@@ -72,6 +73,7 @@ class PythonCanReader(InputReader):
         self._can = can
         self._reader_class = getattr(can, class_name)
         self._raw = self._open_binary()
+        self._log = LibraryLog()
         self.frames = 0
         self._text: TextLogReading | None = None
         self._watch: _ShortReads | None = None
@@ -94,7 +96,8 @@ class PythonCanReader(InputReader):
                 _check_blf_header(handle, self.path, self.size_bytes)
             self._watch = _ShortReads(handle)
         watched = self._watch if self._watch is not None else handle
-        self._reader = self._check(lambda: self._reader_class(watched))
+        with library_log(self._log):
+            self._reader = self._check(lambda: self._reader_class(watched))
         self._closers.append(self._reader)
 
     def _check(self, make: Any) -> Any:
@@ -106,10 +109,10 @@ class PythonCanReader(InputReader):
                 f"reading .{self.format_name} files needs an extra package: {exc.name or exc}"
             ) from None
         except Exception as exc:
-            self.close()
-            raise UsageError(
-                f"cannot read {self.path} as {self.format_name}: {_why(exc)}"
-            ) from None
+            why = _why(exc)
+        # Raised here, not in the except block: the half-made reader goes with ``exc``.
+        self.close()
+        raise UsageError(f"cannot read {self.path} as {self.format_name}: {why}")
 
     def _make_text_reader(self, feed: LineFeed) -> Any:
         options: dict[str, Any] = {}
@@ -120,10 +123,14 @@ class PythonCanReader(InputReader):
         return self._reader_class(feed, **options)
 
     def __iter__(self) -> Iterator[InputItem]:
-        if self._text is not None:
-            yield from self._text_items(self._text)
-        else:
-            yield from self._binary_items()
+        log = self._log
+        with library_log(log):
+            items = self._text_items(self._text) if self._text else self._binary_items()
+            for item in items:
+                yield item
+                if log.messages:
+                    yield from self._library_messages()
+            yield from self._library_messages()
         self.position_bytes = self.size_bytes or _tell(self._raw)
         if not self.frames and self.size_bytes:
             # python-can's text readers skip lines they do not understand without a word;
@@ -138,6 +145,18 @@ class PythonCanReader(InputReader):
                 frames_read=0,
             )
 
+    def _library_messages(self) -> Iterator[Event]:
+        """What python-can / asammdf logged (a line or record they skipped, mostly)."""
+        text = self._text
+        for message in self._log.take():
+            if text is None:
+                detail = f"after frame {self.frames}: {message}"
+                yield diagnostic(self.last_time or 0.0, self.source, BAD_FRAME, detail)
+            else:
+                line = text.feed.lineno
+                detail = f"line {line}: {message}"
+                yield diagnostic(self.last_time or 0.0, self.source, BAD_LINE, detail, line=line)
+
     def _text_items(self, text: TextLogReading) -> Iterator[InputItem]:
         raw = self._raw
         delta = text.time_base == DELTA
@@ -150,9 +169,15 @@ class PythonCanReader(InputReader):
                 yield msg
                 continue
             frame = frame_from_message(msg)
-            if delta:
-                elapsed += frame.time
-                frame.time = start + elapsed
+            problem = time_problem(frame.time)
+            if delta and problem is None:
+                problem = time_problem(start + elapsed + frame.time)
+                if problem is None:
+                    elapsed += frame.time
+                    frame.time = start + elapsed
+            if problem:  # a damaged number that python-can took for a time
+                yield text.bad_line(text.feed.lineno, text.feed.last, ValueError(problem))
+                continue
             yield from self._count(frame, raw)
             text.last_time = frame.time
 
@@ -173,7 +198,18 @@ class PythonCanReader(InputReader):
                     frames_read=self.frames,
                 )
                 return
-            yield from self._count(frame_from_message(msg), raw)
+            frame = frame_from_message(msg)
+            problem = time_problem(frame.time)
+            if problem:  # a damaged time field or start date
+                yield diagnostic(
+                    self.last_time or 0.0,
+                    self.source,
+                    BAD_FRAME,
+                    f"frame {self.frames + 1} skipped: its {problem}",
+                    frames_read=self.frames,
+                )
+                continue
+            yield from self._count(frame, raw)
         cut = self._watch.cut_at if self._watch is not None else None
         tail = getattr(self._reader, "_tail", b"")
         if cut is not None or tail:
