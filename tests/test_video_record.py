@@ -66,10 +66,10 @@ def gimbal() -> Iterator[int]:
 
 
 def record(args: list[str], cwd: Path, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    kwargs.setdefault("env", _env())
     return subprocess.run(
         [sys.executable, "-m", "analyzer", "record", *args],
         cwd=cwd,
-        env=_env(),
         capture_output=True,
         text=True,
         timeout=90,
@@ -476,3 +476,31 @@ def test_a_full_video_queue_drops_up_to_a_keyframe_and_says_so(rtsp_camera: Any)
         [{"format": f.codec, "data": base64.b64encode(f.data).decode()} for f in frames]
     )
     assert decoded == len(frames)
+
+
+def test_two_cameras_with_their_own_passwords_from_a_file_and_a_url(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    document = rtsp_camera_factory("--password", "doc-pw")
+    bench = rtsp_camera_factory("--user", "bob", "--password", "bench-pw")
+    secret = tmp_path / "camera.secret"
+    secret.write_text("doc-pw\n")
+    out = tmp_path / "flight.mcap"
+    bench_url = bench.url(1, user="bob", password="bench-pw")
+    done = record_camera(
+        document.port, out, tmp_path, "--duration", "3",
+        "--camera-password-file", str(secret), "--video", f"bench={bench_url}",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "401" not in done.stderr
+    found = messages(out)
+    assert len(found["/camera/main"]) > 20 and len(found["/camera/bench"]) > 20
+    everything = out.read_bytes()
+    assert b"doc-pw" not in everything and b"bench-pw" not in everything
+    # The same password from the environment: nothing secret on the command line.
+    environ = dict(_env(), GIMBAL_CAMERA_PASSWORD="doc-pw")
+    again = record_camera(
+        document.port, tmp_path / "env.mcap", tmp_path, "--duration", "2", env=environ
+    )
+    assert again.returncode == 0, again.stderr
+    assert len(messages(tmp_path / "env.mcap")["/camera/main"]) > 10
