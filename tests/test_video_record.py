@@ -125,6 +125,16 @@ def assert_logged_at_capture_time(
     assert diagnosis.errors == [] and diagnosis.warnings == []
 
 
+def info_of(path: Path, *options: str) -> str:
+    """``gimbal-analyzer info`` of a recording (stdout; exit 0 checked)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", *options, str(path)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
 def camera_diagnostics(found: dict[str, list[tuple[int, dict[str, Any]]]]) -> list[dict[str, Any]]:
     return [m for _, m in found.get("/diagnostics", []) if m["source"] == "camera/main"]
 
@@ -196,8 +206,16 @@ def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(
     done = record_camera(
         rtsp_camera.port, out, tmp_path, "--duration", "3", "--camera-password", "s3cr3t-x"
     )
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 1, done.stderr  # a stream asked for that never delivered
     assert "401 unauthorized: wrong user name or password" in done.stderr
+    assert (
+        f"gimbal-analyzer record: the video stream /camera/main (rtsp://admin@127.0.0.1:"
+        f"{rtsp_camera.port}/cam/realmonitor?channel=1&subtype=0) delivered no frame"
+    ) in done.stderr
+    listed = info_of(out)
+    assert re.search(r"/camera/main\s+requested \(rtsp://admin@127.0.0.1:\d+/.*\), failed", listed)
+    (stream,) = json.loads(info_of(out, "--json"))["video_streams"]
+    assert stream["failed"] is True and stream["frames"] == 0
     found = messages(out)
     assert len(found["/gimbal/attitude"]) >= 4  # the recording of the gimbal went on
     assert "/camera/main" not in found
@@ -231,6 +249,9 @@ def test_a_dropped_stream_is_a_link_diagnostic_and_comes_back_at_a_keyframe(
         _, err = recorder.communicate(timeout=60)
     assert recorder.returncode == 0, err
     found = messages(out)
+    (stream,) = json.loads(info_of(out, "--json"))["video_streams"]
+    assert len(stream["gaps"]) == 1  # the outage
+    assert stream["fps"] == pytest.approx(30, abs=1.0)  # over the time it was connected
     states = [m["state"] for m in camera_diagnostics(found)]
     assert states[:2] == ["connecting", "connected"]
     lost = states.index("lost")
@@ -504,3 +525,25 @@ def test_two_cameras_with_their_own_passwords_from_a_file_and_a_url(
     )
     assert again.returncode == 0, again.stderr
     assert len(messages(tmp_path / "env.mcap")["/camera/main"]) > 10
+
+
+def test_a_failed_telemetry_link_with_video_says_what_the_recording_holds(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    refused = free_port()  # nothing listens there: the telemetry link is refused
+    done = record(
+        [
+            "--source", f"tcp:127.0.0.1:{refused}", "-o", str(out), "--duration", "3",
+            "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+        ],
+        tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    frames = len(messages(out)["/camera/main"])
+    assert frames > 30
+    said = re.search(
+        r"holds (\d+) video frame\(s\) of /camera/main and its link diagnostics", done.stderr
+    )
+    assert said and int(said.group(1)) == frames, done.stderr
+    assert "holds only its link diagnostics" not in done.stderr
