@@ -274,7 +274,9 @@ def test_a_stream_with_b_frames_is_refused_in_words(
     camera = rtsp_camera_factory("--bframes", "2")
     out = tmp_path / "flight.mcap"
     done = record_camera(camera.port, out, tmp_path, "--duration", "3")
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 1, done.stderr  # the stream asked for was not recorded
+    assert "/camera/main (rtsp://admin@127.0.0.1:" in done.stderr
+    assert "delivered no frame" in done.stderr and "B-frames" in done.stderr
     refused = [m for m in camera_diagnostics(messages(out)) if m["state"] == "refused"]
     assert len(refused) == 1 and "B-frames" in refused[0]["detail"]
 
