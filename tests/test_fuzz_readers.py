@@ -373,3 +373,21 @@ def test_an_mf4_that_asammdf_cannot_open_is_one_line_without_a_cleanup_traceback
     gc.collect()  # asammdf's half-made reader is cleaned up: its __del__ fails
     assert code == 2
     assert err.startswith("gimbal-analyzer decode: error: cannot read") and err.count("\n") == 1
+
+
+def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_on(
+    tmp_path: Path,
+) -> None:
+    import struct
+
+    data = bytearray(_python_can(tmp_path, "x.mf4", _frames()))
+    group = data.find(b"##CG")  # the CAN frames' channel group: 40 records
+    links = struct.unpack_from("<Q", data, group + 16)[0]
+    cycles_at = group + 24 + 8 * links + 8  # after cg_record_id
+    assert struct.unpack_from("<Q", data, cycles_at)[0] == FRAMES
+    struct.pack_into("<Q", data, cycles_at, 0)  # asammdf loops for ever on this
+    path = tmp_path / "uncounted.mf4"
+    path.write_bytes(bytes(data))
+    code, _, err = decode(path, None)
+    assert code == 2
+    assert "holds data but counts no record" in err and err.count("\n") == 1

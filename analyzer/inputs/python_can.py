@@ -95,6 +95,13 @@ class PythonCanReader(InputReader):
             if handle is self._raw:
                 _check_blf_header(handle, self.path, self.size_bytes)
             self._watch = _ShortReads(handle)
+        elif fmt == "mf4" and handle is self._raw and self.size_bytes:
+            from analyzer.inputs.mf4_check import mf4_problem
+
+            problem = mf4_problem(handle, self.size_bytes)
+            if problem:
+                self.close()
+                raise UsageError(f"cannot read {self.path} as mf4: {problem}")
         watched = self._watch if self._watch is not None else handle
         with library_log(self._log):
             self._reader = self._check(lambda: self._reader_class(watched))
