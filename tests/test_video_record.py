@@ -549,3 +549,26 @@ def test_a_failed_telemetry_link_with_video_says_what_the_recording_holds(
     )
     assert said and int(said.group(1)) == frames, done.stderr
     assert "holds only its link diagnostics" not in done.stderr
+
+
+def test_demo_with_a_camera_that_never_answers_ends_with_exit_1_and_info_lists_it(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory()
+    url = camera.url(1)
+    camera.kill()  # the bench camera is off: connection refused
+    out = tmp_path / "demo.mcap"
+    done = subprocess.run(
+        [
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "2",
+            "-o", str(out), "--video", f"bench={url}",
+        ],
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "gimbal-analyzer demo: the video stream /camera/bench (rtsp://admin@" in done.stderr
+    assert "delivered no frame (last link message:" in done.stderr
+    assert messages(out)["/gimbal/attitude"]  # the simulated gimbal was recorded all the same
+    listed = info_of(out)
+    assert re.search(r"/camera/bench\s+requested \(rtsp://admin@127\.0\.0\.1:\d+/", listed)
+    assert "failed: no frame recorded" in listed and "admin:admin" not in listed
