@@ -88,20 +88,23 @@ class Block:
 
     def output(self) -> list[str]:
         """The lines shown as output (everything that is no command line)."""
+        return [self.text[i].rstrip() for i in self.output_indices()]
+
+    def output_indices(self) -> list[int]:
+        """Where the output lines are in ``text`` (blank lines around them left out)."""
         commands = {number for number, _ in self.commands()}
-        shown: list[str] = []
+        shown: list[int] = []
         skip = 0
-        for index, line in enumerate(self.text):
-            number = self.start + index + 1
-            if number in commands:
+        for index in range(len(self.text)):
+            if self.start + index + 1 in commands:
                 skip = _command_length(self, index)
             if skip:
                 skip -= 1
                 continue
-            shown.append(line.rstrip())
-        while shown and not shown[-1]:
+            shown.append(index)
+        while shown and not self.text[shown[-1]].strip():
             shown.pop()
-        while shown and not shown[0]:
+        while shown and not self.text[shown[0]].strip():
             shown.pop(0)
         return shown
 
@@ -110,9 +113,12 @@ def _is_command(text: str) -> bool:
     words = text.split()
     if "gimbal-analyzer" not in words:
         return False
+    from analyzer.cli import COMMANDS
+
     at = words.index("gimbal-analyzer")
-    # "gimbal-analyzer decode: error: ..." is an error message shown, not a command.
-    return not (len(words) > at + 1 and words[at + 1].endswith(":"))
+    # "gimbal-analyzer decode: error: ..." or "gimbal-analyzer 1.0" is output shown.
+    after = words[at + 1] if len(words) > at + 1 else ""
+    return not after or after in COMMANDS or after.startswith("-")
 
 
 def _unclosed(text: str) -> bool:
@@ -248,7 +254,10 @@ def run(command: str) -> tuple[int, str, str]:
         raise ValueError(problems[0])
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(argv)
+        try:
+            code = main(argv)
+        except SystemExit as exc:  # --help, --version, a usage error: argparse exits
+            code = exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     text = out.getvalue()
     if head is not None:
         text = "".join(text.splitlines(keepends=True)[:head])
@@ -342,6 +351,7 @@ def check_blocks(lines: list[str], *, update: bool = False) -> tuple[list[str], 
     blocks = read_blocks(lines)
     with scratch_folder():
         outputs: dict[int, list[str]] = {}  # block index -> stdout lines of its commands
+        replacements: list[tuple[Block, list[str]]] = []
         for index, block in enumerate(blocks):
             if block.mode in (None, "parse"):
                 continue
@@ -380,22 +390,17 @@ def check_blocks(lines: list[str], *, update: bool = False) -> tuple[list[str], 
                 f"{where}: the output shown is not what it prints now:\n" + "\n".join(differences)
             )
             if update:
-                new = updated(block.mode, shown, outputs[index])
-                _replace_output(lines, block, shown, new)
+                replacements.append((block, updated(block.mode, shown, outputs[index])))
+    for block, new in reversed(replacements):  # from the end: earlier blocks keep their place
+        _replace_output(lines, block, new)
     return failures, lines
 
 
-def _replace_output(lines: list[str], block: Block, shown: list[str], new: list[str]) -> None:
-    """Put ``new`` in place of the shown output lines of ``block`` in ``lines``."""
-    text = block.text
-    first = next(i for i, line in enumerate(text) if line.rstrip() == shown[0])
-    last = first
-    seen = 0
-    for i in range(first, len(text)):
-        if seen < len(shown) and text[i].rstrip() == shown[seen]:
-            seen += 1
-            last = i
-    lines[block.start + first : block.start + last + 1] = ["    " + line for line in new]
+def _replace_output(lines: list[str], block: Block, new: list[str]) -> None:
+    """Put ``new`` in place of the output lines of ``block`` in ``lines``."""
+    where = block.output_indices()
+    first, last = (where[0], where[-1] + 1) if where else (len(block.lines), len(block.lines))
+    lines[block.start + first : block.start + last] = ["    " + line for line in new]
 
 
 def parse_failures(lines: list[str]) -> list[str]:

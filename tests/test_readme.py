@@ -89,3 +89,27 @@ def test_update_replaces_a_stale_line_by_its_closest_line_of_output() -> None:
     actual = ["x", "verdicts: 3 obeyed, 3 not obeyed", "y"]
     assert updated("lines", shown, actual) == ["...", "verdicts: 3 obeyed, 3 not obeyed"]
     assert updated("exact", ["a"], ["b", "c"]) == ["b", "c"]
+
+
+def test_update_rewrites_every_stale_block_in_its_place() -> None:
+    lines = [
+        "<!-- check: exact -->",
+        "",
+        "    $ gimbal-analyzer --version",
+        "    gimbal-analyzer 0.0",
+        "    an old line",
+        "",
+        "prose",
+        "",
+        "<!-- check: lines -->",
+        "",
+        "    gimbal-analyzer --version",
+        "    gimbal-analyzer 0.0.9",
+    ]
+    failures, new = check_blocks(lines, update=True)
+    assert len(failures) == 2
+    from analyzer import __version__
+
+    now = f"    gimbal-analyzer {__version__}"
+    assert new == [*lines[:3], now, *lines[5:11], now]
+    assert check_blocks(new)[0] == []
