@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     for finding in kept.findings:
         data.add(finding)
     data.notes.extend(reader.notes)
+    data.frames = pipeline.tally.frames
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
         from analyzer.mcapio.video_reading import read_thumbnails
 
