@@ -155,3 +155,15 @@ def test_a_blf_object_claiming_gigabytes_costs_no_memory_and_is_reported(
     frames = [i for i in items if isinstance(i, CanFrame)]
     assert len(frames) == 6
     assert "cut off inside an object" in items[-1].fields["detail"]
+
+
+def test_a_blf_frame_time_beyond_any_date_is_a_bad_frame_and_reading_goes_on(
+    tmp_path: Path,
+) -> None:
+    msgs = messages()
+    msgs[1].timestamp = T0 + 9e9  # 2^33 s and more: a damaged time, no date
+    items: list[Any] = list(open_input(str(write(tmp_path / "x.blf", msgs))))
+    frames = [i for i in items if isinstance(i, CanFrame)]
+    bad = [i for i in items if isinstance(i, Event)]
+    assert len(frames) == 5 and len(bad) == 1
+    assert bad[0].fields["detail"].startswith("frame 2 skipped: its time 1.07")
