@@ -25,13 +25,19 @@ from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 
-import can
 import pytest
 
 from analyzer.cli import main
 from analyzer.inputs import FORMATS
 from analyzer.protocol.types import CanFrame
-from tests.log_makers import SAMPLE, ardupilot_log, flight_frames, savvycan_csv, sll_pcap
+from tests.log_makers import (
+    SAMPLE,
+    ardupilot_log,
+    flight_frames,
+    python_can_log,
+    savvycan_csv,
+    sll_pcap,
+)
 from tests.rosbag2_files import ros1_bag, rosbag2_mcap
 from tests.test_mcap_support import traffic, write_recording
 from tests.test_ros_bags import rosbags_bag
@@ -71,19 +77,7 @@ def _frames() -> list[CanFrame]:
 
 
 def _python_can(folder: Path, name: str, frames: list[CanFrame]) -> bytes:
-    path = folder / name
-    with can.Logger(str(path)) as logger:
-        for frame in frames:
-            logger.on_message_received(
-                can.Message(
-                    timestamp=frame.time,
-                    arbitration_id=frame.can_id,
-                    is_extended_id=frame.extended,
-                    data=frame.data,
-                    channel=0,
-                )
-            )
-    return path.read_bytes()
+    return python_can_log(folder / name, frames).read_bytes()
 
 
 def _screen(frames: list[CanFrame]) -> bytes:
