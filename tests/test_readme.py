@@ -4,14 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from tests.readme_examples import (
-    README,
-    check_blocks,
-    compare,
-    parse_failures,
-    read_blocks,
-    updated,
-)
+from tests.readme_blocks import parse_failures, read_blocks
+from tests.readme_examples import README, check_blocks, compare, updated
 
 HINT = "\n\nrefresh the shown outputs with: python -m tests.readme_examples --update"
 
