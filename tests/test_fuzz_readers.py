@@ -13,6 +13,7 @@ kept to reproduce it with ``python -m analyzer decode FILE``.
 
 from __future__ import annotations
 
+import faulthandler
 import gzip
 import io
 import os
@@ -24,6 +25,7 @@ from collections.abc import Callable, Iterator
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import pytest
 
@@ -46,6 +48,7 @@ SAMPLES = SAMPLE.parent
 SEED = int(os.environ.get("GIMBAL_FUZZ_SEED", "28"))
 MUTANTS = int(os.environ.get("GIMBAL_FUZZ_MUTANTS", "1500"))
 BUDGET_S = float(os.environ.get("GIMBAL_FUZZ_SECONDS", "25"))
+HANG_S = 60.0  # one mutant decoding longer than this is a hang (see _fuzz)
 FRAMES = 40  # frames per seed file: small files keep each decode in milliseconds
 TEXT_FORMATS = frozenset({"candump", "asc", "trc", "csv", "savvycan"})
 # Values a damaged size or count field takes: zero, small, the edges of signed and
@@ -294,9 +297,31 @@ def test_every_seed_decodes_cleanly(seeds: list[Seed], tmp_path: Path) -> None:
 
 def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) -> None:
     rng = random.Random(SEED)
-    start = time.monotonic()
     tried: dict[str, int] = {}
     failures: list[str] = []
+    with (tmp_path / "hang-traceback.txt").open("w") as dump:
+        try:
+            _fuzz(seeds, rng, tmp_path, dump, tried, failures)
+        finally:
+            faulthandler.cancel_dump_traceback_later()
+    assert not failures, f"{len(failures)} mutant(s) failed:\n" + "\n".join(failures[:10])
+    assert set(tried) == {seed.name for seed in seeds}  # the budget reached every reader
+
+
+def _fuzz(
+    seeds: list[Seed],
+    rng: random.Random,
+    tmp_path: Path,
+    dump: IO[str],
+    tried: dict[str, int],
+    failures: list[str],
+) -> None:
+    """Decode mutants until the count or the time budget runs out. A mutant that hangs
+    ends the test run after HANG_S (a hang must not stall the suite): its name is in
+    ``current-mutant.txt`` and every thread's traceback in ``hang-traceback.txt`` of
+    the test's folder (pytest's captured output is lost with the process)."""
+    start = time.monotonic()
+    current = tmp_path / "current-mutant.txt"
     for number, mutant in enumerate(mutants(seeds, rng)):
         if number >= MUTANTS or time.monotonic() - start > BUDGET_S:
             break
@@ -307,6 +332,8 @@ def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) 
         # Text and raw streams also come through a pipe, read by the standard-input readers.
         piped = mutant.fmt in ("candump", "stream") and number % 2 == 0
         label = f"#{number} {mutant.what} --format {mutant.fmt}" + (" < stdin" if piped else "")
+        current.write_text(f"{label}: {path}\n")
+        faulthandler.dump_traceback_later(HANG_S, exit=True, file=dump)
         try:
             code, _, err = decode(path, mutant.fmt, stdin=piped)
         except Exception:  # a traceback: what this test looks for
@@ -318,8 +345,6 @@ def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) 
             failures.append(f"{label}: {path}\nexit {code}: {err[-2000:]}")
         elif code == 0:
             (folder / mutant.name).unlink()  # keep only the files that failed
-    assert not failures, f"{len(failures)} mutant(s) failed:\n" + "\n".join(failures[:10])
-    assert set(tried) == {seed.name for seed in seeds}  # the budget reached every reader
 
 
 # -- what the fuzzing found, one test each ------------------------------------------------------
