@@ -103,7 +103,11 @@ class PythonCanReader(InputReader):
         self._raw.seek(0)
         if fmt == "blf":  # BLF objects are read one by one: a cut shows as a short read
             if handle is self._raw:
-                _check_blf_header(handle, self.path, self.size_bytes)
+                try:
+                    _check_blf_header(handle, self.path, self.size_bytes)
+                except UsageError:
+                    self.close()
+                    raise
             self._watch = _ShortReads(handle)
         elif fmt == "mf4" and handle is self._raw and self.size_bytes:
             from analyzer.inputs.mf4_check import mf4_problem
