@@ -70,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
+    from analyzer.scene.timeline import OverlayTimeline
 
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
@@ -78,8 +79,9 @@ def run(args: argparse.Namespace) -> int:
     analyzer = ResponseAnalyzer(settings)
     data = ReportData(source=reader.source, format_name=reader.format_name)
     kept = KeepFindings(analyzer)
+    overlays = OverlayTimeline()  # the camera pictures show what Foxglove draws over them
     # The same decoding and counting as every command; the analyzer is a stage of it.
-    pipeline = Pipeline([EventsInto(data.add)], stages=[kept])
+    pipeline = Pipeline([EventsInto(data.add), EventsInto(overlays.add)], stages=[kept])
     try:
         run_items(reader, pipeline)
     finally:
@@ -87,17 +89,21 @@ def run(args: argparse.Namespace) -> int:
     for finding in kept.findings:
         data.add(finding)
     data.notes.extend(reader.notes)
+    lead = ""
     data.frames = pipeline.tally.frames
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
+        from analyzer.check.output import recorded_steps_html
         from analyzer.mcapio.video_reading import read_thumbnails
 
-        data.pictures.extend(read_thumbnails(args.file))
+        data.pictures.extend(overlays.pictures(read_thumbnails(args.file)))
+        lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
     if data.first is not None and data.first == data.last and data.findings:
         data.findings.clear()
         data.notes.append("the input carries no timestamps: responses cannot be timed")
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
+        lead,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:

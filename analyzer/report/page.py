@@ -199,8 +199,8 @@ def _diagnostics(data: ReportData) -> str:
     return table
 
 
-def render(data: ReportData, settings: str) -> str:
-    """The whole page."""
+def render(data: ReportData, settings: str, lead: str = "") -> str:
+    """The whole page; ``lead`` is HTML of a command's own shown first (the check's steps)."""
     plots = _plot_data(data)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
@@ -221,6 +221,7 @@ def render(data: ReportData, settings: str) -> str:
         "The protocol has no acknowledgements: each command is judged from the attitude "
         "feedback that followed it.</p>",
         notes,
+        lead,
         "<h2>Overview</h2>",
         _overview(data, settings),
         "<h2>Gimbal attitude</h2>",
