@@ -18,7 +18,7 @@ from analyzer.commands.simulate import (
     fault_config,
     seconds_value,
 )
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.options import add_compression_argument
 from analyzer.pipeline import Batch
@@ -232,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
-    from analyzer.video.recording import video_recorder
+    from analyzer.video.recording import silent_streams, video_metadata, video_recorder
     from analyzer.video.spec import VIDEO_HOLD_BACK_S, video_specs
 
     # a wrong --video is a usage error before anything starts; video needs the hold-back
@@ -268,6 +268,7 @@ def run(args: argparse.Namespace) -> int:
                 f"demo: simulated gimbal and ground station on {spec}",
                 command="demo",
                 **simulator_metadata(args, config),
+                **video_metadata(args),
             ),
             compression=args.compression,
             force=args.force,
@@ -370,4 +371,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  ({hidden} repeated commands / UAV status lines not shown; --all shows them)")
     if not tui:
         print(f"  next: gimbal-analyzer info {path}   |   open {path} in Foxglove")
+    for words in silent_streams(video) if video is not None else []:
+        print(f"gimbal-analyzer demo: {words}", file=sys.stderr)  # a failure: exit 1
+        if result == 0:
+            result = EXIT_FAILED
     return result

@@ -235,7 +235,12 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.mcapio.writer import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
-    from analyzer.video.recording import video_recorder
+    from analyzer.video.recording import (
+        silent_streams,
+        video_frames,
+        video_metadata,
+        video_recorder,
+    )
     from analyzer.video.spec import video_specs
 
     if args.duration is not None and not args.duration > 0:
@@ -270,7 +275,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         sink = McapSink(
             path,
-            metadata=recording_metadata(description, spec=args.source, command="record"),
+            metadata=recording_metadata(
+                description, spec=args.source, command="record", **video_metadata(args)
+            ),
             compression=args.compression,
             force=args.force,
             inputs=inputs,
@@ -360,11 +367,13 @@ def run(args: argparse.Namespace) -> int:
         # A live source that delivered nothing is a failed capture (exit 1), not a
         # success: say why we think nothing came (the last link message).
         last = link.last_words()
+        pictures = video_frames(video) if video is not None else None
+        holds = f"{pictures} and its link diagnostics" if pictures else "only its link diagnostics"
         print(
             f"gimbal-analyzer record: nothing was received from {description} in "
             f"{stats.elapsed_s:.1f} s"
             + (f" (last link message: {last})" if last else "")
-            + f"; the recording {path} holds only its link diagnostics",
+            + f"; the recording {path} holds {holds}",
             file=sys.stderr,
         )
         result = EXIT_FAILED
@@ -375,6 +384,11 @@ def run(args: argparse.Namespace) -> int:
             f"capture ended ({link.status.describe(time.time())})",
             file=sys.stderr,
         )
+    for words in silent_streams(video) if video is not None else []:
+        # A stream asked for that never delivered is a failure, even with --quiet.
+        print(f"gimbal-analyzer record: {words}", file=sys.stderr)
+        if result == 0:
+            result = EXIT_FAILED
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "

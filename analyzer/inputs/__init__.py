@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import gzip
 import os
 import re
 from collections.abc import Iterable
@@ -10,6 +9,7 @@ from collections.abc import Iterable
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
 from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
+from analyzer.inputs.textlines import GZIP_MAGIC, TolerantGunzip
 from analyzer.protocol.ids import TCP_PORT
 
 __all__ = ["FORMATS", "InputItem", "InputReader", "detect_format", "open_input"]
@@ -135,15 +135,22 @@ def sniff_format(head: bytes) -> str | None:
 
 
 def _head(path: str) -> bytes:
+    """The first SNIFF_BYTES of a file, decompressed when it is gzip (as much of them as
+    decompresses: a damaged gzip file is the reader's to report, with its diagnostic)."""
     with open_binary(path) as handle:
         head = handle.read(SNIFF_BYTES)
-    if head[:2] == b"\x1f\x8b":
+        if head[:2] != GZIP_MAGIC:
+            return head
+        handle.seek(0)
+        unpacked = b""
         try:
-            with gzip.open(path, "rb") as packed:
-                head = packed.read(SNIFF_BYTES)
-        except (OSError, EOFError):
+            for block in TolerantGunzip(handle).read_blocks():
+                unpacked += block
+                if len(unpacked) >= SNIFF_BYTES:
+                    break
+        except OSError:
             pass
-    return head
+    return unpacked[:SNIFF_BYTES]
 
 
 def open_input(
