@@ -186,6 +186,23 @@ def sll_pcap(
     return path
 
 
+def python_can_log(path: Path, frames: list[CanFrame]) -> Path:
+    """The frames written by python-can's ``can.Logger`` (the format from the suffix)."""
+    import can
+
+    with can.Logger(str(path)) as logger:
+        for f in frames:
+            logger.on_message_received(
+                can.Message(
+                    timestamp=f.time,
+                    arbitration_id=f.can_id,
+                    data=f.data,
+                    is_extended_id=f.extended,
+                )
+            )
+    return path
+
+
 def savvycan_csv(frames: list[CanFrame]) -> str:
     """SavvyCAN's native CSV: microsecond times, 8-digit hex IDs, eight data columns."""
     lines = ["Time Stamp,ID,Extended,Dir,Bus,LEN,D1,D2,D3,D4,D5,D6,D7,D8"]

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import can
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -16,7 +15,7 @@ from hypothesis import strategies as st
 from analyzer.inputs import InputReader, detect_format, open_input
 from analyzer.inputs.python_can.text_logs import ABSOLUTE, RELATIVE_TO_START
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event
-from tests.log_makers import flight_frames, savvycan_csv
+from tests.log_makers import flight_frames, python_can_log, savvycan_csv
 
 FRAMES = flight_frames()
 
@@ -73,17 +72,7 @@ def test_a_damaged_savvycan_line_is_reported_and_the_next_is_read(tmp_path: Path
 
 
 def python_can_csv(path: Path, frames: list[CanFrame]) -> list[str]:
-    with can.Logger(str(path)) as logger:
-        for f in frames:
-            logger.on_message_received(
-                can.Message(
-                    timestamp=f.time,
-                    arbitration_id=f.can_id,
-                    data=f.data,
-                    is_extended_id=f.extended,
-                )
-            )
-    return path.read_text().splitlines(keepends=True)
+    return python_can_log(path, frames).read_text().splitlines(keepends=True)
 
 
 @pytest.mark.parametrize("header", [True, False])

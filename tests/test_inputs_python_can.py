@@ -115,3 +115,55 @@ def test_not_a_blf_is_a_usage_error(tmp_path: Path) -> None:
     path.write_bytes(b"this is not a BLF file at all, not even close, no" * 4)
     with pytest.raises(UsageError, match=r"x\.blf"):
         open_input(str(path))
+
+
+def _blf_with(tmp_path: Path, offset: int, value: int) -> Path:
+    """A real BLF (python-can's writer) with the 32-bit size field at ``offset`` changed."""
+    path = write(tmp_path / "x.blf", messages())
+    data = bytearray(path.read_bytes())
+    data[offset : offset + 4] = value.to_bytes(4, "little")
+    path.write_bytes(bytes(data))
+    return path
+
+
+@pytest.mark.parametrize("claim", [2_700_000_000, 10])
+def test_a_blf_header_claiming_another_size_is_refused_in_one_line(
+    tmp_path: Path, claim: int
+) -> None:
+    path = _blf_with(tmp_path, 4, claim)  # the file header's own size (144 as written)
+    size = path.stat().st_size
+    with pytest.raises(UsageError) as caught:
+        open_input(str(path))
+    message = str(caught.value)
+    assert "\n" not in message
+    assert f"claims to be {claim:,} bytes long in a file of {size:,} bytes" in message
+
+
+def test_a_blf_object_claiming_gigabytes_costs_no_memory_and_is_reported(
+    tmp_path: Path,
+) -> None:
+    import tracemalloc
+
+    path = _blf_with(tmp_path, 144 + 8, 2_700_000_000)  # the first object's size
+    tracemalloc.start()
+    try:
+        items: list[Any] = list(open_input(str(path)))
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 20_000_000  # python-can alone would have asked for 2.7 GB
+    frames = [i for i in items if isinstance(i, CanFrame)]
+    assert len(frames) == 6
+    assert "cut off inside an object" in items[-1].fields["detail"]
+
+
+def test_a_blf_frame_time_beyond_any_date_is_a_bad_frame_and_reading_goes_on(
+    tmp_path: Path,
+) -> None:
+    msgs = messages()
+    msgs[1].timestamp = T0 + 9e9  # 2^33 s and more: a damaged time, no date
+    items: list[Any] = list(open_input(str(write(tmp_path / "x.blf", msgs))))
+    frames = [i for i in items if isinstance(i, CanFrame)]
+    bad = [i for i in items if isinstance(i, Event)]
+    assert len(frames) == 5 and len(bad) == 1
+    assert bad[0].fields["detail"].startswith("frame 2 skipped: its time 1.07")

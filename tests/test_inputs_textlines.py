@@ -7,6 +7,7 @@ import io
 import zlib
 from pathlib import Path
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -163,3 +164,38 @@ def test_stdin_reads_a_huge_line_in_bounded_pieces() -> None:
     assert len(bad.fields.get("raw", "")) < 1000
     assert reader.stats["lines"] == 3
     assert reader.position_bytes == len(stream.getvalue())
+
+
+def _corrupt_deflate(path: Path) -> Path:
+    """A gzip file of candump text whose deflate stream is damaged near its start."""
+    text = b"".join(b"(%d.000000) can0 00000F01#0F07%012X\n" % (i, i) for i in range(3000))
+    packed = bytearray(gzip.compress(text))
+    packed[40:60] = bytes(b ^ 0xFF for b in packed[40:60])  # after the 10-byte header
+    with pytest.raises(zlib.error):
+        gzip.decompress(bytes(packed))
+    path.write_bytes(bytes(packed))
+    return path
+
+
+def test_a_gz_with_a_corrupt_deflate_stream_is_the_gzip_damage_diagnostic(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.cli import main
+
+    path = _corrupt_deflate(tmp_path / "x.log.gz")
+    code = main(["decode", str(path)])  # the format from the name, the content looked at
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "gzip data damaged after 0 decompressed bytes" in out
+
+
+def test_a_nameless_gz_that_does_not_decompress_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.cli import main
+
+    path = _corrupt_deflate(tmp_path / "x.gz")
+    code = main(["decode", str(path)])
+    _, err = capsys.readouterr()
+    assert code == 2
+    assert err.count("\n") == 1 and "cannot tell the format of" in err

@@ -66,10 +66,10 @@ def gimbal() -> Iterator[int]:
 
 
 def record(args: list[str], cwd: Path, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    kwargs.setdefault("env", _env())
     return subprocess.run(
         [sys.executable, "-m", "analyzer", "record", *args],
         cwd=cwd,
-        env=_env(),
         capture_output=True,
         text=True,
         timeout=90,
@@ -125,6 +125,16 @@ def assert_logged_at_capture_time(
                 assert log_time == stamp["sec"] * 1_000_000_000 + stamp["nsec"], topic
     diagnosis = examine(path)
     assert diagnosis.errors == [] and diagnosis.warnings == []
+
+
+def info_of(path: Path, *options: str) -> str:
+    """``gimbal-analyzer info`` of a recording (stdout; exit 0 checked)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "analyzer", "info", *options, str(path)],
+        env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return done.stdout
 
 
 def camera_diagnostics(found: dict[str, list[tuple[int, dict[str, Any]]]]) -> list[dict[str, Any]]:
@@ -198,8 +208,16 @@ def test_wrong_password_is_401_in_words_and_the_telemetry_goes_on(
     done = record_camera(
         rtsp_camera.port, out, tmp_path, "--duration", "3", "--camera-password", "s3cr3t-x"
     )
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 1, done.stderr  # a stream asked for that never delivered
     assert "401 unauthorized: wrong user name or password" in done.stderr
+    assert (
+        f"gimbal-analyzer record: the video stream /camera/main (rtsp://admin@127.0.0.1:"
+        f"{rtsp_camera.port}/cam/realmonitor?channel=1&subtype=0) delivered no frame"
+    ) in done.stderr
+    listed = info_of(out)
+    assert re.search(r"/camera/main\s+requested \(rtsp://admin@127.0.0.1:\d+/.*\), failed", listed)
+    (stream,) = json.loads(info_of(out, "--json"))["video_streams"]
+    assert stream["failed"] is True and stream["frames"] == 0
     found = messages(out)
     assert len(found["/gimbal/attitude"]) >= 4  # the recording of the gimbal went on
     assert "/camera/main" not in found
@@ -233,6 +251,9 @@ def test_a_dropped_stream_is_a_link_diagnostic_and_comes_back_at_a_keyframe(
         _, err = recorder.communicate(timeout=60)
     assert recorder.returncode == 0, err
     found = messages(out)
+    (stream,) = json.loads(info_of(out, "--json"))["video_streams"]
+    assert len(stream["gaps"]) == 1  # the outage
+    assert stream["fps"] == pytest.approx(30, abs=1.0)  # over the time it was connected
     states = [m["state"] for m in camera_diagnostics(found)]
     assert states[:2] == ["connecting", "connected"]
     lost = states.index("lost")
@@ -255,7 +276,9 @@ def test_a_stream_with_b_frames_is_refused_in_words(
     camera = rtsp_camera_factory("--bframes", "2")
     out = tmp_path / "flight.mcap"
     done = record_camera(camera.port, out, tmp_path, "--duration", "3")
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 1, done.stderr  # the stream asked for was not recorded
+    assert "/camera/main (rtsp://admin@127.0.0.1:" in done.stderr
+    assert "delivered no frame" in done.stderr and "B-frames" in done.stderr
     refused = [m for m in camera_diagnostics(messages(out)) if m["state"] == "refused"]
     assert len(refused) == 1 and "B-frames" in refused[0]["detail"]
 
@@ -478,3 +501,76 @@ def test_a_full_video_queue_drops_up_to_a_keyframe_and_says_so(rtsp_camera: Any)
         [{"format": f.codec, "data": base64.b64encode(f.data).decode()} for f in frames]
     )
     assert decoded == len(frames)
+
+
+def test_two_cameras_with_their_own_passwords_from_a_file_and_a_url(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    document = rtsp_camera_factory("--password", "doc-pw")
+    bench = rtsp_camera_factory("--user", "bob", "--password", "bench-pw")
+    secret = tmp_path / "camera.secret"
+    secret.write_text("doc-pw\n")
+    out = tmp_path / "flight.mcap"
+    bench_url = bench.url(1, user="bob", password="bench-pw")
+    done = record_camera(
+        document.port, out, tmp_path, "--duration", "3",
+        "--camera-password-file", str(secret), "--video", f"bench={bench_url}",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "401" not in done.stderr
+    found = messages(out)
+    assert len(found["/camera/main"]) > 20 and len(found["/camera/bench"]) > 20
+    everything = out.read_bytes()
+    assert b"doc-pw" not in everything and b"bench-pw" not in everything
+    # The same password from the environment: nothing secret on the command line.
+    environ = dict(_env(), GIMBAL_CAMERA_PASSWORD="doc-pw")
+    again = record_camera(
+        document.port, tmp_path / "env.mcap", tmp_path, "--duration", "2", env=environ
+    )
+    assert again.returncode == 0, again.stderr
+    assert len(messages(tmp_path / "env.mcap")["/camera/main"]) > 10
+
+
+def test_a_failed_telemetry_link_with_video_says_what_the_recording_holds(
+    rtsp_camera: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "flight.mcap"
+    refused = free_port()  # nothing listens there: the telemetry link is refused
+    done = record(
+        [
+            "--source", f"tcp:127.0.0.1:{refused}", "-o", str(out), "--duration", "3",
+            "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
+        ],
+        tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    frames = len(messages(out)["/camera/main"])
+    assert frames > 30
+    said = re.search(
+        r"holds (\d+) video frame\(s\) of /camera/main and its link diagnostics", done.stderr
+    )
+    assert said and int(said.group(1)) == frames, done.stderr
+    assert "holds only its link diagnostics" not in done.stderr
+
+
+def test_demo_with_a_camera_that_never_answers_ends_with_exit_1_and_info_lists_it(
+    rtsp_camera_factory: Callable[..., Any], tmp_path: Path
+) -> None:
+    camera = rtsp_camera_factory()
+    url = camera.url(1)
+    camera.kill()  # the bench camera is off: connection refused
+    out = tmp_path / "demo.mcap"
+    done = subprocess.run(
+        [
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "2",
+            "-o", str(out), "--video", f"bench={url}",
+        ],
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "gimbal-analyzer demo: the video stream /camera/bench (rtsp://admin@" in done.stderr
+    assert "delivered no frame (last link message:" in done.stderr
+    assert messages(out)["/gimbal/attitude"]  # the simulated gimbal was recorded all the same
+    listed = info_of(out)
+    assert re.search(r"/camera/bench\s+requested \(rtsp://admin@127\.0\.0\.1:\d+/", listed)
+    assert "failed: no frame recorded" in listed and "admin:admin" not in listed

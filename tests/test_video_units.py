@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import itertools
 from pathlib import Path
 
@@ -26,7 +27,7 @@ from analyzer.video.annexb import (
     split_nals,
 )
 from analyzer.video.frame_clock import FrameClock, Stamp
-from analyzer.video.spec import parse_video_spec
+from analyzer.video.spec import PASSWORD_ENV, parse_video_spec, video_specs
 
 # SPS and PPS exactly as the test camera's x264 sends them (extradata of the RTSP stream).
 SPS = bytes.fromhex("6742c01eda0280bfe5c05a8303035280000003008000001e478b1750")
@@ -160,6 +161,59 @@ def test_video_specs_of_the_document_and_any_url() -> None:
         "rtsp://u:pw@10.0.0.9/live",
         "rtsp://u@10.0.0.9/live",
     )
+
+
+def _options(*argv: str) -> argparse.Namespace:
+    from analyzer.cli import build_parser
+
+    return build_parser("record").parse_args(
+        ["record", "--source", "can:vcan0", "-o", "x.mcap", *argv]
+    )
+
+
+def test_credentials_written_in_a_url_win_for_that_stream(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv(PASSWORD_ENV, raising=False)
+    args = _options(
+        "--video", "main", "--video", "bench=rtsp://bob:pw%402@10.0.0.9/live",
+        "--video", "door=rtsp://10.0.0.7/live", "--video", "yard=rtsp://eve@10.0.0.8/live",
+        "--camera-password", "doc-pw",
+    )  # fmt: skip
+    main, bench, door, yard = video_specs(args)
+    assert "//admin:doc-pw@192.168.42.108:554/" in main.url
+    assert bench.url == "rtsp://bob:pw%402@10.0.0.9/live"  # not the document camera's
+    assert door.url == "rtsp://10.0.0.7/live"  # no user to go with a password
+    assert yard.url == "rtsp://eve:doc-pw@10.0.0.8/live"  # the URL's user, the option's password
+
+
+def test_the_password_from_a_file_or_the_environment_stays_out_of_the_command_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    secret = tmp_path / "camera.secret"
+    secret.write_text("from-file\nsecond line ignored\n")
+    monkeypatch.setenv(PASSWORD_ENV, "from-env")
+    (main,) = video_specs(_options("--video", "main", "--camera-password-file", str(secret)))
+    assert "admin:from-file@" in main.url and "from-file" not in main.shown
+    (main,) = video_specs(_options("--video", "main"))
+    assert "admin:from-env@" in main.url
+    (main,) = video_specs(_options("--video", "main", "--camera-password", "given"))
+    assert "admin:given@" in main.url
+    monkeypatch.delenv(PASSWORD_ENV)
+    (main,) = video_specs(_options("--video", "main"))
+    assert "admin:admin@" in main.url
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--camera-password", "a", "--camera-password-file", "x"], "not both"),
+        (["--camera-password-file", "/nonexistent/secret"], "cannot read it"),
+    ],
+)
+def test_a_password_option_that_cannot_be_used_is_one_line(argv: list[str], message: str) -> None:
+    with pytest.raises(UsageError, match=message):
+        video_specs(_options("--video", "main", *argv))
 
 
 @pytest.mark.parametrize("text", ["front", "x y=rtsp://h/p", "a=http://h/p", "a=rtsp:///p", "sub3"])

@@ -16,7 +16,7 @@ from analyzer.commands.simulate import (
     fault_config,
     seconds_value,
 )
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
@@ -217,6 +217,7 @@ def written_by_demo(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from analyzer.capture import OUTPUT_CLOSED
     from analyzer.commands.live_recording import Companion, open_live_recording
+    from analyzer.commands.video_options import silent_streams, video_metadata
     from analyzer.live.attach import foxglove_summary
     from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
@@ -261,12 +262,13 @@ def run(args: argparse.Namespace) -> int:
             f"demo: simulated gimbal and ground station on {spec}",
             command="demo",
             **simulator_metadata(args, config),
+            **video_metadata(args),
         ),
         hold_back=hold_back,
         sinks_after=lambda sink, video: [printer],
         replaceable=written_by_demo,
     )
-    capture, sink, live = recording.capture, recording.sink, recording.live
+    capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
     try:
         scene = Scene(spec, config)
     except BaseException:
@@ -314,4 +316,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  ({hidden} repeated commands / UAV status lines not shown; --all shows them)")
     if not tui:
         print(f"  next: gimbal-analyzer info {path}   |   open {path} in Foxglove")
+    for words in silent_streams(video) if video is not None else []:
+        print(f"gimbal-analyzer demo: {words}", file=sys.stderr)  # a failure: exit 1
+        if result == 0:
+            result = EXIT_FAILED
     return result

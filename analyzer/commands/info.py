@@ -150,10 +150,12 @@ def render(info: RecordingInfo) -> str:
 def run(args: argparse.Namespace) -> int:
     from analyzer.mcapio.read.info import recording_info
     from analyzer.mcapio.read.video import video_dicts, video_lines
-    from analyzer.mcapio.write.video import COMPRESSED_VIDEO
+    from analyzer.mcapio.write.video import COMPRESSED_VIDEO, VIDEO_METADATA_KEY
 
     info = recording_info(args.recording, scan=args.scan)
-    has_video = any(t.schema == COMPRESSED_VIDEO for t in info.topics)
+    has_video = any(t.schema == COMPRESSED_VIDEO for t in info.topics) or bool(
+        info.metadata.get(VIDEO_METADATA_KEY)
+    )
     if args.json:
         out = info.to_dict()
         if has_video:

@@ -222,6 +222,7 @@ def _input_files(spec: str) -> list[str]:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.commands.live_recording import open_live_recording
+    from analyzer.commands.video_options import silent_streams, video_frames, video_metadata
     from analyzer.live.attach import foxglove_note, foxglove_summary
     from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
@@ -276,7 +277,9 @@ def run(args: argparse.Namespace) -> int:
         args,
         source,
         path,
-        metadata=recording_metadata(description, spec=args.source, command="record"),
+        metadata=recording_metadata(
+            description, spec=args.source, command="record", **video_metadata(args)
+        ),
         hold_back=hold_back,
         sinks_after=own_sinks,
         inputs=inputs,
@@ -323,11 +326,13 @@ def run(args: argparse.Namespace) -> int:
         # A live source that delivered nothing is a failed capture (exit 1), not a
         # success: say why we think nothing came (the last link message).
         last = link.last_words()
+        pictures = video_frames(video) if video is not None else None
+        holds = f"{pictures} and its link diagnostics" if pictures else "only its link diagnostics"
         print(
             f"gimbal-analyzer record: nothing was received from {description} in "
             f"{stats.elapsed_s:.1f} s"
             + (f" (last link message: {last})" if last else "")
-            + f"; the recording {path} holds only its link diagnostics",
+            + f"; the recording {path} holds {holds}",
             file=sys.stderr,
         )
         result = EXIT_FAILED
@@ -338,6 +343,11 @@ def run(args: argparse.Namespace) -> int:
             f"capture ended ({link.status.describe(time.time())})",
             file=sys.stderr,
         )
+    for words in silent_streams(video) if video is not None else []:
+        # A stream asked for that never delivered is a failure, even with --quiet.
+        print(f"gimbal-analyzer record: {words}", file=sys.stderr)
+        if result == 0:
+            result = EXIT_FAILED
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 import os
 from collections.abc import Iterator
 from typing import IO, Any
@@ -13,6 +14,16 @@ from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 
 # FrameRun only from a reader whose ``frame_runs`` was set.
 InputItem = CanFrame | StreamChunk | Event | FrameRun
+# Frame times are seconds since 1970 or since a log's start: a number beyond 2**33 s
+# (the year 2242) is no time but a damaged field, and later steps cannot date it.
+LATEST_TIME = float(2**33)
+
+
+def time_problem(seconds: float) -> str | None:
+    """Why ``seconds`` cannot be a frame's time (None when it can)."""
+    if math.isfinite(seconds) and abs(seconds) <= LATEST_TIME:
+        return None
+    return f"time {seconds:g} s is out of range"
 
 
 class InputReader:

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import gzip
 import os
 import re
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import open_binary
 from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
+from analyzer.inputs.textlines import GZIP_MAGIC, TolerantGunzip
 
 # --format values and what they read.
 FORMATS: dict[str, str] = {
@@ -131,12 +131,19 @@ def sniff_format(head: bytes) -> str | None:
 
 
 def read_head(path: str) -> bytes:
+    """The first SNIFF_BYTES of a file, decompressed when it is gzip (as much of them as
+    decompresses: a damaged gzip file is the reader's to report, with its diagnostic)."""
     with open_binary(path) as handle:
         head = handle.read(SNIFF_BYTES)
-    if head[:2] == b"\x1f\x8b":
+        if head[:2] != GZIP_MAGIC:
+            return head
+        handle.seek(0)
+        unpacked = b""
         try:
-            with gzip.open(path, "rb") as packed:
-                head = packed.read(SNIFF_BYTES)
-        except (OSError, EOFError):
+            for block in TolerantGunzip(handle).read_blocks():
+                unpacked += block
+                if len(unpacked) >= SNIFF_BYTES:
+                    break
+        except OSError:
             pass
-    return head
+    return unpacked[:SNIFF_BYTES]

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.base import InputItem, InputReader, time_problem
 from analyzer.inputs.python_can.text_logs import ABSOLUTE, RAW_LIMIT, RELATIVE_TO_START, text_lines
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
@@ -87,6 +87,9 @@ class SavvyCanReader(InputReader):
             data = bytes(int(cell, 16) for cell in cells)
             if can_id > (0x1FFFFFFF if extended else 0x7FF):
                 raise ValueError(f"ID 0x{can_id:X} too large")
+            problem = time_problem(micros / 1e6)
+            if problem:
+                raise ValueError(problem)
         except (ValueError, IndexError) as exc:
             shown = text if len(text) <= 60 else text[:57] + "..."
             return diagnostic(

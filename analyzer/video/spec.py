@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import re
 from dataclasses import dataclass
 from urllib.parse import quote, unquote, urlsplit, urlunsplit
@@ -15,6 +16,7 @@ DEFAULT_CAMERA = "192.168.42.108:554"
 DEFAULT_RTSP_PORT = 554
 DEFAULT_USER = "admin"
 DEFAULT_PASSWORD = "admin"
+PASSWORD_ENV = "GIMBAL_CAMERA_PASSWORD"  # the password without showing it in ps or history
 DOCUMENT_PATH = "/cam/realmonitor?channel=1&subtype={subtype}"
 STREAMS = {"main": 0, "sub1": 1, "sub2": 2, "thermal": 2}
 DEFAULT_THUMBNAIL_S = 2.0
@@ -68,8 +70,27 @@ def add_video_options(parser: argparse.ArgumentParser) -> None:
         metavar="HOST[:PORT]",
         help=f"the camera of main/sub1/sub2/thermal (default {DEFAULT_CAMERA})",
     )
-    group.add_argument("--camera-user", default=None, metavar="USER", help="default admin")
-    group.add_argument("--camera-password", default=None, metavar="PASSWORD", help="default admin")
+    group.add_argument(
+        "--camera-user",
+        default=None,
+        metavar="USER",
+        help="default admin; a user written in a NAME=rtsp://USER@... URL wins for that stream",
+    )
+    group.add_argument(
+        "--camera-password",
+        default=None,
+        metavar="PASSWORD",
+        help="of the streams whose URL has none (default: the first line of "
+        f"--camera-password-file, else ${PASSWORD_ENV}, else admin); a password written in "
+        "a NAME=rtsp://USER:PASSWORD@... URL wins for that stream. Given here it is seen "
+        "by everyone in ps and kept in the shell's history: prefer the file or the variable",
+    )
+    group.add_argument(
+        "--camera-password-file",
+        default=None,
+        metavar="FILE",
+        help="read the camera password from the first line of FILE",
+    )
     group.add_argument(
         "--thumbnail-interval",
         type=float,
@@ -85,20 +106,39 @@ def video_specs(args: argparse.Namespace) -> list[VideoSpec]:
     interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
     if interval is not None and interval < 0:
         raise UsageError("--thumbnail-interval must be 0 (none) or a positive number of seconds")
+    texts = getattr(args, "video", [])
+    password = camera_password(args) if texts else None
     specs = [
-        parse_video_spec(
-            text,
-            camera=args.camera,
-            user=args.camera_user,
-            password=args.camera_password,
-        )
-        for text in getattr(args, "video", [])
+        parse_video_spec(text, camera=args.camera, user=args.camera_user, password=password)
+        for text in texts
     ]
     names = [spec.name for spec in specs]
     for name in names:
         if names.count(name) > 1:
             raise UsageError(f"--video {name} is given twice (each stream needs its own name)")
     return specs
+
+
+def camera_password(args: argparse.Namespace) -> str | None:
+    """The password of --camera-password, else of --camera-password-file, else of
+    $GIMBAL_CAMERA_PASSWORD (None: the streams' own or the document's default)."""
+    given = getattr(args, "camera_password", None)
+    path = getattr(args, "camera_password_file", None)
+    if given is not None and path is not None:
+        raise UsageError("give --camera-password or --camera-password-file, not both")
+    if given is not None:
+        return given
+    if path is not None:
+        try:
+            with open(path, encoding="utf-8") as handle:
+                line = handle.readline().rstrip("\r\n")
+        except (OSError, UnicodeDecodeError) as exc:
+            why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            raise UsageError(f"--camera-password-file {path}: cannot read it ({why})") from None
+        if not line:
+            raise UsageError(f"--camera-password-file {path}: its first line is empty")
+        return line
+    return os.environ.get(PASSWORD_ENV) or None
 
 
 def parse_video_spec(
@@ -140,11 +180,13 @@ def _camera_address(camera: str) -> tuple[str, int]:
 
 
 def _spec(name: str, url: str, user: str | None, password: str | None) -> VideoSpec:
+    """The stream with its credentials: those written in the URL win (another camera
+    than the document's has its own), the options' fill in what the URL leaves out."""
     parts = urlsplit(url)
-    url_user = unquote(parts.username) if parts.username else None
-    url_password = unquote(parts.password) if parts.password else None
-    user = user or url_user
-    password = password or url_password
+    if parts.username:
+        user = unquote(parts.username)
+    if parts.password is not None:
+        password = unquote(parts.password)
     host = parts.hostname or ""
     host = f"[{host}]" if ":" in host else host
     where = f"{host}:{parts.port}" if parts.port else host

@@ -3,17 +3,22 @@
 from __future__ import annotations
 
 import gzip
+import struct
 from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.inputs.base import InputItem, InputReader
+from analyzer.inputs.base import InputItem, InputReader, time_problem
+from analyzer.inputs.python_can.library_log import LibraryLog, library_log
 from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
 from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
 # format -> (python-can reader class name, text file?)
 _BLF_OBJECT_HEADER = 16  # signature, header size and version, object size and type
+_BLF_FILE_HEADER = struct.Struct("<4sL")  # python-can's blf.py: "LOGG", header size
+_BLF_HEADER_MIN = 72  # python-can reads this much (its FILE_HEADER_STRUCT) before the rest
+_READ_PIECE = 1 << 20  # a larger read is made in pieces of this size
 
 READERS: dict[str, tuple[str, bool]] = {
     "asc": ("ASCReader", True),
@@ -48,6 +53,7 @@ class PythonCanReader(InputReader):
         self._can = can
         self._reader_class = getattr(can, class_name)
         self._raw = self._open_binary()
+        self._log = LibraryLog()
         self.frames = 0
         self._text: TextLogReading | None = None
         self._watch: _ShortReads | None = None
@@ -66,9 +72,23 @@ class PythonCanReader(InputReader):
             self._closers.append(handle)
         self._raw.seek(0)
         if fmt == "blf":  # BLF objects are read one by one: a cut shows as a short read
+            if handle is self._raw:
+                try:
+                    _check_blf_header(handle, self.path, self.size_bytes)
+                except UsageError:
+                    self.close()
+                    raise
             self._watch = _ShortReads(handle)
+        elif fmt == "mf4" and handle is self._raw and self.size_bytes:
+            from analyzer.inputs.python_can.mf4_check import mf4_problem
+
+            problem = mf4_problem(handle, self.size_bytes)
+            if problem:
+                self.close()
+                raise UsageError(f"cannot read {self.path} as mf4: {problem}")
         watched = self._watch if self._watch is not None else handle
-        self._reader = self._check(lambda: self._reader_class(watched))
+        with library_log(self._log):
+            self._reader = self._check(lambda: self._reader_class(watched))
         self._closers.append(self._reader)
 
     def _check(self, make: Any) -> Any:
@@ -80,10 +100,10 @@ class PythonCanReader(InputReader):
                 f"reading .{self.format_name} files needs an extra package: {exc.name or exc}"
             ) from None
         except Exception as exc:
-            self.close()
-            raise UsageError(
-                f"cannot read {self.path} as {self.format_name}: {_why(exc)}"
-            ) from None
+            why = _why(exc)
+        # Raised here, not in the except block: the half-made reader goes with ``exc``.
+        self.close()
+        raise UsageError(f"cannot read {self.path} as {self.format_name}: {why}")
 
     def _make_text_reader(self, feed: LineFeed) -> Any:
         options: dict[str, Any] = {}
@@ -94,10 +114,14 @@ class PythonCanReader(InputReader):
         return self._reader_class(feed, **options)
 
     def __iter__(self) -> Iterator[InputItem]:
-        if self._text is not None:
-            yield from self._text_items(self._text)
-        else:
-            yield from self._binary_items()
+        log = self._log
+        with library_log(log):
+            items = self._text_items(self._text) if self._text else self._binary_items()
+            for item in items:
+                yield item
+                if log.messages:
+                    yield from self._library_messages()
+            yield from self._library_messages()
         self.position_bytes = self.size_bytes or _tell(self._raw)
         if not self.frames and self.size_bytes:
             # python-can's text readers skip lines they do not understand without a word;
@@ -112,6 +136,18 @@ class PythonCanReader(InputReader):
                 frames_read=0,
             )
 
+    def _library_messages(self) -> Iterator[Event]:
+        """What python-can / asammdf logged (a line or record they skipped, mostly)."""
+        text = self._text
+        for message in self._log.take():
+            if text is None:
+                detail = f"after frame {self.frames}: {message}"
+                yield diagnostic(self.last_time or 0.0, self.source, BAD_FRAME, detail)
+            else:
+                line = text.feed.lineno
+                detail = f"line {line}: {message}"
+                yield diagnostic(self.last_time or 0.0, self.source, BAD_LINE, detail, line=line)
+
     def _text_items(self, text: TextLogReading) -> Iterator[InputItem]:
         raw = self._raw
         delta = text.time_base == DELTA
@@ -124,9 +160,15 @@ class PythonCanReader(InputReader):
                 yield msg
                 continue
             frame = frame_from_message(msg)
-            if delta:
-                elapsed += frame.time
-                frame.time = start + elapsed
+            problem = time_problem(frame.time)
+            if delta and problem is None:
+                problem = time_problem(start + elapsed + frame.time)
+                if problem is None:
+                    elapsed += frame.time
+                    frame.time = start + elapsed
+            if problem:  # a damaged number that python-can took for a time
+                yield text.bad_line(text.feed.lineno, text.feed.last, ValueError(problem))
+                continue
             yield from self._count(frame, raw)
             text.last_time = frame.time
 
@@ -147,7 +189,18 @@ class PythonCanReader(InputReader):
                     frames_read=self.frames,
                 )
                 return
-            yield from self._count(frame_from_message(msg), raw)
+            frame = frame_from_message(msg)
+            problem = time_problem(frame.time)
+            if problem:  # a damaged time field or start date
+                yield diagnostic(
+                    self.last_time or 0.0,
+                    self.source,
+                    BAD_FRAME,
+                    f"frame {self.frames + 1} skipped: its {problem}",
+                    frames_read=self.frames,
+                )
+                continue
+            yield from self._count(frame, raw)
         cut = self._watch.cut_at if self._watch is not None else None
         tail = getattr(self._reader, "_tail", b"")
         if cut is not None or tail:
@@ -182,8 +235,25 @@ class PythonCanReader(InputReader):
         }
 
 
+def _check_blf_header(handle: IO[bytes], path: str, size: int | None) -> None:
+    """Refuse a BLF file whose header claims more bytes than the file has (python-can
+    would allocate what it claims before reading it)."""
+    head = handle.read(_BLF_FILE_HEADER.size)
+    handle.seek(0)
+    if len(head) < _BLF_FILE_HEADER.size or head[:4] != b"LOGG":
+        return  # python-can says what is wrong with it
+    _, header_size = _BLF_FILE_HEADER.unpack(head)
+    if header_size < _BLF_HEADER_MIN or (size is not None and header_size > size):
+        raise UsageError(
+            f"cannot read {path} as blf: its header claims to be {header_size:,} bytes long "
+            f"in a file of {size:,} bytes (a damaged or not a BLF file)"
+        )
+
+
 class _ShortReads:
-    """A binary file that notes where a read first came back shorter than asked."""
+    """A binary file that notes where a read first came back shorter than asked, and
+    reads a large request in pieces (a damaged size field costs no memory it does not
+    fill)."""
 
     def __init__(self, handle: IO[bytes]) -> None:
         self._handle = handle
@@ -192,7 +262,17 @@ class _ShortReads:
         self._after_header = False
 
     def read(self, size: int = -1) -> bytes:
-        data = self._handle.read(size)
+        if size is None or size < 0:
+            data = self._handle.read()
+        elif size <= _READ_PIECE:
+            data = self._handle.read(size)
+        else:
+            pieces = []
+            left = size
+            while left and (piece := self._handle.read(min(left, _READ_PIECE))):
+                pieces.append(piece)
+                left -= len(piece)
+            data = b"".join(pieces)
         # The end of the file is fine between objects (an empty read of the next header)
         # and at the padding after the last one (under 4 bytes).
         short = len(data) < size and (bool(data) or self._after_header) and size >= 4

@@ -11,7 +11,12 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from analyzer import timefmt
-from analyzer.mcapio.write.video import ROLE_THUMBNAIL, ROLE_VIDEO, TOPIC_PREFIX
+from analyzer.mcapio.write.video import (
+    ROLE_THUMBNAIL,
+    ROLE_VIDEO,
+    TOPIC_PREFIX,
+    VIDEO_METADATA_KEY,
+)
 
 GAP_FACTOR = 3.0  # frames further apart than this many frame intervals are a gap
 
@@ -40,11 +45,16 @@ class VideoSummary:
     first: float = 0.0
     last: float = 0.0
     gaps: list[tuple[float, float]] = field(default_factory=list)
+    requested: str = ""  # the URL (without password) the recorder was asked to record
+    failed: bool = False  # asked for, and not one frame recorded
 
     @property
     def fps(self) -> float:
-        span = self.last - self.first
-        return (self.frames - 1) / span if self.frames > 1 and span > 0 else 0.0
+        """Frames per second while the stream was connected (a gap is an outage, not a
+        slow stream)."""
+        span = self.last - self.first - sum(end - start for start, end in self.gaps)
+        intervals = self.frames - 1 - len(self.gaps)
+        return intervals / span if intervals > 0 and span > 0 else 0.0
 
 
 def _camera_messages(path: str | os.PathLike[str], roles: set[str]) -> Iterator[_Message]:
@@ -92,7 +102,31 @@ def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
                 for a, b in itertools.pairwise(stamps)
                 if typical > 0 and b - a > GAP_FACTOR * typical
             ]
-    return [s for s in out.values() if s.frames or s.thumbnails]
+    shown = [s for s in out.values() if s.frames or s.thumbnails]
+    for name, url in requested_streams(path).items():
+        topic = TOPIC_PREFIX + name
+        summary = out.get(topic) or VideoSummary(topic)
+        if summary not in shown:
+            shown.append(summary)
+        summary.requested = url
+        summary.failed = not summary.frames
+    return shown
+
+
+def requested_streams(path: str | os.PathLike[str]) -> dict[str, str]:
+    """The streams the recorder was asked for, {name: URL}, from the recording's
+    metadata (empty for recordings made before it was written down)."""
+    from analyzer.mcapio.channels import METADATA_NAME
+    from analyzer.mcapio.read.reader import Recording
+
+    text = Recording(path).metadata().get(METADATA_NAME, {}).get(VIDEO_METADATA_KEY)
+    try:
+        found = json.loads(text) if text else {}
+    except ValueError:
+        return {}
+    if not isinstance(found, dict):
+        return {}
+    return {str(name): str(url) for name, url in found.items()}
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,12 +147,17 @@ def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
 
 def video_lines(path: str | os.PathLike[str]) -> list[str]:
     """The ``info`` lines of the camera streams (none when the recording has no video)."""
-    summaries = [s for s in video_summaries(path) if s.frames]
+    summaries = [s for s in video_summaries(path) if s.frames or s.failed]
     if not summaries:
         return []
     width = max(len(s.topic) for s in summaries)
     lines = ["", "video streams (read from the file):"]
     for s in summaries:
+        if s.failed:
+            lines.append(
+                f"  {s.topic:<{width}}  requested ({s.requested}), failed: no frame recorded"
+            )
+            continue
         gaps = f"{len(s.gaps)} gaps" if len(s.gaps) != 1 else "1 gap"
         lines.append(
             f"  {s.topic:<{width}}  {s.codec} {s.width}x{s.height}  {s.fps:.1f} fps  "

@@ -28,6 +28,9 @@ ROLE_THUMBNAIL = "thumbnail"
 COMPRESSED_VIDEO = "foxglove.CompressedVideo"
 COMPRESSED_IMAGE = "foxglove.CompressedImage"
 TOPIC_PREFIX = "/camera/"
+# Recording metadata key: the streams asked for, {name: URL without password}, so that
+# `info` lists a stream that never delivered a frame.
+VIDEO_METADATA_KEY = "video_streams"
 
 # The fields of Foxglove's schemas (foxglove-sdk schemas/jsonschema), descriptions as there.
 COMPRESSED_VIDEO_SCHEMA: dict[str, Any] = {

@@ -1,0 +1,90 @@
+"""MF4 files checked before asammdf reads them: a data group whose records are not
+counted makes asammdf loop for ever (ASAM MDF 4.x block layout)."""
+
+from __future__ import annotations
+
+import struct
+from typing import IO, NamedTuple
+
+_BLOCK = struct.Struct("<4s4xQQ")  # id "##XX", reserved, length, link count
+_HD_AT = 64  # the header block follows the 64-byte identification block
+_MAX_CHAIN = 100_000  # a longer chain of blocks is a loop in a damaged file
+_DATA_BLOCKS = (b"##DT", b"##DZ", b"##DL", b"##HL")
+
+
+class _Block(NamedTuple):
+    kind: bytes
+    length: int
+    links: list[int]
+    data_at: int  # where the block's data part starts
+
+
+class _Blocks:
+    """Block headers of an MF4 file, each read where a link points."""
+
+    def __init__(self, handle: IO[bytes], size: int) -> None:
+        self.handle = handle
+        self.size = size
+
+    def at(self, offset: int, kind: bytes) -> _Block | None:
+        """The block of this kind at ``offset`` (None when there is none)."""
+        if offset <= 0 or offset + _BLOCK.size > self.size:
+            return None
+        self.handle.seek(offset)
+        head = self.handle.read(_BLOCK.size)
+        if len(head) < _BLOCK.size:
+            return None
+        found, length, count = _BLOCK.unpack(head)
+        end = offset + _BLOCK.size + 8 * count
+        if (kind and found != kind) or count > 1024 or end > self.size:
+            return None
+        links = list(struct.unpack(f"<{count}Q", self.handle.read(8 * count)))
+        return _Block(found, length, links, end)
+
+    def cycles(self, first: int) -> int:
+        """The records the chain of channel groups from ``first`` counts."""
+        total, offset = 0, first
+        seen: set[int] = set()
+        while offset and offset not in seen and len(seen) < _MAX_CHAIN:
+            seen.add(offset)
+            group = self.at(offset, b"##CG")
+            if group is None or not group.links:
+                return total
+            self.handle.seek(group.data_at + 8)  # after cg_record_id: cg_cycle_count
+            total += int.from_bytes(self.handle.read(8), "little")
+            offset = group.links[0]
+        return total
+
+    def holds_data(self, offset: int) -> bool:
+        block = self.at(offset, b"")
+        if block is None or block.kind not in _DATA_BLOCKS:
+            return False
+        return block.kind != b"##DT" or block.length > _BLOCK.size
+
+
+def mf4_problem(handle: IO[bytes], size: int) -> str | None:
+    """Why asammdf cannot be given this file (None: nothing found wrong). Reads only
+    the headers of the data groups, their channel groups and data blocks."""
+    blocks = _Blocks(handle, size)
+    try:
+        header = blocks.at(_HD_AT, b"##HD")
+        if header is None or not header.links:
+            return None  # not laid out as expected: asammdf says what is wrong
+        seen: set[int] = set()
+        offset = header.links[0]
+        while offset and offset not in seen and len(seen) < _MAX_CHAIN:
+            seen.add(offset)
+            group = blocks.at(offset, b"##DG")
+            if group is None or len(group.links) < 3:
+                return None
+            if not blocks.cycles(group.links[1]) and blocks.holds_data(group.links[2]):
+                return (
+                    f"its data group at byte {offset:,} holds data but counts no record "
+                    "(a damaged or unfinished MF4 file, which asammdf cannot read)"
+                )
+            offset = group.links[0]
+    except (OSError, struct.error):
+        return None
+    finally:
+        handle.seek(0)
+    return None

@@ -1,0 +1,422 @@
+"""Mutation fuzzing of every reader: damaged files end as exit 0 with diagnostics, or as
+exit 2 with one line; never a traceback.
+
+Each seed file is written the way the real tool writes it; every mutant is made from a
+seeded random generator (bit flips, overwritten and cut ranges, duplicated and deleted
+slices, size fields set to extremes, files spliced together, mangled text lines) and
+decoded in-process by ``gimbal-analyzer decode``: by its name, with its right
+``--format`` and with a wrong one. The mutants are taken round-robin over the seeds until
+the count or the time budget runs out (``GIMBAL_FUZZ_MUTANTS``, ``GIMBAL_FUZZ_SECONDS``;
+``GIMBAL_FUZZ_SEED`` picks another series). A failure names the mutant, and the file is
+kept to reproduce it with ``python -m analyzer decode FILE``.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import gzip
+import io
+import os
+import random
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import redirect_stderr, redirect_stdout
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO
+
+import pytest
+
+from analyzer.cli import main
+from analyzer.inputs import FORMATS
+from analyzer.protocol.types import CanFrame
+from tests.log_makers import (
+    SAMPLE,
+    ardupilot_log,
+    flight_frames,
+    python_can_log,
+    savvycan_csv,
+    sll_pcap,
+)
+from tests.rosbag2_files import ros1_bag, rosbag2_mcap
+from tests.test_mcap_support import traffic, write_recording
+from tests.test_ros_bags import rosbags_bag
+
+SAMPLES = SAMPLE.parent
+SEED = int(os.environ.get("GIMBAL_FUZZ_SEED", "28"))
+MUTANTS = int(os.environ.get("GIMBAL_FUZZ_MUTANTS", "1500"))
+BUDGET_S = float(os.environ.get("GIMBAL_FUZZ_SECONDS", "25"))
+HANG_S = 60.0  # one mutant decoding longer than this is a hang (see _fuzz)
+FRAMES = 40  # frames per seed file: small files keep each decode in milliseconds
+TEXT_FORMATS = frozenset({"candump", "asc", "trc", "csv", "savvycan"})
+# Values a damaged size or count field takes: zero, small, the edges of signed and
+# unsigned 16/32/64-bit integers.
+EXTREMES = (
+    b"\x00\x00\x00\x00",
+    b"\x01\x00\x00\x00",
+    b"\xff\xff\xff\xff",
+    b"\xff\xff\xff\x7f",
+    b"\x00\x00\x00\x80",
+    b"\xff\xff",
+    b"\xff\xff\xff\xff\xff\xff\xff\x7f",
+    b"\x00\x00\x00\xa0",  # 2.7 GB
+)
+TEXT_NOISE = ("-1", "nan", "1e309", "99999999999999999999", "", "#", "\x00", "é", "0x", ";")
+
+
+@dataclass(frozen=True)
+class Seed:
+    """A file as its tool writes it: ``name`` (the suffix matters), ``fmt`` its format."""
+
+    name: str
+    fmt: str
+    data: bytes
+
+
+def _frames() -> list[CanFrame]:
+    return flight_frames()[:FRAMES]
+
+
+def _python_can(folder: Path, name: str, frames: list[CanFrame]) -> bytes:
+    return python_can_log(folder / name, frames).read_bytes()
+
+
+def _screen(frames: list[CanFrame]) -> bytes:
+    """candump's default screen output with -ta: ``(time)  can0  ID   [n]  AA BB ...``."""
+    lines = []
+    for frame in frames:
+        ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
+        data = " ".join(f"{b:02X}" for b in frame.data)
+        lines.append(f" ({frame.time:.6f})  can0  {ident}   [{len(frame.data)}]  {data}")
+    return ("\n".join(lines) + "\n").encode()
+
+
+def make_seeds(folder: Path) -> list[Seed]:
+    frames = _frames()
+    log = b"".join(SAMPLE.read_bytes().splitlines(keepends=True)[:FRAMES])
+    dataflash, _ = ardupilot_log(frames, frames[0].time - 30.0)
+    seeds = [
+        Seed("flight.log", "candump", log),
+        Seed("screen.log", "candump", _screen(frames)),
+        Seed("flight.log.gz", "candump", gzip.compress(log)),
+        Seed("idu-tcp.pcap", "pcap", (SAMPLES / "idu-tcp.pcap").read_bytes()),
+        Seed("sll.pcap", "pcap", sll_pcap(folder / "sll.pcap", frames, 113).read_bytes()),
+        Seed(
+            "sll2.pcapng", "pcap", sll_pcap(folder / "s.pcapng", frames, 276, ng=True).read_bytes()
+        ),
+        Seed("uart-dump.bin", "stream", (SAMPLES / "uart-dump.bin").read_bytes()),
+        Seed("00000042.BIN", "dataflash", dataflash),
+        Seed("00000043.BIN.gz", "dataflash", gzip.compress(dataflash)),
+        Seed("gvret.csv", "savvycan", savvycan_csv(frames).encode()),
+        Seed("rosbag2.mcap", "mcap", rosbag2_mcap(frames)),
+        Seed("ros1.bag", "rosbag", ros1_bag(folder / "r.bag", frames).read_bytes()),
+        Seed("bag.db3", "rosbag", rosbags_bag(folder / "bag", frames, "db3").read_bytes()),
+    ]
+    for name in ("x.asc", "x.blf", "x.trc", "x.csv", "x.mf4", "x.asc.gz", "x.trc.gz"):
+        fmt = name.split(".")[1]
+        seeds.append(Seed(name, fmt, _python_can(folder, name, frames)))
+    write_recording(folder / "rec.mcap", traffic(1.0))
+    seeds.append(Seed("recording.mcap", "mcap", (folder / "rec.mcap").read_bytes()))
+    return seeds
+
+
+# -- mutators: (rng, data, another seed's data) -> mutated data, what was done ---------------
+
+Mutator = Callable[[random.Random, bytes, bytes], tuple[bytes, str]]
+
+
+def _span(rng: random.Random, data: bytes, most: int = 64) -> tuple[int, int]:
+    start = rng.randrange(len(data))
+    return start, min(len(data), start + rng.randint(1, most))
+
+
+def flip_bits(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    out = bytearray(data)
+    where = sorted(rng.randrange(len(out) * 8) for _ in range(rng.randint(1, 8)))
+    for bit in where:
+        out[bit // 8] ^= 1 << (bit % 8)
+    return bytes(out), f"flip bits {where}"
+
+
+def overwrite(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    start, end = _span(rng, data)
+    fill = rng.choice([b"\0", b"\xff", None])
+    new = fill * (end - start) if fill else rng.randbytes(end - start)
+    return data[:start] + new + data[end:], f"overwrite [{start}:{end}] with {new[:8].hex()}"
+
+
+def extreme_field(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    value = rng.choice(EXTREMES)
+    start = rng.randrange(0, max(1, len(data) - len(value)), rng.choice([1, 2, 4]))
+    return data[:start] + value + data[start + len(value) :], f"{value.hex()} at {start}"
+
+
+def cut(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    at = rng.randrange(len(data))
+    return data[:at], f"cut at {at}"
+
+
+def delete_slice(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    start, end = _span(rng, data, 512)
+    return data[:start] + data[end:], f"delete [{start}:{end}]"
+
+
+def duplicate_slice(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    start, end = _span(rng, data, 512)
+    at = rng.randrange(len(data))
+    return data[:at] + data[start:end] + data[at:], f"copy [{start}:{end}] to {at}"
+
+
+def splice(rng: random.Random, data: bytes, other: bytes) -> tuple[bytes, str]:
+    at, there = rng.randrange(len(data)), rng.randrange(len(other))
+    return data[:at] + other[there:], f"head [:{at}] + another file from {there}"
+
+
+def mangle_line(rng: random.Random, data: bytes, _: bytes) -> tuple[bytes, str]:
+    """A text line damaged the ways an editor, a serial console or a disk does."""
+    lines = data.split(b"\n")
+    index = rng.randrange(len(lines))
+    line = lines[index].decode("latin-1")
+    fields = line.replace(",", " ").split()
+    how = rng.randrange(6)
+    if how == 0 and fields:  # a field replaced by noise
+        word = rng.choice(fields)
+        line = line.replace(word, rng.choice(TEXT_NOISE), 1)
+    elif how == 1 and fields:  # a field dropped
+        line = line.replace(rng.choice(fields), "", 1)
+    elif how == 2:  # cut inside the line
+        line = line[: rng.randrange(len(line) + 1)]
+    elif how == 3:  # characters inserted
+        at = rng.randrange(len(line) + 1)
+        line = line[:at] + rng.choice(TEXT_NOISE) * rng.randint(1, 3) + line[at:]
+    elif how == 4:  # a very long line
+        line = line + "A" * rng.choice([300, 70_000])
+    else:  # two lines swapped
+        other = rng.randrange(len(lines))
+        lines[other], line = line.encode("latin-1"), lines[other].decode("latin-1")
+    lines[index] = line.encode("latin-1")
+    return b"\n".join(lines), f"line {index + 1}: way {how}"
+
+
+BINARY: tuple[Mutator, ...] = (
+    flip_bits,
+    overwrite,
+    extreme_field,
+    cut,
+    delete_slice,
+    duplicate_slice,
+    splice,
+)
+
+
+@dataclass(frozen=True)
+class Mutant:
+    name: str
+    data: bytes
+    fmt: str | None  # None: from the name and content
+    what: str
+
+
+def _gunzipped_text(seed: Seed) -> bool:
+    return seed.name.endswith(".gz") and seed.fmt in TEXT_FORMATS
+
+
+def mutants(seeds: list[Seed], rng: random.Random) -> Iterator[Mutant]:
+    """Round-robin over the seeds, for ever: one mutant of each seed in turn."""
+    wrong = list(FORMATS)
+    count = 0
+    while True:
+        for seed in seeds:
+            count += 1
+            data = seed.data
+            text = seed.fmt in TEXT_FORMATS
+            if _gunzipped_text(seed) and rng.random() < 0.5:
+                data = gzip.decompress(data)  # the text damaged, then compressed again
+                mutated, what = mangle_line(rng, data, b"")
+                mutated, what = gzip.compress(mutated), f"gzip of {what}"
+            elif text and not seed.name.endswith(".gz") and rng.random() < 0.5:
+                mutated, what = mangle_line(rng, data, b"")
+            else:
+                mutator = rng.choice(BINARY)
+                other = rng.choice(seeds).data
+                mutated, what = mutator(rng, data, other)
+                for _ in range(rng.choice([0, 0, 0, 1, 2])):  # sometimes several at once
+                    mutator = rng.choice(BINARY)
+                    mutated, more = mutator(rng, mutated or b"\0", other)
+                    what += f"; {more}"
+            way = count % 3
+            fmt = None if way == 0 else seed.fmt if way == 1 else rng.choice(wrong)
+            yield Mutant(seed.name, mutated, fmt, f"{seed.name} {what}")
+
+
+def decode(path: Path, fmt: str | None, *, stdin: bool = False) -> tuple[int, str, str]:
+    """``gimbal-analyzer decode`` in this process: (exit code, stdout, stderr); with
+    ``stdin`` the file is piped in (``decode -``)."""
+    out, err = io.StringIO(), io.StringIO()
+    args = ["decode", "-" if stdin else str(path)] + (["--format", fmt] if fmt else [])
+    piped = io.TextIOWrapper(io.BytesIO(path.read_bytes() if stdin else b""))
+    saved = sys.stdin
+    sys.stdin = piped
+    try:
+        with redirect_stdout(out), redirect_stderr(err):
+            code = main(args)
+    finally:
+        sys.stdin = saved
+    return code, out.getvalue(), err.getvalue()
+
+
+def _one_error(code: int, err: str) -> bool:
+    """Nothing on stderr after exit 0; after exit 2 one error line (and the indented
+    details some errors list, e.g. a recording's channels)."""
+    lines = err.splitlines()
+    if "Traceback" in err or "Exception ignored" in err:
+        return False
+    if code == 0:  # notes about the input, each a line of its own
+        return all(line.startswith(("note: ", "  ")) for line in lines)
+    head = "gimbal-analyzer decode: error: "
+    return bool(lines) and lines[0].startswith(head) and all(x.startswith("  ") for x in lines[1:])
+
+
+@pytest.fixture(scope="module")
+def seeds(tmp_path_factory: pytest.TempPathFactory) -> list[Seed]:
+    return make_seeds(tmp_path_factory.mktemp("seeds"))
+
+
+def test_every_seed_decodes_cleanly(seeds: list[Seed], tmp_path: Path) -> None:
+    """The unmutated files are read with their formats (else the fuzzing tests nothing)."""
+    assert {seed.fmt for seed in seeds} == set(FORMATS)
+    for seed in seeds:
+        path = tmp_path / seed.name
+        path.write_bytes(seed.data)
+        code, out, err = decode(path, None)
+        assert code == 0, f"{seed.name}: {err}"
+        assert "/gimbal/" in out, seed.name
+
+
+def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) -> None:
+    rng = random.Random(SEED)
+    tried: dict[str, int] = {}
+    failures: list[str] = []
+    with (tmp_path / "hang-traceback.txt").open("w") as dump:
+        try:
+            _fuzz(seeds, rng, tmp_path, dump, tried, failures)
+        finally:
+            faulthandler.cancel_dump_traceback_later()
+    assert not failures, f"{len(failures)} mutant(s) failed:\n" + "\n".join(failures[:10])
+    assert set(tried) == {seed.name for seed in seeds}  # the budget reached every reader
+
+
+def _fuzz(
+    seeds: list[Seed],
+    rng: random.Random,
+    tmp_path: Path,
+    dump: IO[str],
+    tried: dict[str, int],
+    failures: list[str],
+) -> None:
+    """Decode mutants until the count or the time budget runs out. A mutant that hangs
+    ends the test run after HANG_S (a hang must not stall the suite): its name is in
+    ``current-mutant.txt`` and every thread's traceback in ``hang-traceback.txt`` of
+    the test's folder (pytest's captured output is lost with the process)."""
+    start = time.monotonic()
+    current = tmp_path / "current-mutant.txt"
+    for number, mutant in enumerate(mutants(seeds, rng)):
+        if number >= MUTANTS or time.monotonic() - start > BUDGET_S:
+            break
+        folder = tmp_path / f"m{number:04d}"
+        folder.mkdir()
+        path = folder / mutant.name
+        path.write_bytes(mutant.data)
+        # Text and raw streams also come through a pipe, read by the standard-input readers.
+        piped = mutant.fmt in ("candump", "stream") and number % 2 == 0
+        label = f"#{number} {mutant.what} --format {mutant.fmt}" + (" < stdin" if piped else "")
+        current.write_text(f"{label}: {path}\n")
+        faulthandler.dump_traceback_later(HANG_S, exit=True, file=dump)
+        try:
+            code, _, err = decode(path, mutant.fmt, stdin=piped)
+        except Exception:  # a traceback: what this test looks for
+            failures.append(f"{label}: {path}\n{traceback.format_exc(limit=-4)}")
+            continue
+        finally:
+            tried[mutant.name] = tried.get(mutant.name, 0) + 1
+        if code not in (0, 2) or not _one_error(code, err):
+            failures.append(f"{label}: {path}\nexit {code}: {err[-2000:]}")
+        elif code == 0:
+            (folder / mutant.name).unlink()  # keep only the files that failed
+
+
+# -- what the fuzzing found, one test each ------------------------------------------------------
+
+
+def _bad_lines(path: Path, fmt: str) -> tuple[int, list[str], str]:
+    code, out, err = decode(path, fmt)
+    return code, [line for line in out.splitlines() if "BAD_LINE" in line], err
+
+
+def test_a_savvycan_time_beyond_any_date_is_a_bad_line(tmp_path: Path) -> None:
+    lines = savvycan_csv(_frames()[:3]).splitlines()
+    lines[2] = "99999999999999999999999999" + lines[2][lines[2].index(",") :]
+    path = tmp_path / "gvret.csv"
+    path.write_text("\n".join(lines) + "\n")
+    code, bad, err = _bad_lines(path, "savvycan")
+    assert code == 0, err
+    assert len(bad) == 1 and "line 3" in bad[0] and "is out of range" in bad[0]
+
+
+@pytest.mark.parametrize(("name", "fmt"), [("x.trc", "trc"), ("x.csv", "csv")])
+def test_a_python_can_time_of_infinity_is_a_bad_line(tmp_path: Path, name: str, fmt: str) -> None:
+    frames = _frames()[:3]
+    text = _python_can(tmp_path, name, frames).decode()
+    stamp = {"trc": f"{(frames[1].time - frames[0].time) * 1000:.1f}"}
+    old = stamp.get(fmt, str(frames[1].time))
+    assert old in text
+    (tmp_path / name).write_text(text.replace(old, "1e309", 1))  # python-can reads inf
+    code, bad, err = _bad_lines(tmp_path / name, fmt)
+    assert code == 0, err
+    assert len(bad) == 1 and "inf s is out of range" in bad[0]
+
+
+def test_a_line_python_can_skips_with_a_warning_is_a_bad_line_not_a_stderr_message(
+    tmp_path: Path,
+) -> None:
+    text = _python_can(tmp_path, "x.trc", _frames()[:3]).decode().splitlines()
+    last = len(text)
+    text.append("      4")  # a message number and nothing else: python-can logs and skips it
+    (tmp_path / "x.trc").write_text("\n".join(text) + "\n")
+    code, bad, err = _bad_lines(tmp_path / "x.trc", "trc")
+    assert code == 0 and err == ""
+    assert len(bad) == 1 and f"line {last + 1}: can: TRCReader: Failed to parse" in bad[0]
+
+
+def test_an_mf4_that_asammdf_cannot_open_is_one_line_without_a_cleanup_traceback(
+    tmp_path: Path,
+) -> None:
+    import gc
+
+    data = _python_can(tmp_path, "x.mf4", _frames())
+    path = tmp_path / "cut.mf4"
+    path.write_bytes(data[:1000])
+    code, _, err = decode(path, None)
+    gc.collect()  # asammdf's half-made reader is cleaned up: its __del__ fails
+    assert code == 2
+    assert err.startswith("gimbal-analyzer decode: error: cannot read") and err.count("\n") == 1
+
+
+def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_on(
+    tmp_path: Path,
+) -> None:
+    import struct
+
+    data = bytearray(_python_can(tmp_path, "x.mf4", _frames()))
+    group = data.find(b"##CG")  # the CAN frames' channel group: 40 records
+    links = struct.unpack_from("<Q", data, group + 16)[0]
+    cycles_at = group + 24 + 8 * links + 8  # after cg_record_id
+    assert struct.unpack_from("<Q", data, cycles_at)[0] == FRAMES
+    struct.pack_into("<Q", data, cycles_at, 0)  # asammdf loops for ever on this
+    path = tmp_path / "uncounted.mf4"
+    path.write_bytes(bytes(data))
+    code, _, err = decode(path, None)
+    assert code == 2
+    assert "holds data but counts no record" in err and err.count("\n") == 1

@@ -1,0 +1,109 @@
+"""The README's commands parse with our own parser and its shown outputs are what they print."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.readme_blocks import parse_failures, read_blocks
+from tests.readme_examples import README, check_blocks, compare, updated
+
+HINT = "\n\nrefresh the shown outputs with: python -m tests.readme_examples --update"
+
+
+def _readme() -> list[str]:
+    return README.read_text(encoding="utf-8").splitlines()
+
+
+def test_every_command_line_in_the_readme_is_quoted_right_and_parses() -> None:
+    failures = parse_failures(_readme())
+    assert not failures, "\n".join(failures)
+
+
+def test_the_outputs_the_readme_shows_are_what_the_commands_print() -> None:
+    failures, _ = check_blocks(_readme())
+    assert not failures, "\n\n".join(failures) + HINT
+
+
+def test_the_readme_marks_outputs_of_every_kind() -> None:
+    modes = {block.mode for block in read_blocks(_readme())}
+    assert {"run", "exact", "lines", "parse"} <= modes
+
+
+# -- the checker itself ----------------------------------------------------------------------
+
+STALE = """\
+Some prose.
+
+<!-- check: parse (needs a camera) -->
+
+    gimbal-analyzer demo --video bench=rtsp://h/cam?channel=1&subtype=1
+    gimbal-analyzer decode x.log --no-such-option
+    gimbal-analyzer decode FILE [--format F]
+    gimbal-analyzer fleet fleet --sql "SELECT 1
+        FROM t"
+    gimbal-analyzer decode: error: a shown error message, not a command
+""".splitlines()
+
+
+def test_a_bare_ampersand_and_a_stale_option_are_caught_but_not_a_synopsis() -> None:
+    failures = parse_failures(STALE)
+    assert len(failures) == 2
+    assert "README line 5" in failures[0] and "bare &" in failures[0]
+    assert (
+        "README line 6" in failures[1] and "unrecognized arguments: --no-such-option" in failures[1]
+    )
+
+
+def test_a_marker_applies_to_the_next_block_only() -> None:
+    lines = ["<!-- check: lines -->", "", "    gimbal-analyzer --version", "", "prose", "", "    x"]
+    first, second = read_blocks(lines)
+    assert (first.mode, second.mode) == ("lines", None)
+    with pytest.raises(ValueError, match="unknown check 'exactly'"):
+        read_blocks(["<!-- check: exactly -->", "", "    x"])
+
+
+@pytest.mark.parametrize(
+    ("mode", "shown", "actual", "agree"),
+    [
+        ("exact", ["a", "b"], ["a", "b", ""], True),
+        ("exact", ["a", "c"], ["a", "b", "c"], False),  # b printed, not shown
+        ("exact", ["a", "...", "d"], ["a", "b", "c", "d"], True),
+        ("exact", ["a", "...", "d"], ["a", "b", "c", "d", "e"], False),
+        ("exact", ["a b ..."], ["a b c d"], True),  # ... inside a line is any text
+        ("lines", ["d", "b x..."], ["a", "b x y", "c", "d"], True),  # in any order
+        ("lines", ["verdicts: 2"], ["verdicts: 3"], False),
+    ],
+)
+def test_compare(mode: str, shown: list[str], actual: list[str], agree: bool) -> None:
+    assert (compare(mode, shown, actual) == []) is agree
+
+
+def test_update_replaces_a_stale_line_by_its_closest_line_of_output() -> None:
+    shown = ["...", "verdicts: 4 obeyed, 2 not obeyed"]
+    actual = ["x", "verdicts: 3 obeyed, 3 not obeyed", "y"]
+    assert updated("lines", shown, actual) == ["...", "verdicts: 3 obeyed, 3 not obeyed"]
+    assert updated("exact", ["a"], ["b", "c"]) == ["b", "c"]
+
+
+def test_update_rewrites_every_stale_block_in_its_place() -> None:
+    lines = [
+        "<!-- check: exact -->",
+        "",
+        "    $ gimbal-analyzer --version",
+        "    gimbal-analyzer 0.0",
+        "    an old line",
+        "",
+        "prose",
+        "",
+        "<!-- check: lines -->",
+        "",
+        "    gimbal-analyzer --version",
+        "    gimbal-analyzer 0.0.9",
+    ]
+    failures, new = check_blocks(lines, update=True)
+    assert len(failures) == 2
+    from analyzer import __version__
+
+    now = f"    gimbal-analyzer {__version__}"
+    assert new == [*lines[:3], now, *lines[5:11], now]
+    assert check_blocks(new)[0] == []
