@@ -81,6 +81,16 @@ class FeedbackHealth:
             )
         return out
 
+    def open_since(self) -> list[float]:
+        """The times findings still to come of the feedback can carry: the open window's
+        start, the last feedback message (a silence after it is named from it)."""
+        if self.first is None:
+            return []
+        times = [self.first + self._window * WINDOW_S]
+        if self.last_feedback is not None:
+            times.append(self.last_feedback)
+        return times
+
     def error(self, t: float) -> list[Finding]:
         out = self.tick(t)
         self.errors_per_minute[self._window_of(t)] += 1

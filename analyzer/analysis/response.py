@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections import Counter, deque
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,6 +18,7 @@ from analyzer.analysis.findings import (
 )
 from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
+from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
 from analyzer.protocol.types import (
@@ -38,7 +39,6 @@ DEFAULT_TIME_ALLOWED_S = 5.0
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
-HISTORY = 4096  # attitude samples kept (over half an hour at 2 Hz)
 DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
 MOTION = frozenset(
@@ -92,7 +92,7 @@ class ResponseAnalyzer:
         self.settings = settings or Settings()
         self.health = FeedbackHealth()
         self.verdicts: Counter[str] = Counter()
-        self.samples: deque[Sample] = deque(maxlen=HISTORY)
+        self.samples = SampleWindow()  # only those a pending judgement can still need
         self._targets: list[TargetCheck] = []
         self._tracking: list[_TrackingCheck] = []
         self._burst: Burst | None = None
@@ -126,6 +126,7 @@ class ResponseAnalyzer:
                 self._fc_attitude = t
             elif topic == TOPIC_COMMAND:
                 out += self._command(t, event.fields)
+        self.samples.forget_before(self._needed(t))
         return self._emit(out)
 
     def process(self, events: list[Event]) -> list[Event]:
@@ -142,7 +143,8 @@ class ResponseAnalyzer:
     def close(self) -> list[Event]:
         """The end of the input: judge what is still open with what was seen."""
         out: list[Finding] = []
-        end = self.samples[-1].time if self.samples else None
+        last = self.samples.last
+        end = last.time if last is not None else None
         for check in self._targets:
             out.append(self._judge_target(check, "the input ended", end))
         self._targets = []
@@ -175,7 +177,7 @@ class ResponseAnalyzer:
                     self._end_burst()
                 return out
             if burst is not None and burst.same_speeds(pan, tilt) and t - burst.last <= BURST_GAP_S:
-                burst.times.append(t)
+                burst.add(t)
                 return out
         if name not in MOTION and name != "tracking_stop":
             return out
@@ -188,7 +190,7 @@ class ResponseAnalyzer:
         allowed = self.settings.time_allowed_s
         if name == "gimbal_control":
             pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
-            self._burst = Burst(name, pan, tilt, [t])
+            self._burst = Burst(name, pan, tilt, t)
         else:
             fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
             check = target_check(name, t, fields, t + allowed, fresh)
@@ -259,15 +261,33 @@ class ResponseAnalyzer:
         return out
 
     def _between(self, start: float, end: float) -> list[Sample]:
-        return [s for s in self.samples if start < s.time <= end]
+        return self.samples.between(start, end)
 
     def _before(self, t: float) -> Sample | None:
-        found = None
-        for s in self.samples:
-            if s.time > t:
-                break
-            found = s
-        return found
+        return self.samples.before(t)
+
+    def _needed(self, now: float) -> float:
+        """The earliest time whose samples a judgement still to be made can look at: a
+        pending check's command, a burst's first command, or (for commands to come) now."""
+        times = [now]
+        times += [check.time for check in self._targets]
+        times += [tracking.time for tracking in self._tracking]
+        times += [pending.burst.start for pending in self._bursts]
+        if self._burst is not None:
+            times.append(self._burst.start)
+        return min(times)
+
+    def earliest_pending(self) -> float | None:
+        """No finding still to come carries an earlier time than this (for input in time
+        order): a pending check's command, a burst, the motion command a limit finding would
+        name, the feedback window or silence still open. None before any input."""
+        now = self.health.last
+        if now is None:
+            return None
+        times = [self._needed(now), *self.health.open_since()]
+        if self._motion is not None:
+            times.append(self._motion[1])
+        return min(times)
 
     # -- judgements -----------------------------------------------------------------------
 

@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from collections.abc import Callable
-from typing import IO, Any
+from typing import Any
 
-from analyzer import timefmt
 from analyzer.errors import UsageError
 from analyzer.input_options import add_input_arguments
-from analyzer.terminal_text import printable, printable_lines
+from analyzer.terminal_text import printable
 
 HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
 
@@ -137,99 +134,40 @@ def settings_from(args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import Pipeline, run_items
 
     settings = settings_from(args)
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
-    kept = KeepFindings(analyzer)
-    pipeline = Pipeline(stages=[kept])  # the same decoding and counting as every command
+    pipeline = Pipeline(stages=[analyzer])  # the same decoding and counting as every command
+    out = sys.stdout
+    output = FindingsOutput(
+        analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
+    ).to(out)
+    pipeline.sinks.append(output)
     try:
         run_items(reader, pipeline)
     finally:
         reader.close()
-    findings = kept.findings
-    tally = pipeline.tally
-    commands = tally.topics.get("/gimbal/command", 0)
+    for failure in pipeline.failures:
+        raise failure.error
     notes = list(reader.notes)
-    if untimed(tally, findings):
+    if output.untimed:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
-        findings = []
         analyzer.verdicts.clear()
         notes.append(
             f"{args.file} carries no timestamps (a raw TCP/UART byte dump?), so responses "
             "cannot be timed; record with `gimbal-analyzer record` to get times"
         )
-    findings.sort(key=lambda e: e.time)
-    shown = [f for f in findings if not args.problems or f.fields["verdict"] != "obeyed"]
-    out = sys.stdout
-    if args.json:
-        for finding in shown:
-            out.write(json.dumps(finding.to_dict()) + "\n")
-    else:
+    if not args.json:
+        commands = pipeline.tally.topics.get("/gimbal/command", 0)
         header = (
             f"response analysis of {args.file} ({reader.format_name}): {commands:,} commands; "
             f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s"
         )
-        report = render_findings(header, shown, verdict_line(analyzer.verdicts))
-        out.write(printable_lines(report) + "\n")  # names and paths may come from the input
+        output.finish(header, verdict_line(analyzer.verdicts))
     out.flush()
     for note in notes:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 0
-
-
-VERDICT_WORDS = {
-    "obeyed": "obeyed",
-    "partial": "PARTIAL",
-    "not_obeyed": "NOT OBEYED",
-    "unknown": "unknown",
-}
-
-
-def clock(t: float) -> str:
-    """Time of day with milliseconds, UTC with a Z (or local time with its offset after
-    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
-    if not timefmt.is_absolute(t):
-        return f"{t:10.3f} s"
-    return timefmt.format_clock(t)
-
-
-def render_findings(header: str, findings: list[Any], verdicts: str) -> str:
-    """The text report: a header, one block per finding, the verdict counts."""
-    lines = [header]
-    if findings and timefmt.is_absolute(findings[0].time):
-        zone = "local" if timefmt.local_time() else "UTC"
-        lines.append(f"times are {zone}, " + timefmt.format_datetime(findings[0].time)[:10])
-    lines.append("")
-    for event in findings:
-        f = event.fields
-        numbers = _numbers(f)
-        lines.append(
-            f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
-            f"{VERDICT_WORDS.get(f['verdict'], f['verdict']):<10}  {f['detail']}"
-            + (f"  [{numbers}]" if numbers else "")
-        )
-    if not findings:
-        lines.append("no findings")
-    lines += ["", f"verdicts: {verdicts}"]
-    return "\n".join(lines)
-
-
-_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
-    ("target_deg", "target", lambda v: f"{v:g} deg"),
-    ("response_s", "response", lambda v: f"{v:.2f} s"),
-    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
-    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
-    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
-)
-
-
-def _numbers(fields: dict[str, Any]) -> str:
-    return ", ".join(
-        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
-    )
-
-
-def write_lines(out: IO[str], lines: list[str]) -> None:
-    out.write("\n".join(lines) + "\n")

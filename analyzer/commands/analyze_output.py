@@ -1,0 +1,147 @@
+"""How ``analyze`` writes its findings: JSON lines or the text report, in time order, as made."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from collections.abc import Callable
+from typing import IO, Any, Protocol
+
+from analyzer import timefmt
+from analyzer.analysis.time_order import TimeOrder
+from analyzer.pipeline import Batch
+from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
+from analyzer.tally import Tally
+from analyzer.terminal_text import printable_lines
+
+VERDICT_WORDS = {
+    "obeyed": "obeyed",
+    "partial": "PARTIAL",
+    "not_obeyed": "NOT OBEYED",
+    "unknown": "unknown",
+}
+
+
+class Judging(Protocol):
+    """What the output needs of the analysis (``ResponseAnalyzer``)."""
+
+    def earliest_pending(self) -> float | None: ...
+
+
+class FindingsOutput:
+    """The sink of ``analyze``: each finding written in time order once no earlier one can
+    come (held meanwhile as its line of text, so memory follows the pending judgements,
+    not the length of the flight).
+
+    An input without a clock (see ``untimed``) gets no findings: nothing is written until
+    its times are seen to differ, and at the end ``untimed`` says whether they never did.
+    The text report's lines go to a temporary file first (``finish`` writes the header,
+    which needs the whole input's figures, then them).
+    """
+
+    keeps_items = False
+
+    def __init__(self, analysis: Judging, tally: Tally, *, json_lines: bool, problems: bool):
+        self.analysis = analysis
+        self.tally = tally
+        self.json_lines = json_lines
+        self.problems = problems
+        self.order: TimeOrder[str] = TimeOrder()
+        self.spool: IO[str] | None = (
+            # closed by finish (the text report), or with the process
+            None if json_lines else tempfile.TemporaryFile("w+", encoding="utf-8")  # noqa: SIM115
+        )
+        self.out: IO[str] | None = None
+        self.found = 0
+        self.written = 0
+        self.first_time: float | None = None  # of the first finding shown
+        self.untimed = False
+
+    def to(self, out: IO[str]) -> FindingsOutput:
+        self.out = out
+        return self
+
+    def handle(self, batch: Batch) -> None:
+        for event in batch.events:
+            if event.topic == TOPIC_ANALYSIS_RESPONSE:
+                self.found += 1
+                if self.problems and event.fields.get("verdict") == "obeyed":
+                    continue
+                if self.first_time is None or event.time < self.first_time:
+                    self.first_time = event.time
+                self.order.push(event.time, self._line(event))
+        if self._timed():
+            self._write(self.order.release(self.analysis.earliest_pending()))
+
+    def close(self) -> None:
+        self.untimed = self.found > 0 and not self._timed()
+        if self.untimed:
+            self.order.clear()
+            self.first_time = None
+        self._write(self.order.drain())
+
+    def finish(self, header: str, verdicts: str) -> None:
+        """The text report: header, the findings written so far, the verdict counts."""
+        out, spool = self.out, self.spool
+        assert out is not None and spool is not None
+        out.write(printable_lines(header) + "\n")
+        if self.first_time is not None and timefmt.is_absolute(self.first_time):
+            zone = "local" if timefmt.local_time() else "UTC"
+            out.write(f"times are {zone}, " + timefmt.format_datetime(self.first_time)[:10] + "\n")
+        out.write("\n")
+        spool.seek(0)
+        shutil.copyfileobj(spool, out)
+        spool.close()
+        if not self.written:
+            out.write("no findings\n")
+        out.write(f"\nverdicts: {verdicts}\n")
+
+    def _line(self, event: Event) -> str:
+        if self.json_lines:
+            return json.dumps(event.to_dict())
+        return printable_lines(finding_line(event))  # names may come from the input
+
+    def _timed(self) -> bool:
+        first = self.tally.first_time
+        return first is not None and first != self.tally.last_time
+
+    def _write(self, lines: list[str]) -> None:
+        target = self.spool if self.spool is not None else self.out
+        if lines and target is not None:
+            self.written += len(lines)
+            target.write("\n".join(lines) + "\n")
+
+
+def clock(t: float) -> str:
+    """Time of day with milliseconds, UTC with a Z (or local time with its offset after
+    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
+    if not timefmt.is_absolute(t):
+        return f"{t:10.3f} s"
+    return timefmt.format_clock(t)
+
+
+def finding_line(event: Event) -> str:
+    """One finding of the text report: time, command, check, verdict, detail, numbers."""
+    f = event.fields
+    numbers = _numbers(f)
+    return (
+        f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
+        f"{VERDICT_WORDS.get(f['verdict'], f['verdict']):<10}  {f['detail']}"
+        + (f"  [{numbers}]" if numbers else "")
+    )
+
+
+_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
+    ("target_deg", "target", lambda v: f"{v:g} deg"),
+    ("response_s", "response", lambda v: f"{v:.2f} s"),
+    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
+    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
+    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
+)
+
+
+def _numbers(fields: dict[str, Any]) -> str:
+    return ", ".join(
+        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
+    )
