@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import operator
+from collections.abc import Iterable
 
 from analyzer.mcapio.channel_registry import ChannelRegistry
 from analyzer.mcapio.channels import (
@@ -65,18 +66,38 @@ class MessageWriter:
             self.write_events(events)
             return
         merged: list[RawItem | Event] = sorted([*items, *events], key=_time_of)
+        # Frames and their events alternate: written run by run, counted once per batch.
         for is_event, run in itertools.groupby(merged, key=_is_event):
             if is_event:
-                self.write_events(list(run))  # type: ignore[arg-type]
+                self._put_events(run)  # type: ignore[arg-type]
             else:
-                self.write_items(list(run))  # type: ignore[arg-type]
+                self._put_items(run)  # type: ignore[arg-type]
+        self.tally.add_items(items)
+        self.tally.add_events(events)
+        self.dirty = True
+        self.last_time = merged[-1].time
 
     def write_items(self, items: list[RawItem]) -> None:
+        self._put_items(items)
+        self.tally.add_items(items)
+        if items:
+            self.dirty = True
+            self.last_time = items[-1].time
+
+    def write_events(self, events: list[Event]) -> None:
+        self._put_events(events)
+        self.tally.add_events(events)
+        if events:
+            self.dirty = True
+            self.last_time = events[-1].time
+
+    def _put_items(self, items: Iterable[RawItem]) -> None:
         add = self._writer.add_message if self._tee is None else self._add_teed
         registry = self._registry
         sequence = registry.sequence
         can_id = registry.ids.get(TOPIC_CAN_FRAMES, 0)
         stream_id = registry.ids.get(TOPIC_STREAM_BYTES, 0)
+        written = 0
         for item in items:
             if isinstance(item, CanFrame):
                 channel_id = can_id or registry.channel(TOPIC_CAN_FRAMES, ROLE_RAW)
@@ -90,14 +111,11 @@ class MessageWriter:
             number = sequence[channel_id] + 1
             sequence[channel_id] = number
             add(channel_id, log_time, data, log_time, number)
-            self.messages_written += 1
-            self.items_written += 1
-        self.tally.add_items(items)
-        if items:
-            self.dirty = True
-            self.last_time = items[-1].time
+            written += 1
+        self.messages_written += written
+        self.items_written += written
 
-    def write_events(self, events: list[Event]) -> None:
+    def _put_events(self, events: Iterable[Event]) -> None:
         add = self._writer.add_message if self._tee is None else self._add_teed
         registry = self._registry
         sequence = registry.sequence
@@ -119,10 +137,6 @@ class MessageWriter:
                     sequence[view_id] = number
                     add(view_id, log_time, _ENCODE(message).encode(), log_time, number)
                     self.messages_written += 1
-        self.tally.add_events(events)
-        if events:
-            self.dirty = True
-            self.last_time = events[-1].time
 
     def _add_teed(
         self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int
