@@ -32,10 +32,13 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import GAP_THRESHOLD_S
+from analyzer.tally import EXPECTED_FEEDBACK_HZ, GAP_THRESHOLD_S
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
+# A state flag (tracking) shows a change in the next feedback messages: three periods.
+FLAG_PERIODS = 3
+DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the document's 2 Hz
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
@@ -61,13 +64,16 @@ class Settings:
     """The judgement's knobs (the ``analyze`` options)."""
 
     tolerance_deg: float = DEFAULT_TOLERANCE_DEG
-    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S
+    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S  # for a target (an angle) to be reached
+    flag_allowed_s: float = DEFAULT_FLAG_ALLOWED_S  # for a state flag (tracking) to change
 
     def __post_init__(self) -> None:
         if not self.tolerance_deg > 0:
             raise ValueError("the tolerance must be more than 0 deg")
         if not self.time_allowed_s > 0:
             raise ValueError("the time allowed must be more than 0 s")
+        if not self.flag_allowed_s > 0:
+            raise ValueError("the time allowed for a state flag must be more than 0 s")
 
 
 @dataclass
@@ -100,6 +106,7 @@ class ResponseAnalyzer:
         self._fc_attitude: float | None = None
         self._motion: tuple[str, float] | None = None
         self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
+        self._tracking_seen = False  # a feedback message has shown the tracking flag on
 
     # -- input ---------------------------------------------------------------------------
 
@@ -111,6 +118,7 @@ class ResponseAnalyzer:
             sample = sample_from(t, event.fields)
             if sample is not None:
                 self.samples.append(sample)
+                self._tracking_seen = self._tracking_seen or sample.tracking
                 out += self._limits(sample)
                 out += self._settle(t, sample)
         elif topic == TOPIC_GIMBAL_RANGING:
@@ -200,8 +208,25 @@ class ResponseAnalyzer:
             for old in self._tracking:
                 why = f"{name} came {t - old.time:.1f} s later" if t < old.deadline else ""
                 out.append(self._judge_tracking(old, None, why))
-            self._tracking = [_TrackingCheck(name, t, name == "tracking", t + allowed)]
+            self._tracking = []
+            before = self._before(t)
+            if name == "tracking_stop" and not (before is not None and before.tracking):
+                out.append(self._nothing_to_stop(t, before))
+            else:
+                flag_allowed = self.settings.flag_allowed_s
+                self._tracking.append(_TrackingCheck(name, t, name == "tracking", t + flag_allowed))
         return out
+
+    def _nothing_to_stop(self, t: float, before: Sample | None) -> Finding:
+        """tracking_stop when the feedback did not show tracking on: nothing to obey."""
+        if not self._tracking_seen:
+            text = "tracking was never on: there was nothing to stop"
+        elif before is None:
+            text = "no attitude feedback before the command: whether tracking was on is not known"
+        else:
+            text = "tracking was already off: there was nothing to stop"
+        extra: dict[str, Any] = {"observed_at": before.time} if before is not None else {}
+        return Finding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)
 
     def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A new motion command: earlier targets on its axes, and bursts, end here."""
@@ -314,8 +339,8 @@ class ResponseAnalyzer:
             text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
             return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
         seen = self._between(check.time, check.deadline)
+        allowed = self.settings.flag_allowed_s
         if not seen:
-            allowed = self.settings.time_allowed_s
             why = f"before {cut_short}" if cut_short else f"within {allowed:g} s"
             text = f"no attitude feedback came {why}: the tracking flag could not be checked"
             return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
@@ -323,9 +348,17 @@ class ResponseAnalyzer:
         span = seen[-1].time - check.time
         verdict = UNKNOWN if cut_short else NOT_OBEYED
         other = "off" if check.want else "on"
-        text = f"the feedback's tracking flag stayed {other} for {span:.1f} s"
         if cut_short:
-            text += f", until {cut_short}"
+            text = (
+                f"the feedback's tracking flag stayed {other} for {span:.1f} s, until {cut_short}"
+            )
+        else:
+            n = len(seen)
+            text = (
+                f"the feedback's tracking flag stayed {other} through the {allowed:g} s allowed "
+                f"({n} attitude message{'s' if n > 1 else ''}, the last {span:.1f} s after "
+                "the command)"
+            )
         return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
 
     def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:

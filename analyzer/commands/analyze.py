@@ -32,7 +32,10 @@ feedback does not allow a judgement.
   gimbal_control   measured pan/tilt rate against the commanded speed (ratio,
         lag), still moving after the commands stopped, and commands repeated more
         slowly than the 50 ms the document recommends.
-  tracking, tracking_stop   the feedback's tracking flag.
+  tracking, tracking_stop   the feedback's tracking flag: it must change within
+        --flag-allowed (three feedback periods, 1.5 s); staying as it was through
+        that is not_obeyed, also when the next command follows. A tracking_stop when
+        the flag was not on has nothing to obey: unknown ("tracking was never on").
   limits           pitch -110 / +60, yaw motor +-170 (+-325 on 3.5x models).
   feedback         messages per second, silences, CRC errors, per minute.
 
@@ -61,7 +64,12 @@ def _positive(text: str) -> float:
 
 
 def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
-    from analyzer.analysis.response import DEFAULT_TIME_ALLOWED_S, DEFAULT_TOLERANCE_DEG
+    from analyzer.analysis.response import (
+        DEFAULT_FLAG_ALLOWED_S,
+        DEFAULT_TIME_ALLOWED_S,
+        DEFAULT_TOLERANCE_DEG,
+        FLAG_PERIODS,
+    )
 
     parser.add_argument(
         "--tolerance",
@@ -76,8 +84,16 @@ def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
         type=_positive,
         default=DEFAULT_TIME_ALLOWED_S,
         metavar="S",
-        help="seconds a target command, tracking start or stop has to show its effect "
-        f"(default {DEFAULT_TIME_ALLOWED_S:g} s)",
+        help="seconds a target command (specified_angle, look_down, forward) has to reach "
+        f"its angle (default {DEFAULT_TIME_ALLOWED_S:g} s)",
+    )
+    parser.add_argument(
+        "--flag-allowed",
+        type=_positive,
+        default=DEFAULT_FLAG_ALLOWED_S,
+        metavar="S",
+        help="seconds tracking / tracking_stop have to show in the feedback's tracking flag "
+        f"(default {DEFAULT_FLAG_ALLOWED_S:g} s: {FLAG_PERIODS} feedback periods)",
     )
 
 
@@ -128,7 +144,11 @@ def untimed(tally: Any, findings: list[Any]) -> bool:
 def settings_from(args: argparse.Namespace) -> Any:
     from analyzer.analysis.response import Settings
 
-    return Settings(tolerance_deg=args.tolerance, time_allowed_s=args.time_allowed)
+    return Settings(
+        tolerance_deg=args.tolerance,
+        time_allowed_s=args.time_allowed,
+        flag_allowed_s=args.flag_allowed,
+    )
 
 
 def run(args: argparse.Namespace) -> int:

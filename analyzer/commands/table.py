@@ -228,6 +228,7 @@ def _plan(
         "port": args.port,
         "tolerance_deg": args.tolerance,
         "time_allowed_s": args.time_allowed,
+        "flag_allowed_s": args.flag_allowed,
     }
     out = sys.stdout
     todo: list[FileWork] = []

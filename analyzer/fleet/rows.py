@@ -54,6 +54,7 @@ class FileWork:
     port: int = 2000
     tolerance_deg: float | None = None
     time_allowed_s: float | None = None
+    flag_allowed_s: float | None = None
     error: str | None = None  # set when the file could not even be hashed
 
 
@@ -217,6 +218,8 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
         knobs["tolerance_deg"] = work.tolerance_deg
     if work.time_allowed_s is not None:
         knobs["time_allowed_s"] = work.time_allowed_s
+    if work.flag_allowed_s is not None:
+        knobs["flag_allowed_s"] = work.flag_allowed_s
     settings = Settings(**knobs)
     reader = open_input(path, work.fmt, work.port, wanted_ids=PROTOCOL_IDS)
     analyzer = ResponseAnalyzer(settings)
