@@ -63,7 +63,9 @@ def test_a_gimbal_that_obeys(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "tolerance 1 deg, time allowed 5 s" in out
     assert "times are UTC, 2023-11-14" in out
     assert "NOT OBEYED" not in out and "PARTIAL" not in out
-    assert "verdicts: 6 obeyed, 0 partial, 0 not obeyed, 0 unknown" in out
+    assert "verdicts: 5 obeyed, 0 partial, 0 not obeyed, 0 unknown" in out
+    assert "feedback: 1 of 1 minute healthy; no gap (no message lost)" in out
+    assert "feedback         feedback     healthy     feedback healthy over" in out
     assert "22:13:21.000Z  specified_angle  target       obeyed      yaw reached 45.0" in out
 
 

@@ -32,7 +32,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import EXPECTED_FEEDBACK_HZ, GAP_THRESHOLD_S
+from analyzer.tally import EXPECTED_FEEDBACK_HZ, feedback_stream
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
@@ -41,6 +41,7 @@ FLAG_PERIODS = 3
 DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the document's 2 Hz
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
+FEEDBACK_WAIT_S = 1.0  # without feedback, a judgement waits this long past its deadline
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
 DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
@@ -114,7 +115,7 @@ class ResponseAnalyzer:
         t, topic = event.time, event.topic
         out: list[Finding] = []
         if topic == TOPIC_GIMBAL_ATTITUDE:
-            out += self.health.feedback(t)
+            out += self.health.feedback(t, feedback_stream(event))
             sample = sample_from(t, event.fields)
             if sample is not None:
                 self.samples.append(sample)
@@ -122,7 +123,7 @@ class ResponseAnalyzer:
                 out += self._limits(sample)
                 out += self._settle(t, sample)
         elif topic == TOPIC_GIMBAL_RANGING:
-            out += self.health.feedback(t)
+            out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
         elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_FEEDBACK:
             out += self.health.error(t)
@@ -220,7 +221,7 @@ class ResponseAnalyzer:
     def _nothing_to_stop(self, t: float, before: Sample | None) -> Finding:
         """tracking_stop when the feedback did not show tracking on: nothing to obey."""
         if not self._tracking_seen:
-            text = "tracking was never on: there was nothing to stop"
+            text = "tracking was never on in the feedback: there was nothing to stop"
         elif before is None:
             text = "no attitude feedback before the command: whether tracking was on is not known"
         else:
@@ -257,7 +258,7 @@ class ResponseAnalyzer:
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
-        late = GAP_THRESHOLD_S  # without feedback, wait this long past a deadline
+        late = FEEDBACK_WAIT_S
         keep: list[TargetCheck] = []
         for check in self._targets:
             if t > check.deadline + (0.0 if sample is not None else late):

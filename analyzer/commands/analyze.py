@@ -152,7 +152,6 @@ def settings_from(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import Pipeline, run_items
@@ -186,7 +185,7 @@ def run(args: argparse.Namespace) -> int:
             f"response analysis of {args.file} ({reader.format_name}): {commands:,} commands; "
             f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s"
         )
-        output.finish(header, verdict_line(analyzer.verdicts))
+        output.finish(header)
     out.flush()
     for note in notes:
         sys.stderr.write(f"note: {printable(note)}\n")
