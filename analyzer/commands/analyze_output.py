@@ -189,6 +189,8 @@ def verdict_word(fields: dict[str, Any]) -> str:
 
 _NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
     ("target_deg", "target", lambda v: f"{v:g} deg"),
+    ("start_deg", "start", lambda v: f"{v:.2f} deg"),
+    ("final_deg", "final", lambda v: f"{v:.2f} deg"),
     ("response_s", "response", lambda v: f"{v:.2f} s"),
     ("error_deg", "error", lambda v: f"{v:.2f} deg"),
     ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
