@@ -122,6 +122,7 @@ class ResponseAnalyzer:
                 self._tracking_seen = self._tracking_seen or sample.tracking
                 out += self._limits(sample)
                 out += self._settle(t, sample)
+                self.samples.forget_before(self._needed(t))
         elif topic == TOPIC_GIMBAL_RANGING:
             out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
@@ -135,8 +136,7 @@ class ResponseAnalyzer:
                 self._fc_attitude = t
             elif topic == TOPIC_COMMAND:
                 out += self._command(t, event.fields)
-        self.samples.forget_before(self._needed(t))
-        return self._emit(out)
+        return self._emit(out) if out else []
 
     def process(self, events: list[Event]) -> list[Event]:
         """As a pipeline stage (``analyzer.pipeline.Stage``): the findings of a batch.
@@ -144,9 +144,12 @@ class ResponseAnalyzer:
         Findings already in the input (a recording made with this stage) are not judged
         again as input."""
         out: list[Event] = []
+        feed = self.feed
         for event in events:
             if event.topic != TOPIC_ANALYSIS_RESPONSE:
-                out += self.feed(event)
+                found = feed(event)
+                if found:
+                    out += found
         return out
 
     def close(self) -> list[Event]:
@@ -177,6 +180,7 @@ class ResponseAnalyzer:
     def _command(self, t: float, fields: dict[str, Any]) -> list[Finding]:
         name = str(fields.get("name", ""))
         out: list[Finding] = []
+        pan = tilt = 0.0
         if name == "gimbal_control":
             pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
             burst = self._burst
@@ -198,7 +202,6 @@ class ResponseAnalyzer:
             self._motion = (name, t)
         allowed = self.settings.time_allowed_s
         if name == "gimbal_control":
-            pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
             self._burst = Burst(name, pan, tilt, t)
         else:
             fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
@@ -258,6 +261,8 @@ class ResponseAnalyzer:
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
+        if not (self._targets or self._tracking or self._burst or self._bursts):
+            return out
         late = FEEDBACK_WAIT_S
         keep: list[TargetCheck] = []
         for check in self._targets:
