@@ -106,6 +106,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--problems", action="store_true", help="only findings that are not 'obeyed'"
     )
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress line while a file is read"
+    )
 
 
 class KeepFindings:
@@ -155,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.progress import Progress
 
     settings = settings_from(args)
     reader = open_reader(args)
@@ -165,8 +169,10 @@ def run(args: argparse.Namespace) -> int:
         analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
     ).to(out)
     pipeline.sinks.append(output)
+    # The text report is written at the end: the terminal is free for a progress line.
+    progress = Progress.maybe(reader, sys.stderr, out, not args.json, quiet=args.quiet)
     try:
-        run_items(reader, pipeline)
+        run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
     for failure in pipeline.failures:
