@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 from analyzer.mcapio.channel_registry import ChannelRegistry
 from analyzer.mcapio.channels import (
+    MAX_LOG_SECONDS,
     ROLE_EVENT,
     ROLE_RAW,
     ROLE_VIEW,
@@ -88,7 +89,8 @@ class MessageWriter:
                 event: Event = message  # type: ignore[assignment]
                 topic = event.topic
                 channel_id = channels.get(topic) or registry.channel(topic, ROLE_EVENT)
-                log_time = time_ns(event.time)
+                t = event.time
+                log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
                 number = sequence[channel_id] + 1
                 sequence[channel_id] = number
                 add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
@@ -110,7 +112,8 @@ class MessageWriter:
                 topic = TOPIC_STREAM_BYTES
                 channel_id = channels.get(topic) or registry.channel(topic, ROLE_RAW)
                 data = stream_chunk_json(message)  # type: ignore[arg-type]
-            log_time = time_ns(message.time)
+            t = message.time
+            log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
             number = sequence[channel_id] + 1
             sequence[channel_id] = number
             add(channel_id, log_time, data, log_time, number)
