@@ -12,9 +12,6 @@ Regenerate it only when a verdict is meant to change, and say which in the commi
 from __future__ import annotations
 
 import contextlib
-import difflib
-import gzip
-import hashlib
 import io
 import json
 import sys
@@ -28,6 +25,7 @@ if __name__ == "__main__":
 
 from analyzer.cli import main  # noqa: E402
 from tests.analysis_corpus import write_corpus  # noqa: E402
+from tests.stored_copy import assert_same, entry, load, save  # noqa: E402
 
 STORED = ROOT / "tests" / "data" / "analyze_json.json.gz"
 OPTIONS: dict[str, tuple[str, ...]] = {
@@ -48,16 +46,12 @@ def outputs(folder: Path) -> dict[str, dict[str, str]]:
     for name, path in write_corpus(folder).items():
         runs = [()] + ([OPTIONS[name]] if name in OPTIONS else [])
         for options in runs:
-            found[" ".join([name, *options])] = {
-                "input_sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
-                "output": analyze_json(path, options),
-            }
+            found[" ".join([name, *options])] = entry(path, analyze_json(path, options))
     return found
 
 
 def stored() -> dict[str, dict[str, str]]:
-    data: dict[str, dict[str, str]] = json.loads(gzip.decompress(STORED.read_bytes()))
-    return data
+    return load(STORED)
 
 
 @pytest.fixture(scope="module")
@@ -73,14 +67,7 @@ def test_every_input_of_the_corpus_is_stored(current: dict[str, dict[str, str]])
 def test_analyze_json_is_byte_for_byte_the_stored_copy(
     case: str, current: dict[str, dict[str, str]]
 ) -> None:
-    want = stored()[case]
-    got = current[case]
-    assert got["input_sha256"] == want["input_sha256"], f"{case}: the input file changed"
-    if got["output"] != want["output"]:
-        diff = difflib.unified_diff(
-            want["output"].splitlines(), got["output"].splitlines(), "stored", "now", lineterm=""
-        )
-        pytest.fail(f"{case}: analyze --json differs\n" + "\n".join(list(diff)[:40]))
+    assert_same(case, stored()[case], current[case], "analyze --json")
 
 
 def test_the_corpus_has_findings_of_every_verdict(current: dict[str, dict[str, str]]) -> None:
@@ -97,10 +84,7 @@ def store() -> None:
     import tempfile
 
     with tempfile.TemporaryDirectory() as folder:
-        text = json.dumps(outputs(Path(folder)), indent=0, sort_keys=True)
-    STORED.parent.mkdir(parents=True, exist_ok=True)
-    STORED.write_bytes(gzip.compress(text.encode(), compresslevel=9, mtime=0))
-    print(f"wrote {STORED} ({STORED.stat().st_size:,} bytes)")
+        save(STORED, outputs(Path(folder)))
 
 
 if __name__ == "__main__":

@@ -8,8 +8,6 @@ millisecond early or late changes nothing, in ``analyze``, ``decode --summary``,
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import random
 from pathlib import Path
@@ -17,9 +15,9 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from analyzer.cli import main
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.tally import GAP_PERIODS, lost_messages
+from tests.fleet_flights import cli as fleet_cli
 
 T0 = 1_700_000_000.0
 PERIOD = 0.5
@@ -60,10 +58,9 @@ def write_log(path: Path, times: list[float]) -> Path:
 
 
 def cli(*args: str) -> str:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        assert main(list(args)) == 0
-    return out.getvalue()
+    code, out, err = fleet_cli(*args)
+    assert code == 0, err
+    return out
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,6 @@ report's bracket say the same angles, errors and times (one set of numbers)."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import re
 from pathlib import Path
@@ -12,17 +10,16 @@ from typing import Any
 
 import pytest
 
-from analyzer.cli import main
 from tests.analysis_corpus import write_corpus
+from tests.fleet_flights import cli as fleet_cli
 
 NUMBER = r"(-?\d+\.\d)"
 
 
 def cli(*args: str) -> str:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        assert main(list(args)) == 0
-    return out.getvalue()
+    code, out, err = fleet_cli(*args)
+    assert code == 0, err
+    return out
 
 
 @pytest.fixture(scope="module")
