@@ -8,7 +8,6 @@ from typing import Any
 
 from analyzer.analysis.findings import (
     CHECK_LIMIT,
-    CHECK_TRACKING,
     FEEDBACK_COMMAND,
     NOT_OBEYED,
     OBEYED,
@@ -21,6 +20,7 @@ from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
+from analyzer.analysis.tracking import TrackingCheck, judge_tracking, nothing_to_stop
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -78,14 +78,6 @@ class Settings:
 
 
 @dataclass
-class _TrackingCheck:
-    command: str
-    time: float
-    want: bool
-    deadline: float
-
-
-@dataclass
 class _BurstCheck:
     burst: Burst
     observe_until: float
@@ -101,7 +93,7 @@ class ResponseAnalyzer:
         self.verdicts: Counter[str] = Counter()
         self.samples = SampleWindow()  # only those a pending judgement can still need
         self._targets: list[TargetCheck] = []
-        self._tracking: list[_TrackingCheck] = []
+        self._tracking: list[TrackingCheck] = []
         self._burst: Burst | None = None
         self._bursts: list[_BurstCheck] = []
         self._fc_attitude: float | None = None
@@ -215,22 +207,11 @@ class ResponseAnalyzer:
             self._tracking = []
             before = self._before(t)
             if name == "tracking_stop" and not (before is not None and before.tracking):
-                out.append(self._nothing_to_stop(t, before))
+                out.append(nothing_to_stop(t, before, seen_on=self._tracking_seen))
             else:
                 flag_allowed = self.settings.flag_allowed_s
-                self._tracking.append(_TrackingCheck(name, t, name == "tracking", t + flag_allowed))
+                self._tracking.append(TrackingCheck(name, t, name == "tracking", t + flag_allowed))
         return out
-
-    def _nothing_to_stop(self, t: float, before: Sample | None) -> Finding:
-        """tracking_stop when the feedback did not show tracking on: nothing to obey."""
-        if not self._tracking_seen:
-            text = "tracking was never on in the feedback: there was nothing to stop"
-        elif before is None:
-            text = "no attitude feedback before the command: whether tracking was on is not known"
-        else:
-            text = "tracking was already off: there was nothing to stop"
-        extra: dict[str, Any] = {"observed_at": before.time} if before is not None else {}
-        return Finding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)
 
     def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A new motion command: earlier targets on its axes, and bursts, end here."""
@@ -271,7 +252,7 @@ class ResponseAnalyzer:
             else:
                 keep.append(check)
         self._targets = keep
-        still: list[_TrackingCheck] = []
+        still: list[TrackingCheck] = []
         for tracking in self._tracking:
             if sample is not None and sample.tracking == tracking.want and t > tracking.time:
                 out.append(self._judge_tracking(tracking, sample, ""))
@@ -335,37 +316,10 @@ class ResponseAnalyzer:
         )
 
     def _judge_tracking(
-        self, check: _TrackingCheck, sample: Sample | None, cut_short: str
+        self, check: TrackingCheck, sample: Sample | None, cut_short: str
     ) -> Finding:
-        flag = "on" if check.want else "off"
-        extra: dict[str, Any] = {}
-        if sample is not None:
-            extra["response_s"] = sample.time - check.time
-            extra["observed_at"] = sample.time
-            text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
-            return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
-        seen = self._between(check.time, check.deadline)
-        allowed = self.settings.flag_allowed_s
-        if not seen:
-            why = f"before {cut_short}" if cut_short else f"within {allowed:g} s"
-            text = f"no attitude feedback came {why}: the tracking flag could not be checked"
-            return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
-        extra["observed_at"] = seen[-1].time
-        span = seen[-1].time - check.time
-        verdict = UNKNOWN if cut_short else NOT_OBEYED
-        other = "off" if check.want else "on"
-        if cut_short:
-            text = (
-                f"the feedback's tracking flag stayed {other} for {span:.1f} s, until {cut_short}"
-            )
-        else:
-            n = len(seen)
-            text = (
-                f"the feedback's tracking flag stayed {other} through the {allowed:g} s allowed "
-                f"({n} attitude message{'s' if n > 1 else ''}, the last {span:.1f} s after "
-                "the command)"
-            )
-        return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
+        seen = [] if sample is not None else self._between(check.time, check.deadline)
+        return judge_tracking(check, sample, seen, cut_short, self.settings.flag_allowed_s)
 
     def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:
         burst = pending.burst
