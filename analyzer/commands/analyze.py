@@ -37,7 +37,16 @@ feedback does not allow a judgement.
         that is not_obeyed, also when the next command follows. A tracking_stop when
         the flag was not on has nothing to obey: unknown ("tracking was never on").
   limits           pitch -110 / +60, yaw motor +-170 (+-325 on 3.5x models).
-  feedback         messages per second, silences, CRC errors, per minute.
+  feedback         messages per second, gaps, CRC errors, per minute, and each
+        gap: a silence of 1.5 feedback periods (0.75 s) or more lost
+        round(silence / 0.5 s) - 1 messages, the same count decode --summary,
+        info and table give. The text says these in health words (healthy,
+        DEGRADED, LOST) and counts them apart from the commands' verdicts.
+
+Findings are written in time order as they are decided; the analysis keeps
+only the feedback a pending judgement can still need, so long flights take
+time in proportion and memory that does not grow. A progress line shows on a
+terminal (-q: none).
 
 It reads every input `decode` reads (candump, python-can logs, pcap, raw
 TCP/UART dumps, MCAP recordings).
