@@ -172,11 +172,12 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
-    pipeline = Pipeline(stages=[analyzer])  # the same decoding and counting as every command
+    pipeline = Pipeline()  # the same decoding and counting as every command
     out = sys.stdout
     output = FindingsOutput(
         analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
     ).to(out)
+    pipeline.stages.append(output.stage)  # the analysis, whose findings it writes
     pipeline.sinks.append(output)
     # The text report is written at the end: the terminal is free for a progress line.
     progress = Progress.maybe(reader, sys.stderr, out, not args.json, quiet=args.quiet)

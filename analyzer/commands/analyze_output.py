@@ -18,7 +18,7 @@ from analyzer.analysis.findings import (
 )
 from analyzer.analysis.time_order import TimeOrder
 from analyzer.pipeline import Batch
-from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
+from analyzer.protocol.types import Event
 from analyzer.summary import gap_words
 from analyzer.tally import Tally
 from analyzer.terminal_text import printable_lines
@@ -42,7 +42,29 @@ GAP_WORD = "LOST"
 class Judging(Protocol):
     """What the output needs of the analysis (``ResponseAnalyzer``)."""
 
+    def process(self, events: list[Event]) -> list[Event]: ...
+
+    def close(self) -> list[Event]: ...
+
     def earliest_pending(self) -> float | None: ...
+
+
+class _Judged:
+    """The analysis as the pipeline's stage, its findings (only those) handed to the output."""
+
+    def __init__(self, analysis: Judging, output: FindingsOutput) -> None:
+        self.analysis = analysis
+        self.output = output
+
+    def process(self, events: list[Event]) -> list[Event]:
+        found = self.analysis.process(events)
+        self.output.take(found)
+        return found
+
+    def close(self) -> list[Event]:
+        found = self.analysis.close()
+        self.output.take(found)
+        return found
 
 
 class FindingsOutput:
@@ -50,10 +72,12 @@ class FindingsOutput:
     come (held meanwhile as its line of text, so memory follows the pending judgements,
     not the length of the flight).
 
-    An input without a clock (see ``untimed``) gets no findings: nothing is written until
-    its times are seen to differ, and at the end ``untimed`` says whether they never did.
-    The text report's lines go to a temporary file first (``finish`` writes the header,
-    which needs the whole input's figures, then them).
+    ``stage`` is the analysis as the pipeline's stage: the findings it makes, and no
+    finding the input may already hold, are written. An input without a clock (see
+    ``untimed``) gets no findings: nothing is written until its times are seen to differ,
+    and at the end ``untimed`` says whether they never did. The text report's lines go to
+    a temporary file first (``finish`` writes the header, which needs the whole input's
+    figures, then them).
     """
 
     keeps_items = False
@@ -76,21 +100,25 @@ class FindingsOutput:
         self.verdicts: Counter[str] = Counter()  # of the commands' findings
         self.health: Counter[str] = Counter()  # of the feedback windows, by verdict
         self.gaps = self.lost = 0
+        self.stage = _Judged(analysis, self)
 
     def to(self, out: IO[str]) -> FindingsOutput:
         self.out = out
         return self
 
+    def take(self, findings: list[Event]) -> None:
+        """Findings of the stage: counted, and held (as text) until their turn."""
+        for event in findings:
+            self.found += 1
+            self._count(event.fields)
+            if self.problems and event.fields.get("verdict") == "obeyed":
+                continue
+            if self.first_time is None or event.time < self.first_time:
+                self.first_time = event.time
+            self.order.push(event.time, self._line(event))
+
     def handle(self, batch: Batch) -> None:
-        for event in batch.events:
-            if event.topic == TOPIC_ANALYSIS_RESPONSE:
-                self.found += 1
-                self._count(event.fields)
-                if self.problems and event.fields.get("verdict") == "obeyed":
-                    continue
-                if self.first_time is None or event.time < self.first_time:
-                    self.first_time = event.time
-                self.order.push(event.time, self._line(event))
+        """After the counters took the batch: write what no finding to come can precede."""
         if self._timed():
             self._write(self.order.release(self.analysis.earliest_pending()))
 
