@@ -1,7 +1,7 @@
 """Long file work shows how far it is and how fast it goes, on a terminal only.
 
 Every command that reads a file through the pipeline (``decode``, ``analyze``,
-``convert``, ``report``) draws the same line on stderr when it is a terminal, clears it
+``convert``, ``report``, ``table`` for a file it reads itself) draws the same line on stderr when it is a terminal, clears it
 at the end, and stays quiet with -q or when stderr is a pipe or a file.
 """
 
@@ -53,6 +53,7 @@ COMMANDS = {
     "analyze": ("analyze", str(SAMPLE)),
     "convert": ("convert", str(SAMPLE), "-o", "out.mcap"),
     "report": ("report", str(SAMPLE), "-o", "out.html"),
+    "table": ("table", str(SAMPLE), "-o", "fleet"),
 }
 
 
@@ -65,7 +66,7 @@ def test_every_command_draws_the_same_progress_line(name: str, tmp_path: Path) -
     assert "\r\033[K" in drawn  # cleared before the command's own last words
 
 
-@pytest.mark.parametrize("name", ["analyze", "convert", "report"])
+@pytest.mark.parametrize("name", ["analyze", "convert", "report", "table"])
 def test_quiet_draws_nothing(name: str, tmp_path: Path) -> None:
     code, drawn = run_on_a_terminal(*COMMANDS[name], "-q", cwd=tmp_path)
     assert code == 0 and "%" not in drawn and "MB/s" not in drawn

@@ -55,6 +55,7 @@ class FileWork:
     tolerance_deg: float | None = None
     time_allowed_s: float | None = None
     flag_allowed_s: float | None = None
+    progress: bool = False  # a progress line while it is read (in this process, a terminal)
     error: str | None = None  # set when the file could not even be hashed
 
 
@@ -210,6 +211,7 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
     from analyzer.commands.analyze import KeepFindings, untimed
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.progress import Progress
     from analyzer.protocol.ids import PROTOCOL_IDS
     from analyzer.summary import Summary
 
@@ -226,8 +228,9 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
     kept = KeepFindings(analyzer)
     sink = ColumnSink()
     pipeline = Pipeline([sink], stages=[kept])  # what decode, analyze and report run
+    progress = Progress.maybe(reader, sys.stderr, quiet=not work.progress)
     try:
-        run_items(reader, pipeline)
+        run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
     for failure in pipeline.failures:
