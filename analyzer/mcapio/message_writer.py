@@ -15,10 +15,10 @@ from analyzer.mcapio.channels import (
     TOPIC_STREAM_BYTES,
     MessageTee,
     can_frame_json,
+    json_bytes,
     stream_chunk_json,
     time_ns,
 )
-from analyzer.mcapio.channels import encode_json as _ENCODE
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
 from analyzer.pipeline import RawItem
@@ -93,7 +93,7 @@ class MessageWriter:
                 log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
                 number = sequence[channel_id] + 1
                 sequence[channel_id] = number
-                add(channel_id, log_time, _ENCODE(event.to_dict()).encode(), log_time, number)
+                add(channel_id, log_time, json_bytes(event.to_dict()), log_time, number)
                 events += 1
                 if views is not None and topic in VIEW_INPUT_TOPICS:
                     for view_topic, view in views.views(event):
@@ -101,7 +101,7 @@ class MessageWriter:
                         view_id = view_id or registry.channel(view_topic, ROLE_VIEW)
                         number = sequence[view_id] + 1
                         sequence[view_id] = number
-                        add(view_id, log_time, _ENCODE(view).encode(), log_time, number)
+                        add(view_id, log_time, json_bytes(view), log_time, number)
                         extra += 1
                 continue
             if kind is CanFrame:
