@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "monitor": "analyzer.commands.monitor",
     "simulate": "analyzer.commands.simulate",
     "send": "analyzer.commands.send",
+    "interfaces": "analyzer.commands.interfaces",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",
     "layout": "analyzer.commands.layout",

@@ -56,7 +56,7 @@ def test_recording_passes_the_mcap_reader_with_crc_validation(tmp_path: Path) ->
 
 def test_channels_are_json_with_valid_json_schemas(tmp_path: Path) -> None:
     path = tmp_path / "rec.mcap"
-    write_recording(path, emit_other=True)
+    write_recording(path, traffic(bus_off=True), emit_other=True)
     core = topic_schemas()
     seen: set[str] = set()
     validators: dict[int, jsonschema.Draft202012Validator] = {}
@@ -84,10 +84,24 @@ def test_log_and_publish_time_are_the_event_time(tmp_path: Path) -> None:
         body = json.loads(message.data)
         if "time" in body:
             assert message.log_time == time_ns(body["time"])
-        else:  # Foxglove views carry a {sec, nsec} timestamp
-            stamp = body["timestamp"]
-            assert abs(message.log_time - (stamp["sec"] * 10**9 + stamp["nsec"])) <= 1
+        else:  # Foxglove views carry {sec, nsec} timestamps (transforms, entities: each one)
+            stamps = list(_timestamps(body))
+            assert stamps
+            for stamp in stamps:
+                assert abs(message.log_time - (stamp["sec"] * 10**9 + stamp["nsec"])) <= 1
         assert message.publish_time == message.log_time
+
+
+def _timestamps(value: Any) -> Any:
+    """Every "timestamp" object in a message, at any depth."""
+    if isinstance(value, dict):
+        if isinstance(value.get("timestamp"), dict):
+            yield value["timestamp"]
+        for item in value.values():
+            yield from _timestamps(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _timestamps(item)
 
 
 def test_location_fix_channels(tmp_path: Path) -> None:

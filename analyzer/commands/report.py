@@ -74,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.progress import Progress
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
+    from analyzer.scene.timeline import OverlayTimeline
 
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
@@ -82,8 +83,9 @@ def run(args: argparse.Namespace) -> int:
     analyzer = ResponseAnalyzer(settings)
     data = ReportData(source=reader.source, format_name=reader.format_name)
     kept = KeepFindings(analyzer)
+    overlays = OverlayTimeline()  # the camera pictures show what Foxglove draws over them
     # The same decoding and counting as every command; the analyzer is a stage of it.
-    pipeline = Pipeline([EventsInto(data.add)], stages=[kept])
+    pipeline = Pipeline([EventsInto(data.add), EventsInto(overlays.add)], stages=[kept])
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
     try:
         run_items(reader, pipeline, progress=progress)
@@ -92,10 +94,11 @@ def run(args: argparse.Namespace) -> int:
     for finding in kept.findings:
         data.add(finding)
     data.notes.extend(reader.notes)
+    data.frames = pipeline.tally.frames
     if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
         from analyzer.mcapio.video_reading import read_thumbnails
 
-        data.pictures.extend(read_thumbnails(args.file))
+        data.pictures.extend(overlays.pictures(read_thumbnails(args.file)))
     if data.first is not None and data.first == data.last and data.findings:
         data.findings.clear()
         data.notes.append("the input carries no timestamps: responses cannot be timed")

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.mcapio.channels import TOPIC_SCENE
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
-from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+from analyzer.protocol.types import (
+    TOPIC_CAN_BUS_STATE,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+)
 
 # Panel ids are "<panel type>!<name>"; the types are those of Foxglove Studio 1.48.
 MAP = "map!gimbal-map"
@@ -16,9 +22,16 @@ STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
 IMAGE = "ImageViewPanel!gimbal-camera"
+SCENE = "3D!gimbal-scene"
+BUS_PLOT = "Plot!can-bus-state"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
-# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
+# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel, with
+# /camera/main/annotations over it.
 CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
+CAMERA_THUMBNAIL_ANNOTATIONS = "/camera/main/thumbnail/annotations"
+# The 3D panel follows the gimbal's position (the world stays upright), seen from behind
+# and above, with the frames' axes (/tf) and the scene (aircraft, field of view, target).
+SCENE_FOLLOW_FRAME = "gimbal"
 
 # Message paths the layout shows: (topic, field) pairs, checked against the schemas by tests.
 PLOT_SERIES = (
@@ -32,6 +45,8 @@ STATE_SERIES = (
     (TOPIC_GIMBAL_ATTITUDE, "tracking"),
     (TOPIC_COMMAND, "name"),
 )
+# The CAN controller's state as a number: 0 error-active .. 3 bus-off.
+BUS_SERIES = ((TOPIC_CAN_BUS_STATE, "level"),)
 TRACKING = (TOPIC_GIMBAL_ATTITUDE, "tracking")
 
 _COLOURS = ("#4e98e2", "#f5774d", "#61cbff", "#f7df71")
@@ -99,7 +114,7 @@ def layout() -> dict[str, Any]:
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
         IMAGE: {
             "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
-            "enabledMarkerTopics": [],
+            "enabledMarkerTopics": [CAMERA_THUMBNAIL_ANNOTATIONS],
             "mode": "fit",
             "pan": {"x": 0, "y": 0},
             "rotation": 0,
@@ -107,24 +122,64 @@ def layout() -> dict[str, Any]:
             "transformMarkers": False,
             "zoom": 1,
         },
+        SCENE: {
+            "cameraState": {
+                "distance": 20,
+                "perspective": True,
+                "phi": 55,
+                "target": [0, 0, 0],
+                "targetOffset": [0, 0, 0],
+                "targetOrientation": [0, 0, 0, 1],
+                "thetaOffset": 150,
+                "fovy": 45,
+                "near": 0.1,
+                "far": 5000,
+            },
+            "followMode": "follow-position",
+            "followTf": SCENE_FOLLOW_FRAME,
+            "scene": {"transforms": {"showLabel": True, "labelSize": 0.12, "axisScale": 3}},
+            "transforms": {},
+            "topics": {TOPIC_SCENE: {"visible": True}},
+            "layers": {},  # a grid at the world origin is far behind a flying aircraft
+        },
+    }
+    config_by_id[BUS_PLOT] = {
+        **config_by_id[PLOT],
+        "title": "CAN bus state (0 error-active .. 3 bus-off)",
+        "paths": [
+            {
+                "value": message_path(topic, field),
+                "enabled": True,
+                "timestampMethod": "receiveTime",
+                "color": colour,
+            }
+            for (topic, field), colour in zip(BUS_SERIES, _COLOURS[3:], strict=False)
+        ],
+        "minYValue": 0,
+        "maxYValue": 3,
     }
     mosaic = {
         "direction": "row",
-        "splitPercentage": 38,
+        "splitPercentage": 50,
         "first": {
             "direction": "column",
-            "splitPercentage": 55,
+            "splitPercentage": 50,
             "first": {
                 "direction": "row",
                 "splitPercentage": 50,
-                "first": MAP,
-                "second": IMAGE,
+                "first": IMAGE,
+                "second": SCENE,
             },
             "second": {
-                "direction": "column",
-                "splitPercentage": 22,
-                "first": INDICATOR,
-                "second": LOG,
+                "direction": "row",
+                "splitPercentage": 50,
+                "first": MAP,
+                "second": {
+                    "direction": "column",
+                    "splitPercentage": 30,
+                    "first": INDICATOR,
+                    "second": LOG,
+                },
             },
         },
         "second": {
@@ -134,7 +189,12 @@ def layout() -> dict[str, Any]:
             "second": {
                 "direction": "column",
                 "splitPercentage": 42,
-                "first": STATES,
+                "first": {
+                    "direction": "row",
+                    "splitPercentage": 60,
+                    "first": STATES,
+                    "second": BUS_PLOT,
+                },
                 "second": {
                     "direction": "row",
                     "splitPercentage": 50,

@@ -7,7 +7,9 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
+from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
+    BUS_ERROR,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -63,6 +65,8 @@ class ReportData:
     findings: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     pictures: list[Any] = field(default_factory=list)  # camera thumbnails (report.camera)
+    bus: BusFigures = field(default_factory=BusFigures)  # what the CAN error frames say
+    frames: int = 0  # CAN frames read, error frames included (for the bus hints)
 
     def add(self, event: Event) -> None:
         t, topic, fields = event.time, event.topic, event.fields
@@ -101,6 +105,8 @@ class ReportData:
         elif topic == TOPIC_DIAGNOSTICS:
             kind = str(fields.get("kind", "unknown"))
             self.diagnostic_kinds[kind] += 1
+            if kind == BUS_ERROR:
+                self.bus.add_events((event,))
             if len(self.diagnostics) < MAX_ROWS:
                 self.diagnostics.append((t, kind, str(fields.get("detail", ""))))
 
