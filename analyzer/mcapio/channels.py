@@ -76,7 +76,7 @@ STREAM_BYTES_SCHEMA: dict[str, Any] = {
     "required": ["time", "data", "source"],
 }
 
-_TRUE_FALSE = ("false", "true")
+TRUE_FALSE = ("false", "true")
 _STRING_CACHE: dict[str, str] = {}
 
 
@@ -94,21 +94,21 @@ def _json_time(value: float) -> str:
     return repr(float(value)) if math.isfinite(value) else "0.0"
 
 
-_FRAME_TAILS: dict[tuple[str, bool, bool, bool, str], str] = {}
+FRAME_TAILS: dict[tuple[str, bool, bool, bool, str], str] = {}
 
 
-def _frame_tail(frame: CanFrame) -> str:
+def frame_tail(frame: CanFrame) -> str:
     """The end of a frame's message from its data on: the same for most frames of a file."""
     key = (frame.channel, frame.is_remote, frame.is_error, frame.is_fd, frame.direction)
-    tail = _FRAME_TAILS.get(key)
+    tail = FRAME_TAILS.get(key)
     if tail is None:
         tail = (
             f'","channel":{_json_str(frame.channel)},'
-            f'"remote":{_TRUE_FALSE[frame.is_remote]},"error":{_TRUE_FALSE[frame.is_error]},'
-            f'"fd":{_TRUE_FALSE[frame.is_fd]},"direction":{_json_str(frame.direction)}}}'
+            f'"remote":{TRUE_FALSE[frame.is_remote]},"error":{TRUE_FALSE[frame.is_error]},'
+            f'"fd":{TRUE_FALSE[frame.is_fd]},"direction":{_json_str(frame.direction)}}}'
         )
-        if len(_FRAME_TAILS) < 1024:
-            _FRAME_TAILS[key] = tail
+        if len(FRAME_TAILS) < 1024:
+            FRAME_TAILS[key] = tail
     return tail
 
 
@@ -116,11 +116,11 @@ def can_frame_json(frame: CanFrame) -> bytes:
     """The /can/frames message of one frame (hand-built: this runs for every frame)."""
     t = frame.time
     stamp = repr(t) if type(t) is float and t - t == 0 else _json_time(t)  # not NaN, inf
-    tail = _FRAME_TAILS.get(
+    tail = FRAME_TAILS.get(
         (frame.channel, frame.is_remote, frame.is_error, frame.is_fd, frame.direction)
-    ) or _frame_tail(frame)
+    ) or frame_tail(frame)
     return (
-        f'{{"time":{stamp},"id":{frame.can_id},"extended":{_TRUE_FALSE[frame.extended]},'
+        f'{{"time":{stamp},"id":{frame.can_id},"extended":{TRUE_FALSE[frame.extended]},'
         f'"dlc":{frame.dlc},"data":"{frame.data.hex(" ").upper()}{tail}'
     ).encode()
 

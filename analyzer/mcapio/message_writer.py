@@ -7,14 +7,17 @@ from collections.abc import Sequence
 
 from analyzer.mcapio.channel_registry import ChannelRegistry
 from analyzer.mcapio.channels import (
+    FRAME_TAILS,
     MAX_LOG_SECONDS,
     ROLE_EVENT,
     ROLE_RAW,
     ROLE_VIEW,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
+    TRUE_FALSE,
     MessageTee,
     can_frame_json,
+    frame_tail,
     json_bytes,
     stream_chunk_json,
     time_ns,
@@ -82,6 +85,7 @@ class MessageWriter:
         channels = registry.ids
         views = self._views
         can_id = channels.get(TOPIC_CAN_FRAMES, 0)
+        tails = FRAME_TAILS
         items = events = extra = 0
         for message in messages:
             kind = type(message)
@@ -107,7 +111,24 @@ class MessageWriter:
             if kind is CanFrame:
                 channel_id = can_id or registry.channel(TOPIC_CAN_FRAMES, ROLE_RAW)
                 can_id = channel_id
-                data = can_frame_json(message)  # type: ignore[arg-type]
+                frame: CanFrame = message  # type: ignore[assignment]
+                t = frame.time
+                if type(t) is float and t - t == 0:  # can_frame_json, inlined: every frame
+                    key = (
+                        frame.channel,
+                        frame.is_remote,
+                        frame.is_error,
+                        frame.is_fd,
+                        frame.direction,
+                    )
+                    tail = tails.get(key) or frame_tail(frame)
+                    data = (
+                        f'{{"time":{t!r},"id":{frame.can_id},"extended":'
+                        f'{TRUE_FALSE[frame.extended]},"dlc":{frame.dlc},'
+                        f'"data":"{frame.data.hex(" ").upper()}{tail}'
+                    ).encode()
+                else:
+                    data = can_frame_json(frame)
             else:
                 topic = TOPIC_STREAM_BYTES
                 channel_id = channels.get(topic) or registry.channel(topic, ROLE_RAW)
