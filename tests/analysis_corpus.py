@@ -21,6 +21,7 @@ from tests.fault_logs import CANDUMP_NAME, STREAM_NAME, write_fault_logs
 from tests.fleet_flights import FLIGHTS
 from tests.fleet_flights import SCRIPT as FLEET_SCRIPT
 from tests.fleet_flights import SECONDS as FLEET_SECONDS
+from tests.log_makers import ardupilot_log, flight_frames, savvycan_csv, sll_pcap
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "samples"
@@ -87,6 +88,14 @@ def write_corpus(folder: Path) -> dict[str, Path]:
         path = folder / name
         path.write_text(candump_text(frames))
         made[name] = path
+    # The sample's frames as other tools write them (ArduPilot DataFlash with GPS,
+    # tcpdump -i any, SavvyCAN): the same findings must come out of every format.
+    frames = flight_frames()
+    made["sample-dataflash.bin"] = folder / "sample-dataflash.bin"
+    made["sample-dataflash.bin"].write_bytes(ardupilot_log(frames, frames[0].time - 10)[0])
+    made["sample-sll2.pcap"] = sll_pcap(folder / "sample-sll2.pcap", frames, 276)
+    made["sample-savvycan.csv"] = folder / "sample-savvycan.csv"
+    made["sample-savvycan.csv"].write_text(savvycan_csv(frames))
     dense = folder / "dense-mix.log"
     with dense.open("w") as f:
         for batch in _decode_speed().dense_lines(DENSE_FRAMES):
