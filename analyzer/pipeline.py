@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from itertools import islice
 from typing import Any, Protocol, runtime_checkable
 
+from analyzer.progress import Progress
 from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 from analyzer.tally import Tally
 
@@ -229,6 +230,7 @@ def run_items(
     *,
     batch_items: int = BATCH_ITEMS,
     after_batch: Callable[[Batch], None] | None = None,
+    progress: Progress | None = None,
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
@@ -236,9 +238,11 @@ def run_items(
     reads in blocks hands on a block's items at once; 1 for live input such as standard
     input, so each line shows at once); ``after_batch`` runs after each. When no sink
     keeps raw items, a reader that can hands its frames on as FrameRuns. Stops
-    early when a sink fails. An exception of the reader (Ctrl-C, unreadable input)
-    propagates without ``finish``: the caller decides whether what was read counts
-    (``decode`` of live input finishes, ``convert`` throws its output away).
+    early when a sink fails. ``progress`` (``analyzer.progress.Progress.maybe``) is
+    drawn after each batch and cleared at the end, whatever happens. An exception of
+    the reader (Ctrl-C, unreadable input) propagates without ``finish``: the caller
+    decides whether what was read counts (``decode`` of live input finishes,
+    ``convert`` throws its output away).
     """
     if not pipeline.keeps_items and hasattr(items, "frame_runs"):
         items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
@@ -246,15 +250,22 @@ def run_items(
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:
         chunks = _chunks(iter(items), batch_items)
-    with fewer_collections():
-        for chunk in chunks:
-            pipeline.feed(chunk)
-            batch = pipeline.deliver()
-            if pipeline.failed:
-                break
-            if after_batch is not None:
-                after_batch(batch)
-        pipeline.finish()
+    tally = pipeline.tally
+    try:
+        with fewer_collections():
+            for chunk in chunks:
+                pipeline.feed(chunk)
+                batch = pipeline.deliver()
+                if pipeline.failed:
+                    break
+                if after_batch is not None:
+                    after_batch(batch)
+                if progress is not None:
+                    progress.update(tally.frames + tally.chunks)
+            pipeline.finish()
+    finally:
+        if progress is not None:
+            progress.clear()
 
 
 @contextlib.contextmanager

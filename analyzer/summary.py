@@ -11,7 +11,7 @@ from analyzer.protocol.types import Event
 from analyzer.tally import (
     EXPECTED_FEEDBACK_HZ,
     FEEDBACK_TOLERANCE,
-    GAP_THRESHOLD_S,
+    GAP_PERIODS,
     MAX_FEEDBACK_SOURCES,
     FeedbackTrack,
     Tally,
@@ -48,9 +48,9 @@ def feedback_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
                 f"longest gap {track.longest_gap:.3f} s, "
                 f"{format_datetime(track.gap_start or 0.0)} .. "
                 f"{format_datetime(track.gap_end or 0.0)}; "
-                f"{track.gaps_over_threshold} gap(s) over {GAP_THRESHOLD_S:g} s"
+                + gap_words(track.gaps_over_threshold, track.lost_messages)
             )
-            if track.longest_gap > 2 / EXPECTED_FEEDBACK_HZ:
+            if track.gaps_over_threshold:
                 gap = alarm(gap)
             lines.append(f"    {gap}")
     if tally.feedback_untracked:
@@ -59,6 +59,16 @@ def feedback_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
             f"first {MAX_FEEDBACK_SOURCES:,} (counted; rate and gaps not timed)"
         )
     return lines
+
+
+def gap_words(gaps: int, lost: int) -> str:
+    """'no gap' or '2 gaps, 3 messages lost', as every command says it."""
+    if not gaps:
+        return "no gap (no message lost)"
+    return (
+        f"{gaps} gap{'s' if gaps > 1 else ''}, {lost} message{'s' if lost > 1 else ''} lost "
+        f"(a silence of {GAP_PERIODS:g} feedback periods or more)"
+    )
 
 
 def _rate(track: FeedbackTrack, alarm: Style) -> str:

@@ -10,6 +10,7 @@ or from a scan of the recorded events) all read these figures.
 from __future__ import annotations
 
 import json
+import math
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
@@ -36,8 +37,10 @@ from analyzer.protocol.types import (
 EXPECTED_FEEDBACK_HZ = 2.0
 FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
 FEEDBACK_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING})
-# A silence longer than this means feedback messages were lost.
-GAP_THRESHOLD_S = 1.0
+FEEDBACK_PERIOD_S = 1 / EXPECTED_FEEDBACK_HZ
+# A silence of this many feedback periods or more has lost at least one message.
+GAP_PERIODS = 1.5
+GAP_THRESHOLD_S = GAP_PERIODS * FEEDBACK_PERIOD_S  # 0.75 s at 2 Hz
 # Streams whose feedback is timed one by one; a file naming millions of channels must not
 # grow the tally (nor the stats record written into a recording) without limit.
 MAX_FEEDBACK_SOURCES = MAX_SOURCES
@@ -47,6 +50,34 @@ CAN_BITS_EXTENDED = 67
 CAN_BITS_STANDARD = 47
 
 _US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie exactly
+
+
+def silence_s(previous: float, t: float) -> float:
+    """The time between two messages in whole microseconds (a recording's nanosecond times
+    and the file it was made from give the same silence)."""
+    return (round(t * _US) - round(previous * _US)) / _US
+
+
+def feedback_stream(event: Event) -> str:
+    """The stream a feedback message belongs to: its source, and direction if any."""
+    direction = event.fields.get("direction")
+    return f"{event.source} {direction}" if direction else event.source
+
+
+def lost_messages(silence_s: float, period_s: float = FEEDBACK_PERIOD_S) -> int:
+    """Feedback messages lost in a silence between two messages, counted in periods.
+
+    A silence of ``GAP_PERIODS`` (1.5) periods or more has lost at least one message; it
+    lost round(silence / period) - 1 of them. A message a fraction of a millisecond early
+    or late changes nothing: one lost message at 2 Hz leaves about 1.0 s (0.75..1.25 s
+    counts one), two leave about 1.5 s. decode --summary, info, analyze, report and
+    table all count with this one function.
+    """
+    if not silence_s >= GAP_PERIODS * period_s:  # also False for NaN
+        return 0
+    return max(1, math.floor(silence_s / period_s + 0.5) - 1)
+
+
 _DATA = attrgetter("data")
 _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
@@ -70,7 +101,8 @@ class FeedbackTrack:
     longest_gap: float = 0.0
     gap_start: float | None = None  # the message before the longest gap
     gap_end: float | None = None  # the message that ended it
-    gaps_over_threshold: int = 0
+    gaps_over_threshold: int = 0  # silences that lost messages (see lost_messages)
+    lost_messages: int = 0  # feedback messages lost in them
     _longest_us: int = field(default=0, repr=False)
 
     def add(self, t: float) -> None:
@@ -82,8 +114,10 @@ class FeedbackTrack:
             if gap_us > self._longest_us:
                 self._longest_us = gap_us
                 self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
-            if gap_us > GAP_THRESHOLD_S * _US:
+            lost = lost_messages(gap_us / _US)
+            if lost:
                 self.gaps_over_threshold += 1
+                self.lost_messages += lost
         self.count += 1
         self.last = t
 
@@ -108,6 +142,7 @@ class FeedbackTrack:
             "longest_gap_end": self.gap_end if gap else None,
             "gap_threshold_s": GAP_THRESHOLD_S,
             "gaps_over_threshold": self.gaps_over_threshold,
+            "lost_messages": self.lost_messages,
         }
 
     @classmethod
@@ -121,6 +156,7 @@ class FeedbackTrack:
             gap_start=_opt_float(data.get("longest_gap_start")),
             gap_end=_opt_float(data.get("longest_gap_end")),
             gaps_over_threshold=int(data.get("gaps_over_threshold", 0)),
+            lost_messages=int(data.get("lost_messages", 0)),
         )
         track._longest_us = round(track.longest_gap * _US)
         return track
@@ -248,10 +284,7 @@ class Tally:
     def _add_feedback(self, event: Event, fields: dict[str, Any]) -> None:
         """One feedback message: its stream's timing, and one CRC checked."""
         self.crc_checked += 1
-        key = event.source
-        direction = fields.get("direction")
-        if direction:
-            key = f"{key} {direction}"
+        key = feedback_stream(event)
         track = self.feedback.get(key)
         if track is None:
             if len(self.feedback) >= MAX_FEEDBACK_SOURCES:

@@ -245,19 +245,47 @@ def test_tracking_start_and_stop_follow_the_flag() -> None:
     assert "went off" in stop["detail"]
 
 
-def test_tracking_never_engaged() -> None:
+def test_tracking_never_engaged_is_not_obeyed_after_three_feedback_periods() -> None:
+    # The flag stays off in every feedback message: not obeyed once 1.5 s (three periods
+    # at 2 Hz) have passed, also when the next command (the stop, 3 s later) follows.
     found = session(TRACK, 8.0, behaviour=Behaviour(ignore=frozenset({"tracking"})))
     f = only(found, "tracking", "tracking")
-    assert f["verdict"] == "unknown" and "stayed off" in f["detail"]  # stop came at 3 s < 5 s
+    assert f["verdict"] == "not_obeyed" and "stayed off through the 1.5 s allowed" in f["detail"]
+    assert f["observed_at"] - f["time"] <= 1.5
+    stop = only(found, "tracking_stop", "tracking")
+    assert stop["verdict"] == "unknown" and "tracking was never on" in stop["detail"]
     found = session(TRACK[:1], 8.0, behaviour=Behaviour(ignore=frozenset({"tracking"})))
     f = only(found, "tracking", "tracking")
-    assert f["verdict"] == "not_obeyed" and "stayed off for 5.0 s" in f["detail"]
+    assert f["verdict"] == "not_obeyed" and "stayed off through the 1.5 s" in f["detail"]
+
+
+def test_the_flag_allowance_is_a_setting() -> None:
+    ignored = Behaviour(ignore=frozenset({"tracking"}))
+    found = session(TRACK, 8.0, Settings(flag_allowed_s=2.5), behaviour=ignored)
+    assert "stayed off through the 2.5 s allowed" in only(found, "tracking", "tracking")["detail"]
+    # A stop before the allowance is over cuts the check short: not known.
+    found = session(TRACK, 8.0, Settings(flag_allowed_s=4.0), behaviour=ignored)
+    f = only(found, "tracking", "tracking")
+    assert f["verdict"] == "unknown" and "until tracking_stop came 3.0 s later" in f["detail"]
+    with pytest.raises(ValueError, match="state flag"):
+        Settings(flag_allowed_s=0)
+
+
+def test_stopping_tracking_that_never_started_is_never_obeyed() -> None:
+    found = session((Step(1.0, "tracking_stop"),), 5.0)
+    f = only(found, "tracking_stop", "tracking")
+    assert f["verdict"] == "unknown" and f["detail"].startswith("tracking was never on")
+    # Started, then stopped twice: the second stop has nothing left to stop.
+    twice = (*TRACK, Step(6.0, "tracking_stop"))
+    found = [f for f in session(twice, 9.0) if f["command"] == "tracking_stop"]
+    assert [f["verdict"] for f in found] == ["obeyed", "unknown"]
+    assert "tracking was already off" in found[1]["detail"]
 
 
 def test_tracking_that_does_not_stop() -> None:
     found = session(TRACK, 12.0, behaviour=Behaviour(ignore=frozenset({"tracking_stop"})))
     f = only(found, "tracking_stop", "tracking")
-    assert f["verdict"] == "not_obeyed" and "stayed on" in f["detail"]
+    assert f["verdict"] == "not_obeyed" and "stayed on through the 1.5 s" in f["detail"]
 
 
 # -- gimbal_control ------------------------------------------------------------------------------
@@ -337,12 +365,19 @@ def test_feedback_silence_and_crc_errors() -> None:
     faults = FaultConfig(corrupt=0.02, stop_at=5.0, stop_for=3.0, seed=3)
     found = session(LOOK_DOWN, 70.0, faults=faults)
     gaps = [f for f in found if f["check"] == "feedback_gap"]
-    assert [f["verdict"] for f in gaps] == ["not_obeyed"]
-    assert 3.0 <= gaps[0]["gap_s"] <= 3.6 and gaps[0]["time"] == pytest.approx(4.5, abs=0.1)
+    (outage,) = [f for f in gaps if f["gap_s"] > 2]
+    assert 3.0 <= outage["gap_s"] <= 3.6 and outage["time"] == pytest.approx(4.5, abs=0.1)
+    assert outage["lost_messages"] == 6 and "6 messages missing" in outage["detail"]
+    # A corrupted message is a message lost too: a silence of one period more.
+    others = [f for f in gaps if f is not outage]
+    assert others and all(f["lost_messages"] == 1 for f in others)
     windows = [f for f in found if f["check"] == "feedback"]
     assert len(windows) == 2  # one per minute
     assert windows[0]["verdict"] == "partial" and windows[0]["crc_errors"] > 0
-    assert windows[0]["gaps"] == 1 and "silence" in windows[0]["detail"]
+    first = [f for f in gaps if f["time"] < windows[1]["time"]]
+    lost = sum(f["lost_messages"] for f in first)
+    assert windows[0]["gaps"] == len(first) and windows[0]["lost_messages"] == lost
+    assert f"{len(first)} gaps ({lost} messages lost)" in windows[0]["detail"]
 
 
 def test_simulate_options_make_the_behaviour() -> None:

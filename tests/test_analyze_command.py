@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import socket
 from pathlib import Path
@@ -63,7 +64,9 @@ def test_a_gimbal_that_obeys(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "tolerance 1 deg, time allowed 5 s" in out
     assert "times are UTC, 2023-11-14" in out
     assert "NOT OBEYED" not in out and "PARTIAL" not in out
-    assert "verdicts: 6 obeyed, 0 partial, 0 not obeyed, 0 unknown" in out
+    assert "verdicts: 5 obeyed, 0 partial, 0 not obeyed, 0 unknown" in out
+    assert "feedback: 1 of 1 minute healthy; no gap (no message lost)" in out
+    assert "feedback         feedback     healthy     feedback healthy over" in out
     assert "22:13:21.000Z  specified_angle  target       obeyed      yaw reached 45.0" in out
 
 
@@ -193,3 +196,28 @@ def test_heading_30_without_ff13_gives_no_false_stopped_short(
     assert [f["verdict"] for f in targets] == ["obeyed"] * 3
     assert [f["yaw_reference"] for f in targets] == ["north", "north", "airframe"]
     assert targets[2]["reference_reason"] == "command DATA4 = 1"
+
+
+def test_findings_already_in_the_input_are_not_written_again() -> None:
+    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.commands.analyze_output import FindingsOutput
+    from analyzer.pipeline import Pipeline, run_items
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
+    from tests.log_makers import flight_frames
+
+    def written(extra: list[Event]) -> list[str]:
+        out = io.StringIO()
+        pipeline = Pipeline()
+        output = FindingsOutput(ResponseAnalyzer(), pipeline.tally, json_lines=True, problems=False)
+        pipeline.stages.append(output.stage)
+        pipeline.sinks.append(output.to(out))
+        run_items([*flight_frames(), *extra], pipeline)
+        return out.getvalue().splitlines()
+
+    old = {"command": "look_down", "check": "target", "verdict": "obeyed", "detail": "recorded"}
+    recorded = Event(TOPIC_ANALYSIS_RESPONSE, 1_715_680_810.0, "analysis", old)
+    lines = written([recorded])
+    assert lines == written([]) and len(lines) > 5
+    assert all("recorded" not in line for line in lines)
+    times = [json.loads(line)["time"] for line in lines]
+    assert times == sorted(times)  # in time order, as they were decided

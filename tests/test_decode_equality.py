@@ -12,9 +12,6 @@ output is meant to change:
 from __future__ import annotations
 
 import contextlib
-import difflib
-import gzip
-import hashlib
 import io
 import json
 import sys
@@ -28,6 +25,7 @@ if __name__ == "__main__":
 
 from analyzer.cli import main  # noqa: E402
 from tests.fault_logs import CANDUMP_NAME, STREAM_NAME, write_fault_logs  # noqa: E402
+from tests.stored_copy import assert_same, entry, load, save  # noqa: E402
 
 STORED = ROOT / "tests" / "data" / "decode_json.json.gz"
 SAMPLES = ROOT / "samples"
@@ -64,16 +62,12 @@ def outputs(folder: Path) -> dict[str, dict[str, str]]:
     found = {}
     for name, options in CASES:
         path = input_path(name, folder)
-        found[case_name(name, options)] = {
-            "input_sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
-            "output": decode_json(path, options),
-        }
+        found[case_name(name, options)] = entry(path, decode_json(path, options))
     return found
 
 
 def stored() -> dict[str, dict[str, str]]:
-    data: dict[str, dict[str, str]] = json.loads(gzip.decompress(STORED.read_bytes()))
-    return data
+    return load(STORED)
 
 
 @pytest.fixture(scope="module")
@@ -85,14 +79,7 @@ def current(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, str
 def test_decode_json_is_byte_for_byte_the_stored_copy(
     case: str, current: dict[str, dict[str, str]]
 ) -> None:
-    want = stored()[case]
-    got = current[case]
-    assert got["input_sha256"] == want["input_sha256"], f"{case}: the input file changed"
-    if got["output"] != want["output"]:
-        diff = difflib.unified_diff(
-            want["output"].splitlines(), got["output"].splitlines(), "stored", "now", lineterm=""
-        )
-        pytest.fail(f"{case}: decode --json differs\n" + "\n".join(list(diff)[:40]))
+    assert_same(case, stored()[case], current[case], "decode --json")
 
 
 def test_the_fault_logs_hold_every_kind_of_trouble(current: dict[str, dict[str, str]]) -> None:
@@ -117,10 +104,7 @@ def store() -> None:
     import tempfile
 
     with tempfile.TemporaryDirectory() as folder:
-        text = json.dumps(outputs(Path(folder)), indent=0, sort_keys=True)
-    STORED.parent.mkdir(parents=True, exist_ok=True)
-    STORED.write_bytes(gzip.compress(text.encode(), compresslevel=9, mtime=0))
-    print(f"wrote {STORED} ({STORED.stat().st_size:,} bytes)")
+        save(STORED, outputs(Path(folder)))
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "bus_figures",
             "bus_hints",
             "tally",
+            "progress",
             "pipeline",
         ),
     ),

@@ -63,7 +63,7 @@ class Finding:
         for key, value in self.extra.items():
             if value is None:
                 continue  # absent rather than null
-            fields[key] = round(value, 3) if isinstance(value, float) else value
+            fields[key] = round(value, 3) if type(value) is float else value
         return Event(TOPIC_ANALYSIS_RESPONSE, self.time, SOURCE, fields)
 
 

@@ -1,9 +1,7 @@
-"""Feedback health over time: messages per second, silences, CRC errors per minute."""
+"""Feedback health over time: messages per second, silences that lost messages, CRC errors."""
 
 from __future__ import annotations
 
-import math
-from collections import Counter
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -17,28 +15,32 @@ from analyzer.analysis.findings import (
     Finding,
 )
 from analyzer.tally import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
+from analyzer.tally import FEEDBACK_PERIOD_S, MAX_FEEDBACK_SOURCES, lost_messages, silence_s
 from analyzer.tally import FEEDBACK_TOLERANCE as RATE_TOLERANCE
-from analyzer.tally import GAP_THRESHOLD_S
 
 WINDOW_S = 60.0
 MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement only if it has data
 
 
 class FeedbackHealth:
-    """Folds feedback times and feedback errors; findings per silence and per minute."""
+    """Folds feedback times and feedback errors; findings per silence and per minute.
+
+    Silences are timed per stream (source and direction), as the tally times them, and
+    counted with the same ``lost_messages``: its gaps are the summary's gaps."""
 
     def __init__(self) -> None:
-        self.per_second: Counter[int] = Counter()  # whole Unix second -> feedback messages
-        self.errors_per_minute: Counter[int] = Counter()  # window index -> CRC / incomplete
-        self.gaps: list[tuple[float, float]] = []  # (last message before, first message after)
         self.first: float | None = None  # first event of the input, feedback or not
         self.last: float | None = None
         self.last_feedback: float | None = None
+        self._last_of: dict[str, float] = {}  # stream -> its last feedback message
         self._window = 0
         self._window_messages = 0
         self._window_gaps = 0
+        self._window_lost = 0
         self._window_errors = 0
         self.messages = 0
+        self.gaps = 0
+        self.lost = 0
 
     def _window_of(self, t: float) -> int:
         assert self.first is not None
@@ -59,31 +61,49 @@ class FeedbackHealth:
             self._window = window
         return out
 
-    def feedback(self, t: float) -> list[Finding]:
+    def feedback(self, t: float, stream: str = "") -> list[Finding]:
+        """One feedback message at ``t`` of ``stream``; a finding when it ends a silence
+        that lost messages."""
         out = self.tick(t)
-        self.per_second[math.floor(t)] += 1
         self.messages += 1
         self._window_messages += 1
-        previous, self.last_feedback = self.last_feedback, t
-        if previous is not None and t - previous > GAP_THRESHOLD_S:
-            self.gaps.append((previous, t))
+        self.last_feedback = t
+        previous = self._last_of.get(stream)
+        if previous is None and len(self._last_of) >= MAX_FEEDBACK_SOURCES:
+            return out  # as the tally: streams beyond so many are counted, not timed
+        self._last_of[stream] = t
+        if previous is None:
+            return out
+        gap = t - previous
+        lost = lost_messages(silence_s(previous, t))
+        if lost:
+            self.gaps += 1
+            self.lost += lost
             self._window_gaps += 1
-            gap = t - previous
+            self._window_lost += lost
+            words = f"{lost} message{'s' if lost > 1 else ''}"
+            text = (
+                f"feedback lost: {words} missing, no feedback for {gap:.1f} s "
+                f"(expected every {FEEDBACK_PERIOD_S:g} s)"
+            )
+            extra = {"gap_s": gap, "lost_messages": lost, "observed_at": t}
             out.append(
-                Finding(
-                    FEEDBACK_COMMAND,
-                    previous,
-                    CHECK_FEEDBACK_GAP,
-                    NOT_OBEYED,
-                    f"no feedback for {gap:.1f} s (expected every {1 / EXPECTED_HZ:.1f} s)",
-                    {"gap_s": gap, "observed_at": t},
-                )
+                Finding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, NOT_OBEYED, text, extra)
             )
         return out
 
+    def open_since(self) -> list[float]:
+        """The times findings still to come of the feedback can carry: the open window's
+        start, the last feedback message (a silence after it is named from it)."""
+        if self.first is None:
+            return []
+        times = [self.first + self._window * WINDOW_S]
+        if self.last_feedback is not None:
+            times.append(self.last_feedback)
+        return times
+
     def error(self, t: float) -> list[Finding]:
         out = self.tick(t)
-        self.errors_per_minute[self._window_of(t)] += 1
         self._window_errors += 1
         return out
 
@@ -99,8 +119,14 @@ class FeedbackHealth:
         assert self.first is not None
         start = self.first + self._window * WINDOW_S
         messages, gaps, errors = self._window_messages, self._window_gaps, self._window_errors
-        self._window_messages = self._window_gaps = self._window_errors = 0
-        extra: dict[str, Any] = {"gaps": gaps, "crc_errors": errors, "window_s": length}
+        lost = self._window_lost
+        self._window_messages = self._window_gaps = self._window_errors = self._window_lost = 0
+        extra: dict[str, Any] = {
+            "gaps": gaps,
+            "lost_messages": lost,
+            "crc_errors": errors,
+            "window_s": length,
+        }
         if not messages:
             verdict = UNKNOWN if self.messages == 0 else NOT_OBEYED
             what = "no gimbal feedback in the input" if not self.messages else "no feedback"
@@ -112,12 +138,15 @@ class FeedbackHealth:
         if hz is not None and abs(hz - EXPECTED_HZ) > RATE_TOLERANCE * EXPECTED_HZ:
             problems.append(f"{hz:.2f} messages/s instead of {EXPECTED_HZ:g}")
         if gaps:
-            problems.append(f"{gaps} silence{'s' if gaps > 1 else ''} over {GAP_THRESHOLD_S:g} s")
+            problems.append(
+                f"{gaps} gap{'s' if gaps > 1 else ''} ({lost} message{'s' if lost > 1 else ''} "
+                "lost)"
+            )
         if errors:
             problems.append(f"{errors} damaged message{'s' if errors > 1 else ''} (CRC/incomplete)")
         rate = f"{hz:.2f} messages/s" if hz is not None else f"{messages} messages"
         if problems:
             text = f"feedback over {length:.0f} s: " + ", ".join(problems)
             return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, PARTIAL, text, extra)
-        text = f"feedback healthy over {length:.0f} s: {rate}, no silence, no CRC error"
+        text = f"feedback healthy over {length:.0f} s: {rate}, no message lost, no CRC error"
         return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, OBEYED, text, extra)

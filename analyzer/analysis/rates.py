@@ -30,21 +30,31 @@ SAME_SPEED = 0.005  # deg/s: speeds that differ less are the same command repeat
 
 @dataclass
 class Burst:
-    """gimbal_control commands with the same speeds, repeated without a long pause."""
+    """gimbal_control commands with the same speeds, repeated without a long pause.
+
+    Only what the judgements need is kept of the commands (first and last time, count,
+    sum and longest of the intervals), so a burst held for an hour takes no more room."""
 
     name: str
     pan: float
     tilt: float
-    times: list[float] = field(default_factory=list)
+    start: float
+    last: float = field(init=False)
+    count: int = 1
+    interval_sum: float = 0.0  # summed in order, as sum() of the intervals would be
+    interval_max: float = 0.0
     stopped_at: float | None = None  # an explicit zero-speed command
 
-    @property
-    def start(self) -> float:
-        return self.times[0]
+    def __post_init__(self) -> None:
+        self.last = self.start
 
-    @property
-    def last(self) -> float:
-        return self.times[-1]
+    def add(self, t: float) -> None:
+        """One more command of the burst, at ``t``."""
+        interval = t - self.last
+        self.interval_sum += interval
+        self.interval_max = interval if self.count == 1 else max(self.interval_max, interval)
+        self.count += 1
+        self.last = t
 
     @property
     def end(self) -> float:
@@ -53,9 +63,6 @@ class Burst:
 
     def same_speeds(self, pan: float, tilt: float) -> bool:
         return abs(pan - self.pan) < SAME_SPEED and abs(tilt - self.tilt) < SAME_SPEED
-
-    def intervals(self) -> list[float]:
-        return [b - a for a, b in zip(self.times, self.times[1:], strict=False)]
 
 
 def _slope(samples: list[Sample], axis: str) -> float:
@@ -99,7 +106,7 @@ def judge_rate(burst: Burst, before: Sample | None, inside: list[Sample]) -> Fin
         "commanded_pan_dps": burst.pan,
         "commanded_tilt_dps": burst.tilt,
         "duration_s": burst.last - burst.start,
-        "command_count": len(burst.times),
+        "command_count": burst.count,
     }
     verdicts: list[str] = []
     texts: list[str] = []
@@ -188,24 +195,23 @@ def judge_stop(burst: Burst, after: list[Sample], tolerance: float) -> Finding |
 
 def judge_repeat(burst: Burst, rate_verdict: str) -> Finding | None:
     """Commands repeated too slowly to keep the gimbal moving (None when fast enough)."""
-    intervals = burst.intervals()
     verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
-    if not intervals:
+    if burst.count == 1:
         text = (
             "sent once, not repeated: the gimbal stops when the commands stop "
             f"(the document recommends repeating every {RECOMMENDED_REPEAT_S * 1000:.0f} ms)"
         )
         return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, text, {"command_count": 1})
-    mean = sum(intervals) / len(intervals)
+    mean = burst.interval_sum / (burst.count - 1)
     if mean <= SLOW_REPEAT_S:
         return None
     text = (
-        f"repeated every {mean:.2f} s on average (longest pause {max(intervals):.2f} s); the "
+        f"repeated every {mean:.2f} s on average (longest pause {burst.interval_max:.2f} s); the "
         f"document recommends {RECOMMENDED_REPEAT_S * 1000:.0f} ms to keep it moving"
     )
     extra: dict[str, Any] = {
         "interval_s": mean,
-        "max_interval_s": max(intervals),
-        "command_count": len(burst.times),
+        "max_interval_s": burst.interval_max,
+        "command_count": burst.count,
     }
     return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, text, extra)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from collections import Counter, deque
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.findings import (
     CHECK_LIMIT,
-    CHECK_TRACKING,
     FEEDBACK_COMMAND,
     NOT_OBEYED,
     OBEYED,
@@ -18,8 +17,10 @@ from analyzer.analysis.findings import (
 )
 from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
+from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
+from analyzer.analysis.tracking import TrackingCheck, judge_tracking, nothing_to_stop
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -31,14 +32,17 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import GAP_THRESHOLD_S
+from analyzer.tally import EXPECTED_FEEDBACK_HZ, feedback_stream
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
+# A state flag (tracking) shows a change in the next feedback messages: three periods.
+FLAG_PERIODS = 3
+DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the document's 2 Hz
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
+FEEDBACK_WAIT_S = 1.0  # without feedback, a judgement waits this long past its deadline
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
-HISTORY = 4096  # attitude samples kept (over half an hour at 2 Hz)
 DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
 MOTION = frozenset(
@@ -61,21 +65,16 @@ class Settings:
     """The judgement's knobs (the ``analyze`` options)."""
 
     tolerance_deg: float = DEFAULT_TOLERANCE_DEG
-    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S
+    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S  # for a target (an angle) to be reached
+    flag_allowed_s: float = DEFAULT_FLAG_ALLOWED_S  # for a state flag (tracking) to change
 
     def __post_init__(self) -> None:
         if not self.tolerance_deg > 0:
             raise ValueError("the tolerance must be more than 0 deg")
         if not self.time_allowed_s > 0:
             raise ValueError("the time allowed must be more than 0 s")
-
-
-@dataclass
-class _TrackingCheck:
-    command: str
-    time: float
-    want: bool
-    deadline: float
+        if not self.flag_allowed_s > 0:
+            raise ValueError("the time allowed for a state flag must be more than 0 s")
 
 
 @dataclass
@@ -92,14 +91,15 @@ class ResponseAnalyzer:
         self.settings = settings or Settings()
         self.health = FeedbackHealth()
         self.verdicts: Counter[str] = Counter()
-        self.samples: deque[Sample] = deque(maxlen=HISTORY)
+        self.samples = SampleWindow()  # only those a pending judgement can still need
         self._targets: list[TargetCheck] = []
-        self._tracking: list[_TrackingCheck] = []
+        self._tracking: list[TrackingCheck] = []
         self._burst: Burst | None = None
         self._bursts: list[_BurstCheck] = []
         self._fc_attitude: float | None = None
         self._motion: tuple[str, float] | None = None
         self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
+        self._tracking_seen = False  # a feedback message has shown the tracking flag on
 
     # -- input ---------------------------------------------------------------------------
 
@@ -107,14 +107,16 @@ class ResponseAnalyzer:
         t, topic = event.time, event.topic
         out: list[Finding] = []
         if topic == TOPIC_GIMBAL_ATTITUDE:
-            out += self.health.feedback(t)
+            out += self.health.feedback(t, feedback_stream(event))
             sample = sample_from(t, event.fields)
             if sample is not None:
                 self.samples.append(sample)
+                self._tracking_seen = self._tracking_seen or sample.tracking
                 out += self._limits(sample)
                 out += self._settle(t, sample)
+                self.samples.forget_before(self._needed(t))
         elif topic == TOPIC_GIMBAL_RANGING:
-            out += self.health.feedback(t)
+            out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
         elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_FEEDBACK:
             out += self.health.error(t)
@@ -126,7 +128,7 @@ class ResponseAnalyzer:
                 self._fc_attitude = t
             elif topic == TOPIC_COMMAND:
                 out += self._command(t, event.fields)
-        return self._emit(out)
+        return self._emit(out) if out else []
 
     def process(self, events: list[Event]) -> list[Event]:
         """As a pipeline stage (``analyzer.pipeline.Stage``): the findings of a batch.
@@ -134,15 +136,19 @@ class ResponseAnalyzer:
         Findings already in the input (a recording made with this stage) are not judged
         again as input."""
         out: list[Event] = []
+        feed = self.feed
         for event in events:
             if event.topic != TOPIC_ANALYSIS_RESPONSE:
-                out += self.feed(event)
+                found = feed(event)
+                if found:
+                    out += found
         return out
 
     def close(self) -> list[Event]:
         """The end of the input: judge what is still open with what was seen."""
         out: list[Finding] = []
-        end = self.samples[-1].time if self.samples else None
+        last = self.samples.last
+        end = last.time if last is not None else None
         for check in self._targets:
             out.append(self._judge_target(check, "the input ended", end))
         self._targets = []
@@ -166,6 +172,7 @@ class ResponseAnalyzer:
     def _command(self, t: float, fields: dict[str, Any]) -> list[Finding]:
         name = str(fields.get("name", ""))
         out: list[Finding] = []
+        pan = tilt = 0.0
         if name == "gimbal_control":
             pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
             burst = self._burst
@@ -175,7 +182,7 @@ class ResponseAnalyzer:
                     self._end_burst()
                 return out
             if burst is not None and burst.same_speeds(pan, tilt) and t - burst.last <= BURST_GAP_S:
-                burst.times.append(t)
+                burst.add(t)
                 return out
         if name not in MOTION and name != "tracking_stop":
             return out
@@ -187,8 +194,7 @@ class ResponseAnalyzer:
             self._motion = (name, t)
         allowed = self.settings.time_allowed_s
         if name == "gimbal_control":
-            pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
-            self._burst = Burst(name, pan, tilt, [t])
+            self._burst = Burst(name, pan, tilt, t)
         else:
             fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
             check = target_check(name, t, fields, t + allowed, fresh)
@@ -198,7 +204,13 @@ class ResponseAnalyzer:
             for old in self._tracking:
                 why = f"{name} came {t - old.time:.1f} s later" if t < old.deadline else ""
                 out.append(self._judge_tracking(old, None, why))
-            self._tracking = [_TrackingCheck(name, t, name == "tracking", t + allowed)]
+            self._tracking = []
+            before = self._before(t)
+            if name == "tracking_stop" and not (before is not None and before.tracking):
+                out.append(nothing_to_stop(t, before, seen_on=self._tracking_seen))
+            else:
+                flag_allowed = self.settings.flag_allowed_s
+                self._tracking.append(TrackingCheck(name, t, name == "tracking", t + flag_allowed))
         return out
 
     def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
@@ -230,7 +242,9 @@ class ResponseAnalyzer:
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
-        late = GAP_THRESHOLD_S  # without feedback, wait this long past a deadline
+        if not (self._targets or self._tracking or self._burst or self._bursts):
+            return out
+        late = FEEDBACK_WAIT_S
         keep: list[TargetCheck] = []
         for check in self._targets:
             if t > check.deadline + (0.0 if sample is not None else late):
@@ -238,7 +252,7 @@ class ResponseAnalyzer:
             else:
                 keep.append(check)
         self._targets = keep
-        still: list[_TrackingCheck] = []
+        still: list[TrackingCheck] = []
         for tracking in self._tracking:
             if sample is not None and sample.tracking == tracking.want and t > tracking.time:
                 out.append(self._judge_tracking(tracking, sample, ""))
@@ -259,15 +273,33 @@ class ResponseAnalyzer:
         return out
 
     def _between(self, start: float, end: float) -> list[Sample]:
-        return [s for s in self.samples if start < s.time <= end]
+        return self.samples.between(start, end)
 
     def _before(self, t: float) -> Sample | None:
-        found = None
-        for s in self.samples:
-            if s.time > t:
-                break
-            found = s
-        return found
+        return self.samples.before(t)
+
+    def _needed(self, now: float) -> float:
+        """The earliest time whose samples a judgement still to be made can look at: a
+        pending check's command, a burst's first command, or (for commands to come) now."""
+        times = [now]
+        times += [check.time for check in self._targets]
+        times += [tracking.time for tracking in self._tracking]
+        times += [pending.burst.start for pending in self._bursts]
+        if self._burst is not None:
+            times.append(self._burst.start)
+        return min(times)
+
+    def earliest_pending(self) -> float | None:
+        """No finding still to come carries an earlier time than this (for input in time
+        order): a pending check's command, a burst, the motion command a limit finding would
+        name, the feedback window or silence still open. None before any input."""
+        now = self.health.last
+        if now is None:
+            return None
+        times = [self._needed(now), *self.health.open_since()]
+        if self._motion is not None:
+            times.append(self._motion[1])
+        return min(times)
 
     # -- judgements -----------------------------------------------------------------------
 
@@ -284,29 +316,10 @@ class ResponseAnalyzer:
         )
 
     def _judge_tracking(
-        self, check: _TrackingCheck, sample: Sample | None, cut_short: str
+        self, check: TrackingCheck, sample: Sample | None, cut_short: str
     ) -> Finding:
-        flag = "on" if check.want else "off"
-        extra: dict[str, Any] = {}
-        if sample is not None:
-            extra["response_s"] = sample.time - check.time
-            extra["observed_at"] = sample.time
-            text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
-            return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
-        seen = self._between(check.time, check.deadline)
-        if not seen:
-            allowed = self.settings.time_allowed_s
-            why = f"before {cut_short}" if cut_short else f"within {allowed:g} s"
-            text = f"no attitude feedback came {why}: the tracking flag could not be checked"
-            return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
-        extra["observed_at"] = seen[-1].time
-        span = seen[-1].time - check.time
-        verdict = UNKNOWN if cut_short else NOT_OBEYED
-        other = "off" if check.want else "on"
-        text = f"the feedback's tracking flag stayed {other} for {span:.1f} s"
-        if cut_short:
-            text += f", until {cut_short}"
-        return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
+        seen = [] if sample is not None else self._between(check.time, check.deadline)
+        return judge_tracking(check, sample, seen, cut_short, self.settings.flag_allowed_s)
 
     def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:
         burst = pending.burst

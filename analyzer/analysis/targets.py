@@ -134,7 +134,8 @@ def judge_axis(
             return result
     if abs(moved) < tolerance:
         result.verdict = NOT_OBEYED
-        text = f"never moved (stayed at {_fmt(start_value)})"
+        # The angles the finding carries (start_deg, final_deg): less than the tolerance apart.
+        text = f"never moved (from {_fmt(start_value)} to {where})"
     elif abs(first_error) > tolerance and math.copysign(1.0, moved) != sign:
         result.verdict = NOT_OBEYED
         text = f"moved the other way, to {where}"

@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from collections.abc import Callable
-from typing import IO, Any
+from typing import Any
 
-from analyzer import timefmt
 from analyzer.errors import UsageError
 from analyzer.input_options import add_input_arguments
-from analyzer.terminal_text import printable, printable_lines
+from analyzer.terminal_text import printable
 
 HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
 
@@ -35,9 +32,21 @@ feedback does not allow a judgement.
   gimbal_control   measured pan/tilt rate against the commanded speed (ratio,
         lag), still moving after the commands stopped, and commands repeated more
         slowly than the 50 ms the document recommends.
-  tracking, tracking_stop   the feedback's tracking flag.
+  tracking, tracking_stop   the feedback's tracking flag: it must change within
+        --flag-allowed (three feedback periods, 1.5 s); staying as it was through
+        that is not_obeyed, also when the next command follows. A tracking_stop when
+        the flag was not on has nothing to obey: unknown ("tracking was never on").
   limits           pitch -110 / +60, yaw motor +-170 (+-325 on 3.5x models).
-  feedback         messages per second, silences, CRC errors, per minute.
+  feedback         messages per second, gaps, CRC errors, per minute, and each
+        gap: a silence of 1.5 feedback periods (0.75 s) or more lost
+        round(silence / 0.5 s) - 1 messages, the same count decode --summary,
+        info and table give. The text says these in health words (healthy,
+        DEGRADED, LOST) and counts them apart from the commands' verdicts.
+
+Findings are written in time order as they are decided; the analysis keeps
+only the feedback a pending judgement can still need, so long flights take
+time in proportion and memory that does not grow. A progress line shows on a
+terminal (-q: none).
 
 It reads every input `decode` reads (candump, python-can logs, pcap, raw
 TCP/UART dumps, MCAP recordings).
@@ -64,7 +73,12 @@ def _positive(text: str) -> float:
 
 
 def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
-    from analyzer.analysis.response import DEFAULT_TIME_ALLOWED_S, DEFAULT_TOLERANCE_DEG
+    from analyzer.analysis.response import (
+        DEFAULT_FLAG_ALLOWED_S,
+        DEFAULT_TIME_ALLOWED_S,
+        DEFAULT_TOLERANCE_DEG,
+        FLAG_PERIODS,
+    )
 
     parser.add_argument(
         "--tolerance",
@@ -79,8 +93,16 @@ def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
         type=_positive,
         default=DEFAULT_TIME_ALLOWED_S,
         metavar="S",
-        help="seconds a target command, tracking start or stop has to show its effect "
-        f"(default {DEFAULT_TIME_ALLOWED_S:g} s)",
+        help="seconds a target command (specified_angle, look_down, forward) has to reach "
+        f"its angle (default {DEFAULT_TIME_ALLOWED_S:g} s)",
+    )
+    parser.add_argument(
+        "--flag-allowed",
+        type=_positive,
+        default=DEFAULT_FLAG_ALLOWED_S,
+        metavar="S",
+        help="seconds tracking / tracking_stop have to show in the feedback's tracking flag "
+        f"(default {DEFAULT_FLAG_ALLOWED_S:g} s: {FLAG_PERIODS} feedback periods)",
     )
 
 
@@ -92,6 +114,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--problems", action="store_true", help="only findings that are not 'obeyed'"
+    )
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress line while a file is read"
     )
 
 
@@ -125,105 +150,53 @@ def open_reader(args: argparse.Namespace) -> Any:
 def settings_from(args: argparse.Namespace) -> Any:
     from analyzer.analysis.response import Settings
 
-    return Settings(tolerance_deg=args.tolerance, time_allowed_s=args.time_allowed)
+    return Settings(
+        tolerance_deg=args.tolerance,
+        time_allowed_s=args.time_allowed,
+        flag_allowed_s=args.flag_allowed,
+    )
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.findings import untimed, verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.progress import Progress
 
     settings = settings_from(args)
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
-    kept = KeepFindings(analyzer)
-    pipeline = Pipeline(stages=[kept])  # the same decoding and counting as every command
+    pipeline = Pipeline()  # the same decoding and counting as every command
+    out = sys.stdout
+    output = FindingsOutput(
+        analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
+    ).to(out)
+    pipeline.stages.append(output.stage)  # the analysis, whose findings it writes
+    pipeline.sinks.append(output)
+    # The text report is written at the end: the terminal is free for a progress line.
+    progress = Progress.maybe(reader, sys.stderr, out, not args.json, quiet=args.quiet)
     try:
-        run_items(reader, pipeline)
+        run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
-    findings = kept.findings
-    tally = pipeline.tally
-    commands = tally.topics.get("/gimbal/command", 0)
+    for failure in pipeline.failures:
+        raise failure.error
     notes = list(reader.notes)
-    if untimed(tally, findings):
+    if output.untimed:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
-        findings = []
         analyzer.verdicts.clear()
         notes.append(
             f"{args.file} carries no timestamps (a raw TCP/UART byte dump?), so responses "
             "cannot be timed; record with `gimbal-analyzer record` to get times"
         )
-    findings.sort(key=lambda e: e.time)
-    shown = [f for f in findings if not args.problems or f.fields["verdict"] != "obeyed"]
-    out = sys.stdout
-    if args.json:
-        for finding in shown:
-            out.write(json.dumps(finding.to_dict()) + "\n")
-    else:
+    if not args.json:
+        commands = pipeline.tally.topics.get("/gimbal/command", 0)
         header = (
             f"response analysis of {args.file} ({reader.format_name}): {commands:,} commands; "
             f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s"
         )
-        report = render_findings(header, shown, verdict_line(analyzer.verdicts))
-        out.write(printable_lines(report) + "\n")  # names and paths may come from the input
+        output.finish(header)
     out.flush()
     for note in notes:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 0
-
-
-VERDICT_WORDS = {
-    "obeyed": "obeyed",
-    "partial": "PARTIAL",
-    "not_obeyed": "NOT OBEYED",
-    "unknown": "unknown",
-}
-
-
-def clock(t: float) -> str:
-    """Time of day with milliseconds, UTC with a Z (or local time with its offset after
-    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
-    if not timefmt.is_absolute(t):
-        return f"{t:10.3f} s"
-    return timefmt.format_clock(t)
-
-
-def render_findings(header: str, findings: list[Any], verdicts: str) -> str:
-    """The text report: a header, one block per finding, the verdict counts."""
-    lines = [header]
-    if findings and timefmt.is_absolute(findings[0].time):
-        zone = "local" if timefmt.local_time() else "UTC"
-        lines.append(f"times are {zone}, " + timefmt.format_datetime(findings[0].time)[:10])
-    lines.append("")
-    for event in findings:
-        f = event.fields
-        numbers = _numbers(f)
-        lines.append(
-            f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
-            f"{VERDICT_WORDS.get(f['verdict'], f['verdict']):<10}  {f['detail']}"
-            + (f"  [{numbers}]" if numbers else "")
-        )
-    if not findings:
-        lines.append("no findings")
-    lines += ["", f"verdicts: {verdicts}"]
-    return "\n".join(lines)
-
-
-_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
-    ("target_deg", "target", lambda v: f"{v:g} deg"),
-    ("response_s", "response", lambda v: f"{v:.2f} s"),
-    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
-    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
-    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
-)
-
-
-def _numbers(fields: dict[str, Any]) -> str:
-    return ", ".join(
-        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
-    )
-
-
-def write_lines(out: IO[str], lines: list[str]) -> None:
-    out.write("\n".join(lines) + "\n")

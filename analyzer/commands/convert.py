@@ -7,11 +7,12 @@ import contextlib
 import os
 import sys
 import time
-from typing import IO, Any
+from typing import Any
 
 from analyzer.errors import EXIT_INTERRUPTED, UsageError
 from analyzer.mcapio.write.options import add_compression_argument
-from analyzer.pipeline import Batch, Pipeline, run_items
+from analyzer.pipeline import Pipeline, run_items
+from analyzer.progress import Progress
 from analyzer.stdio import interrupt_name, interrupts_deferred
 
 HELP = "convert a capture file (candump, python-can logs, pcap, raw dumps, MCAP) to MCAP"
@@ -30,8 +31,6 @@ partial file behind.
   gimbal-analyzer convert capture.pcap -o capture.mcap --port 2000
   gimbal-analyzer convert uart.bin -o uart.mcap --format raw
 """
-
-PROGRESS_INTERVAL = 0.2
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,49 +52,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-class Progress:
-    """A progress line on stderr (only on a terminal)."""
-
-    def __init__(self, stream: IO[str], name: str, source: Any) -> None:
-        self.stream = stream
-        self.name = name
-        self.source = source
-        self.enabled = stream.isatty()
-        self._next = 0.0
-        self._width = 0
-
-    def fraction(self) -> float | None:
-        """Share of the input read, from the reader's position_bytes / size_bytes."""
-        size = getattr(self.source, "size_bytes", None)
-        position = getattr(self.source, "position_bytes", None)
-        if isinstance(size, int) and size > 0 and isinstance(position, int):
-            return max(0.0, min(1.0, position / size))
-        return None
-
-    def __call__(self, items: int, seconds: float) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if now < self._next:
-            return
-        self._next = now + PROGRESS_INTERVAL
-        rate = items / seconds if seconds > 0 else 0.0
-        share = self.fraction()
-        bar = ""
-        if share is not None:
-            filled = int(share * 30)
-            bar = f"{share * 100:5.1f}% [{'#' * filled}{'.' * (30 - filled)}] "
-        text = f"converting {self.name} {bar}{items} items ({rate:,.0f}/s)"
-        self.stream.write("\r" + text + " " * max(0, self._width - len(text)))
-        self._width = len(text)
-        self.stream.flush()
-
-    def done(self) -> None:
-        if self.enabled and self._width:
-            self.stream.write("\r" + " " * self._width + "\r")
-            self.stream.flush()
-
-
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
     from analyzer.mcapio.write.sink import McapSink, recording_metadata
@@ -115,14 +71,8 @@ def run(args: argparse.Namespace) -> int:
 
     # Made before the output exists: the decoder's import takes a while.
     pipeline = Pipeline(stages=analysis_stages())
-    progress = Progress(sys.stderr, args.input, source)
+    progress = Progress.maybe(source, sys.stderr, quiet=args.quiet, label="converting ")
     started = time.perf_counter()
-
-    def after_batch(batch: Batch) -> None:
-        if not args.quiet:
-            tally = pipeline.tally
-            progress(tally.frames + tally.chunks, time.perf_counter() - started)
-
     sink: McapSink | None = None
     finished = False
     interrupted = ""
@@ -138,14 +88,13 @@ def run(args: argparse.Namespace) -> int:
                 compression=args.compression,
             )
         pipeline.sinks.append(sink)
-        run_items(source, pipeline, after_batch=after_batch)  # closes (commits) the sink
+        run_items(source, pipeline, progress=progress)  # closes (commits) the sink
         for failure in pipeline.failures:
             raise failure.error
         finished = True
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the finally removes the partial file
         interrupted = interrupt_name(exc)
     finally:
-        progress.done()
         _close(source)
         if not finished and sink is not None:
             sink.abandon()

@@ -6,11 +6,11 @@ import argparse
 import json
 import os
 import sys
-import time
 from collections.abc import Callable
 from typing import IO, Any
 
 from analyzer.errors import UsageError
+from analyzer.progress import Progress
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.terminal_text import printable
 
@@ -44,8 +44,6 @@ examples:
 diagnostic kind (crc_mismatch); both may be repeated. --summary counts every
 event, whatever the filters.
 """
-
-PROGRESS_INTERVAL_S = 0.2
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -116,7 +114,7 @@ class LinePrinter:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
-    from analyzer.pipeline import Batch, Pipeline, default_decoder, run_items
+    from analyzer.pipeline import Pipeline, default_decoder, run_items
     from analyzer.protocol.ids import PROTOCOL_IDS
     from analyzer.summary import Summary
 
@@ -140,23 +138,16 @@ def run(args: argparse.Namespace) -> int:
         sinks.append(LinePrinter(out, printer, wanted, flush_each=live))
     pipeline = Pipeline(sinks, decoder=default_decoder(emit_other=args.raw))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
-
-    def after_batch(batch: Batch) -> None:
-        if progress is not None:
-            progress.update()
-
     interrupted = False
     try:
         try:
-            run_items(reader, pipeline, batch_items=1 if live else 2048, after_batch=after_batch)
+            run_items(reader, pipeline, batch_items=1 if live else 2048, progress=progress)
         except KeyboardInterrupt:
             if not live:
                 raise
             interrupted = True  # Ctrl-C ends live input: finish as at its end
             pipeline.finish()
     finally:
-        if progress is not None:
-            progress.clear()
         reader.close()
     for failure in pipeline.failures:
         raise failure.error
@@ -290,53 +281,3 @@ def _topic_matches(topic: str, value: str) -> bool:
     if value.startswith("/"):
         return topic == value or topic.startswith(value + "/")
     return topic.endswith("/" + value) or topic.lstrip("/") == value
-
-
-class Progress:
-    """A one-line progress bar on stderr, redrawn at most every PROGRESS_INTERVAL_S."""
-
-    def __init__(self, reader: Any, stream: IO[str]) -> None:
-        self.reader = reader
-        self.stream = stream
-        self.started = time.monotonic()
-        self.last_draw = 0.0
-        self.drawn = False
-
-    @classmethod
-    def maybe(cls, reader: Any, err: IO[str], out: IO[str], quiet_output: bool) -> Progress | None:
-        """Only for files of known size, when stderr is a terminal that events do not use."""
-        if not reader.size_bytes or not _isatty(err):
-            return None
-        if _isatty(out) and not quiet_output:
-            return None  # the event lines themselves show progress
-        return cls(reader, err)
-
-    def update(self) -> None:
-        now = time.monotonic()
-        if now - self.last_draw < PROGRESS_INTERVAL_S:
-            return
-        self.last_draw = now
-        size = self.reader.size_bytes or 1
-        done = min(self.reader.position_bytes, size)
-        fraction = done / size
-        width = 30
-        filled = int(fraction * width)
-        rate = done / max(now - self.started, 1e-6) / 1e6
-        self.stream.write(
-            f"\r{self.reader.source[:30]} [{'#' * filled}{'.' * (width - filled)}] "
-            f"{fraction * 100:5.1f}%  {done / 1e6:.1f}/{size / 1e6:.1f} MB  {rate:.1f} MB/s"
-        )
-        self.stream.flush()
-        self.drawn = True
-
-    def clear(self) -> None:
-        if self.drawn:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
-
-
-def _isatty(stream: IO[str]) -> bool:
-    try:
-        return bool(stream.isatty())
-    except (AttributeError, ValueError):
-        return False

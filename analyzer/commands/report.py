@@ -41,6 +41,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-f", "--force", action="store_true", help="replace the output file if it exists"
     )
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress line while the file is read"
+    )
     add_settings_arguments(parser)
 
 
@@ -70,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.commands.analyze import KeepFindings, open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.progress import Progress
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
     from analyzer.scene.timeline import OverlayTimeline
@@ -84,8 +88,9 @@ def run(args: argparse.Namespace) -> int:
     overlays = OverlayTimeline()  # the camera pictures show what Foxglove draws over them
     # The same decoding and counting as every command; the analyzer is a stage of it.
     pipeline = Pipeline([EventsInto(data.add), EventsInto(overlays.add)], stages=[kept])
+    progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
     try:
-        run_items(reader, pipeline)
+        run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
     for finding in kept.findings:

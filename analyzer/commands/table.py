@@ -9,6 +9,7 @@ import shutil
 import sys
 import time
 from collections import Counter
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from analyzer.errors import EXIT_FAILED, UsageError
@@ -191,6 +192,8 @@ def _run(
     if removed:
         out.write(f"removed {removed} unfinished file(s) of an interrupted run in {args.output}\n")
     todo, skipped, failed_before = _plan(args, paths, tags, dataset)
+    if not args.quiet and client is None and (args.workers <= 1 or len(todo) <= 1):
+        todo = [replace(work, progress=True) for work in todo]  # read here: a progress line
     out.flush()
     if client is None:  # local workers write their files themselves
         results = run_local(todo, args.workers, args.output)
@@ -247,6 +250,7 @@ def _plan(
         "port": args.port,
         "tolerance_deg": args.tolerance,
         "time_allowed_s": args.time_allowed,
+        "flag_allowed_s": args.flag_allowed,
     }
     out = sys.stdout
     todo: list[FileWork] = []

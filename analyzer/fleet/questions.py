@@ -280,7 +280,7 @@ def worst_flights(tags: Sequence[str]) -> TopQuestion:
         score=(
             Term("error", 1000, present=True),
             Term("crc_error_rate", 1000),
-            Term("findings_not_obeyed", 10),
+            Term("findings_not_obeyed", 10, minus="gaps"),  # a gap is its own term
             Term("findings_partial", 3),
             Term("gaps", 5),
             Term("diagnostics", 1, minus="crc_errors"),
@@ -292,7 +292,8 @@ def worst_flights(tags: Sequence[str]) -> TopQuestion:
                 "'CRC error rate ' || round(r.crc_error_rate, 4)",
             ),
             Reason(
-                "r.findings_not_obeyed > 0", "r.findings_not_obeyed || ' finding(s) not obeyed'"
+                "r.findings_not_obeyed > r.gaps",
+                "(r.findings_not_obeyed - r.gaps) || ' finding(s) not obeyed'",
             ),
             Reason("r.findings_partial > 0", "r.findings_partial || ' partial'"),
             Reason(

@@ -43,6 +43,8 @@ class FileWork:
     port: int = 2000
     tolerance_deg: float | None = None
     time_allowed_s: float | None = None
+    flag_allowed_s: float | None = None
+    progress: bool = False  # a progress line while it is read (in this process, a terminal)
     error: str | None = None  # set when the file could not even be hashed
 
 
@@ -124,6 +126,7 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
     from analyzer.analysis.response import ResponseAnalyzer, Settings
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.progress import Progress
     from analyzer.protocol.ids import PROTOCOL_IDS
     from analyzer.summary import Summary
 
@@ -132,13 +135,16 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
         knobs["tolerance_deg"] = work.tolerance_deg
     if work.time_allowed_s is not None:
         knobs["time_allowed_s"] = work.time_allowed_s
+    if work.flag_allowed_s is not None:
+        knobs["flag_allowed_s"] = work.flag_allowed_s
     settings = Settings(**knobs)
     reader = open_input(path, work.fmt, work.port, wanted_ids=PROTOCOL_IDS)
     sink = ColumnSink(out, work.recording, work.content_hash)
     # What decode, analyze and report run; findings reach the sink as they are made.
     pipeline = Pipeline([sink], stages=[ResponseAnalyzer(settings)])
+    progress = Progress.maybe(reader, sys.stderr, quiet=not work.progress)
     try:
-        run_items(reader, pipeline)
+        run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
     for failure in pipeline.failures:

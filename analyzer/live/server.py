@@ -39,7 +39,7 @@ from analyzer.mcapio.channels import (
     ChannelSpec,
     can_frame_json,
     channel_spec,
-    encode_json,
+    json_bytes,
     known_channel_specs,
     stream_chunk_json,
 )
@@ -207,10 +207,10 @@ class FoxgloveLive:
         views = self._views
         for event in batch.events:
             topic = event.topic
-            send(topic, ROLE_EVENT, event.time, encode_json(event.to_dict()).encode())
+            send(topic, ROLE_EVENT, event.time, json_bytes(event.to_dict()))
             if topic in VIEW_INPUT_TOPICS:
                 for view_topic, message in views.views(event):
-                    send(view_topic, ROLE_VIEW, event.time, encode_json(message).encode())
+                    send(view_topic, ROLE_VIEW, event.time, json_bytes(message))
 
     def _send(self, topic: str, role: str, seconds: float, data: bytes) -> None:
         if topic in self._own:

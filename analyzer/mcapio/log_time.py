@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-_MAX_SECONDS = (2**64 - 1) / 1e9
+MAX_LOG_SECONDS = (2**64 - 1) / 1e9
 
 
 def time_ns(seconds: float) -> int:
     """Event time in seconds -> MCAP log time in nanoseconds (clamped to the uint64 range)."""
-    if 0 < seconds < _MAX_SECONDS:  # False for NaN too
+    if 0 < seconds < MAX_LOG_SECONDS:  # False for NaN too
         return round(seconds * 1e9)
-    return 2**64 - 1 if seconds >= _MAX_SECONDS else 0
+    return 2**64 - 1 if seconds >= MAX_LOG_SECONDS else 0

@@ -72,7 +72,15 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
     "limit_deg": ("number", "the mechanical limit reached"),
     "gap_s": ("number", "length of a silence in the feedback"),
     "feedback_hz": ("number", "feedback messages per second in the window"),
-    "gaps": ("integer", "silences over 1 s in the window"),
+    "gaps": (
+        "integer",
+        "silences in the window that lost feedback messages (1.5 feedback periods or more)",
+    ),
+    "lost_messages": (
+        "integer",
+        "feedback messages lost: in the silence, or in the window's silences; a silence lost "
+        "round(silence / period) - 1 of them",
+    ),
     "crc_errors": ("integer", "CRC errors and incomplete feedback messages in the window"),
     "window_s": ("number", "length of the health window"),
 }

@@ -1,0 +1,69 @@
+"""tracking / tracking_stop against the feedback's tracking flag: a state flag's judgement."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from analyzer.analysis.findings import CHECK_TRACKING, NOT_OBEYED, OBEYED, UNKNOWN, Finding
+from analyzer.analysis.samples import Sample
+
+
+@dataclass
+class TrackingCheck:
+    """A tracking (``want`` on) or tracking_stop (``want`` off) waiting for the flag."""
+
+    command: str
+    time: float
+    want: bool
+    deadline: float  # the command's time and the flag's allowance
+
+
+def judge_tracking(
+    check: TrackingCheck,
+    sample: Sample | None,
+    seen: list[Sample],
+    cut_short: str,
+    allowed_s: float,
+) -> Finding:
+    """``sample``: the first attitude message showing the flag as wanted (obeyed); else
+    ``seen``, the messages of the allowance, all showing it as it was: not obeyed, or
+    unknown when ``cut_short`` names what ended the allowance early."""
+    flag = "on" if check.want else "off"
+    extra: dict[str, Any] = {}
+    if sample is not None:
+        extra["response_s"] = sample.time - check.time
+        extra["observed_at"] = sample.time
+        text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
+        return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
+    if not seen:
+        why = f"before {cut_short}" if cut_short else f"within {allowed_s:g} s"
+        text = f"no attitude feedback came {why}: the tracking flag could not be checked"
+        return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
+    extra["observed_at"] = seen[-1].time
+    span = seen[-1].time - check.time
+    verdict = UNKNOWN if cut_short else NOT_OBEYED
+    other = "off" if check.want else "on"
+    if cut_short:
+        text = f"the feedback's tracking flag stayed {other} for {span:.1f} s, until {cut_short}"
+    else:
+        n = len(seen)
+        text = (
+            f"the feedback's tracking flag stayed {other} through the {allowed_s:g} s allowed "
+            f"({n} attitude message{'s' if n > 1 else ''}, the last {span:.1f} s after "
+            "the command)"
+        )
+    return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
+
+
+def nothing_to_stop(t: float, before: Sample | None, *, seen_on: bool) -> Finding:
+    """A tracking_stop at ``t`` when the feedback did not show tracking on: nothing to obey.
+    ``before``: the last attitude message before it; ``seen_on``: any showed the flag on."""
+    if not seen_on:
+        text = "tracking was never on in the feedback: there was nothing to stop"
+    elif before is None:
+        text = "no attitude feedback before the command: whether tracking was on is not known"
+    else:
+        text = "tracking was already off: there was nothing to stop"
+    extra: dict[str, Any] = {"observed_at": before.time} if before is not None else {}
+    return Finding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)

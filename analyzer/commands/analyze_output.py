@@ -1,0 +1,232 @@
+"""How ``analyze`` writes its findings: JSON lines or the text report, in time order, as made."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from collections import Counter
+from collections.abc import Callable
+from typing import IO, Any, Protocol
+
+from analyzer import timefmt
+from analyzer.analysis.findings import (
+    CHECK_FEEDBACK_GAP,
+    FEEDBACK_COMMAND,
+    VERDICTS,
+    verdict_line,
+)
+from analyzer.analysis.time_order import TimeOrder
+from analyzer.pipeline import Batch
+from analyzer.protocol.types import Event
+from analyzer.summary import gap_words
+from analyzer.tally import Tally
+from analyzer.terminal_text import printable_lines
+
+VERDICT_WORDS = {
+    "obeyed": "obeyed",
+    "partial": "PARTIAL",
+    "not_obeyed": "NOT OBEYED",
+    "unknown": "unknown",
+}
+# Findings about the feedback itself say how healthy the link is, not what was obeyed.
+HEALTH_WORDS = {
+    "obeyed": "healthy",
+    "partial": "DEGRADED",
+    "not_obeyed": "SILENT",
+    "unknown": "unknown",
+}
+GAP_WORD = "LOST"
+
+
+class Judging(Protocol):
+    """What the output needs of the analysis (``ResponseAnalyzer``)."""
+
+    def process(self, events: list[Event]) -> list[Event]: ...
+
+    def close(self) -> list[Event]: ...
+
+    def earliest_pending(self) -> float | None: ...
+
+
+class _Judged:
+    """The analysis as the pipeline's stage, its findings (only those) handed to the output."""
+
+    def __init__(self, analysis: Judging, output: FindingsOutput) -> None:
+        self.analysis = analysis
+        self.output = output
+
+    def process(self, events: list[Event]) -> list[Event]:
+        found = self.analysis.process(events)
+        self.output.take(found)
+        return found
+
+    def close(self) -> list[Event]:
+        found = self.analysis.close()
+        self.output.take(found)
+        return found
+
+
+class FindingsOutput:
+    """The sink of ``analyze``: each finding written in time order once no earlier one can
+    come (held meanwhile as its line of text, so memory follows the pending judgements,
+    not the length of the flight).
+
+    ``stage`` is the analysis as the pipeline's stage: the findings it makes, and no
+    finding the input may already hold, are written. An input without a clock (see
+    ``untimed``) gets no findings: nothing is written until its times are seen to differ,
+    and at the end ``untimed`` says whether they never did. The text report's lines go to
+    a temporary file first (``finish`` writes the header, which needs the whole input's
+    figures, then them).
+    """
+
+    keeps_items = False
+
+    def __init__(self, analysis: Judging, tally: Tally, *, json_lines: bool, problems: bool):
+        self.analysis = analysis
+        self.tally = tally
+        self.json_lines = json_lines
+        self.problems = problems
+        self.order: TimeOrder[str] = TimeOrder()
+        self.spool: IO[str] | None = (
+            # closed by finish (the text report), or with the process
+            None if json_lines else tempfile.TemporaryFile("w+", encoding="utf-8")  # noqa: SIM115
+        )
+        self.out: IO[str] | None = None
+        self.found = 0
+        self.written = 0
+        self.first_time: float | None = None  # of the first finding shown
+        self.untimed = False
+        self.verdicts: Counter[str] = Counter()  # of the commands' findings
+        self.health: Counter[str] = Counter()  # of the feedback windows, by verdict
+        self.gaps = self.lost = 0
+        self.stage = _Judged(analysis, self)
+
+    def to(self, out: IO[str]) -> FindingsOutput:
+        self.out = out
+        return self
+
+    def take(self, findings: list[Event]) -> None:
+        """Findings of the stage: counted, and held (as text) until their turn."""
+        for event in findings:
+            self.found += 1
+            self._count(event.fields)
+            if self.problems and event.fields.get("verdict") == "obeyed":
+                continue
+            if self.first_time is None or event.time < self.first_time:
+                self.first_time = event.time
+            self.order.push(event.time, self._line(event))
+
+    def handle(self, batch: Batch) -> None:
+        """After the counters took the batch: write what no finding to come can precede."""
+        if self._timed():
+            self._write(self.order.release(self.analysis.earliest_pending()))
+
+    def close(self) -> None:
+        self.untimed = self.found > 0 and not self._timed()
+        if self.untimed:
+            self.order.clear()
+            self.first_time = None
+            self.verdicts.clear()
+            self.health.clear()
+            self.gaps = self.lost = 0
+        self._write(self.order.drain())
+
+    def finish(self, header: str) -> None:
+        """The text report: header, the findings written so far, the verdict counts and
+        the feedback's health."""
+        out, spool = self.out, self.spool
+        assert out is not None and spool is not None
+        out.write(printable_lines(header) + "\n")
+        if self.first_time is not None and timefmt.is_absolute(self.first_time):
+            zone = "local" if timefmt.local_time() else "UTC"
+            out.write(f"times are {zone}, " + timefmt.format_datetime(self.first_time)[:10] + "\n")
+        out.write("\n")
+        spool.seek(0)
+        shutil.copyfileobj(spool, out)
+        spool.close()
+        if not self.written:
+            out.write("no findings\n")
+        out.write(f"\nverdicts: {verdict_line(self.verdicts)}\n")
+        out.write(f"feedback: {self.health_line()}\n")
+
+    def health_line(self) -> str:
+        """'2 minutes healthy, 1 degraded; 1 gap, 1 message lost (...)'."""
+        windows = [
+            f"{n} {HEALTH_WORDS[v].lower()}" for v in VERDICTS if (n := self.health.get(v, 0))
+        ]
+        if windows:
+            total = sum(self.health.values())
+            minutes = f" of {total} minute{'s' if total > 1 else ''} "
+            windows[0] = windows[0].replace(" ", minutes, 1)
+        return "; ".join([", ".join(windows) or "not judged", gap_words(self.gaps, self.lost)])
+
+    def _count(self, fields: dict[str, Any]) -> None:
+        verdict = str(fields.get("verdict"))
+        if fields.get("command") != FEEDBACK_COMMAND:
+            self.verdicts[verdict] += 1
+        elif fields.get("check") == CHECK_FEEDBACK_GAP:
+            self.gaps += 1
+            self.lost += int(fields.get("lost_messages", 1))
+        else:
+            self.health[verdict] += 1
+
+    def _line(self, event: Event) -> str:
+        if self.json_lines:
+            return json.dumps(event.to_dict())
+        return printable_lines(finding_line(event))  # names may come from the input
+
+    def _timed(self) -> bool:
+        first = self.tally.first_time
+        return first is not None and first != self.tally.last_time
+
+    def _write(self, lines: list[str]) -> None:
+        target = self.spool if self.spool is not None else self.out
+        if lines and target is not None:
+            self.written += len(lines)
+            target.write("\n".join(lines) + "\n")
+
+
+def clock(t: float) -> str:
+    """Time of day with milliseconds, UTC with a Z (or local time with its offset after
+    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
+    if not timefmt.is_absolute(t):
+        return f"{t:10.3f} s"
+    return timefmt.format_clock(t)
+
+
+def finding_line(event: Event) -> str:
+    """One finding of the text report: time, command, check, verdict, detail, numbers."""
+    f = event.fields
+    numbers = _numbers(f)
+    return (
+        f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
+        f"{verdict_word(f):<10}  {f['detail']}" + (f"  [{numbers}]" if numbers else "")
+    )
+
+
+def verdict_word(fields: dict[str, Any]) -> str:
+    """How the text report names a finding's verdict: in health words for the feedback."""
+    verdict = str(fields["verdict"])
+    if fields.get("command") != FEEDBACK_COMMAND:
+        return VERDICT_WORDS.get(verdict, verdict)
+    if fields.get("check") == CHECK_FEEDBACK_GAP:
+        return GAP_WORD
+    return HEALTH_WORDS.get(verdict, verdict)
+
+
+_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
+    ("target_deg", "target", lambda v: f"{v:g} deg"),
+    ("start_deg", "start", lambda v: f"{v:.2f} deg"),
+    ("final_deg", "final", lambda v: f"{v:.2f} deg"),
+    ("response_s", "response", lambda v: f"{v:.2f} s"),
+    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
+    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
+    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
+)
+
+
+def _numbers(fields: dict[str, Any]) -> str:
+    return ", ".join(
+        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
+    )

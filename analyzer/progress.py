@@ -1,0 +1,87 @@
+"""The progress line of long file work: how far through the input, and the rate, on stderr."""
+
+from __future__ import annotations
+
+import time
+from typing import IO, Protocol
+
+PROGRESS_INTERVAL_S = 0.2  # redrawn at most this often
+BAR = 30
+
+
+class Sized(Protocol):
+    """What the line needs of a file reader (``analyzer.inputs.base.InputReader``)."""
+
+    source: str
+    size_bytes: int | None
+    position_bytes: int
+
+
+class Progress:
+    """One line on stderr, redrawn in place: the input's name, a bar, the share and MB
+    read, MB/s and items (frames, chunks) per second. ``run_items`` draws it after each
+    batch and clears it at the end, for every command that reads a file."""
+
+    def __init__(self, reader: Sized, stream: IO[str], label: str = "") -> None:
+        self.reader = reader
+        self.stream = stream
+        self.label = label
+        self.started = time.monotonic()
+        self.last_draw = 0.0
+        self.drawn = False
+
+    @classmethod
+    def maybe(
+        cls,
+        reader: object,
+        err: IO[str],
+        out: IO[str] | None = None,
+        quiet_output: bool = True,
+        *,
+        quiet: bool = False,
+        label: str = "",
+    ) -> Progress | None:
+        """A progress line, or None: with ``quiet`` (-q), for input of unknown size (standard
+        input), when stderr is not a terminal, or when ``out`` is the same terminal and the
+        command prints there as it goes (``quiet_output`` False: its lines show progress)."""
+        size = getattr(reader, "size_bytes", None)
+        if quiet or not isinstance(size, int) or size <= 0 or not isatty(err):
+            return None
+        if out is not None and isatty(out) and not quiet_output:
+            return None
+        return cls(reader, err, label)  # type: ignore[arg-type]
+
+    def update(self, items: int | None = None) -> None:
+        """Redraw (at most every PROGRESS_INTERVAL_S); ``items`` read so far, if known."""
+        now = time.monotonic()
+        if now - self.last_draw < PROGRESS_INTERVAL_S:
+            return
+        self.last_draw = now
+        size = self.reader.size_bytes or 1
+        done = max(0, min(self.reader.position_bytes, size))
+        fraction = done / size
+        filled = int(fraction * BAR)
+        elapsed = max(now - self.started, 1e-6)
+        text = (
+            f"{self.label}{self.reader.source[:30]} [{'#' * filled}{'.' * (BAR - filled)}] "
+            f"{fraction * 100:5.1f}%  {done / 1e6:.1f}/{size / 1e6:.1f} MB  "
+            f"{done / elapsed / 1e6:.1f} MB/s"
+        )
+        if items is not None:
+            text += f"  {items / elapsed:,.0f} frames/s"
+        self.stream.write("\r" + text + "\033[K")
+        self.stream.flush()
+        self.drawn = True
+
+    def clear(self) -> None:
+        if self.drawn:
+            self.stream.write("\r\033[K")
+            self.stream.flush()
+            self.drawn = False
+
+
+def isatty(stream: IO[str] | None) -> bool:
+    try:
+        return stream is not None and bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
