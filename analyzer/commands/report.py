@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
-from typing import IO, Any, cast
+from typing import IO, cast
 
 HELP = "write a flight report: one offline HTML file with plots, findings and diagnostics"
 
@@ -42,68 +41,56 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_settings_arguments(parser)
 
 
-class EventsInto:
-    """A sink handing every decoded event (not findings stored in the input) to ``add``."""
-
-    def __init__(self, add: Callable[[Any], None]) -> None:
-        self.add = add
-
-    def handle(self, batch: Any) -> None:
-        from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
-
-        add = self.add
-        for event in batch.events:
-            if event.topic != TOPIC_ANALYSIS_RESPONSE:
-                add(event)
-
-    def close(self) -> None:
-        pass
-
-
 def run(args: argparse.Namespace) -> int:
     import sys
 
     from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
-    from analyzer.commands.analyze import KeepFindings, open_reader, settings_from
+    from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
+    from analyzer.report import camera
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
+    from analyzer.report.stream import EventsInto, FindingsInto
+    from analyzer.report.tables import UNTIMED
 
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
     settings = settings_from(args)
     reader = open_reader(args)
-    analyzer = ResponseAnalyzer(settings)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    kept = KeepFindings(analyzer)
-    # The same decoding and counting as every command; the analyzer is a stage of it.
-    pipeline = Pipeline([EventsInto(data.add)], stages=[kept])
+    stage = FindingsInto(ResponseAnalyzer(settings), data)
+    # The same decoding and counting as every command; the analysis is a stage of it.
+    pipeline = Pipeline([EventsInto(data)], stages=[stage])
     try:
         run_items(reader, pipeline)
     finally:
         reader.close()
-    for finding in kept.findings:
-        data.add(finding)
     data.notes.extend(reader.notes)
-    if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
-        from analyzer.mcapio.video_reading import read_thumbnails
+    if data.first is not None and data.first == data.last and data.findings.total:
+        data.findings.clear()  # a raw byte dump has no clock: "0.0 s later" is nonsense
+        data.untimed = True
+        data.notes.append(UNTIMED)
+    pictures = None
+    if reader.format_name == "mcap" and data.first is not None and data.last is not None:
+        from analyzer.mcapio.video_reading import read_thumbnails  # camera pictures
 
-        data.pictures.extend(read_thumbnails(args.file))
-    if data.first is not None and data.first == data.last and data.findings:
-        data.findings.clear()
-        data.notes.append("the input carries no timestamps: responses cannot be timed")
+        shown = camera.shown_findings(data.findings.worst_first())
+        pictures = camera.choose(read_thumbnails(args.file), data.first, data.last, shown)
+        if not pictures.count:
+            pictures = None
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
+        pictures,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:
         cast("IO[bytes]", out.file).write(page)
     size = len(page)
     print(
-        f"wrote {args.output} ({size / 1024:,.0f} KiB): {len(data.findings)} findings "
+        f"wrote {args.output} ({size / 1024:,.0f} KiB): {data.findings.total:,} findings "
         f"({verdict_line(data.verdicts())})"
     )
     for note in reader.notes:
