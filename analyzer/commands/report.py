@@ -68,10 +68,12 @@ def run(args: argparse.Namespace) -> int:
     finally:
         reader.close()
     data.notes.extend(reader.notes)
-    if data.first is not None and data.first == data.last and data.findings.total:
-        data.findings.clear()  # a raw byte dump has no clock: "0.0 s later" is nonsense
+    if data.first is not None and data.first == data.last and data.topics.total() > 1:
+        # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         data.untimed = True
-        data.notes.append(UNTIMED)
+        if data.findings.total or data.commands:
+            data.findings.clear()
+            data.notes.append(UNTIMED)
     pictures = None
     if reader.format_name == "mcap" and data.first is not None and data.last is not None:
         from analyzer.mcapio.video_reading import read_thumbnails  # camera pictures

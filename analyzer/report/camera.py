@@ -81,10 +81,19 @@ def verdict_moment(finding: dict[str, Any]) -> float | None:
 @dataclass(frozen=True)
 class Wanted:
     """A moment a picture is wanted for: the last picture at or before it (``before``), or
-    the first one at or after it."""
+    the one nearest to it taken after ``later_than``."""
 
     time: float
-    before: bool
+    before: bool = False
+    later_than: float | None = None
+
+    def better(self, t: float, best: float | None) -> bool:
+        """Whether a picture taken at ``t`` fits better than the best one so far."""
+        if self.before:
+            return t <= self.time and (best is None or t > best)
+        if self.later_than is not None and t <= self.later_than:
+            return False
+        return best is None or abs(t - self.time) < abs(best - self.time)
 
 
 class PictureChoice:
@@ -107,11 +116,7 @@ class PictureChoice:
         self.last = t if self.last is None else max(self.last, t)
         self.times.add((t,))
         for want, best in self.best.items():
-            if want.before:
-                fits = t <= want.time and (best is _NONE or t > best.time)
-            else:
-                fits = t >= want.time and (best is _NONE or t < best.time)
-            if fits:
+            if want.better(t, None if best is _NONE else best.time):
                 self.best[want] = picture
 
     def get(self, want: Wanted) -> Picture | None:
@@ -138,19 +143,32 @@ def shown_findings(examples: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 def strip_moments(first: float, last: float) -> list[Wanted]:
     span = last - first
     if span <= 0:
-        return [Wanted(first, False)]
-    return [Wanted(first + span * i / (STRIP_SIZE - 1), False) for i in range(STRIP_SIZE)]
+        return [Wanted(first)]
+    return [Wanted(first + span * i / (STRIP_SIZE - 1)) for i in range(STRIP_SIZE)]
 
 
 def wanted_moments(findings: Sequence[dict[str, Any]]) -> list[Wanted]:
     """Every moment a picture is wanted for: each finding's pair."""
     wanted = []
     for finding in findings:
-        wanted.append(Wanted(float(finding["time"]), True))
-        moment = verdict_moment(finding)
-        if moment is not None:
-            wanted.append(Wanted(moment, False))
+        wanted.append(before_command(finding))
+        after = at_verdict(finding)
+        if after is not None:
+            wanted.append(after)
     return wanted
+
+
+def before_command(finding: dict[str, Any]) -> Wanted:
+    """The last picture taken at or before the command."""
+    return Wanted(float(finding["time"]), before=True)
+
+
+def at_verdict(finding: dict[str, Any]) -> Wanted | None:
+    """The picture nearest to the moment the verdict was decided, taken after the command."""
+    moment = verdict_moment(finding)
+    if moment is None:
+        return None
+    return Wanted(moment, later_than=float(finding["time"]))
 
 
 def choose(
@@ -213,14 +231,16 @@ def camera_section(choice: PictureChoice, findings: Sequence[dict[str, Any]]) ->
         return "\n".join(out)
     out.append(
         '<p class="small">For each command: the last picture before it was sent, and the '
-        "first at the moment its verdict was decided (the feedback that decided it).</p>"
+        "one nearest to the moment its verdict was decided (the feedback that decided it). "
+        "Findings about the feedback link as a whole have no picture.</p>"
     )
     out.append('<div class="seen">')
     for finding in findings:
         t = float(finding["time"])
         moment = verdict_moment(finding)
-        before = choice.get(Wanted(t, True))
-        after = choice.get(Wanted(moment, False)) if moment is not None else None
+        before = choice.get(before_command(finding))
+        wanted_after = at_verdict(finding)
+        after = choice.get(wanted_after) if wanted_after is not None else None
         verdict = str(finding["verdict"])
         decided = ""
         if moment is not None:

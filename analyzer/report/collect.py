@@ -11,6 +11,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
+from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -21,7 +22,6 @@ from analyzer.protocol.types import (
     TOPIC_UAV_TEXT,
     Event,
 )
-from analyzer.render import describe_event
 from analyzer.report.decimate import Decimator, PerSecond, Row
 from analyzer.report.finding_groups import FindingGroups
 
@@ -57,7 +57,8 @@ class ReportData:
     diagnostic_kinds: Counter[str] = field(default_factory=Counter)
     # (t, pitch, yaw, motor yaw)
     attitude: Decimator = field(default_factory=lambda: Decimator((1, 2, 3)))
-    # (t, label): each command its own mark; a gimbal_control stream one mark per burst
+    # (t, command event): each command its mark; gimbal_control one per burst of the same
+    # speeds, as the response analysis judges them
     marks: Decimator = field(default_factory=lambda: Decimator((), MAX_MARKS))
     commanded: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, pan, tilt)
     measured: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, pan, tilt)
@@ -127,15 +128,20 @@ class ReportData:
         name = str(fields.get("name", "unknown"))
         self.commands[name] += 1
         if name != "gimbal_control":
-            self.marks.add((t, describe_event(event)))
+            self.marks.add((t, event))
             return
         pan = _number(fields, "pan_speed_dps") or 0.0
         tilt = _number(fields, "tilt_speed_dps") or 0.0
         last = self._last_speed
-        if last is None or t - last[0] > STOP_AFTER_S:
-            if last is not None:
-                self._speeds_stop(last)
-            self.marks.add((t, "gimbal_control"))  # a stick stream: one mark per burst
+        if last is not None and t - last[0] > STOP_AFTER_S:
+            self._speeds_stop(last)
+        if (
+            last is None
+            or t - last[0] > BURST_GAP_S
+            or abs(pan - last[1]) >= SAME_SPEED
+            or abs(tilt - last[2]) >= SAME_SPEED
+        ):
+            self.marks.add((t, event))  # a new burst
         self.commanded.add((t, pan, tilt))
         self._last_speed = (t, pan, tilt)
 

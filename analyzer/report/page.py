@@ -8,6 +8,7 @@ from importlib import resources
 from typing import Any
 
 from analyzer import __version__
+from analyzer.render import describe_event
 from analyzer.report import camera, tables
 from analyzer.report.collect import ReportData
 from analyzer.report.decimate import Row
@@ -64,7 +65,7 @@ def _plot_data(data: ReportData) -> dict[str, Any]:
         "start": start,
         "span": round((data.last or start) - start, 3),
         "attitude": rel(data.attitude.rows()),
-        "marks": [[round(r[0] - start, 3), r[1]] for r in data.marks.rows()],
+        "marks": [[round(r[0] - start, 3), describe_event(r[1])] for r in data.marks.rows()],
         "targets": targets,
         "commanded": rel(data.commanded.rows()),
         "measured": rel(data.measured.rows()),
