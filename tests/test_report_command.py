@@ -145,6 +145,10 @@ def test_report_of_every_sample_loads(name: str, samples: dict[str, Path], tmp_p
     if name == "uart-dump.bin":  # no times and no feedback: said instead of empty plots
         assert list(canvases(dom)) == ["plot-track"]  # positions need no clock
         assert "nothing to plot over time" in dom and "no timestamps" in dom
+        # the responses say why there are none, not that no command had an effect
+        responses = page.read_text().split("<h2>Responses</h2>")[1].split("<h2>")[0]
+        assert "carries no timestamps" in responses and "cannot be timed" in responses
+        assert "no command with a visible effect" not in responses
 
 
 def test_report_of_a_demo_recording(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

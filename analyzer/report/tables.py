@@ -97,7 +97,7 @@ def _group(group: Group) -> str:
     if group.first is not None and group.last is not None and group.total > 1:
         span = f", {_e(_clock(group.first))} to {_e(_clock(group.last))}"
     shown = (
-        f"the worst {len(examples)} of {group.total:,}"
+        f"{len(examples)} examples of {group.total:,}"
         if len(examples) < group.total
         else f"all {group.total:,}"
     )
