@@ -8,11 +8,14 @@ from importlib import resources
 from typing import Any
 
 from analyzer import __version__
+from analyzer.protocol.types import Event
 from analyzer.render import describe_event
 from analyzer.report import camera, tables
 from analyzer.report.collect import ReportData
 from analyzer.report.decimate import Row
 from analyzer.report.tables import _e, _rows
+
+MARK_LABEL = 34  # characters of a command mark's label
 
 __all__ = ["CHART_JS", "CHECK_JS", "CSS", "_e", "_plot", "_rows", "render"]
 
@@ -49,6 +52,12 @@ def _plot(plot_id: str, has_data: bool, empty: str, square: bool = False) -> str
     return f'<div class="{cls}"><canvas id="{plot_id}"></canvas></div>'
 
 
+def _mark_label(event: Event) -> str:
+    """A command in words, short enough to stand along a plot's height."""
+    words = " ".join(describe_event(event).split())
+    return words if len(words) <= MARK_LABEL else words[: MARK_LABEL - 1] + "\u2026"
+
+
 def _plot_data(data: ReportData) -> dict[str, Any]:
     start = data.first or 0.0
 
@@ -65,7 +74,7 @@ def _plot_data(data: ReportData) -> dict[str, Any]:
         "start": start,
         "span": round((data.last or start) - start, 3),
         "attitude": rel(data.attitude.rows()),
-        "marks": [[round(r[0] - start, 3), describe_event(r[1])] for r in data.marks.rows()],
+        "marks": [[round(r[0] - start, 3), _mark_label(r[1])] for r in data.marks.rows()],
         "targets": targets,
         "commanded": rel(data.commanded.rows()),
         "measured": rel(data.measured.rows()),

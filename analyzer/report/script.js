@@ -261,9 +261,11 @@
                      line("yaw motor (from the nose)", att, 3, COLORS.motor)]
         .concat(targets(["yaw", "motor_yaw"])), "yaw (deg)", { marks: data.marks });
   chart("plot-rates", [
-    line("pan commanded", data.commanded, 1, COLORS.pan, { borderDash: [6, 3] }),
+    line("pan commanded", data.commanded, 1, COLORS.pan,
+         { borderDash: [6, 3], stepped: "before" }),
     line("pan measured", data.measured, 1, COLORS.pan, { pointRadius: 2 }),
-    line("tilt commanded", data.commanded, 2, COLORS.tilt, { borderDash: [6, 3] }),
+    line("tilt commanded", data.commanded, 2, COLORS.tilt,
+         { borderDash: [6, 3], stepped: "before" }),
     line("tilt measured", data.measured, 2, COLORS.tilt, { pointRadius: 2 })
   ], "rate (deg/s)", { marks: data.marks });
   chart("plot-health", [
