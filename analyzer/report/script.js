@@ -39,7 +39,7 @@
       if (span / STEPS[i] <= most) { step = STEPS[i]; break; }
     }
     var stepMs = Math.round(step * 1000);
-    var origin = absolute ? startMs : 0;
+    var origin = startMs;  // round times of the clock, whatever the first sample's time
     var first = Math.ceil((origin + scale.min * 1000 - 1e-6) / stepMs);
     var ticks = [];
     for (var k = first; (k * stepMs - origin) / 1000 <= scale.max + 1e-9; k++) {
