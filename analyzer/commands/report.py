@@ -11,11 +11,19 @@ DESCRIPTION = """\
 Writes one self-contained HTML file (no network needed to open it, fit to attach
 to a support ticket) from any input `decode` reads, recordings included:
 
-  overview       source, time range, counts, verdicts per command
-  plots          gimbal pitch / yaw over time with command markers and targets,
-                 commanded against measured rates, feedback rate and diagnostics
-                 over time, UAV altitude and track (in metres, no map tiles)
-  tables         the responses of `gimbal-analyzer analyze` and the diagnostics
+  overview       source, time range, counts, verdicts
+  plots          gimbal pitch / yaw over time with a mark for every command and the
+                 targets, commanded against measured rates, feedback rate and
+                 diagnostics over time, UAV altitude and track (in metres, equal
+                 scale, no map tiles); drag across a time plot to zoom in
+  tables         the findings of `gimbal-analyzer analyze` counted per command and
+                 check, with the worst examples; the flight controller's status
+                 texts; the diagnostics; pictures of a recording's camera before
+                 each command not obeyed and at its verdict
+
+The file stays small for any length of flight: plots keep each time bucket's
+lowest and highest samples, findings are counted (every one is in `analyze
+--json` and in a recording's /analysis/response).
 
   gimbal-analyzer report flight.log -o report.html
   gimbal-analyzer report demo.mcap -o demo-report.html --tolerance 2
@@ -72,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         data.untimed = True
         if data.findings.total or data.commands:
-            data.findings.clear()
+            data.drop_findings()
             data.notes.append(UNTIMED)
     pictures = None
     if reader.format_name == "mcap" and data.first is not None and data.last is not None:

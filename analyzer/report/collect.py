@@ -175,6 +175,11 @@ class ReportData:
                 series = self.targets[verdict, axis] = Decimator((1,), MAX_TARGETS)
             series.add((float(finding["time"]), target, verdict, what, axis))
 
+    def drop_findings(self) -> None:
+        """Forget every finding (an input without a clock cannot time a response)."""
+        self.findings.clear()
+        self.targets.clear()
+
     def finish(self) -> None:
         """The end of the input: a commanded speed still held returns to 0."""
         if self._last_speed is not None:
