@@ -202,3 +202,19 @@ def test_only_the_chosen_pictures_are_kept_while_reading() -> None:
     assert len(kept) <= camera.STRIP_SIZE + 2 and choice.count == 10_000
     after = camera.at_verdict(finding)
     assert after is not None and after.time == 503.0  # no feedback moment: command + response
+
+
+def test_with_local_time_the_page_says_which_times_are_local(
+    flight: tuple[Path, dict[str, Any], str], tmp_path: Path
+) -> None:
+    from analyzer import timefmt
+    from analyzer.cli import main
+
+    page = tmp_path / "local.html"
+    log = flight[0].with_name("demo31.log")
+    try:
+        assert main(["--local-time", "report", str(log), "-o", str(page)]) == 0
+    finally:
+        timefmt.use_local_time(False)
+    assert "Times in the tables are local time" in page.read_text()
+    assert "Times are UTC." in flight[0].read_text()

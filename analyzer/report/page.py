@@ -7,7 +7,7 @@ import time
 from importlib import resources
 from typing import Any
 
-from analyzer import __version__
+from analyzer import __version__, timefmt
 from analyzer.protocol.types import Event
 from analyzer.render import describe_event
 from analyzer.report import camera, tables
@@ -56,6 +56,12 @@ def _mark_label(event: Event) -> str:
     """A command in words, short enough to stand along a plot's height."""
     words = " ".join(describe_event(event).split())
     return words if len(words) <= MARK_LABEL else words[: MARK_LABEL - 1] + "\u2026"
+
+
+def _zone_words() -> str:
+    if timefmt.local_time():
+        return "Times in the tables are local time (with their UTC offset); the plots' are UTC."
+    return "Times are UTC."
 
 
 def _plot_data(data: ReportData) -> dict[str, Any]:
@@ -117,7 +123,7 @@ def render(data: ReportData, settings: str, pictures: camera.PictureChoice | Non
     notes = "".join(f'<p class="small">note: {_e(n)}</p>' for n in data.notes)
     sections = [
         f"<h1>{_e(title)}</h1>",
-        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. Times are UTC. '
+        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. {_zone_words()} '
         "The protocol has no acknowledgements: each command is judged from the attitude "
         "feedback that followed it.</p>",
         notes,
