@@ -8,6 +8,7 @@ from analyzer.protocol.fields import CODE_SUFFIX
 from analyzer.protocol.types import (
     FROM_IDU,
     TO_IDU,
+    TOPIC_CAN_BUS_STATE,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -38,6 +39,7 @@ TOPIC_LABELS = {
     TOPIC_UAV_ATTITUDE: "uav attitude",
     TOPIC_UAV_TEXT: "text",
     TOPIC_CAN_OTHER: "other frame",
+    TOPIC_CAN_BUS_STATE: "bus state",
 }
 
 # Field-name suffix -> unit words; the suffix is dropped from the shown name.
@@ -154,6 +156,8 @@ def describe(event: Event) -> str:
         return text
     if topic == TOPIC_UAV_TEXT:
         return repr(str(fields.get("text", "")))
+    if topic == TOPIC_CAN_BUS_STATE:
+        return bus_state_words(fields)
     if topic == TOPIC_CAN_OTHER:
         can_id = int(fields.get("can_id", 0))
         ident = f"0x{can_id:08X}" if fields.get("extended", True) else f"0x{can_id:03X}"
@@ -183,6 +187,18 @@ def describe(event: Event) -> str:
         else:
             words.append(value_words(key, value, fields))
     return "  ".join(head + words + tail)
+
+
+def bus_state_words(fields: dict[str, Any]) -> str:
+    """``error-passive since 22:13:20.000Z  tx errors 128  rx errors 136  6 error frames``."""
+    words = [str(fields.get("state", "?"))]
+    since = fields.get("since")
+    if isinstance(since, (int, float)):
+        words[0] += f" since {format_time(since)}"
+    if "tx_errors" in fields:
+        words.append(f"tx errors {fields['tx_errors']}  rx errors {fields.get('rx_errors')}")
+    words.append(f"{fields.get('error_frames', 0)} error frames")
+    return "  ".join(words)
 
 
 def describe_event(event: Event) -> str:

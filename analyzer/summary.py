@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from analyzer.bus_hints import bus_hints
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import Event
 from analyzer.tally import (
@@ -68,6 +69,40 @@ def _rate(track: FeedbackTrack, alarm: Style) -> str:
     if abs(rate - EXPECTED_FEEDBACK_HZ) > FEEDBACK_TOLERANCE * EXPECTED_FEEDBACK_HZ:
         text = alarm(text + " OFF")
     return text
+
+
+def _count(n: int, word: str) -> str:
+    return f"{n:,} {word}" + ("" if n == 1 else "s")
+
+
+def bus_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
+    """The CAN buses' error frames: worst state and when, counts by class, and hints."""
+    bus = tally.bus
+    if not bus:
+        return []
+    lines = [f"  {'CAN bus':<15}{_count(bus.error_frames, 'error frame')}"]
+    for name, channel in sorted(bus.channels.items()):
+        worst = channel.worst
+        when = format_datetime(channel.worst_time) if channel.worst_time is not None else "?"
+        words = f"worst {worst} at {when}"
+        if worst != "error-active":
+            words = alarm(words)
+        counters = ""
+        if channel.tx_errors_max or channel.rx_errors_max:
+            counters = (
+                f", error counters up to tx {channel.tx_errors_max} rx {channel.rx_errors_max}"
+            )
+        lines.append(
+            f"    {printable(name):<11}{_count(channel.error_frames, 'error frame')}, {words}, "
+            f"now {channel.state}{counters}"
+        )
+        by_class = ", ".join(f"{k} {v:,}" for k, v in channel.classes.most_common())
+        lines.append(f"    {'':<11}{by_class}")
+    if bus.untracked:
+        lines.append(f"    {bus.untracked:,} more error frames of channels not followed one by one")
+    for hint in bus_hints(bus, tally.frames):
+        lines.append(f"  {'hint':<15}{alarm(printable(hint))}")
+    return lines
 
 
 def crc_line(tally: Tally, alarm: Style = _plain) -> str:
@@ -217,6 +252,7 @@ class Summary:
         lines.append(f"  {'input':<15}{self._input_words()}")
         lines.extend(event_lines(tally, alarm))
         lines.extend(feedback_lines(tally, alarm))
+        lines.extend(bus_lines(tally, alarm))
         if self.not_a_stream is None:
             lines.append(crc_line(tally, alarm))
         else:
@@ -245,8 +281,12 @@ class Summary:
         frames = s.get("frames", d.get("frames", 0))
         if frames or "frames" in s:
             protocol = d.get("protocol_frames", 0)
-            other = frames - protocol
-            parts.append(f"{frames:,} CAN frames ({protocol:,} protocol, {other:,} other)")
+            errors = self.tally.bus.error_frames
+            other = frames - protocol - errors
+            kinds = f"{protocol:,} protocol, {other:,} other" + (
+                f", {_count(errors, 'error frame')}" if errors else ""
+            )
+            parts.append(f"{frames:,} CAN frames ({kinds})")
         if s.get("recorded_events"):
             parts.append(f"{s['recorded_events']:,} events as recorded (not decoded again)")
         if d.get("chunks"):

@@ -16,8 +16,10 @@ from dataclasses import asdict, dataclass, field
 from operator import attrgetter, itemgetter
 from typing import Any
 
+from analyzer.bus_figures import BusFigures
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import (
+    BUS_ERROR,
     CRC_MISMATCH,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
@@ -145,6 +147,7 @@ class Tally:
     crc_errors: int = 0
     first_time: float | None = None
     last_time: float | None = None
+    bus: BusFigures = field(default_factory=BusFigures)  # what the error frames say
 
     # -- folding -----------------------------------------------------------------------------
 
@@ -226,6 +229,8 @@ class Tally:
             self.diagnostics += len(kinds)
             self.kinds.update(kinds)
             self.crc_errors += kinds.count(CRC_MISMATCH)
+            if BUS_ERROR in kinds:
+                self.bus.add_events(events)
         streamed = [e for e in events if "transport" in e.fields]  # read from a stream
         if streamed:
             self.crc_checked += sum(
@@ -289,6 +294,7 @@ class Tally:
             "crc_errors": self.crc_errors,
             "crc_error_rate": _round(self.crc_error_rate),
             **({"feedback_untracked": self.feedback_untracked} if self.feedback_untracked else {}),
+            **({"bus": self.bus.figures()} if self.bus else {}),
         }
 
     def items(self) -> dict[str, int]:
@@ -297,7 +303,8 @@ class Tally:
 
     def copy(self) -> Tally:
         """An independent snapshot."""
-        twin = Tally(**{k: v for k, v in asdict(self).items() if k != "feedback"})
+        twin = Tally(**{k: v for k, v in asdict(self).items() if k not in ("feedback", "bus")})
+        twin.bus = BusFigures.from_figures(self.bus.figures())
         twin.topics, twin.kinds = Counter(self.topics), Counter(self.kinds)
         twin.commands = Counter(self.commands)
         twin.feedback = {
@@ -342,6 +349,7 @@ class Tally:
             crc_errors=int(figures["crc_errors"]),
             first_time=_opt_float(data.get("first_time")),
             last_time=_opt_float(data.get("last_time")),
+            bus=BusFigures.from_figures(figures.get("bus") or {}),
         )
         return tally
 

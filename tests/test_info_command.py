@@ -16,7 +16,7 @@ from tests.test_mcap_support import T0, batches, decode_all, traffic, write_reco
 
 def test_finished_file_is_summarised_without_scanning(tmp_path: Path) -> None:
     path = tmp_path / "rec.mcap"
-    items = traffic(6.0, gap_after=2.0)
+    items = traffic(6.0, gap_after=2.0, bus_off=True)
     write_recording(path, items)
     info = recording_info(path)
     assert not info.recovered
@@ -32,7 +32,12 @@ def test_finished_file_is_summarised_without_scanning(tmp_path: Path) -> None:
     assert info.duration_s == pytest.approx(items[-1].time - T0, abs=1e-6)
     rates = {t.topic: t.rate_hz for t in info.topics}
     assert rates["/gimbal/command"] == pytest.approx(counts["/gimbal/command"] / info.duration_s)
-    assert info.tally.kinds == Counter({"crc_mismatch": 2, "garbage": 1})
+    assert info.tally.kinds == Counter({"crc_mismatch": 2, "garbage": 1, "bus_error": 2})
+    # The adapter went bus-off and was restarted: the record says so without a scan.
+    bus = info.tally.bus.figures()
+    assert (bus["worst_state"], bus["worst_channel"]) == ("bus-off", "can0")
+    assert bus["channels"]["can0"]["state"] == "error-active"
+    assert bus["classes"] == {"bus-off": 1, "restarted-after-bus-off": 1}
     # Feedback every 0.25 s (attitude and ranging), none for 2 s after t=2: the longest
     # gap is 2.25 s, from the ranging message at 1.75 s to the attitude at 4.0 s.
     (track,) = info.tally.feedback.values()
@@ -70,7 +75,7 @@ def test_recovered_file_is_scanned_and_says_so(
 
 def test_info_command_text_and_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "rec.mcap"
-    write_recording(path)
+    write_recording(path, traffic(bus_off=True))
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
     assert "finished" in out
@@ -78,10 +83,13 @@ def test_info_command_text_and_json(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert "crc_mismatch" in out
     assert "longest gap" in out
     assert "2023-11-14 22:13:20.000Z" in out
+    assert "2 error frames, worst bus-off at 2023-11-14 22:13:24.300Z, now error-active" in out
+    assert "can0 went bus-off at 2023-11-14 22:13:24.300Z and came back" in out
     assert main(["info", str(path), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["recovered"] is False
-    assert data["diagnostics_by_kind"] == {"crc_mismatch": 2, "garbage": 1}
+    assert data["diagnostics_by_kind"] == {"crc_mismatch": 2, "garbage": 1, "bus_error": 2}
+    assert data["figures"]["bus"]["worst_state"] == "bus-off"
     assert data["figures"]["feedback"]["can0"]["messages"] == 16  # attitude and ranging in 4 s
     assert data["figures"]["topics"]["/gimbal/attitude"] == 8
 

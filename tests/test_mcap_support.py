@@ -35,11 +35,13 @@ def feedback_frames(t: float, message: bytes, *, channel: str = "can0") -> list[
     ]
 
 
-def traffic(seconds: float = 4.0, *, gap_after: float | None = None) -> list[RawItem]:
+def traffic(
+    seconds: float = 4.0, *, gap_after: float | None = None, bus_off: bool = False
+) -> list[RawItem]:
     """Mixed CAN and TCP traffic: commands, feedback every 0.5 s, UAV status, faults.
 
     ``gap_after``: the gimbal's feedback (attitude and ranging) stops for 2 s after this
-    many seconds.
+    many seconds. ``bus_off``: at the end the adapter goes bus-off and is restarted.
     """
     items: list[RawItem] = []
     steps = int(seconds / 0.05)
@@ -95,6 +97,9 @@ def traffic(seconds: float = 4.0, *, gap_after: float | None = None) -> list[Raw
             direction=FROM_IDU,
         )
     )
+    if bus_off:  # SocketCAN error frames: bus-off, then restarted
+        items.append(CanFrame(end + 0.3, 0x040, bytes(8), channel="can0", is_error=True))
+        items.append(CanFrame(end + 0.4, 0x100, bytes(8), channel="can0", is_error=True))
     items.sort(key=lambda item: item.time)
     return items
 

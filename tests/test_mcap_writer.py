@@ -56,7 +56,7 @@ def test_recording_passes_the_mcap_reader_with_crc_validation(tmp_path: Path) ->
 
 def test_channels_are_json_with_valid_json_schemas(tmp_path: Path) -> None:
     path = tmp_path / "rec.mcap"
-    write_recording(path, emit_other=True)
+    write_recording(path, traffic(bus_off=True), emit_other=True)
     core = topic_schemas()
     seen: set[str] = set()
     validators: dict[int, jsonschema.Draft202012Validator] = {}

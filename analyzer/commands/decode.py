@@ -184,17 +184,28 @@ def run(args: argparse.Namespace) -> int:
         sys.stderr.write(
             f"{tally.events:,} events ({tally.diagnostics:,} diagnostics) from {args.file}\n"
         )
-    for note in [*reader.notes, *_nothing_for_us(reader.stats, decoder_stats, args.raw), *mismatch]:
+    from analyzer.bus_hints import bus_hints
+
+    errors = tally.bus.error_frames
+    hints = [] if args.summary else bus_hints(tally.bus, tally.frames)
+    nothing = _nothing_for_us(reader.stats, decoder_stats, args.raw, errors)
+    for note in [*reader.notes, *nothing, *hints, *mismatch]:
         sys.stderr.write(f"note: {printable(note)}\n")
     return 130 if interrupted else 0
 
 
 def _nothing_for_us(
-    input_stats: dict[str, int], decoder_stats: dict[str, int], raw: bool = False
+    input_stats: dict[str, int],
+    decoder_stats: dict[str, int],
+    raw: bool = False,
+    error_frames: int = 0,
 ) -> list[str]:
-    """A note when CAN frames were read but none of them belongs to the protocol."""
-    frames = input_stats.get("frames", decoder_stats.get("frames", 0))
-    if frames and not decoder_stats.get("protocol_frames") and not decoder_stats.get("chunks"):
+    """A note when CAN data frames were read but none of them belongs to the protocol.
+
+    Error frames are no answer to "is this the gimbal's bus?": the bus hints speak of them.
+    """
+    frames = input_stats.get("frames", decoder_stats.get("frames", 0)) - error_frames
+    if frames > 0 and not decoder_stats.get("protocol_frames") and not decoder_stats.get("chunks"):
         ids = ", ".join(f"0x{i:08X}" for i in sorted(PROTOCOL_IDS))
         where = "they are the /can/other events" if raw else "--raw shows them"
         return [

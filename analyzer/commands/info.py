@@ -6,7 +6,7 @@ import argparse
 import json
 from typing import TYPE_CHECKING
 
-from analyzer.summary import crc_line, event_lines, feedback_lines
+from analyzer.summary import bus_lines, crc_line, event_lines, feedback_lines
 from analyzer.terminal_text import printable
 from analyzer.timefmt import format_datetime
 
@@ -127,6 +127,7 @@ def render(info: RecordingInfo) -> str:
     lines.append(f"figures of the run, from {info.stats_from}:")
     lines.extend(event_lines(info.tally))
     lines.extend(feedback_lines(info.tally))
+    lines.extend(bus_lines(info.tally))
     lines.append(crc_line(info.tally))
     # Paths, metadata, topics and kinds come from the file: no raw control characters.
     return "\n".join(printable(line) for line in lines)

@@ -15,6 +15,7 @@ Write a Foxglove Studio layout for gimbal-analyzer recordings:
   Log                diagnostics (/diagnostics/log)
   Plot               gimbal pitch and yaw with the commanded pan / tilt speeds
   State Transitions  control mode, tracking and command names over time
+  Plot (CAN bus)     the CAN controller's state, 0 error-active .. 3 bus-off (/can/bus_state)
   Indicator          tracking on / off
   Raw Messages       /gimbal/command
   Table              /diagnostics

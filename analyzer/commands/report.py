@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         reader.close()
     data.notes.extend(reader.notes)
+    data.frames = pipeline.tally.frames
     if data.first is not None and data.first == data.last and data.topics.total() > 1:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         data.untimed = True

@@ -112,6 +112,8 @@ def recordings_schema(tags: list[str]) -> pa.Schema:
         pa.field("crc_error_rate", pa.float64()),
         pa.field("gaps", pa.int64()),
         pa.field("longest_gap_s", pa.float64()),
+        pa.field("bus_worst_state", pa.string()),  # of the CAN controller, from error frames
+        pa.field("bus_worst_time", TIME),
         pa.field("diagnostics", pa.int64()),
         *(pa.field(diagnostic_column(k), pa.int64()) for k in DIAGNOSTIC_KINDS),
         pa.field("findings", pa.int64()),

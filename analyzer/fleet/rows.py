@@ -310,6 +310,8 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
             gaps=sum(f["gaps_over_threshold"] for f in feedback),
             longest_gap_s=max(gaps) if gaps else None,
             diagnostics=figures["diagnostics"],
+            bus_worst_state=(figures.get("bus") or {}).get("worst_state"),
+            bus_worst_time=(figures.get("bus") or {}).get("worst_time"),
             findings=run["findings"],
             notes=run["notes"],
         )
@@ -322,7 +324,7 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
         for verdict in VERDICTS:
             row.setdefault(verdict_column(verdict), 0)
     schema = recordings_schema(list(tags))
-    for name in ("start", "end"):
+    for name in ("start", "end", "bus_worst_time"):
         value = row.get(name)
         row[name] = None if value is None else round(float(value) * 1_000_000)
     columns = {

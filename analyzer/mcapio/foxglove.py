@@ -153,13 +153,24 @@ def log_level(event: Event) -> int:
     """Foxglove log level of a diagnostic."""
     kind = event.fields.get("kind")
     if kind == BUS_ERROR:
-        return LOG_ERROR
+        return _bus_error_level(event.fields)
     if kind == LINK:
         state = str(event.fields.get("state", "")).lower()
         if state == "failed":  # the capture stopped on this failure
             return LOG_ERROR
         return LOG_INFO if state in _GOOD_LINK_STATES else LOG_WARNING
     return LOG_WARNING
+
+
+def _bus_error_level(fields: dict[str, Any]) -> int:
+    """A recovery is good news; an error-passive or bus-off controller is an error."""
+    state = fields.get("bus_state")
+    if state in (None, "error-passive", "bus-off"):
+        return LOG_ERROR
+    recovered = "restarted-after-bus-off" in (fields.get("classes") or ()) or (
+        "back-to-error-active" in (fields.get("controller") or ())
+    )
+    return LOG_INFO if recovered and state == "error-active" else LOG_WARNING
 
 
 def log_message(event: Event) -> dict[str, Any]:

@@ -5,7 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
-from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+from analyzer.protocol.types import (
+    TOPIC_CAN_BUS_STATE,
+    TOPIC_COMMAND,
+    TOPIC_DIAGNOSTICS,
+    TOPIC_GIMBAL_ATTITUDE,
+)
 
 # Panel ids are "<panel type>!<name>"; the types are those of Foxglove Studio 1.48.
 MAP = "map!gimbal-map"
@@ -16,6 +21,7 @@ STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
 IMAGE = "ImageViewPanel!gimbal-camera"
+BUS_PLOT = "Plot!can-bus-state"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
 # CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
 CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
@@ -32,6 +38,8 @@ STATE_SERIES = (
     (TOPIC_GIMBAL_ATTITUDE, "tracking"),
     (TOPIC_COMMAND, "name"),
 )
+# The CAN controller's state as a number: 0 error-active .. 3 bus-off.
+BUS_SERIES = ((TOPIC_CAN_BUS_STATE, "level"),)
 TRACKING = (TOPIC_GIMBAL_ATTITUDE, "tracking")
 
 _COLOURS = ("#4e98e2", "#f5774d", "#61cbff", "#f7df71")
@@ -108,6 +116,21 @@ def layout() -> dict[str, Any]:
             "zoom": 1,
         },
     }
+    config_by_id[BUS_PLOT] = {
+        **config_by_id[PLOT],
+        "title": "CAN bus state (0 error-active .. 3 bus-off)",
+        "paths": [
+            {
+                "value": message_path(topic, field),
+                "enabled": True,
+                "timestampMethod": "receiveTime",
+                "color": colour,
+            }
+            for (topic, field), colour in zip(BUS_SERIES, _COLOURS[3:], strict=False)
+        ],
+        "minYValue": 0,
+        "maxYValue": 3,
+    }
     mosaic = {
         "direction": "row",
         "splitPercentage": 38,
@@ -134,7 +157,12 @@ def layout() -> dict[str, Any]:
             "second": {
                 "direction": "column",
                 "splitPercentage": 42,
-                "first": STATES,
+                "first": {
+                    "direction": "row",
+                    "splitPercentage": 60,
+                    "first": STATES,
+                    "second": BUS_PLOT,
+                },
                 "second": {
                     "direction": "row",
                     "splitPercentage": 50,

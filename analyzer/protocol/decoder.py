@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.protocol.bus_state import BusState
+from analyzer.protocol.can_error import decode_error_frame
 from analyzer.protocol.codec import decode_command
 from analyzer.protocol.decode_batch import STATUS_TOPICS, feed_batch
 from analyzer.protocol.feedback import decode_feedback
@@ -20,6 +22,7 @@ from analyzer.protocol.stream_frames import stream_frame_events
 from analyzer.protocol.types import (
     BAD_FRAME,
     BUS_ERROR,
+    TOPIC_CAN_BUS_STATE,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -59,6 +62,8 @@ class Decoder:
         self._framers: LruTable[tuple[str, str], StreamFramer] = LruTable(
             self._evict_framer, max_sources
         )
+        # Each CAN channel's controller state, followed from its error frames.
+        self._buses: LruTable[str, BusState] = LruTable(_forget, max_sources)
         self._given_up: list[Event] = []  # diagnostics of evicted state, for the caller
         # The reassembler used last (only an add for another source can evict it).
         self._recent_source: str | None = None
@@ -191,16 +196,7 @@ class Decoder:
         """Any CAN frame: flags, standard IDs, other devices, text, extra fields."""
         can_id = frame.can_id
         if frame.is_error:
-            return [
-                diagnostic(
-                    frame.time,
-                    source,
-                    BUS_ERROR,
-                    f"CAN error frame (id 0x{can_id:08X})",
-                    frame.data,
-                    **extra,
-                )
-            ]
+            return self._bus_error(frame, source, extra)
         if can_id not in _HANDLED:
             self.other_frames += 1
             if not self.emit_other:
@@ -264,6 +260,32 @@ class Decoder:
         fields.update(extra)
         return [Event(STATUS_TOPICS[can_id], frame.time, source, fields, warnings + more)]
 
+    def _bus_error(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        """An error frame: a bus_error diagnostic, and the channel's state when it is due."""
+        error = decode_error_frame(frame.can_id, frame.data)
+        bus = self._buses.get(source) or self._buses.add(source, BusState())
+        due = bus.note(error, frame.time)
+        if error.problems:
+            detail = f"malformed CAN error frame ({'; '.join(error.problems)}): {error.text}"
+        else:
+            detail = f"CAN error frame: {error.text}"
+        events = [
+            diagnostic(
+                frame.time,
+                source,
+                BUS_ERROR,
+                f"{detail}; bus {bus.state}",
+                frame.data,
+                can_id=frame.can_id,
+                **error.fields(),
+                bus_state=bus.state,
+                **extra,
+            )
+        ]
+        if due:
+            events.append(Event(TOPIC_CAN_BUS_STATE, frame.time, source, bus.message()))
+        return events
+
     def _feedback(
         self,
         source: str,
@@ -299,6 +321,10 @@ class Decoder:
             else:
                 out.extend(stream_frame_events(result, source, extra, self._can_any))
         return out
+
+
+def _forget(source: str, bus: BusState) -> None:
+    """A channel's bus state given up for a newer channel: nothing is pending in it."""
 
 
 _HANDLED = frozenset({CONTROL_ID, FEEDBACK_ID, TEXT_ID, TEXT_END_ID, *STATUS_FRAMES})

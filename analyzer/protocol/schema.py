@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.protocol.bus_state import BUS_STATES, count_key
+from analyzer.protocol.can_error import CLASS_NAMES, UNKNOWN_CLASS, UNSPECIFIED
 from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
@@ -12,6 +14,7 @@ from analyzer.protocol.response_fields import CHECKS, FIELD_ENUMS, OPTIONAL_FIEL
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_CAN_BUS_STATE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_UAV_TEXT,
@@ -155,6 +158,78 @@ def response_schema() -> dict[str, Any]:
     return schema
 
 
+_NAMES = {"type": "array", "items": {"type": "string"}}
+_COUNTER = {"type": "integer", "minimum": 0, "maximum": 255}
+_BUS_STATE = {"type": "string", "enum": list(BUS_STATES)}
+# Fields of a bus_error diagnostic (a SocketCAN error frame, linux/can/error.h); those
+# the frame does not tell (no counters, no protocol violation) are left out.
+ERROR_FRAME_FIELDS: dict[str, Any] = {
+    "error": {
+        "type": "string",
+        "description": "bus_error: the error frame as candump -e explains it",
+    },
+    "classes": {**_NAMES, "description": "bus_error: error classes (candump -e names)"},
+    "controller": {**_NAMES, "description": "bus_error: controller problems"},
+    "protocol": {**_NAMES, "description": "bus_error: protocol violation types"},
+    "location": {
+        "type": "string",
+        "description": "bus_error: where in the frame the protocol violation was",
+    },
+    "transceiver": {"type": "string", "description": "bus_error: wiring status"},
+    "lost_arbitration_bit": {
+        "type": "integer",
+        "description": "bus_error: the bit arbitration was lost in",
+    },
+    "tx_errors": {**_COUNTER, "description": "bus_error: transmit error counter"},
+    "rx_errors": {**_COUNTER, "description": "bus_error: receive error counter"},
+    "bus_state": {**_BUS_STATE, "description": "bus_error: the channel's state after it"},
+    "malformed": {
+        "type": "string",
+        "description": "bus_error: why the error frame does not fit linux/can/error.h",
+    },
+}
+
+
+def bus_state_schema() -> dict[str, Any]:
+    """A CAN channel's controller state, followed from its error frames."""
+    schema = _envelope(
+        TOPIC_CAN_BUS_STATE,
+        "CAN bus state",
+        "The error state of the CAN controller of a channel, at each change (state or "
+        "error counters) and at least every second while error frames come in.",
+    )
+    counts = {
+        count_key(name): {"type": "integer", "minimum": 0}
+        for name in (*CLASS_NAMES, UNSPECIFIED, UNKNOWN_CLASS)
+    }
+    schema["properties"].update(
+        {
+            "state": {**_BUS_STATE, "description": "error-active .. bus-off"},
+            "level": {
+                "type": "integer",
+                "minimum": 0,
+                "maximum": len(BUS_STATES) - 1,
+                "description": "the state as a number to plot: 0 error-active, "
+                "1 error-warning, 2 error-passive, 3 bus-off",
+            },
+            "since": {"type": "number", "description": "when the state began"},
+            "tx_errors": {
+                **_COUNTER,
+                "description": "transmit error counter (last reported; absent until one is)",
+            },
+            "rx_errors": {**_COUNTER, "description": "receive error counter (last reported)"},
+            "error_frames": {"type": "integer", "minimum": 0, "description": "error frames so far"},
+            "counts": {
+                "type": "object",
+                "properties": counts,
+                "description": "error frames so far by class (candump -e names, '_' for '-')",
+            },
+        }
+    )
+    schema["required"] += ["state", "level", "error_frames", "counts"]
+    return schema
+
+
 def topic_schemas() -> dict[str, dict[str, Any]]:
     """Topic -> JSON Schema of its events."""
     out: dict[str, dict[str, Any]] = {TOPIC_COMMAND: command_schema()}
@@ -207,11 +282,13 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
             "packets_read": {"type": "integer", "description": "pcap packets read until then"},
             "frames_read": {"type": "integer", "description": "frames read until then"},
             "missing_bytes": {"type": "integer", "description": "bytes a capture lacks"},
+            **ERROR_FRAME_FIELDS,
         }
     )
     diag["required"] += ["kind", "detail", "raw"]
     out[TOPIC_DIAGNOSTICS] = diag
     out[TOPIC_ANALYSIS_RESPONSE] = response_schema()
+    out[TOPIC_CAN_BUS_STATE] = bus_state_schema()
     assert set(out) == set(TOPICS)
     return out
 

@@ -15,6 +15,7 @@ TOPIC_UAV_ATTITUDE = "/uav/attitude"
 TOPIC_UAV_TEXT = "/uav/text"
 TOPIC_DIAGNOSTICS = "/diagnostics"
 TOPIC_CAN_OTHER = "/can/other"
+TOPIC_CAN_BUS_STATE = "/can/bus_state"  # a CAN controller's error state, from error frames
 TOPIC_ANALYSIS_RESPONSE = "/analysis/response"  # findings of the response analysis
 
 TOPICS = (
@@ -27,6 +28,7 @@ TOPICS = (
     TOPIC_UAV_TEXT,
     TOPIC_DIAGNOSTICS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_CAN_BUS_STATE,
 )
 
 # Diagnostic kinds (the ``kind`` field of /diagnostics events).

@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
+from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
+    BUS_ERROR,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -73,6 +75,8 @@ class ReportData:
     text_count: int = 0
     findings: FindingGroups = field(default_factory=FindingGroups)
     notes: list[str] = field(default_factory=list)
+    bus: BusFigures = field(default_factory=BusFigures)  # what the CAN error frames say
+    frames: int = 0  # CAN frames read, error frames included (for the bus hints)
     untimed: bool = False  # set when the input has no clock (responses not judged)
     _last_attitude: tuple[float, float, float] | None = None  # (t, pitch, motor yaw)
     _last_speed: tuple[float, float, float] | None = None  # (t, pan, tilt)
@@ -105,6 +109,8 @@ class ReportData:
             kind = str(fields.get("kind", "unknown"))
             self.diagnostic_kinds[kind] += 1
             self.errors.add(t)
+            if kind == BUS_ERROR:
+                self.bus.add_events((event,))
             if len(self.diagnostics) < MAX_ROWS:
                 self.diagnostics.append((t, kind, str(fields.get("detail", ""))))
 

@@ -72,11 +72,30 @@ def overview(data: ReportData, settings: str) -> str:
     rows.append(
         ("diagnostics", ", ".join(f"{_e(k)} {n:,}" for k, n in kinds.most_common()) or "none")
     )
+    rows.extend(_bus_rows(data))
     verdicts = data.verdicts()
     rows.append(("verdicts", " ".join(f"{_verdict(v)} {verdicts.get(v, 0):,}" for v in VERDICTS)))
     rows.append(("judged with", _e(settings)))
     body = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
     return f'<table class="kv">{body}</table>'
+
+
+def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
+    """The CAN bus's worst state and when, its error frames by class, and what to do."""
+    from analyzer.bus_hints import bus_hints
+
+    worst = data.bus.worst()
+    if worst is None:
+        return []
+    state, when, channel = worst
+    at = f" at {_e(_clock(when, True))}" if when is not None else ""
+    classes = ", ".join(f"{_e(k)} {n:,}" for k, n in data.bus.classes().most_common())
+    rows = [
+        ("CAN bus", f"worst {_e(state)}{at} on {_e(channel)}"),
+        ("error frames", f"{data.bus.error_frames:,}: {classes}"),
+    ]
+    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames)]
+    return rows
 
 
 def _example(finding: dict[str, Any]) -> list[str]:

@@ -6,7 +6,7 @@ import contextlib
 from typing import Any
 
 from analyzer.errors import SourceError, UsageError
-from analyzer.inputs.python_can import frame_from_message
+from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
 from analyzer.protocol.types import CanFrame
 from analyzer.sources.base import MAX_ITEMS_PER_READ, SourceItem, link_event
 from analyzer.sources.spec import CanSpec
@@ -104,7 +104,8 @@ class CanSource:
         return out
 
     def _frame(self, msg: Any) -> CanFrame:
-        return frame_from_message(msg, self.spec.channel)
+        socketcan_errors = self.spec.interface in SOCKETCAN_ERROR_INTERFACES
+        return frame_from_message(msg, self.spec.channel, socketcan_errors=socketcan_errors)
 
     def close(self) -> None:
         if self._closed:

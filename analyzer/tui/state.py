@@ -10,10 +10,12 @@ from __future__ import annotations
 
 from collections import Counter, deque
 
+from analyzer.bus_figures import BusFigures
 from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
 from analyzer.protocol.ids import CAN_BITRATE
 from analyzer.protocol.types import (
+    BUS_ERROR,
     LINK,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_OTHER,
@@ -112,6 +114,7 @@ class MonitorState:
         self.link_detail = ""
         self.link = LinkStatus()
         self.source_ended = False
+        self.bus = BusFigures()  # the CAN controllers' error frames: state, worst, classes
         # rates over windows of bus time
         self.frames_per_s = 0.0
         self.bits_per_s = 0.0
@@ -295,6 +298,8 @@ class MonitorState:
                         self.link_detail = self.link.detail
                 else:
                     self._window_errors += 1
+                    if kind == BUS_ERROR:
+                        self.bus.add_events((event,))
             elif topic == TOPIC_UAV_GPS:
                 self.gps = event
             elif topic == TOPIC_UAV_ALTITUDE:

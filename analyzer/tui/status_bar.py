@@ -6,9 +6,11 @@ from dataclasses import dataclass
 
 from rich.text import Text
 
+from analyzer.bus_figures import BusFigures
+from analyzer.protocol.bus_state import LEVELS
 from analyzer.tui.fit import join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
-from analyzer.tui.formatting import format_size
+from analyzer.tui.formatting import format_size, format_time
 from analyzer.tui.state import MonitorState
 
 
@@ -46,6 +48,27 @@ def link_text(state: MonitorState) -> tuple[str, str]:
     return "waiting for data", "yellow"
 
 
+# Style of each CAN controller state, from error-active to bus-off.
+BUS_STYLES = ("bold green", "bold yellow", "bold red", "bold white on red")
+
+
+def bus_cell(bus: BusFigures) -> Text | None:
+    """``CAN bus-off │ worst bus-off 10:00:08.000 │ 46 errors: bus-error 40, ...``."""
+    if not bus.channels:
+        return None
+    now = max((b.state for b in bus.channels.values()), key=lambda s: LEVELS.get(s, 0))
+    cell = Text(f" CAN {now} ", BUS_STYLES[LEVELS.get(now, 0)])
+    worst = bus.worst()
+    if worst is not None and LEVELS.get(worst[0], 0) and worst[1] is not None:
+        cell.append(
+            f" worst {worst[0]} {format_time(worst[1]).strip()}", BUS_STYLES[LEVELS[worst[0]]]
+        )
+    classes = ", ".join(f"{name} {n:,}" for name, n in bus.classes().most_common(2))
+    count = bus.error_frames
+    cell.append(f"  {count:,} error frame{'' if count == 1 else 's'}: {classes}", "dim")
+    return cell
+
+
 def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
     """The status line's parts: source and link, recording, rates, view, filter, pause."""
     source = Text.assemble(
@@ -67,6 +90,9 @@ def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
         load = state.bus_load * 100
         rates.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
     cells.append(rates)
+    bus = bus_cell(state.bus)
+    if bus is not None:
+        cells.append(bus)
     if info.dropped:
         cells.append(Text(f" {info.dropped:,} DROPPED ", "bold white on red"))
     if info.live:
