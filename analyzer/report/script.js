@@ -244,13 +244,15 @@
     }
     scale.ticks = ticks;
   }
-  var keepSquare = {
+  var keepSquare = {  // a resize changes the plot area: the ranges follow within a pass or two
     id: "keepSquare",
     afterRender: function (c) {
       var area = c.chartArea, x = c.scales.x, y = c.scales.y;
-      var ratio = ((x.max - x.min) / (area.right - area.left)) / ((y.max - y.min) / (area.bottom - area.top));
+      var ratio = ((x.max - x.min) / (area.right - area.left)) /
+                  ((y.max - y.min) / (area.bottom - area.top));
+      if (Math.abs(ratio - 1) <= 0.002) { c.$squarePasses = 0; return; }
       c.$squarePasses = (c.$squarePasses || 0) + 1;
-      if (Math.abs(ratio - 1) > 0.002 && c.$squarePasses < 4) { squareRanges(x); squareRanges(y); c.update("none"); }
+      if (c.$squarePasses <= 3) { c.update("none"); } else { c.$squarePasses = 0; }
     }
   };
 
