@@ -14,11 +14,10 @@ FIRST_WIDTH_S = 0.001  # bucket width to start with; doubled whenever there are 
 
 def _extremes(rows: Sequence[Row], columns: Sequence[int]) -> list[Row]:
     """The rows holding the minimum and the maximum of each column, in time order, once."""
+    if not columns:  # marks: the first of the bucket
+        return [min(rows, key=lambda r: r[0])]
     if len(rows) <= 2:
         return sorted(rows, key=lambda r: r[0])
-    if not columns:  # marks: the first and the last of the bucket
-        ordered = sorted(rows, key=lambda r: r[0])
-        return [ordered[0], ordered[-1]]
     kept: dict[int, Row] = {}
     for c in columns:
         low = min(rows, key=lambda r: r[c])
@@ -59,7 +58,7 @@ class Decimator:
                 self._coarsen()
             return
         bucket.append(row)
-        if len(bucket) > 2 * max(len(self.columns), 1) + 1:
+        if len(bucket) > (2 * len(self.columns) + 1 if self.columns else 1):
             bucket[:] = _extremes(bucket, self.columns)
 
     def _coarsen(self) -> None:

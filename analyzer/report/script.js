@@ -94,10 +94,12 @@
       ctx.fillStyle = "rgba(60,60,60,0.8)";
       ctx.font = "10px sans-serif";
       ctx.setLineDash([3, 3]);
+      var labelled = -Infinity;  // a label only where it does not overlap the last one
       visible.forEach(function (m) {
         var px = x.getPixelForValue(m[0]);
         ctx.beginPath(); ctx.moveTo(px, area.top); ctx.lineTo(px, area.bottom); ctx.stroke();
-        if (visible.length <= 40) {
+        if (visible.length <= 40 && px - labelled >= 11) {
+          labelled = px;
           ctx.save(); ctx.translate(px + 2, area.top + 2); ctx.rotate(Math.PI / 2);
           ctx.fillText(m[1], 0, 0); ctx.restore();
         }
