@@ -34,4 +34,6 @@
     }
   });
   document.body.setAttribute("data-plots-ready", "yes");
+  // milliseconds from the start of loading the page to its plots drawn
+  document.body.setAttribute("data-drawn-ms", String(Math.round(performance.now())));
 })();
