@@ -179,8 +179,9 @@
     var zoomed = lo > whole.lo || hi < whole.hi;
     var reset = document.getElementById("zoom-reset");
     if (reset) { reset.hidden = !zoomed; }
-    var where = zoomed ? "#zoom=" + lo.toFixed(3) + "," + hi.toFixed(3) : " ";
-    if (window.history && history.replaceState) { history.replaceState(null, "", where); }
+    var where = window.location.pathname + window.location.search;
+    if (zoomed) { where += "#zoom=" + lo.toFixed(3) + "," + hi.toFixed(3); }
+    try { history.replaceState(null, "", where); } catch (e) { /* an address it may not set */ }
     document.body.setAttribute("data-zoom", lo.toFixed(3) + "," + hi.toFixed(3));
   }
 
