@@ -116,3 +116,30 @@ def test_findings_are_counted_exactly_and_the_worst_are_kept_first() -> None:
     # groups with the most commands not obeyed first
     assert [g.command for g in groups.ordered()] == ["specified_angle", "feedback"]
     assert groups.worst_first()[0] is worst[0]
+
+
+def test_the_report_holds_bounded_summaries_of_any_number_of_events() -> None:
+    from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_GIMBAL_ATTITUDE, Event
+    from analyzer.report.collect import MAX_MARKS, MAX_TARGETS, ReportData
+
+    data = ReportData()
+    rng = random.Random(7)
+    for i in range(100_000):
+        t = 1_700_000_000.0 + i * 0.01
+        attitude = {"pitch_deg": rng.uniform(-90, 30), "yaw_deg": 0.0, "motor_yaw_deg": 0.0}
+        data.add(Event(TOPIC_GIMBAL_ATTITUDE, t, "sim", attitude))
+        data.add(Event(TOPIC_COMMAND, t, "sim", {"name": "specified_angle", "pitch_deg": -i}))
+        verdict = rng.choice(["obeyed", "not_obeyed"])
+        data.add_finding(
+            finding("specified_angle", "target", verdict, t, target_deg=-i % 90, axis="pitch")
+        )
+    data.finish()
+    assert data.findings.total == 100_000  # counted exactly ...
+    (group,) = data.findings.groups.values()
+    assert len(group.examples()) == data.findings.keep  # ... but a few kept
+    assert len(data.attitude.buckets) <= data.attitude.limit
+    assert len(data.marks.rows()) <= MAX_MARKS
+    assert all(len(s.buckets) <= MAX_TARGETS for s in data.targets.values())
+    assert len(data.target_rows()) <= 2 * 2 * MAX_TARGETS  # two verdicts, extremes per bucket
+    pitches = [r[1] for r in data.attitude.rows()]
+    assert min(pitches) >= -90 and max(pitches) <= 30
