@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from analyzer.cli import main
-from analyzer.report.decimate import FINE_BUCKETS
+from analyzer.report.decimate import ATTITUDE_BUCKETS, FINE_BUCKETS
 from benchmarks.decode_speed import write_log
 from tests.test_report_charts import axes, embedded
 from tests.test_report_command import canvases, load
@@ -42,9 +42,13 @@ def test_the_report_of_a_long_flight_is_small(dense: tuple[Path, Path]) -> None:
     assert page.stat().st_size <= FULL_LIMIT * FRAMES / FULL_FRAMES
     data = embedded(page)
     assert data["span"] == pytest.approx(100.0, abs=0.1)  # 4,000 blocks of 25 ms
-    for name in ("attitude", "commanded", "measured"):
+    for name, buckets in (
+        ("attitude", ATTITUDE_BUCKETS),
+        ("measured", ATTITUDE_BUCKETS),
+        ("commanded", FINE_BUCKETS),
+    ):
         columns = len(data[name][0]) - 1
-        assert len(data[name]) <= 2 * columns * FINE_BUCKETS, name
+        assert len(data[name]) <= 2 * columns * buckets, name
     # 4,000 feedback messages: each kept, so a zoom shows every one
     assert len(data["attitude"]) == 4000
     # 36,000 stick commands: the extremes of each time bucket, not every command

@@ -24,7 +24,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_TEXT,
     Event,
 )
-from analyzer.report.decimate import Decimator, PerSecond, Row
+from analyzer.report.decimate import ATTITUDE_BUCKETS, Decimator, PerSecond, Row
 from analyzer.report.finding_groups import FindingGroups
 
 EARTH_M_PER_DEG = 111_320.0
@@ -58,12 +58,13 @@ class ReportData:
     commands: Counter[str] = field(default_factory=Counter)
     diagnostic_kinds: Counter[str] = field(default_factory=Counter)
     # (t, pitch, yaw, motor yaw)
-    attitude: Decimator = field(default_factory=lambda: Decimator((1, 2, 3)))
+    attitude: Decimator = field(default_factory=lambda: Decimator((1, 2, 3), ATTITUDE_BUCKETS))
     # (t, command event): each command its mark; gimbal_control one per burst of the same
     # speeds, as the response analysis judges them
     marks: Decimator = field(default_factory=lambda: Decimator((), MAX_MARKS))
     commanded: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, pan, tilt)
-    measured: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, pan, tilt)
+    # (t, pan, tilt)
+    measured: Decimator = field(default_factory=lambda: Decimator((1, 2), ATTITUDE_BUCKETS))
     altitude: Decimator = field(default_factory=lambda: Decimator((1,)))
     track: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, east m, north m)
     feedback: PerSecond = field(default_factory=lambda: PerSecond(zeros=True))

@@ -9,6 +9,9 @@ from typing import Any
 Row = tuple[Any, ...]  # (time, value, value, ..., extra, ...)
 
 FINE_BUCKETS = 6000  # buckets kept per series; the page re-buckets these for its view
+# The gimbal's attitude (and the rates measured from it) in finer buckets: every sample of
+# a 40 Hz feedback over 1,000 s still fits, so a zoom shows each one.
+ATTITUDE_BUCKETS = 32768
 FIRST_WIDTH_S = 0.001  # bucket width to start with; doubled whenever there are too many
 
 

@@ -98,9 +98,10 @@ def _resolution(data: ReportData) -> str:
     if all(s.whole for s in series):
         return "The plots hold every sample."
     width = max(s.width for s in series if not s.whole)
+    attitude = "The attitude plots hold every sample. " if data.attitude.whole else ""
     return (
-        "The plots hold, per time bucket of a long series (here up to "
-        f"{width * 1000:,.0f} ms), the samples with the lowest and the highest value, so no "
+        f"{attitude}Where a series is long, the plots hold per time bucket (here up to "
+        f"{width * 1000:,.0f} ms) the samples with the lowest and the highest value, so no "
         "peak is lost; every sample is in <code>gimbal-analyzer decode FILE --json</code>."
     )
 
