@@ -17,7 +17,6 @@ SIGNAL_ERRORS = (
 )
 MANY_SIGNAL_ERRORS = 10  # this many stuff / form / bit errors are no passing disturbance
 _RATE = f"{CAN_BITRATE // 1_000_000} Mbit/s"
-_SOURCE = f"--source can:socketcan:can0@{CAN_BITRATE}"
 
 
 def _frames(count: int) -> str:
@@ -38,7 +37,8 @@ def bus_hints(bus: BusFigures, frames: int) -> list[str]:
         hints.append(
             f"the adapter received only error frames ({error_frames:,}), no data frame: "
             f"its bitrate is not the bus's; the gimbal's protocol runs at {_RATE} "
-            f"(e.g. {_SOURCE}, or: ip link set can0 type can bitrate {CAN_BITRATE})"
+            f"(SocketCAN: ip link set can0 type can bitrate {CAN_BITRATE}; other adapters: "
+            f"--source can:INTERFACE:CHANNEL@{CAN_BITRATE})"
         )
     if no_ack:
         hints.append(

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from collections.abc import Sequence
 from types import ModuleType
+from typing import NoReturn
 
 from analyzer import __version__, timefmt
 from analyzer.errors import (
@@ -35,6 +37,8 @@ COMMANDS: dict[str, str] = {
     "monitor": "analyzer.commands.monitor",
     "simulate": "analyzer.commands.simulate",
     "send": "analyzer.commands.send",
+    "check": "analyzer.commands.check",
+    "interfaces": "analyzer.commands.interfaces",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",
     "layout": "analyzer.commands.layout",
@@ -52,6 +56,28 @@ record MCAP files for Foxglove, and watch everything in a terminal UI.
 """
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with its errors in one line and a hint, instead of the usage block; an
+    unknown option is reported by the command it was given to."""
+
+    commands: dict[str, argparse.ArgumentParser]
+
+    def parse_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        parsed, extra = self.parse_known_args(args, namespace)
+        if extra:
+            named = getattr(self, "commands", {}).get(getattr(parsed, "command", None) or "")
+            (named or self).error(f"unrecognized arguments: {' '.join(extra)}")
+        return parsed
+
+    def error(self, message: str) -> NoReturn:
+        hint = f"see: {self.prog} --help"
+        if re.search(r"(^|\s)-f\b", message) and "--format" in self.format_help():
+            hint = f"-f is --force wherever it exists; the format is --format FORMAT; {hint}"
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {printable(message)} ({hint})\n")
+
+
 def _load(name: str) -> ModuleType | None:
     try:
         return importlib.import_module(COMMANDS[name])
@@ -64,7 +90,7 @@ def _load(name: str) -> ModuleType | None:
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The parser of every command, or (``only``) of that one alone: running a command
     imports no other command's module, which keeps start-up short."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="gimbal-analyzer",
         description=DESCRIPTION,
         epilog="exit codes (the same for every command):\n" + exit_code_table(),
@@ -73,6 +99,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--local-time", action="store_true", help=timefmt.FLAG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    parser.commands = {}
     for name in [only] if only in COMMANDS else COMMANDS:
         module = _load(name)
         if module is None:
@@ -85,6 +112,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         module.add_arguments(p)
+        parser.commands[name] = p
         # Also after the command name; SUPPRESS keeps a value given before it.
         p.add_argument(
             "--local-time", action="store_true", default=argparse.SUPPRESS, help=timefmt.FLAG_HELP

@@ -17,7 +17,8 @@ EXIT_CODES: tuple[tuple[int, str], ...] = (
     (
         EXIT_FAILED,
         "the work started but failed: a write failure (disk full, standard output "
-        "unwritable), a source that failed, a live capture that never received anything",
+        "unwritable), a source that failed, a live capture that never received anything, "
+        "a step of a bench check that failed",
     ),
     (
         EXIT_USAGE,

@@ -11,7 +11,6 @@ def add_input_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("file", help="capture file or MCAP recording; '-' reads candump text")
     parser.add_argument(
-        "-f",
         "--format",
         metavar="FORMAT",
         help="file format instead of guessing it: " + ", ".join(FORMATS),

@@ -2,8 +2,9 @@
 
 Shared by the monitor's status bar and the plain ``record`` status line, so both say the
 same thing: "connected to ...", "cannot connect to ...: connection refused; retrying in
-1.5 s", "connection lost: ...; connecting again". Time comes from the events and the
-``now`` the caller gives; nothing here reads a clock.
+1.5 s", "connection lost: ... (gone 3.2 s, since 10:00:01.253Z); connecting again", and
+once a lost link is back, when it was lost and when it came back. Time comes from the
+events and the ``now`` the caller gives; nothing here reads a clock.
 """
 
 from __future__ import annotations
@@ -12,23 +13,27 @@ from collections.abc import Iterable
 
 from analyzer.protocol.types import LINK, TOPIC_DIAGNOSTICS, Event
 from analyzer.sources.base import OVERFLOW
+from analyzer.timefmt import format_clock
 
 GOOD_STATES = frozenset({"open", "connected", "gs_connected"})
 WAIT_STATES = frozenset({"listening", "reconnecting", "connecting"})
 PROBLEM_STATES = frozenset({"connect_failed", "lost", "refused"})
 RETRY_STATE = "reconnecting"
+LOST_STATE = "lost"
 
 
 class LinkStatus:
     """The last link state change, and the failure a pending retry follows."""
 
-    __slots__ = ("detail", "problem", "retry_at", "state")
+    __slots__ = ("back_at", "detail", "lost_at", "problem", "retry_at", "state")
 
     def __init__(self) -> None:
         self.state = ""  # e.g. connected, connect_failed, lost, reconnecting, listening
         self.detail = ""  # the words of that change
         self.problem = ""  # the last failure's words, kept while a retry is pending
         self.retry_at: float | None = None  # when the pending retry is due (event time)
+        self.lost_at: float | None = None  # when a link that was up went down (event time)
+        self.back_at: float | None = None  # when it came back after such a loss
 
     def fold(self, events: Iterable[Event]) -> None:
         for event in events:
@@ -41,6 +46,10 @@ class LinkStatus:
         if state == OVERFLOW:
             return
         detail = str(event.fields.get("detail", ""))
+        if state == LOST_STATE and (self.lost_at is None or self.back_at is not None):
+            self.lost_at, self.back_at = event.time, None  # down since now
+        elif state in GOOD_STATES and self.lost_at is not None and self.back_at is None:
+            self.back_at = event.time  # up again
         if state == RETRY_STATE:
             retry = event.fields.get("retry_in_s")
             self.retry_at = event.time + float(retry) if isinstance(retry, int | float) else None
@@ -64,7 +73,13 @@ class LinkStatus:
         return self.state in PROBLEM_STATES or bool(self.state == RETRY_STATE and self.problem)
 
     def describe(self, now: float) -> str:
-        """The link in words at time ``now`` (a pending retry counts down)."""
+        """The link in words at time ``now`` (a pending retry counts down; a lost link
+        says since when, and once back, when it was lost and when it came back)."""
+        if self.good and self.back_at is not None and self.lost_at is not None:
+            lost, back = format_clock(self.lost_at), format_clock(self.back_at)
+            return f"{self.detail} (lost {lost}, back {back})"
+        if self.state in PROBLEM_STATES:
+            return self.detail + self._gone(now)
         if self.state != RETRY_STATE:
             return self.detail or self.state
         if self.retry_at is None:
@@ -73,4 +88,9 @@ class LinkStatus:
             retry = "connecting again"
         else:
             retry = f"retrying in {self.retry_at - now:.1f} s"
-        return f"{self.problem}; {retry}" if self.problem else retry
+        return f"{self.problem}{self._gone(now)}; {retry}" if self.problem else retry
+
+    def _gone(self, now: float) -> str:
+        if self.lost_at is None:
+            return ""
+        return f" (gone {max(0.0, now - self.lost_at):.1f} s, since {format_clock(self.lost_at)})"

@@ -5,8 +5,8 @@ second (the most a 1 Mbit/s bus carries without stuffing): gimbal traffic (comma
 feedback in four segments, UAV GPS / altitude / attitude, text messages) mixed with
 foreign IDs. A Capture with an McapSink (or a counting sink with ``--sink count``) records
 it. Reported: frames sent vs captured vs written, the recorder's CPU use (CPU time of the
-capture and MCAP flush threads, measured per thread) and ratios against the targets of
-issue 4 (none lost, under 25% of one core).
+CAN source's reader, capture and MCAP flush threads, measured per thread) and ratios
+against the targets of issue 4 (none lost, under 25% of one core).
 
 With an MCAP sink the same load is then recorded a second time while serving it live to
 one Foxglove WebSocket client (``--foxglove``, issue 25): a client in a process of its own
@@ -224,7 +224,7 @@ def run(
         server = client = None
     capture = Capture(source, [sink] if server is None else [sink, server])
     sender = Sender(channel, rate, seconds)
-    meter = CpuMeter(("capture", "mcap-flush"))
+    meter = CpuMeter(("capture", "mcap-flush", "can"))  # "can": the source's reader thread
     capture.start()
     meter.thread.start()
     wall0 = time.monotonic()

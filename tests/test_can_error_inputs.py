@@ -308,7 +308,7 @@ def test_error_frames_of_an_adapter_with_its_own_encoding_are_unspecified() -> N
     channel = f"pcan-{uuid.uuid4().hex[:8]}"
     sender = can.Bus(interface="virtual", channel=channel)
     bus = can.Bus(interface="virtual", channel=channel)
-    source = CanSource(CanSpec("pcan", "PCAN_USBBUS1", 1_000_000), bus=bus)
+    source = CanSource(CanSpec("pcan", "PCAN_USBBUS1", 1_000_000), open_bus=lambda spec: bus)
     try:
         sender.send(can.Message(arbitration_id=4, is_error_frame=True, data=b"\x00\x00\x07\x02"))
         deadline = time.monotonic() + 5.0

@@ -65,6 +65,8 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
         ("commands", "--markdown"),
         ("send", "--list"),
         ("send", "look_down"),
+        ("interfaces",),
+        ("interfaces", "--json"),
     ],
 )
 def test_full_standard_output_is_one_line_and_exit_1(args: tuple[str, ...], tmp_path: Path) -> None:

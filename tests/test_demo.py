@@ -113,3 +113,46 @@ def test_demo_with_a_heading_is_judged_from_north_without_a_false_stopped_short(
     assert {f.get("reference_reason") for f in recorded if f.get("axis") == "yaw"} == {
         "FF13 present"
     }
+    # The recording keeps the simulator's options that made it; info shows them.
+    assert main(["info", str(path)]) == 0
+    shown = capsys.readouterr().out.splitlines()
+    assert "simulator   --clean --heading 30" in shown
+    assert "  faults    none" in shown and "  heading   30 deg from north" in shown
+    assert "  gimbal    obeys" in shown
+
+
+def test_demo_help_names_only_what_exists(capsys: pytest.CaptureFixture[str]) -> None:
+    """Every option its help mentions is one of demo's, every command one the tool has."""
+    import re
+
+    from analyzer.cli import COMMANDS, build_parser
+
+    with pytest.raises(SystemExit):
+        main(["demo", "--help"])
+    text = capsys.readouterr().out
+    parser = build_parser("demo").commands["demo"]
+    options = {o for a in parser._actions for o in a.option_strings}
+    assert set(re.findall(r"(?<![\w-])--[a-z][a-z-]+", text)) <= options
+    for line in re.findall(r"^  (\S+) \S+\.mcap", text, re.MULTILINE):
+        assert line == "gimbal-analyzer"
+    assert set(re.findall(r"gimbal-analyzer (\w+)", text)) <= set(COMMANDS)
+
+
+@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+def test_demo_metadata_repeats_the_fault_and_behaviour_options(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.mcapio.info import recording_info
+
+    path = tmp_path / "faulty.mcap"
+    args = ["demo", "--no-tui", "--duration", "1", "-o", str(path), "--drop", "0.1"]
+    assert main([*args, "--seed", "3", "--ignore", "tracking", "--sluggish", "0.5"]) == 0
+    capsys.readouterr()
+    meta = recording_info(str(path)).metadata
+    assert meta["simulator_options"] == (
+        "--drop 0.1 --corrupt 0.02 --duplicate 0.02 --delay 0.02 --seed 3 "
+        "--sluggish 0.5 --ignore tracking"
+    )
+    assert meta["simulator_faults"] == "drop 10%, corrupt 2%, duplicate 2%, delay 2% (seed 3)"
+    assert meta["simulator_gimbal"] == "moves at 50% of the asked speed; ignores tracking"
+    assert meta["simulator_heading"] == "ahead along the orbit"

@@ -163,8 +163,11 @@ def test_a_failed_input_is_skipped_next_time_unless_retried(
     cut.write_bytes(fleet["files"]["b-cut.pcap"].read_bytes())
     dataset = tmp_path / "dataset"
     args = ("table", str(lost), str(cut), "-o", str(dataset), "--workers", "1")
-    code, out, _ = cli(*args)
-    assert code == 0 and "2 input(s), 0 added (0 rows), 0 skipped" in out
+    code, out, err = cli(*args)
+    assert code == 1 and "2 input(s), 0 added (0 rows), 0 skipped" in out
+    assert (
+        err == "gimbal-analyzer table: error: every input to add failed (2); their rows say why\n"
+    )
     assert "2 with errors" in out
     row = recording(dataset, "lost.log")
     assert row["error"].startswith(f"cannot read {lost}: ") and row["frames"] is None
@@ -173,12 +176,13 @@ def test_a_failed_input_is_skipped_next_time_unless_retried(
     code, out, _ = cli(*args)
     assert code == 0
     assert f"skipped {lost}: failed before ({row['error']}); --retry-failed tries again" in out
-    assert f"skipped {cut}: already in {dataset}" in out
-    assert "0 added (0 rows), 2 skipped (content already there) (1 had failed: " in out
+    cut_error = recording(dataset, "b-cut.pcap")["error"]
+    assert f"skipped {cut}: failed before ({cut_error}); --retry-failed tries again" in out
+    assert "0 added (0 rows), 2 skipped (content already there) (2 had failed: " in out
     assert {p: p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")} == before
 
     code, out, _ = cli(*args, "--retry-failed")
-    assert code == 0
+    assert code == 1
     assert f"retrying {lost}: it failed before ({row['error']})" in out
     assert f"retrying {cut}: it failed before (cannot read {cut} as a capture: " in out
     assert "0 added (0 rows), 0 skipped" in out and "2 with errors" in out

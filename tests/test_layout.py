@@ -9,9 +9,12 @@ from typing import Any
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.foxglove import VIEW_SCHEMAS
+from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS, view_schema
 from analyzer.mcapio.layout import layout
+from analyzer.mcapio.video_channels import thumbnail_annotations_topic, thumbnail_topic
 from analyzer.protocol.schema import topic_schemas
+from analyzer.scene.scene3d import GIMBAL
 
 # Panel types of Foxglove Studio 1.48 (panels/index of @foxglove/studio-base) used here, and
 # the config keys each panel reads.
@@ -24,6 +27,7 @@ PANEL_KEYS = {
     "RawMessages": {"topicPath", "diffTopicPath", "diffMethod", "diffEnabled"},
     "Table": {"topicPath"},
     "ImageViewPanel": {"cameraTopic", "enabledMarkerTopics", "mode", "synchronize"},
+    "3D": {"cameraState", "followMode", "followTf", "scene", "topics", "layers"},
 }
 
 
@@ -81,6 +85,19 @@ def test_every_message_path_exists_in_the_schemas() -> None:
     assert "/gimbal/attitude.control_mode" in paths and "/gimbal/attitude.tracking" in paths
     for path in paths:
         assert field_exists(path), path
+
+
+def test_the_camera_and_3d_panels_show_the_overlays_and_the_scene() -> None:
+    config = layout()["configById"]
+    image = config["ImageViewPanel!gimbal-camera"]
+    assert image["cameraTopic"] == thumbnail_topic("main")
+    assert image["enabledMarkerTopics"] == [thumbnail_annotations_topic("main")]
+    assert view_schema(thumbnail_annotations_topic("main"))[0] == "foxglove.ImageAnnotations"
+    scene = config["3D!gimbal-scene"]
+    assert scene["followTf"] == GIMBAL and scene["followMode"] == "follow-position"
+    assert scene["topics"] == {TOPIC_SCENE: {"visible": True}}  # scene entities start hidden
+    assert VIEW_SCHEMAS[TOPIC_SCENE][0] == "foxglove.SceneUpdate"
+    assert VIEW_SCHEMAS[TOPIC_TF][0] == "foxglove.FrameTransforms"
 
 
 def test_layout_command_writes_and_refuses_to_overwrite(

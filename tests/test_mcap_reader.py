@@ -87,12 +87,26 @@ def test_truncated_finished_file_falls_back_to_recovery(tmp_path: Path) -> None:
     assert "summary" in got.note
 
 
+def _middle_chunk_byte(data: bytes) -> int:
+    """The middle byte of the first chunk record ending after the middle of ``data``."""
+    position = 8  # after the magic
+    while position + 9 <= len(data):
+        opcode = data[position]
+        length = int.from_bytes(data[position + 1 : position + 9], "little")
+        end = position + 9 + length
+        if opcode == 0x06 and end > len(data) // 2:  # Chunk
+            return position + 9 + length // 2
+        position = end
+    raise AssertionError("no chunk after the middle")
+
+
 def test_damaged_chunk_in_an_unfinished_file_is_skipped(tmp_path: Path) -> None:
     path = tmp_path / "crashed.mcap"
     flushed = _live_recording(path)
     data = bytearray(path.read_bytes())
-    # Flip a byte in the middle of the file: one chunk fails its CRC.
-    data[len(data) // 2] ^= 0xFF
+    # Flip a byte in the middle of the chunk that holds the middle of the file (or the next
+    # one): that chunk fails its CRC.
+    data[_middle_chunk_byte(bytes(data))] ^= 0xFF
     path.write_bytes(bytes(data))
     recording = Recording(path)
     items = list(recording.items())

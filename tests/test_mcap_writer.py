@@ -73,8 +73,9 @@ def test_channels_are_json_with_valid_json_schemas(tmp_path: Path) -> None:
         seen.add(channel.topic)
     assert {"/can/frames", "/stream/bytes", "/can/other", "/diagnostics/log"} <= seen
     assert {"/uav/gps/fix", "/gimbal/ranging/fix"} <= seen
-    # Findings of the response analysis are not decoded from the wire: tested on their own.
-    assert set(core) - {"/analysis/response"} <= seen
+    # Findings of the response analysis and the bench check's steps are not decoded from
+    # the wire: tested on their own (test_check_command validates /check/steps).
+    assert set(core) - {"/analysis/response", "/check/steps"} <= seen
 
 
 def test_log_and_publish_time_are_the_event_time(tmp_path: Path) -> None:
@@ -84,10 +85,24 @@ def test_log_and_publish_time_are_the_event_time(tmp_path: Path) -> None:
         body = json.loads(message.data)
         if "time" in body:
             assert message.log_time == time_ns(body["time"])
-        else:  # Foxglove views carry a {sec, nsec} timestamp
-            stamp = body["timestamp"]
-            assert abs(message.log_time - (stamp["sec"] * 10**9 + stamp["nsec"])) <= 1
+        else:  # Foxglove views carry {sec, nsec} timestamps (transforms, entities: each one)
+            stamps = list(_timestamps(body))
+            assert stamps
+            for stamp in stamps:
+                assert abs(message.log_time - (stamp["sec"] * 10**9 + stamp["nsec"])) <= 1
         assert message.publish_time == message.log_time
+
+
+def _timestamps(value: Any) -> Any:
+    """Every "timestamp" object in a message, at any depth."""
+    if isinstance(value, dict):
+        if isinstance(value.get("timestamp"), dict):
+            yield value["timestamp"]
+        for item in value.values():
+            yield from _timestamps(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _timestamps(item)
 
 
 def test_location_fix_channels(tmp_path: Path) -> None:

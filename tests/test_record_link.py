@@ -54,7 +54,27 @@ def test_link_status_says_refused_then_counts_down_the_retry() -> None:
             link(T0 + 10, "reconnecting", "reconnecting in 0.5 s", retry_in_s=0.5),
         ]
     )
-    assert status.describe(T0 + 10.2) == "connection lost: reset by peer; retrying in 0.3 s"
+    gone = "(gone 0.2 s, since 22:13:30.000Z)"
+    assert status.describe(T0 + 10.2) == f"connection lost: reset by peer {gone}; retrying in 0.3 s"
+    status.fold(
+        [
+            link(T0 + 10.5, "connect_failed", "cannot connect to 127.0.0.1:9: timed out"),
+            link(T0 + 10.5, "reconnecting", "reconnecting in 1.0 s", retry_in_s=1.0),
+        ]
+    )
+    assert status.describe(T0 + 11.0) == (
+        "cannot connect to 127.0.0.1:9: timed out (gone 1.0 s, since 22:13:30.000Z); "
+        "retrying in 0.5 s"
+    )
+    status.note(link(T0 + 12, "connected", "connected to 127.0.0.1:9 again after 2.0 s without it"))
+    assert status.describe(T0 + 20) == (
+        "connected to 127.0.0.1:9 again after 2.0 s without it "
+        "(lost 22:13:30.000Z, back 22:13:32.000Z)"
+    )
+    status.note(link(T0 + 30, "lost", "connection lost: timed out"))  # a second loss
+    assert status.describe(T0 + 31) == (
+        "connection lost: timed out (gone 1.0 s, since 22:13:50.000Z)"
+    )
 
 
 class Stats:
@@ -169,3 +189,31 @@ def test_the_monitor_status_bar_says_the_same() -> None:
     state.advance(T0 + 1.0)
     text = render_status(state, StatusInfo(source="tcp:127.0.0.1:9")).plain
     assert f"{refused}; retrying in 3.0 s" in text
+
+
+def test_the_monitor_status_bar_says_how_long_an_adapter_was_gone() -> None:
+    from analyzer.tui.state import MonitorState
+    from analyzer.tui.status_bar import StatusInfo, render_status
+
+    state = MonitorState()
+    source = "can:slcan:/dev/serial/by-id/usb-canable.io_CANable_8c005eb_0037001A5948-if00"
+    lost = f"{source}@1000000 lost: Could not read from serial device: Input/output error"
+    state.fold(
+        Batch(
+            [],
+            [
+                link(T0, "lost", lost),
+                link(T0, "reconnecting", "reconnecting in 0.5 s", retry_in_s=0.5),
+            ],
+            T0,
+        ),
+        T0,
+    )
+    state.advance(T0 + 2.0)
+    text = render_status(state, StatusInfo(source=source)).plain
+    assert f"{lost} (gone 2.0 s, since 22:13:20.000Z); connecting again" in text
+    back = f"opened {source}@1000000 (listen-only) again after 5.5 s without it"
+    state.fold(Batch([], [link(T0 + 5.5, "open", back, down_s=5.5, lost_at=T0)], T0 + 5.5), T0)
+    state.advance(T0 + 6.0)
+    text = render_status(state, StatusInfo(source=source)).plain
+    assert f"{back} (lost 22:13:20.000Z, back 22:13:25.500Z)" in text

@@ -133,7 +133,6 @@ def test_the_report_holds_bounded_summaries_of_any_number_of_events() -> None:
         data.add_finding(
             finding("specified_angle", "target", verdict, t, target_deg=-i % 90, axis="pitch")
         )
-    data.finish()
     assert data.findings.total == 100_000  # counted exactly ...
     (group,) = data.findings.groups.values()
     assert len(group.examples()) == data.findings.keep  # ... but a few kept

@@ -5,15 +5,17 @@ from __future__ import annotations
 import time
 import uuid
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import can
 import pytest
 
-from analyzer.errors import SourceError
+from analyzer.errors import SourceError, UsageError
 from analyzer.protocol.types import LINK, TOPIC_DIAGNOSTICS, CanFrame, Event
-from analyzer.sources import open_source
+from analyzer.sources import can_bus, open_source
 from analyzer.sources.can_bus import CanSource, listen_only_kwargs
+from analyzer.sources.socketcan_links import socketcan_down
 from analyzer.sources.spec import CanSpec
 
 DEADLINE_S = 5.0
@@ -89,7 +91,7 @@ class SpyBus:
 def test_source_never_sends(channel: str, sender: can.BusABC) -> None:
     spy = SpyBus(can.Bus(interface="virtual", channel=channel))
     observer = can.Bus(interface="virtual", channel=channel)
-    source = CanSource(CanSpec("virtual", channel, None), bus=spy)
+    source = CanSource(CanSpec("virtual", channel, None), open_bus=lambda spec: spy)
     try:
         for i in range(50):
             sender.send(
@@ -145,19 +147,109 @@ def test_listen_only_options() -> None:
     assert listen_only_kwargs("socketcan") == {}
 
 
-def test_bus_failure_is_a_source_error() -> None:
-    class BrokenBus:
+def test_a_bus_failing_mid_capture_is_reopened_with_the_same_arguments(
+    channel: str, sender: can.BusABC
+) -> None:
+    class UnpluggedBus:
         def recv(self, timeout: float | None = None) -> None:
-            raise can.CanOperationError("device unplugged\nmore detail")
+            raise can.CanOperationError("Could not read from serial device\nmore detail")
 
         def shutdown(self) -> None:
-            pass
+            raise can.CanOperationError("Could not write to serial device")
 
-    source = CanSource(CanSpec("virtual", "x", None), bus=BrokenBus())
-    source.read(0.0)  # may or may not carry the announcement before the failure
-    with pytest.raises(SourceError, match="device unplugged"):
-        source.read(0.0)
-        source.read(0.0)
+    opened: list[CanSpec] = []
+
+    def open_bus(spec: CanSpec) -> Any:
+        opened.append(spec)
+        if len(opened) == 1:
+            return UnpluggedBus()
+        if len(opened) == 2:
+            raise can.CanInitializationError("could not open port /dev/ttyACM0")
+        return can.Bus(interface="virtual", channel=channel)
+
+    spec = CanSpec("virtual", channel, None)
+    source = CanSource(spec, open_bus=open_bus, backoff_initial=0.01, backoff_max=0.02)
+    try:
+        items = read_until_state(source, "open", 2)
+        sender.send(can.Message(arbitration_id=0x00000F01, data=bytes(8)))
+        items += read_frames(source, 1)
+    finally:
+        source.close()
+    assert opened == [spec, spec, spec]
+    links = [i for i in items if isinstance(i, Event) and i.fields.get("kind") == LINK]
+    assert [e.fields["state"] for e in links] == [
+        "open",
+        "lost",
+        "reconnecting",
+        "connect_failed",
+        "reconnecting",
+        "open",
+    ]
+    details = [e.fields["detail"] for e in links]
+    assert details[1] == f"can:virtual:{channel} lost: Could not read from serial device"
+    assert details[3] == (f"cannot open can:virtual:{channel}: could not open port /dev/ttyACM0")
+    assert details[5].startswith(f"opened can:virtual:{channel} (receive-only) again after ")
+    assert links[5].fields["down_s"] >= 0.01
+    assert links[5].fields["lost_at"] == links[1].time
+    assert links[5].time - links[1].time == pytest.approx(links[5].fields["down_s"], abs=1e-3)
+    assert next(i for i in items if isinstance(i, CanFrame)).can_id == 0x00000F01
+
+
+def test_a_socketcan_interface_that_is_down_is_not_open(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    class Bus:
+        closed = 0
+
+        def recv(self, timeout: float | None = None) -> None:
+            return None
+
+        def shutdown(self) -> None:
+            Bus.closed += 1
+
+    down = {"can0"}
+    monkeypatch.setattr(can_bus, "socketcan_down", lambda name: name in down)
+    spec = CanSpec("socketcan", "can0", None)
+    with pytest.raises(
+        SourceError,
+        match=r"^cannot open can:socketcan:can0: can0 is down "
+        r"\(sudo ip link set can0 up type can bitrate 1000000 listen-only on\)$",
+    ):
+        CanSource(spec, open_bus=lambda spec: Bus())
+    assert Bus.closed == 1
+    down.clear()  # ip link set can0 up
+    source = CanSource(spec, open_bus=lambda spec: Bus())
+    source.close()
+    assert Bus.closed == 2
+
+
+def test_sysfs_says_whether_an_interface_is_down(tmp_path: Path) -> None:
+    (tmp_path / "can0").mkdir()
+    (tmp_path / "can0" / "flags").write_text("0x80\n")
+    (tmp_path / "can1").mkdir()
+    (tmp_path / "can1" / "flags").write_text("0x40081\n")
+    assert socketcan_down("can0", tmp_path)
+    assert not socketcan_down("can1", tmp_path)
+    assert not socketcan_down("vcan9", tmp_path)
+
+
+def read_until_state(source: Any, state: str, count: int) -> list[Any]:
+    items: list[Any] = []
+    deadline = time.monotonic() + DEADLINE_S
+    while sum(isinstance(i, Event) and i.fields.get("state") == state for i in items) < count:
+        assert time.monotonic() < deadline, f"timed out; got {items!r}"
+        items.extend(source.read(0.05))
+    return items
+
+
+def test_a_bus_that_never_opens_fails_at_start() -> None:
+    def open_bus(spec: CanSpec) -> Any:
+        raise can.CanInitializationError("could not open port /dev/ttyACM7: No such file")
+
+    with pytest.raises(SourceError, match=r"^cannot open can:slcan:/dev/ttyACM7@1000000: could"):
+        CanSource(CanSpec("slcan", "/dev/ttyACM7", 1_000_000), open_bus=open_bus)
+    with pytest.raises(UsageError, match="unknown CAN interface 'nosuch'"):
+        open_source("can:nosuch:0")
 
 
 def test_error_frames_are_kept(channel: str, sender: can.BusABC) -> None:

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 import pytest
+import serial
 
 from analyzer.errors import SourceError
 from analyzer.protocol.framing import wrap_control
@@ -70,7 +71,7 @@ def test_missing_device_is_a_source_error(tmp_path: Any) -> None:
         open_source(f"serial:{tmp_path}/ttyNONE@115200")
 
 
-def test_port_failure_ends_the_source() -> None:
+def test_a_port_failing_mid_capture_is_reopened() -> None:
     class Unplugged:
         in_waiting = 0
 
@@ -80,13 +81,40 @@ def test_port_failure_ends_the_source() -> None:
         def close(self) -> None:
             pass
 
-    source = SerialSource(SerialSpec("/dev/ttyUSB9", 115200), port=Unplugged())
-    items: list[Any] = []
-    with pytest.raises(
-        SourceError, match=r"serial:/dev/ttyUSB9@115200 failed: .*Input/output error"
-    ):
-        deadline = time.monotonic() + DEADLINE_S
-        while time.monotonic() < deadline:
-            items.extend(source.read(0.05))
-    source.close()
-    assert [e.fields["state"] for e in items if isinstance(e, Event)] == ["open", "lost"]
+    opened: list[SerialSpec] = []
+
+    def open_port(spec: SerialSpec) -> Any:
+        opened.append(spec)
+        if len(opened) == 1:
+            return Unplugged()
+        if len(opened) == 2:
+            raise OSError(2, "No such file or directory", spec.url)
+        return serial.serial_for_url("loop://", timeout=0.05)
+
+    spec = SerialSpec("/dev/ttyUSB9", 115200)
+    source = SerialSource(spec, open_port=open_port, backoff_initial=0.01, backoff_max=0.02)
+    try:
+        items = read_until(source, lambda got: len(opened) == 3 and states(got)[-1:] == ["open"])
+        source.port.write(CONTROL)
+        items += read_until(source, lambda got: stream(got) == CONTROL)
+    finally:
+        source.close()
+    assert opened == [spec] * 3
+    assert states(items) == [
+        "open",
+        "lost",
+        "reconnecting",
+        "connect_failed",
+        "reconnecting",
+        "open",
+    ]
+    details = [e.fields["detail"] for e in items if isinstance(e, Event)]
+    assert details[1] == "serial:/dev/ttyUSB9@115200 lost: Input/output error"
+    assert details[3] == (
+        "cannot open serial:/dev/ttyUSB9@115200: No such file or directory: /dev/ttyUSB9"
+    )
+    assert details[5].startswith("opened /dev/ttyUSB9 at 115200 baud again after ")
+
+
+def states(items: list[Any]) -> list[str]:
+    return [e.fields["state"] for e in items if isinstance(e, Event)]

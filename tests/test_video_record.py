@@ -119,8 +119,10 @@ def assert_logged_at_capture_time(
     assert camera
     for topic in camera:
         for log_time, message in found[topic]:
-            stamp = message["timestamp"]
-            assert log_time == stamp["sec"] * 1_000_000_000 + stamp["nsec"], topic
+            # an overlay's shapes each carry the time of the feedback or command drawn
+            shapes = [s for kind in ("circles", "points", "texts") for s in message.get(kind, [])]
+            for stamp in [s["timestamp"] for s in shapes] or [message["timestamp"]]:
+                assert log_time == stamp["sec"] * 1_000_000_000 + stamp["nsec"], topic
     diagnosis = examine(path)
     assert diagnosis.errors == [] and diagnosis.warnings == []
 

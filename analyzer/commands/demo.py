@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import sys
 import threading
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
@@ -46,8 +47,12 @@ turns them off. --sluggish, --fall-short, --ignore, --drift and
 aircraft's nose at 30 deg while it flies, so the gimbal's yaw from north
 (psi) is 30 deg more than its yaw motor angle. Afterwards:
 
-  gimbal-analyzer info demo.mcap       what was recorded
-  foxglove-studio demo.mcap            (or open it in Foxglove: map, log, plots)
+  gimbal-analyzer info demo.mcap       what was recorded, and the simulator's options
+  gimbal-analyzer report demo.mcap     did the gimbal obey? (an HTML page)
+
+and open demo.mcap in Foxglove (the desktop app's Open local file, or
+app.foxglove.dev): map, log, plots. The recording's metadata keeps the
+simulator options that made it (faults, disobedience, --heading).
 
 With --foxglove the stream is also served live to Foxglove (ws://127.0.0.1:8765).
 """
@@ -88,12 +93,56 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--clean", action="store_true", help="inject no faults")
     add_compression_argument(parser)
-    add_heading_argument(parser)
     add_foxglove_options(parser)
     add_video_options(parser)  # a camera on the bench recorded next to the simulated gimbal
+    first = len(parser._actions)
+    add_heading_argument(parser, uav_always=True)
+    faults = len(parser._actions)
     add_fault_arguments(parser)
+    behaviour_at = len(parser._actions)
     add_behaviour_arguments(parser)
-    parser.set_defaults(**DEMO_FAULTS)
+    # The simulator's options, to be kept in the recording's metadata.
+    simulator = tuple(
+        SimulatorOption(a.dest, a.option_strings[-1], a.default, faults <= n < behaviour_at)
+        for n, a in enumerate(parser._actions[first:], first)
+    )
+    parser.set_defaults(**DEMO_FAULTS, simulator_options=simulator)
+
+
+def simulator_metadata(args: argparse.Namespace, config: Any) -> dict[str, str]:
+    """What made the simulated flight, for the recording's metadata (and `info`): the
+    options as they would be typed again, and what they mean."""
+    options: list[str] = ["--clean"] if args.clean else []
+    for option in getattr(args, "simulator_options", ()):
+        value = getattr(args, option.dest, None)
+        if value == option.default or (args.clean and option.fault):
+            continue
+        if value is True:
+            options.append(option.flag)
+        elif isinstance(value, list):
+            options += [f"{option.flag} {v}" for v in value]
+        else:
+            shown = f"{value:g}" if isinstance(value, float) else str(value)
+            options.append(f"{option.flag} {shown}")
+    heading = config.heading_deg
+    return {
+        "simulator_options": " ".join(options) or "(none)",
+        "simulator_faults": config.faults.describe(),
+        "simulator_gimbal": config.behaviour.describe(),
+        "simulator_heading": "ahead along the orbit"
+        if heading is None
+        else f"{heading:g} deg from north",
+    }
+
+
+@dataclass(frozen=True)
+class SimulatorOption:
+    """One option of the simulator, as demo's metadata repeats it."""
+
+    dest: str
+    flag: str
+    default: Any
+    fault: bool
 
 
 class LinePrinter:
@@ -216,7 +265,9 @@ def run(args: argparse.Namespace) -> int:
         sink = McapSink(
             path,
             metadata=recording_metadata(
-                f"demo: simulated gimbal and ground station on {spec}", command="demo"
+                f"demo: simulated gimbal and ground station on {spec}",
+                command="demo",
+                **simulator_metadata(args, config),
             ),
             compression=args.compression,
             force=args.force,

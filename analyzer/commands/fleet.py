@@ -6,6 +6,8 @@ import argparse
 import sys
 from typing import IO, TYPE_CHECKING, cast
 
+from analyzer.errors import UsageError
+
 if TYPE_CHECKING:
     from analyzer.fleet.queries import Answer
 
@@ -26,6 +28,7 @@ with plots, in the style of `report` (with --sql, the query's answer at its end)
 
   gimbal-analyzer fleet fleet/
   gimbal-analyzer fleet fleet/ --json
+  gimbal-analyzer fleet fleet/ --question worst_flights --csv
   gimbal-analyzer fleet fleet/ --sql "SELECT gimbal, avg(crc_error_rate) FROM recordings GROUP BY 1"
   gimbal-analyzer fleet fleet/ --sql "SELECT * FROM findings WHERE verdict = 'not_obeyed'" --csv
   gimbal-analyzer fleet fleet/ --html fleet.html
@@ -54,8 +57,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     shape = parser.add_mutually_exclusive_group()
     shape.add_argument("--json", action="store_true", help="rows as JSON lines")
     shape.add_argument("--csv", action="store_true", help="rows as CSV")
+    parser.add_argument(
+        "--question",
+        metavar="NAME",
+        help="only this standard question (its name as --json gives it, e.g. worst_flights); "
+        "--csv needs it: one table per CSV",
+    )
     parser.add_argument("--html", metavar="FILE", help="write the fleet report to FILE")
-    parser.add_argument("--force", action="store_true", help="replace the --html file if it exists")
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="replace the --html file if it exists"
+    )
     parser.add_argument(
         "--dask",
         metavar="ADDRESS",
@@ -69,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.html:
         check_output(args.html, force=args.force)
+    if args.question and args.sql:
+        raise UsageError("--question picks a standard question; --sql asks its own")
     standard: list[Answer] = []
     overview: Answer | None = None
     query: list[Answer] = []
@@ -85,12 +98,12 @@ def run(args: argparse.Namespace) -> int:
             standard = standard_answers(con)
         if args.html:
             overview = ask(con, overview_question())
-    answers = query or standard
+    answers = query or _chosen(standard, args)
     out = sys.stdout
     if args.json:
         write_json(out, answers, named=not args.sql)
     elif args.csv:
-        write_csv(out, answers, named=not args.sql)
+        write_csv(out, answers[0])
     elif not args.html or args.sql:
         write_text(out, answers)
     if args.html:
@@ -103,6 +116,19 @@ def run(args: argparse.Namespace) -> int:
             cast("IO[bytes]", handle.file).write(page)
         sys.stderr.write(f"wrote {args.html} ({len(page) / 1024:,.0f} KiB)\n")
     return 0
+
+
+def _chosen(answers: list[Answer], args: argparse.Namespace) -> list[Answer]:
+    """The answer --question names (every answer without it); --csv takes one table."""
+    names = ", ".join(a.name for a in answers)
+    if args.question:
+        picked = [a for a in answers if a.name == args.question]
+        if not picked:
+            raise UsageError(f"--question {args.question}: no such question here; one of: {names}")
+        return picked
+    if args.csv and len(answers) > 1:
+        raise UsageError(f"--csv writes one table: choose it with --question NAME, one of: {names}")
+    return answers
 
 
 def _on_cluster(args: argparse.Namespace) -> tuple[list[Answer], Answer | None, list[Answer]]:

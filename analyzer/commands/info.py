@@ -64,6 +64,19 @@ def _repaired_name(path: str) -> str:
     return f"{stem}-repaired.mcap"
 
 
+# Metadata keys `demo` writes about the simulator that made the recording.
+SIMULATOR_KEYS = (
+    ("simulator_options", "simulator"),
+    ("simulator_faults", "  faults"),
+    ("simulator_gimbal", "  gimbal"),
+    ("simulator_heading", "  heading"),
+)
+
+
+def _simulator_lines(meta: dict[str, str]) -> list[str]:
+    return [f"{label:<12}{meta[key]}" for key, label in SIMULATOR_KEYS if meta.get(key)]
+
+
 def render(info: RecordingInfo) -> str:
     """Human-readable report."""
     lines = []
@@ -101,6 +114,7 @@ def render(info: RecordingInfo) -> str:
     meta = info.metadata
     if meta.get("source"):
         lines.append(f"source      {meta['source']}")
+    lines.extend(_simulator_lines(meta))
     if meta.get("tool_version"):
         lines.append(f"recorded by gimbal-analyzer {meta['tool_version']}")
     elif info.writer:  # another writer's file (a ROS bag): what its header says

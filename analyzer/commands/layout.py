@@ -6,12 +6,16 @@ import argparse
 import json
 import sys
 
-HELP = "write a Foxglove Studio layout (map, log, plots, modes, commands, diagnostics)"
+HELP = "write a Foxglove Studio layout (map, camera, 3D, log, plots, modes, commands, diagnostics)"
 DEFAULT_OUTPUT = "gimbal-layout.json"
 DESCRIPTION = f"""\
 Write a Foxglove Studio layout for gimbal-analyzer recordings:
 
   Map                UAV track (/uav/gps/fix) and laser-ranging target (/gimbal/ranging/fix)
+  Image              the camera's thumbnails (/camera/main/thumbnail, record --video main)
+                     with the tracking box, tap points and pitch / yaw / zoom drawn over them
+  3D                 the aircraft, the gimbal's and camera's axes (/tf), the field of view
+                     and the laser-ranging target (/gimbal/scene), following the gimbal
   Log                diagnostics (/diagnostics/log)
   Plot               gimbal pitch and yaw with the commanded pan / tilt speeds
   State Transitions  control mode, tracking and command names over time

@@ -32,14 +32,20 @@ older than about a second can still be read (gimbal-analyzer info / decode);
 with --video, older than about {VIDEO_HOLD_BACK_S + 0.5:g} s (see "camera video" below).
 Ctrl-C or SIGTERM finishes the file properly.
 
-Sources:
+Sources (gimbal-analyzer interfaces lists the adapters of this machine):
   can:socketcan:can0            a CAN interface (received passively, never transmits)
+  can:slcan:/dev/serial/by-id/usb-...-if00@1000000
+                                a USB slcan adapter (CANable), opened listen-only
   tcp:192.168.42.200:2000       the IDU's TCP port (reconnects when the link drops)
   tcp:2000                      a port alone is on this machine, 127.0.0.1:2000 (simulate)
   proxy:2000->192.168.42.200:2000   between ground station and IDU, both directions
                                 (listens on all interfaces; proxy:127.0.0.1:2000->... does not)
   serial:/dev/ttyUSB0@115200    the UART pins
   file:flight.log               replay a capture file (--speed 1 = recorded speed)
+
+A CAN adapter or serial port that fails mid-capture (unplugged, interface down) is
+opened again when it is back, with the same backoff as tcp: (0.5 s doubling to
+10 s); the recording goes on. One that cannot be opened at the start is an error.
 
 Examples:
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap
@@ -362,6 +368,13 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         result = EXIT_FAILED
+    if not nothing_received and not inputs and link.status.failing:
+        # an adapter unplugged and not back: the recording ends at the loss, say so
+        print(
+            f"gimbal-analyzer record: warning: {description} had not come back when the "
+            f"capture ended ({link.status.describe(time.time())})",
+            file=sys.stderr,
+        )
     if stats.dropped:  # even with --quiet: the recording is missing data
         print(
             f"gimbal-analyzer record: warning: {stats.dropped} frame(s) / chunk(s) "

@@ -45,7 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="the HTML file to write (default report.html)",
     )
-    parser.add_argument("--force", action="store_true", help="replace the output file if it exists")
+    parser.add_argument(
+        "-f", "--force", action="store_true", help="replace the output file if it exists"
+    )
     add_settings_arguments(parser)
 
 
@@ -69,13 +71,21 @@ def run(args: argparse.Namespace) -> int:
     reader = open_reader(args)
     data = ReportData(source=reader.source, format_name=reader.format_name)
     stage = FindingsInto(ResponseAnalyzer(settings), data)
+    sinks = [EventsInto(data.add)]
+    overlays = None
+    if reader.format_name == "mcap":  # only a recording has camera pictures to draw over
+        from analyzer.scene.timeline import OverlayTimeline
+
+        overlays = OverlayTimeline()  # the pictures show what Foxglove draws over them
+        sinks.append(EventsInto(overlays.add))
     # The same decoding and counting as every command; the analysis is a stage of it.
-    pipeline = Pipeline([EventsInto(data)], stages=[stage])
+    pipeline = Pipeline(sinks, stages=[stage])
     try:
         run_items(reader, pipeline)
     finally:
         reader.close()
     data.notes.extend(reader.notes)
+    lead = ""
     data.frames = pipeline.tally.frames
     if data.first is not None and data.first == data.last and data.topics.total() > 1:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
@@ -84,17 +94,21 @@ def run(args: argparse.Namespace) -> int:
             data.drop_findings()
             data.notes.append(UNTIMED)
     pictures = None
-    if reader.format_name == "mcap" and data.first is not None and data.last is not None:
+    if overlays is not None and data.first is not None and data.last is not None:
+        from analyzer.check.output import recorded_steps_html
         from analyzer.mcapio.video_reading import read_thumbnails  # camera pictures
 
         shown = camera.shown_findings(data.findings.worst_first())
-        pictures = camera.choose(read_thumbnails(args.file), data.first, data.last, shown)
+        thumbnails = overlays.pictures(read_thumbnails(args.file))
+        pictures = camera.choose(thumbnails, data.first, data.last, shown)
         if not pictures.count:
             pictures = None
+        lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
         pictures,
+        lead,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:

@@ -100,15 +100,21 @@ def heading_value(text: str) -> float:
     return value % 360.0
 
 
-def add_heading_argument(parser: argparse.ArgumentParser) -> None:
+def add_heading_argument(parser: argparse.ArgumentParser, *, uav_always: bool = False) -> None:
+    """--heading; ``uav_always``: the command always plays the UAV (demo has no --uav)."""
+    flying = (
+        "the simulated aircraft keeps its nose that way while it flies (default: ahead "
+        "along the orbit)"
+        if uav_always
+        else "with --uav the aircraft keeps its nose that way while it flies (default: 0 "
+        "alone, ahead along the orbit with --uav)"
+    )
     parser.add_argument(
         "--heading",
         type=heading_value,
         metavar="DEG",
         help="the aircraft's heading, degrees from north: the gimbal's yaw from north (psi) "
-        "is then the heading plus its yaw motor angle, as on a real aircraft; with --uav "
-        "the aircraft keeps its nose that way while it flies (default: 0 alone, ahead "
-        "along the orbit with --uav)",
+        f"is then the heading plus its yaw motor angle, as on a real aircraft; {flying}",
     )
 
 
@@ -188,7 +194,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration", type=seconds_value, metavar="S", help="stop after S seconds (default: Ctrl-C)"
     )
     parser.add_argument(
-        "--quiet", action="store_true", help="print only the start and the end, not each command"
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print only the start and the end, not each command",
     )
     add_heading_argument(parser)
     add_fault_arguments(parser)

@@ -11,7 +11,7 @@ import time
 from collections import Counter
 from typing import TYPE_CHECKING
 
-from analyzer.errors import UsageError
+from analyzer.errors import EXIT_FAILED, UsageError
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -51,10 +51,17 @@ same path (checked first); this process writes each input's recordings row last.
 --client-writes is for a DIR the workers cannot reach: they send the rows back and
 this process writes them. A wrong address stops before DIR is made.
 
-An input that could not be read at all is a row too (its error, keyed by its
-path): the next runs skip it and say so. One that failed to decode is skipped
-as content already there. --retry-failed decodes every input whose row has an
-error again; a file unreadable before is taken by itself once it reads.
+An input that could not be read at all (keyed by its path) or failed to decode
+is a row too, with its error; the next runs skip it and say it failed before.
+--retry-failed decodes every input whose row has an error again; a file
+unreadable before is taken by itself once it reads. A run in which every input
+it had to add failed exits with code 1.
+
+Rows are written as they are decoded, a Parquet row group at a time: memory
+does not grow with the length of a flight.
+
+Tags stay with the content: an input already in DIR keeps its tags (a warning
+when this run gives others); --retag gives it this run's tags.
 
   gimbal-analyzer table flights/ -o fleet --dask tcp://scheduler:8786 --client-writes
   gimbal-analyzer table flights/ -o fleet --retry-failed
@@ -100,7 +107,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="decode again the inputs whose row has an error (unreadable or failed before)",
     )
     parser.add_argument(
-        "-f", "--format", metavar="FORMAT", help="read every input as " + "/".join(FORMATS)
+        "--retag",
+        action="store_true",
+        help="inputs already in DIR take the --tag values of this run (default: kept, "
+        "with a warning when they differ)",
+    )
+    parser.add_argument(
+        "--format", metavar="FORMAT", help="read every input as " + "/".join(FORMATS)
     )
     parser.add_argument(
         "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
@@ -206,12 +219,18 @@ def _run(
         f"{skipped} skipped (content already there){again}, {errors} with errors; "
         f"{seconds:.1f} s\n"
     )
-    if where:
-        runners = ", ".join(f"{name} ({count})" for name, count in sorted(where.items()))
-        out.write(f"tasks ran on: {runners}\n")
     if client is not None:
+        runners = ", ".join(f"{name} ({count})" for name, count in sorted(where.items()))
+        out.write(f"tasks ran on: {runners or 'none'}\n")
         writer = "this process" if args.client_writes else "the workers (recordings rows: here)"
         out.write(f"written by: {writer}\n")
+    if todo and errors == len(todo):
+        out.flush()
+        sys.stderr.write(
+            f"gimbal-analyzer table: error: every input to add failed ({errors}); "
+            "their rows say why\n"
+        )
+        return EXIT_FAILED
     return 0
 
 
@@ -245,8 +264,7 @@ def _plan(
             continue
         seen[digest] = path
         if dataset.holds(digest):
-            unreadable = work.error is not None
-            failure = dataset.failure(digest) if args.retry_failed or unreadable else None
+            failure = dataset.failure(digest)
             if failure is not None and args.retry_failed:
                 dataset.forget(digest)
                 if not args.quiet:
@@ -260,6 +278,30 @@ def _plan(
                 why = f"failed before ({failure}); --retry-failed tries again"
             if not args.quiet:
                 out.write(f"skipped {path}: {why}\n")
+            _check_tags(args, path, dataset, digest, tags)
             continue
         todo.append(work)
     return todo, skipped, failed_before
+
+
+def _check_tags(
+    args: argparse.Namespace, path: str, dataset: Dataset, digest: str, tags: dict[str, str]
+) -> None:
+    """Content already in the dataset under other tags: replaced with --retag, else a warning."""
+    stored = dataset.tags(digest)
+    if stored is None or stored == tags or not (tags or args.retag):
+        return
+    was = _tag_text(stored)
+    if args.retag:
+        dataset.retag(digest, tags)
+        if not args.quiet:
+            sys.stdout.write(f"retagged {path}: {_tag_text(tags)} (was {was})\n")
+        return
+    sys.stderr.write(
+        f"gimbal-analyzer table: warning: {path} is in {args.output} with the tags {was}, "
+        f"not {_tag_text(tags)}: kept; --retag replaces them\n"
+    )
+
+
+def _tag_text(tags: dict[str, str]) -> str:
+    return " ".join(f"{k}={v}" for k, v in tags.items()) or "(none)"

@@ -45,6 +45,8 @@ KEY_FIELDS: tuple[pa.Field, ...] = (
     pa.field("time", TIME),
     pa.field("source", pa.string()),
 )
+# The one unit of crc_error_rate in every table, answer, plot and reason: a fraction.
+CRC_RATE_UNIT = "errors per CRC-checked message (0.01 = 1 in 100)"
 # Findings may carry these (the yaw reference and why it was chosen) when the analysis has them.
 FINDING_EXTRAS = {"yaw_reference": "string", "reference_reason": "string"}
 
@@ -109,7 +111,7 @@ def recordings_schema(tags: list[str]) -> pa.Schema:
         pa.field("feedback_rate_hz", pa.float64()),
         pa.field("crc_checked", pa.int64()),
         pa.field("crc_errors", pa.int64()),
-        pa.field("crc_error_rate", pa.float64()),
+        pa.field("crc_error_rate", pa.float64(), metadata={"unit": CRC_RATE_UNIT}),
         pa.field("gaps", pa.int64()),
         pa.field("longest_gap_s", pa.float64()),
         pa.field("bus_worst_state", pa.string()),  # of the CAN controller, from error frames

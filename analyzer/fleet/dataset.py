@@ -9,6 +9,7 @@ input without its ``recordings`` file (a run killed half way) are removed by the
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import uuid
@@ -19,13 +20,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from analyzer.errors import UsageError
-from analyzer.fleet.columns import RECORDINGS, TABLES
+from analyzer.fleet.columns import RECORDINGS, TABLES, recordings_schema
 from analyzer.output_file import OutputWriteError, describe_os_error
 
 SUFFIX = ".parquet"
 UNREADABLE = "unreadable-"  # key prefix of a file that could not be read (by its path)
 _PARTIAL = ".partial-"
 HASH_BLOCK = 1 << 20
+COMPRESSION = "zstd"
 
 
 def content_hash(path: str) -> str:
@@ -88,6 +90,33 @@ class Dataset:
             return None
         return None if len(column) == 0 else column[0].as_py()
 
+    def tags(self, digest: str) -> dict[str, str] | None:
+        """The tags of the input's row (None when it is not here)."""
+        try:
+            table = pq.read_table(self.path(RECORDINGS, digest))
+        except (OSError, pa.ArrowException):
+            return None
+        if table.num_rows == 0:
+            return None
+        base = set(recordings_schema([]).names)
+        row = table.slice(0, 1).to_pylist()[0]
+        return {k: str(v) for k, v in row.items() if k not in base and v is not None}
+
+    def retag(self, digest: str, tags: dict[str, str]) -> None:
+        """Give the input's row these tags instead of its own (rewritten atomically)."""
+        target = self.path(RECORDINGS, digest)
+        old = pq.read_table(target)
+        schema = recordings_schema(list(tags))
+        columns = [
+            pa.array([tags[f.name]] * old.num_rows, f.type)
+            if f.name in tags
+            else old.column(f.name).cast(f.type)
+            if f.name in old.column_names
+            else pa.nulls(old.num_rows, f.type)
+            for f in schema
+        ]
+        self._write_one(target, pa.Table.from_arrays(columns, schema=schema))
+
     def forget(self, digest: str) -> None:
         """Remove an input's files, its ``recordings`` row first (to be made again)."""
         for name in (RECORDINGS, *(n for n in TABLES if n != RECORDINGS)):
@@ -136,14 +165,82 @@ class Dataset:
                 continue
             self._write_one(self.path(name, digest), tables[name])
 
+    def stream(self, digest: str) -> StreamedTables:
+        """Row groups of an input's tables (all but ``recordings``), written as they come."""
+        return StreamedTables(self, digest)
+
     @staticmethod
     def _write_one(target: Path, table: pa.Table) -> None:
-        temp = target.with_name(f"{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}-{target.name}")
+        temp = _temp_name(target)
         try:
-            pq.write_table(table, temp, compression="zstd")
-            with open(temp, "rb+") as handle:
-                os.fsync(handle.fileno())
-            os.replace(temp, target)
+            pq.write_table(table, temp, compression=COMPRESSION)
+            _publish(temp, target)
         except OSError as exc:
             temp.unlink(missing_ok=True)
             raise OutputWriteError(f"cannot write {target}: {describe_os_error(exc)}") from exc
+
+
+class StreamedTables:
+    """An input's tables written row group by row group under temporary names
+    (``ParquetWriter``), renamed into place by ``finish``, removed by ``abort``: memory
+    holds one row group per table, never the input's rows."""
+
+    def __init__(self, dataset: Dataset, digest: str) -> None:
+        self.dataset = dataset
+        self.digest = digest
+        self.open: dict[str, tuple[pq.ParquetWriter, Path]] = {}
+
+    def write(self, name: str, table: pa.Table) -> None:
+        """One row group of table ``name`` (opened at its first)."""
+        entry = self.open.get(name)
+        try:
+            if entry is None:
+                temp = _temp_name(self.dataset.path(name, self.digest))
+                entry = self.open[name] = (
+                    pq.ParquetWriter(temp, table.schema, compression=COMPRESSION),
+                    temp,
+                )
+            entry[0].write_table(table, row_group_size=max(1, table.num_rows))
+        except OSError as exc:
+            target = self.dataset.path(name, self.digest)
+            raise OutputWriteError(f"cannot write {target}: {describe_os_error(exc)}") from exc
+
+    def discard(self, name: str) -> None:
+        """Throw away what was written of table ``name``."""
+        entry = self.open.pop(name, None)
+        if entry is not None:
+            entry[0].close()
+            entry[1].unlink(missing_ok=True)
+
+    def finish(self) -> None:
+        """Close every table and rename it into place (the caller writes ``recordings`` last)."""
+        try:
+            while self.open:
+                name, (writer, temp) = self.open.popitem()
+                target = self.dataset.path(name, self.digest)
+                try:
+                    writer.close()
+                    _publish(temp, target)
+                except OSError as exc:
+                    temp.unlink(missing_ok=True)
+                    raise OutputWriteError(
+                        f"cannot write {target}: {describe_os_error(exc)}"
+                    ) from exc
+        finally:
+            self.abort()
+
+    def abort(self) -> None:
+        """Remove every table not finished (the input failed)."""
+        for name in list(self.open):
+            with contextlib.suppress(OSError, pa.ArrowException):
+                self.discard(name)
+
+
+def _temp_name(target: Path) -> Path:
+    return target.with_name(f"{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}-{target.name}")
+
+
+def _publish(temp: Path, target: Path) -> None:
+    with open(temp, "rb+") as handle:
+        os.fsync(handle.fileno())
+    os.replace(temp, target)

@@ -35,7 +35,7 @@
   }
 
   chart("plot-crc-week", "line", data.weeks, sets(data.crc_week, data.weeks, "line"),
-        "CRC error rate (%)");
+        "CRC error rate (errors per CRC-checked message)");
   chart("plot-gaps", "bar", data.tag_values, sets(data.gaps, data.tag_values, "bar"),
         "feedback gaps over 1 s");
   chart("plot-verdicts", "bar", data.commands, sets(data.verdicts, data.commands, "bar"),

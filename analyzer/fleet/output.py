@@ -87,14 +87,9 @@ def write_json(out: IO[str], answers: Sequence[Answer], *, named: bool) -> None:
             out.write(json.dumps(obj) + "\n")
 
 
-def write_csv(out: IO[str], answers: Sequence[Answer], *, named: bool) -> None:
-    """A header and rows; several answers are separated by a blank line and a # title."""
+def write_csv(out: IO[str], answer: Answer) -> None:
+    """One answer as one CSV table: a header and the rows."""
     writer = csv.writer(out, lineterminator="\n")
-    for n, answer in enumerate(answers):
-        if named:
-            if n:
-                out.write("\n")
-            out.write(f"# {answer.name}: {answer.title}\n")
-        writer.writerow(answer.columns)
-        for row in answer.rows:
-            writer.writerow(["" if (v := cell(x)) is None else v for x in row])
+    writer.writerow(answer.columns)
+    for row in answer.rows:
+        writer.writerow(["" if (v := cell(x)) is None else v for x in row])

@@ -35,9 +35,7 @@ def plot_data(answers: Sequence[Answer], tag: str) -> dict[str, Any]:
     crc_week: dict[str, dict[str, float]] = {}
     for r in weekly:
         if r["week"] is not None and r["crc_error_rate"] is not None:
-            crc_week.setdefault(str(r[tag]), {})[str(r["week"])] = round(
-                float(r["crc_error_rate"]) * 100, 4
-            )
+            crc_week.setdefault(str(r[tag]), {})[str(r["week"])] = float(r["crc_error_rate"])
     tag_values = [str(r[tag]) for r in links]
     gaps = {"gaps over 1 s": {str(r[tag]): int(r["gaps"] or 0) for r in links}}
     commands = sorted({str(r["command"]) for r in obedience})

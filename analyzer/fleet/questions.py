@@ -289,7 +289,7 @@ def worst_flights(tags: Sequence[str]) -> TopQuestion:
             Reason("r.error IS NOT NULL", "'unreadable: ' || r.error"),
             Reason(
                 f"r.crc_error_rate > {CRC_ALARM}",
-                "'CRC errors ' || round(r.crc_error_rate * 100, 2) || ' %'",
+                "'CRC error rate ' || round(r.crc_error_rate, 4)",
             ),
             Reason(
                 "r.findings_not_obeyed > 0", "r.findings_not_obeyed || ' finding(s) not obeyed'"

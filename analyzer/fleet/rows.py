@@ -1,44 +1,33 @@
 """The rows of one input file: the same pipeline as decode and analyze, as Arrow tables.
 
-``file_rows`` is a pure function of one file (and the settings): it runs on a local
-worker process or on a Dask worker alike, and gives the same rows wherever it runs.
+``file_rows`` is a function of one file (and the settings) and where its rows go: it
+runs on a local worker process or on a Dask worker alike, and gives the same rows
+wherever it runs.
 """
 
 from __future__ import annotations
 
-import json
 import os
 import socket
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
 import pyarrow as pa
 
+from analyzer.fleet.column_sink import CollectedTables, ColumnSink, TablesOut
 from analyzer.fleet.columns import (
-    EXTRA,
-    KEY_FIELDS,
     RECORDINGS,
     TIME,
-    TOPIC_TABLES,
     diagnostic_column,
-    event_schema,
     recordings_schema,
     verdict_column,
 )
-from analyzer.protocol.types import DIAGNOSTIC_KINDS, TOPIC_ANALYSIS_RESPONSE, Event
-
-_KEYS = frozenset(f.name for f in KEY_FIELDS) | {"topic", EXTRA}
-_PY_TYPES: dict[pa.DataType, tuple[type, ...]] = {
-    pa.string(): (str,),
-    pa.int64(): (int,),
-    pa.float64(): (float, int),
-    pa.bool_(): (bool,),
-    pa.list_(pa.string()): (list,),
-}
+from analyzer.output_file import OutputWriteError
+from analyzer.protocol.types import DIAGNOSTIC_KINDS
 
 
 @dataclass(frozen=True)
@@ -74,98 +63,6 @@ class FileRows:
         return self.row_count or sum(t.num_rows for t in self.tables.values())
 
 
-class TableColumns:
-    """Events of one topic gathered column by column, typed by the topic's schema."""
-
-    def __init__(self, topic: str) -> None:
-        self.schema = event_schema(topic)
-        self.names = [f.name for f in self.schema if f.name not in _KEYS]
-        self.known = frozenset(self.names) | _KEYS
-        self.times: list[float] = []
-        self.sources: list[str] = []
-        self.columns: dict[str, list[Any]] = {name: [] for name in self.names}
-        self.extra: list[dict[str, Any] | None] = []
-
-    def add(self, time_s: float, source: str, fields: dict[str, Any], warnings: list[str]) -> None:
-        self.times.append(time_s)
-        self.sources.append(source)
-        columns = self.columns
-        for name in self.names:
-            columns[name].append(fields.get(name))
-        if "warnings" in columns:
-            columns["warnings"][-1] = list(warnings)
-        unknown = fields.keys() - self.known
-        self.extra.append({k: fields[k] for k in sorted(unknown)} if unknown else None)
-
-    def table(self, recording: str, content_hash: str) -> pa.Table:
-        n = len(self.times)
-        arrays: list[pa.Array] = [
-            pa.array([recording] * n, pa.string()),
-            pa.array([content_hash] * n, pa.string()),
-            timestamps(self.times),
-            pa.array(self.sources, pa.string()),
-        ]
-        for name in self.names:
-            arrays.append(self._column(name, self.schema.field(name).type))
-        arrays.append(
-            pa.array(
-                [None if e is None else json.dumps(e, default=str) for e in self.extra], pa.string()
-            )
-        )
-        return pa.Table.from_arrays(arrays, schema=self.schema)
-
-    def _column(self, name: str, kind: pa.DataType) -> pa.Array:
-        values = self.columns[name]
-        try:
-            return pa.array(values, kind)
-        except (pa.ArrowInvalid, pa.ArrowTypeError, TypeError, OverflowError):
-            pass
-        # A value of another type than the schema says: kept in ``extra``, never lost.
-        wanted = _PY_TYPES.get(kind, (object,))
-        for i, value in enumerate(values):
-            if value is None or (isinstance(value, wanted) and not _bool_as_number(value, kind)):
-                continue
-            extra = self.extra[i]
-            if extra is None:
-                extra = {}
-            extra[name] = value
-            self.extra[i] = extra
-            values[i] = None
-        return pa.array(values, kind)
-
-
-def _bool_as_number(value: Any, kind: pa.DataType) -> bool:
-    return isinstance(value, bool) and kind != pa.bool_()
-
-
-def timestamps(seconds: Sequence[float | None]) -> pa.Array:
-    """Unix seconds -> UTC timestamps in microseconds."""
-    micros = [None if s is None else round(s * 1_000_000) for s in seconds]
-    return pa.array(micros, pa.int64()).cast(TIME)
-
-
-class ColumnSink:
-    """A pipeline sink filing every decoded event under its table (findings come apart)."""
-
-    def __init__(self) -> None:
-        self.tables: dict[str, TableColumns] = {}
-
-    def handle(self, batch: Any) -> None:
-        tables = self.tables
-        for event in batch.events:
-            topic = event.topic
-            name = TOPIC_TABLES.get(topic)
-            if name is None or topic == TOPIC_ANALYSIS_RESPONSE:
-                continue
-            columns = tables.get(name)
-            if columns is None:
-                columns = tables[name] = TableColumns(topic)
-            columns.add(event.time, event.source, event.fields, event.warnings)
-
-    def close(self) -> None:
-        pass
-
-
 def worker_name() -> str:
     """Where this task runs: the Dask worker's address, else host and process id."""
     if "distributed" in sys.modules:
@@ -178,35 +75,53 @@ def worker_name() -> str:
     return f"{socket.gethostname()} pid {os.getpid()}"
 
 
-def file_rows(work: FileWork) -> FileRows:
-    """Decode and analyse one file; a file that cannot be read is one row with its error."""
+def file_rows(work: FileWork, out: TablesOut | None = None) -> FileRows:
+    """Decode and analyse one file; a file that cannot be read is one row with its error.
+
+    The event and finding rows go to ``out`` as they come (default: kept and returned in
+    ``tables``); the ``recordings`` row is returned, for the caller to write last.
+    """
     started = time.perf_counter()
     result = FileRows(work, worker=worker_name())
+    kept = CollectedTables()
+    target: TablesOut = out if out is not None else kept
     if work.error is not None:
         result.error = work.error
     else:
         try:
             with local_file(work.path) as path:
-                _decode(work, path, result)
+                _decode(work, path, result, target)
+        except OutputWriteError:  # the dataset cannot be written: the run stops
+            raise
         except Exception as exc:  # any failure of one file is that file's row, not the run's
-            result.tables = {}
             result.error = error_text(exc)
     if result.error is not None:
         result.tables = {RECORDINGS: recording_row(work, None, error=result.error)}
+        result.row_count = 1
+    elif out is None:
+        result.tables.update(kept.tables())
     result.seconds = time.perf_counter() - started
     return result
 
 
 def error_text(exc: BaseException) -> str:
-    text = str(exc).strip() or type(exc).__name__
-    if type(exc).__name__ not in ("UsageError", "InputError", "SourceError"):
-        text = f"{type(exc).__name__}: {text}"
+    """One line for the user: the message, never the exception's class name."""
+    text = str(exc).strip()
+    if not text:
+        text = _ERROR_WORDS.get(type(exc).__name__, "failed without a message")
     return text.splitlines()[0]
 
 
-def _decode(work: FileWork, path: str, result: FileRows) -> None:
+_ERROR_WORDS = {
+    "MemoryError": "out of memory",
+    "RecursionError": "too deeply nested",
+    "EOFError": "ended too early",
+}
+
+
+def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None:
     from analyzer.analysis.response import ResponseAnalyzer, Settings
-    from analyzer.commands.analyze import KeepFindings, untimed
+    from analyzer.commands.analyze import untimed
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.protocol.ids import PROTOCOL_IDS
@@ -219,10 +134,9 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
         knobs["time_allowed_s"] = work.time_allowed_s
     settings = Settings(**knobs)
     reader = open_input(path, work.fmt, work.port, wanted_ids=PROTOCOL_IDS)
-    analyzer = ResponseAnalyzer(settings)
-    kept = KeepFindings(analyzer)
-    sink = ColumnSink()
-    pipeline = Pipeline([sink], stages=[kept])  # what decode, analyze and report run
+    sink = ColumnSink(out, work.recording, work.content_hash)
+    # What decode, analyze and report run; findings reach the sink as they are made.
+    pipeline = Pipeline([sink], stages=[ResponseAnalyzer(settings)])
     try:
         run_items(reader, pipeline)
     finally:
@@ -237,34 +151,21 @@ def _decode(work: FileWork, path: str, result: FileRows) -> None:
         last_time=reader.last_time,
         time_base=reader.time_base,
     )
-    findings: list[Event] = sorted(kept.findings, key=lambda e: e.time)
     notes = list(reader.notes)
-    if untimed(pipeline.tally, findings):
-        findings = []
+    if untimed(pipeline.tally, [True] if sink.verdicts else []):
+        sink.drop_findings()
         notes.append("the input carries no timestamps: responses cannot be timed")
-    found = TableColumns(TOPIC_ANALYSIS_RESPONSE)
-    for finding in findings:
-        found.add(finding.time, finding.source, finding.fields, finding.warnings)
-    columns = dict(sink.tables)
-    if findings:
-        columns[TOPIC_TABLES[TOPIC_ANALYSIS_RESPONSE]] = found
-    for name, gathered in columns.items():
-        result.tables[name] = gathered.table(work.recording, work.content_hash)
-    figures = summary.to_dict()
-    verdicts: dict[str, int] = {}
-    for finding in findings:
-        verdict = str(finding.fields["verdict"])
-        verdicts[verdict] = verdicts.get(verdict, 0) + 1
     row = {
         "source": reader.source,
         "format": reader.format_name,
-        "figures": figures,
+        "figures": summary.to_dict(),
         "items": pipeline.tally.items(),
-        "verdicts": verdicts,
-        "findings": len(findings),
+        "verdicts": dict(sink.verdicts),
+        "findings": sink.verdicts.total(),
         "notes": notes,
     }
     result.tables[RECORDINGS] = recording_row(work, row)
+    result.row_count = sink.rows + 1
 
 
 def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None = None) -> pa.Table:

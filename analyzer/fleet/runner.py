@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import socket
 import uuid
 from collections.abc import Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -95,14 +96,21 @@ def rows_written(work: FileWork, root: str, index_here: bool = False) -> FileRow
     back, for the caller to write last (a Dask worker on another machine: the input is
     complete in the index only once the caller has its row).
     """
-    result = file_rows(work)
-    count = result.rows
-    tables = dict(result.tables)
-    index = tables.pop(RECORDINGS, None) if index_here else None
-    Dataset(root).write(work.content_hash, tables)
-    result.row_count = count
-    result.tables = {RECORDINGS: index} if index is not None else {}
-    result.written = index is None
+    dataset = Dataset(root)
+    out = dataset.stream(work.content_hash)
+    try:
+        result = file_rows(work, out)
+        if result.error is None:
+            out.finish()  # every table in place before the input's recordings row
+    finally:
+        out.abort()
+    index = result.tables.pop(RECORDINGS)
+    if index_here:
+        result.tables = {RECORDINGS: index}
+    else:
+        dataset.write(work.content_hash, {RECORDINGS: index})
+        result.tables = {}
+        result.written = True
     return result
 
 
@@ -162,8 +170,7 @@ def cluster_error(client: Client, exc: BaseException) -> SourceError:
             f"the Dask cluster at {address} cannot run gimbal-analyzer's tasks: install the "
             "package where its scheduler and workers run (pip install 'gimbal-analyzer[cluster]')"
         )
-    first = next((line for line in str(exc).splitlines() if line.strip()), "")
-    return SourceError(f"the Dask cluster at {address} failed: {type(exc).__name__}: {first}")
+    return SourceError(f"the Dask cluster at {address} failed: {error_text(exc)}")
 
 
 def workers_reach(client: Client, root: str) -> None:
@@ -213,8 +220,30 @@ def connect(address: str) -> Client:
         raise UsageError(
             "--dask needs dask.distributed: pip install 'gimbal-analyzer[cluster]'"
         ) from None
+    _probe(address)
     try:
         client: Client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise UsageError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     return client
+
+
+def _probe(address: str) -> None:
+    """UsageError at once when nothing listens at a ``tcp://HOST:PORT`` address (Dask's
+    client would retry a refused connection until its timeout)."""
+    scheme, sep, rest = address.partition("://")
+    if (sep and scheme != "tcp") or (not rest and sep):
+        return
+    host, _, port = (rest if sep else address).rpartition(":")
+    if not host or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S):
+            pass
+    except ConnectionRefusedError:
+        raise UsageError(
+            f"cannot reach the Dask scheduler at {address}: connection refused "
+            "(is the scheduler running, on that port?)"
+        ) from None
+    except OSError:
+        return  # a slow or unknown network: the client's own timeout decides

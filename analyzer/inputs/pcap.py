@@ -375,4 +375,4 @@ def _flow_name(client: tuple[str, int], server: tuple[str, int]) -> str:
 
 def _why(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+    return text[0] if text else "not a pcap or pcapng file"

@@ -11,6 +11,7 @@ from analyzer.errors import UsageError
 
 if TYPE_CHECKING:
     from analyzer.live.server import FoxgloveLive
+    from analyzer.mcapio.channels import ChannelSpec
 
 
 def start_foxglove(
@@ -28,9 +29,20 @@ def start_foxglove(
         raise UsageError(
             f"--foxglove needs the foxglove-sdk package (pip install foxglove-sdk): {exc}"
         ) from None
-    live = FoxgloveLive(listen, encode=encode)
+    live = FoxgloveLive(listen, encode=encode, channels=camera_channels(args))
     print(f"foxglove: {live.describe()}", file=stream or sys.stderr, flush=True)
     return live
+
+
+def camera_channels(args: argparse.Namespace) -> list[ChannelSpec]:
+    """The channels of the ``--video`` streams, advertised from the start like the others
+    (a channel advertised while a client is connected may not reach it at once)."""
+    if not getattr(args, "video", None):
+        return []
+    from analyzer.mcapio.video_channels import camera_channel_specs
+    from analyzer.video.spec import video_specs
+
+    return [spec for video in video_specs(args) for spec in camera_channel_specs(video.name)]
 
 
 def with_foxglove(label: str, live: FoxgloveLive | None) -> str:

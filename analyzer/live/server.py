@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -100,10 +101,12 @@ class FoxgloveLive:
     """Sink and ``MessageTee`` (``analyzer.mcapio.channels``) serving Foxglove live.
 
     Starts listening at once (``UsageError`` with one line when it cannot, e.g. the port is
-    taken). ``add_channel`` / ``add_message`` are called by a recording for every channel
-    and message it writes; with ``encode`` (no recording to feed it) ``handle`` encodes each
-    batch itself. ``close`` stops the server and disconnects the clients. Nothing here
-    raises into the recording: a message the SDK refuses is counted in ``errors``.
+    taken); ``channels`` (the cameras') are advertised from the start with those a
+    recording can always hold. ``add_channel`` / ``add_message`` are called by a recording
+    for every channel and message it writes; with ``encode`` (no recording to feed it)
+    ``handle`` encodes each batch itself. ``close`` stops the server and disconnects the
+    clients. Nothing here raises into the recording: a message the SDK refuses is counted
+    in ``errors``.
     """
 
     def __init__(
@@ -113,6 +116,7 @@ class FoxgloveLive:
         schemas: dict[str, dict[str, Any]] | None = None,
         backlog: int = DEFAULT_BACKLOG,
         encode: bool = False,
+        channels: Sequence[ChannelSpec] = (),
     ) -> None:
         self.listen = listen
         self.encode = encode
@@ -140,7 +144,7 @@ class FoxgloveLive:
             raise UsageError(f"--foxglove: cannot listen on {where} ({exc})") from None
         self.port = self._server.port
         self.url = f"ws://{address(listen.host, self.port)}"
-        for spec in known_channel_specs(self._schemas):
+        for spec in [*known_channel_specs(self._schemas), *channels]:
             self._advertise(spec)
 
     # -- MessageTee: fed by a recording ---------------------------------------------------------
@@ -150,6 +154,9 @@ class FoxgloveLive:
         if len(channels) <= channel_id:
             channels.extend([None] * (channel_id + 1 - len(channels)))
         channels[channel_id] = self._channel_for(spec)
+
+    def advertise(self, spec: ChannelSpec) -> None:
+        self._channel_for(spec)
 
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None:
         channel = self._channels[channel_id] if channel_id < len(self._channels) else None

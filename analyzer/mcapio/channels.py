@@ -12,6 +12,10 @@ from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
 TOPIC_CAN_FRAMES = "/can/frames"
 TOPIC_STREAM_BYTES = "/stream/bytes"
 RAW_TOPICS = (TOPIC_CAN_FRAMES, TOPIC_STREAM_BYTES)
+# Where the gimbal points (views of the feedback, commands and UAV status): the frames of
+# world, aircraft, gimbal and camera, and the 3D scene (aircraft, field of view, target).
+TOPIC_TF = "/tf"
+TOPIC_SCENE = "/gimbal/scene"
 
 # Name of the metadata record describing the recording, and of the one written at the end
 # with counts gathered while writing (so `info` needs no scan of a finalised file).
@@ -202,9 +206,9 @@ def channel_spec(topic: str, role: str, schemas: dict[str, dict[str, Any]]) -> C
         schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
         name = str(schema["title"])
     elif role == ROLE_VIEW:
-        from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
+        from analyzer.mcapio.foxglove import view_schema  # it imports this module
 
-        name, schema = VIEW_SCHEMAS[topic]
+        name, schema = view_schema(topic)
     else:
         name = schema_name(topic)
         schema = schemas.get(topic) or permissive_schema(topic)
@@ -217,6 +221,9 @@ class MessageTee(Protocol):
     (the live Foxglove server, ``analyzer.live.server``)."""
 
     def add_channel(self, channel_id: int, spec: ChannelSpec) -> None: ...
+
+    def advertise(self, spec: ChannelSpec) -> None:
+        """A channel the recording will have (a camera's), told before its first message."""
 
     def add_message(self, channel_id: int, log_time: int, data: bytes) -> None: ...
 

@@ -1,4 +1,5 @@
-"""Foxglove views of events: target and UAV positions as LocationFix, diagnostics as Log."""
+"""Foxglove views of events: target and UAV positions as LocationFix, diagnostics as Log,
+where the gimbal points as transforms, a 3D scene and overlays on the camera's pictures."""
 
 from __future__ import annotations
 
@@ -6,6 +7,12 @@ import math
 from typing import Any
 
 from analyzer.mcapio.channels import time_ns
+from analyzer.mcapio.scene_views import (
+    ANNOTATIONS_SCHEMA,
+    SCENE_SCHEMAS,
+    SceneViews,
+    is_annotation_topic,
+)
 from analyzer.protocol.types import (
     BUS_ERROR,
     LINK,
@@ -15,6 +22,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_GPS,
     Event,
 )
+from analyzer.scene.state import INPUT_TOPICS as SCENE_INPUT_TOPICS
 
 LOCATION_FIX = "foxglove.LocationFix"
 LOG = "foxglove.Log"
@@ -106,12 +114,25 @@ VIEW_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
     TOPIC_UAV_FIX: (LOCATION_FIX, LOCATION_FIX_SCHEMA),
     TOPIC_TARGET_FIX: (LOCATION_FIX, LOCATION_FIX_SCHEMA),
     TOPIC_DIAGNOSTICS_LOG: (LOG, LOG_SCHEMA),
+    **SCENE_SCHEMAS,
 }
 
 # Topics whose events have a Foxglove view (UAV altitude only feeds the UAV fix).
 VIEW_INPUT_TOPICS = frozenset(
     {TOPIC_UAV_ALTITUDE, TOPIC_UAV_GPS, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS}
+    | SCENE_INPUT_TOPICS
 )
+
+
+def view_schema(topic: str) -> tuple[str, dict[str, Any]]:
+    """Schema name and JSON Schema of a view topic (a camera's /annotations included)."""
+    known = VIEW_SCHEMAS.get(topic)
+    if known is not None:
+        return known
+    if is_annotation_topic(topic):
+        return ANNOTATIONS_SCHEMA
+    raise KeyError(topic)
+
 
 _ZERO_COVARIANCE = [0.0] * 9
 # Link states (sources' link events) that are good news; the others are warnings.
@@ -190,27 +211,31 @@ def log_message(event: Event) -> dict[str, Any]:
 
 
 class FoxgloveViews:
-    """Turns events into Foxglove messages; keeps the last UAV altitude for the UAV fix."""
+    """Turns events into Foxglove messages; keeps the last UAV altitude for the UAV fix, and
+    the gimbal's state for the transforms, the scene and the overlays (``scene``)."""
 
     def __init__(self) -> None:
         self.uav_altitude_m = 0.0
+        self.scene = SceneViews()
 
     def views(self, event: Event) -> list[tuple[str, dict[str, Any]]]:
         """(topic, message) pairs to publish for one event (most events give none)."""
         topic = event.topic
+        out = self.scene.views(event, timestamp(event.time))
         if topic == TOPIC_UAV_ALTITUDE:
             altitude = _number(event.fields.get("altitude_m"))
             if altitude is not None:
                 self.uav_altitude_m = altitude
-            return []
-        if topic == TOPIC_UAV_GPS:
+        elif topic == TOPIC_UAV_GPS:
             fix = _fix(event, "uav", self.uav_altitude_m)
-            return [] if fix is None else [(TOPIC_UAV_FIX, fix)]
-        if topic == TOPIC_GIMBAL_RANGING:
-            if event.fields.get("success") is False:
-                return []
-            fix = _fix(event, "ranging_target", 0.0)
-            return [] if fix is None else [(TOPIC_TARGET_FIX, fix)]
-        if topic == TOPIC_DIAGNOSTICS:
-            return [(TOPIC_DIAGNOSTICS_LOG, log_message(event))]
-        return []
+            if fix is not None:
+                out.append((TOPIC_UAV_FIX, fix))
+        elif topic == TOPIC_GIMBAL_RANGING:
+            fix = (
+                None if event.fields.get("success") is False else _fix(event, "ranging_target", 0.0)
+            )
+            if fix is not None:
+                out.append((TOPIC_TARGET_FIX, fix))
+        elif topic == TOPIC_DIAGNOSTICS:
+            out.append((TOPIC_DIAGNOSTICS_LOG, log_message(event)))
+        return out

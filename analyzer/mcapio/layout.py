@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.mcapio.channels import TOPIC_SCENE
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
 from analyzer.protocol.types import (
     TOPIC_CAN_BUS_STATE,
+    TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -20,11 +22,18 @@ INDICATOR = "Indicator!gimbal-tracking"
 STATES = "StateTransitions!gimbal-modes"
 RAW = "RawMessages!gimbal-command"
 TABLE = "Table!gimbal-diagnostics"
+CHECK_STEPS = "Table!check-steps"  # the steps of a bench check (empty in other recordings)
 IMAGE = "ImageViewPanel!gimbal-camera"
+SCENE = "3D!gimbal-scene"
 BUS_PLOT = "Plot!can-bus-state"
 # The camera's thumbnails (record --video main): Studio 1.48 draws CompressedImage, not
-# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel.
+# CompressedVideo; newer Foxglove can be pointed at /camera/main in the same panel, with
+# /camera/main/annotations over it.
 CAMERA_THUMBNAIL_TOPIC = "/camera/main/thumbnail"
+CAMERA_THUMBNAIL_ANNOTATIONS = "/camera/main/thumbnail/annotations"
+# The 3D panel follows the gimbal's position (the world stays upright), seen from behind
+# and above, with the frames' axes (/tf) and the scene (aircraft, field of view, target).
+SCENE_FOLLOW_FRAME = "gimbal"
 
 # Message paths the layout shows: (topic, field) pairs, checked against the schemas by tests.
 PLOT_SERIES = (
@@ -105,15 +114,36 @@ def layout() -> dict[str, Any]:
             "showFullMessageForDiff": False,
         },
         TABLE: {"topicPath": TOPIC_DIAGNOSTICS},
+        CHECK_STEPS: {"topicPath": TOPIC_CHECK_STEPS},
         IMAGE: {
             "cameraTopic": CAMERA_THUMBNAIL_TOPIC,
-            "enabledMarkerTopics": [],
+            "enabledMarkerTopics": [CAMERA_THUMBNAIL_ANNOTATIONS],
             "mode": "fit",
             "pan": {"x": 0, "y": 0},
             "rotation": 0,
             "synchronize": False,
             "transformMarkers": False,
             "zoom": 1,
+        },
+        SCENE: {
+            "cameraState": {
+                "distance": 20,
+                "perspective": True,
+                "phi": 55,
+                "target": [0, 0, 0],
+                "targetOffset": [0, 0, 0],
+                "targetOrientation": [0, 0, 0, 1],
+                "thetaOffset": 150,
+                "fovy": 45,
+                "near": 0.1,
+                "far": 5000,
+            },
+            "followMode": "follow-position",
+            "followTf": SCENE_FOLLOW_FRAME,
+            "scene": {"transforms": {"showLabel": True, "labelSize": 0.12, "axisScale": 3}},
+            "transforms": {},
+            "topics": {TOPIC_SCENE: {"visible": True}},
+            "layers": {},  # a grid at the world origin is far behind a flying aircraft
         },
     }
     config_by_id[BUS_PLOT] = {
@@ -133,21 +163,26 @@ def layout() -> dict[str, Any]:
     }
     mosaic = {
         "direction": "row",
-        "splitPercentage": 38,
+        "splitPercentage": 50,
         "first": {
             "direction": "column",
-            "splitPercentage": 55,
+            "splitPercentage": 50,
             "first": {
                 "direction": "row",
                 "splitPercentage": 50,
-                "first": MAP,
-                "second": IMAGE,
+                "first": IMAGE,
+                "second": SCENE,
             },
             "second": {
-                "direction": "column",
-                "splitPercentage": 22,
-                "first": INDICATOR,
-                "second": LOG,
+                "direction": "row",
+                "splitPercentage": 50,
+                "first": MAP,
+                "second": {
+                    "direction": "column",
+                    "splitPercentage": 30,
+                    "first": INDICATOR,
+                    "second": LOG,
+                },
             },
         },
         "second": {
@@ -167,7 +202,12 @@ def layout() -> dict[str, Any]:
                     "direction": "row",
                     "splitPercentage": 50,
                     "first": RAW,
-                    "second": TABLE,
+                    "second": {
+                        "direction": "column",
+                        "splitPercentage": 60,
+                        "first": TABLE,
+                        "second": CHECK_STEPS,
+                    },
                 },
             },
         },

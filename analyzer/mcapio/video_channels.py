@@ -1,4 +1,4 @@
-"""Camera video in a recording: CompressedVideo and thumbnail channels, written and read."""
+"""Camera video in a recording: CompressedVideo, thumbnails and their overlays, written and read."""
 
 from __future__ import annotations
 
@@ -7,12 +7,20 @@ import json
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from analyzer.mcapio.channels import ROLE_KEY, time_ns
+from analyzer.mcapio.channels import (
+    ROLE_KEY,
+    ROLE_VIEW,
+    ChannelSpec,
+    MessageTee,
+    channel_spec,
+    time_ns,
+)
 from analyzer.mcapio.chunked_writer import ChunkedWriter
 from analyzer.mcapio.foxglove import TIME_SCHEMA
 from analyzer.mcapio.writer import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
+from analyzer.scene.scene3d import optical_frame
 
 if TYPE_CHECKING:  # the streams import PyAV; reading a recording does not need it
     from analyzer.video.rtsp_stream import VideoFrame, VideoStream
@@ -87,8 +95,38 @@ def thumbnail_topic(name: str) -> str:
     return f"{TOPIC_PREFIX}{name}/thumbnail"
 
 
+def annotations_topic(name: str) -> str:
+    """The overlays in the video's pixels (``foxglove.ImageAnnotations``)."""
+    return f"{TOPIC_PREFIX}{name}/annotations"
+
+
+def thumbnail_annotations_topic(name: str) -> str:
+    """The overlays in the thumbnail's pixels."""
+    return f"{TOPIC_PREFIX}{name}/thumbnail/annotations"
+
+
 def frame_id(name: str) -> str:
-    return f"camera_{name}"
+    return optical_frame(name)
+
+
+_SCHEMAS = {ROLE_VIDEO: COMPRESSED_VIDEO_SCHEMA, ROLE_THUMBNAIL: COMPRESSED_IMAGE_SCHEMA}
+
+
+def _spec(topic: str, role: str) -> ChannelSpec:
+    schema = _SCHEMAS[role]
+    data = json.dumps(schema, separators=(",", ":")).encode()
+    return ChannelSpec(topic, role, str(schema["title"]), data)
+
+
+def camera_channel_specs(name: str) -> list[ChannelSpec]:
+    """The channels of camera stream ``name``: video, thumbnails and their overlays (the
+    live server advertises them before the first frame comes)."""
+    return [
+        _spec(video_topic(name), ROLE_VIDEO),
+        _spec(thumbnail_topic(name), ROLE_THUMBNAIL),
+        channel_spec(annotations_topic(name), ROLE_VIEW, {}),
+        channel_spec(thumbnail_annotations_topic(name), ROLE_VIEW, {}),
+    ]
 
 
 def message_json(name: str, time: float, data: bytes, fmt: str) -> bytes:
@@ -104,9 +142,11 @@ def message_json(name: str, time: float, data: bytes, fmt: str) -> bytes:
 
 
 class VideoChannels:
-    """Registers the camera channels on first use and writes frames and thumbnails."""
+    """Registers the camera channels on first use and writes frames and thumbnails; a
+    ``tee`` (the live server) gets every channel and message with the very bytes written."""
 
-    def __init__(self) -> None:
+    def __init__(self, tee: MessageTee | None = None) -> None:
+        self._tee = tee
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
@@ -121,34 +161,35 @@ class VideoChannels:
                 "height": str(frame.height),
             }
             topic = video_topic(frame.stream)
-            channel = self._channel(writer, topic, COMPRESSED_VIDEO_SCHEMA, metadata)
+            channel = self._channel(writer, _spec(topic, ROLE_VIDEO), metadata)
             data = message_json(frame.stream, frame.time, frame.data, frame.codec)
-            writer.add_message(channel, log_time, data, log_time, self._next(channel))
+            self._add(writer, channel, log_time, data)
             if frame.thumbnail is not None:
                 topic = thumbnail_topic(frame.stream)
                 meta = {ROLE_KEY: ROLE_THUMBNAIL}
-                channel = self._channel(writer, topic, COMPRESSED_IMAGE_SCHEMA, meta)
+                channel = self._channel(writer, _spec(topic, ROLE_THUMBNAIL), meta)
                 data = message_json(frame.stream, frame.time, frame.thumbnail, "jpeg")
-                writer.add_message(channel, log_time, data, log_time, self._next(channel))
+                self._add(writer, channel, log_time, data)
 
-    def _next(self, channel: int) -> int:
+    def _add(self, writer: ChunkedWriter, channel: int, log_time: int, data: bytes) -> None:
         self._sequence[channel] += 1
-        return self._sequence[channel]
+        writer.add_message(channel, log_time, data, log_time, self._sequence[channel])
+        if self._tee is not None:
+            self._tee.add_message(channel, log_time, data)
 
-    def _channel(
-        self, writer: ChunkedWriter, topic: str, schema: dict[str, Any], metadata: dict[str, str]
-    ) -> int:
-        channel = self._channels.get(topic)
+    def _channel(self, writer: ChunkedWriter, spec: ChannelSpec, metadata: dict[str, str]) -> int:
+        channel = self._channels.get(spec.topic)
         if channel is not None:
             return channel
-        name = str(schema["title"])
-        schema_id = self._schemas.get(name)
+        schema_id = self._schemas.get(spec.schema_name)
         if schema_id is None:
-            data = json.dumps(schema, separators=(",", ":")).encode()
-            schema_id = self._schemas[name] = writer.register_schema(name, "jsonschema", data)
-        channel = writer.register_channel(topic, "json", schema_id, metadata)
-        self._channels[topic] = channel
+            schema_id = writer.register_schema(spec.schema_name, spec.schema_encoding, spec.schema)
+            self._schemas[spec.schema_name] = schema_id
+        channel = writer.register_channel(spec.topic, spec.message_encoding, schema_id, metadata)
+        self._channels[spec.topic] = channel
         self._sequence[channel] = 0
+        if self._tee is not None:
+            self._tee.add_channel(channel, spec)
         return channel
 
 
@@ -165,10 +206,17 @@ class VideoRecorder:
     def __init__(self, mcap: McapSink, streams: Sequence[VideoStream]) -> None:
         self.mcap = mcap
         self.streams = list(streams)
-        self.channels = VideoChannels()
+        self.channels = VideoChannels(mcap.tee)
         self.stage = _LinkStage(self)
         self.frames_written = 0
         self._frames: list[VideoFrame] = []
+        self._sizes: dict[str, tuple[int, int]] = {}  # the picture size the overlays are for
+        for stream in self.streams:
+            name = stream.spec.name
+            mcap.add_camera(name)
+            if mcap.tee is not None:
+                for spec in camera_channel_specs(name):
+                    mcap.tee.advertise(spec)
 
     def start(self) -> None:
         for stream in self.streams:
@@ -192,8 +240,26 @@ class VideoRecorder:
         frames, self._frames = self._frames, []
         if frames:
             frames.sort(key=lambda f: f.time)
+            self._size_overlays(frames)
             self.mcap.write_with(lambda writer: self.channels.write(writer, frames))
             self.frames_written += len(frames)
+
+    def _size_overlays(self, frames: Sequence[VideoFrame]) -> None:
+        """The overlays of a stream are drawn for its picture size, known from its frames
+        (and changed with it, should the camera come back with another size)."""
+        for frame in frames:
+            size = (frame.width, frame.height)
+            if self._sizes.get(frame.stream) == size or frame.width <= 0 or frame.height <= 0:
+                continue
+            from analyzer.video.thumbnail import thumbnail_size  # PyAV: video is recorded
+
+            self._sizes[frame.stream] = size
+            self.mcap.add_overlay(annotations_topic(frame.stream), *size)
+            if any(s.thumbnail_interval > 0 for s in self.streams if s.spec.name == frame.stream):
+                width, height = thumbnail_size(*size)
+                topic = thumbnail_annotations_topic(frame.stream)
+                # the thumbnails are what Foxglove Studio 1.48 shows: it draws lines, no text
+                self.mcap.add_overlay(topic, width, height, stroked=True)
 
     def close(self) -> None:
         self.stop()

@@ -184,6 +184,24 @@ class McapSink:
                 self._stop_after(exc)
                 self._raise_pending()
 
+    def add_camera(self, name: str) -> None:
+        """A camera stream is recorded: its optical frame hangs under the gimbal in /tf."""
+        with self._lock:
+            if self._views is not None:
+                self._views.scene.add_camera(name)
+
+    def add_overlay(self, topic: str, width: int, height: int, *, stroked: bool = False) -> None:
+        """Draw the overlays (tracking box, taps, angles) on ``topic``, for a picture of
+        ``width`` x ``height`` pixels, from now on (``stroked``: the text as lines)."""
+        with self._lock:
+            if self._views is not None:
+                self._views.scene.add_overlay(topic, width, height, stroked=stroked)
+
+    @property
+    def tee(self) -> MessageTee | None:
+        """What gets every channel and message written (the live server), if anything."""
+        return self._tee
+
     def write_with(self, write: Callable[[ChunkedWriter], None]) -> None:
         """Run ``write`` on the file's writer under the sink's lock, for channels other
         modules own (camera video); a write error stops the recording as ``handle`` does."""

@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 from analyzer.protocol.command_table import COMMANDS
-from analyzer.protocol.feedback import ATTITUDE, RANGING
+from analyzer.protocol.feedback import LAYOUTS
 from analyzer.protocol.fields import Field
-from analyzer.protocol.ids import COMPONENT_NAMES, FEEDBACK_ID
+from analyzer.protocol.ids import COMPONENT_NAMES, FEEDBACK_ID, TEXT_END_ID, TEXT_ID
+from analyzer.protocol.types import TEXT_UNTERMINATED, TOPIC_UAV_TEXT
 from analyzer.protocol.uav import STATUS_FRAMES
+
+TEXT_NOTE = (
+    "8 ASCII bytes per frame, NUL padding removed; a message that never ends is "
+    f"reported as `{TEXT_UNTERMINATED}`."
+)
 
 
 def describe_field(f: Field, data_offset: int = 0) -> str:
@@ -66,7 +72,7 @@ def command_reference() -> str:
             f"| {row.title} | {cell} |"
         )
     lines += ["", f"## Gimbal feedback (CAN ID 0x{FEEDBACK_ID:08X}, 4 x 8-byte segments)", ""]
-    for layout in (ATTITUDE, RANGING):
+    for layout in LAYOUTS.values():
         lines.append(
             f"### {layout.name} (length byte 0x{layout.length_byte:02X}, topic `{layout.topic}`, "
             f"CRC at bytes {layout.crc_offset}-{layout.crc_offset + 1})"
@@ -81,10 +87,10 @@ def command_reference() -> str:
         lines += [f"- {describe_field(f)}" for f in status.layout.fields]
         lines.append("")
     lines += [
-        "### text (CAN IDs 0x02008201 start/middle, 0x02008202 end, topic `/uav/text`)",
+        f"### text (CAN IDs 0x{TEXT_ID:08X} start/middle, 0x{TEXT_END_ID:08X} end, "
+        f"topic `{TOPIC_UAV_TEXT}`)",
         "",
-        "- 8 ASCII bytes per frame, NUL padding removed; a message that never ends is "
-        "reported as `text_unterminated`.",
+        f"- {TEXT_NOTE}",
         "",
     ]
     return "\n".join(lines)

@@ -6,6 +6,13 @@ from typing import Any
 
 from analyzer.protocol.bus_state import BUS_STATES, count_key
 from analyzer.protocol.can_error import CLASS_NAMES, UNKNOWN_CLASS, UNSPECIFIED
+from analyzer.protocol.check_fields import (
+    FIGURES,
+    REQUIRED_FIELDS,
+    STEP_FIELDS,
+    STEP_NAMES,
+    STEP_VERDICTS,
+)
 from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
@@ -15,6 +22,7 @@ from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_BUS_STATE,
+    TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_UAV_TEXT,
@@ -158,6 +166,24 @@ def response_schema() -> dict[str, Any]:
     return schema
 
 
+def check_steps_schema() -> dict[str, Any]:
+    """Steps of the bench check (`gimbal-analyzer check`): verdict and measured figures."""
+    schema = _envelope(
+        TOPIC_CHECK_STEPS,
+        "bench check step",
+        "One step of `gimbal-analyzer check`, judged by the response analysis and the "
+        "figures measured from the feedback; 'time' is when the step was decided.",
+    )
+    props = schema["properties"]
+    for name, (kind, description) in {**STEP_FIELDS, **FIGURES}.items():
+        props[name] = {"type": kind, "description": description}
+    props["step"]["enum"] = list(STEP_NAMES)
+    props["verdict"]["enum"] = list(STEP_VERDICTS)
+    props["findings"]["items"] = {"type": "string"}
+    schema["required"] += list(REQUIRED_FIELDS)
+    return schema
+
+
 _NAMES = {"type": "array", "items": {"type": "string"}}
 _COUNTER = {"type": "integer", "minimum": 0, "maximum": 255}
 _BUS_STATE = {"type": "string", "enum": list(BUS_STATES)}
@@ -278,6 +304,14 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
             },
             "peer": {"type": "string", "description": "link diagnostics: the other end"},
             "retry_in_s": {"type": "number", "description": "link diagnostics: next attempt"},
+            "down_s": {
+                "type": "number",
+                "description": "link diagnostics: how long a lost link was gone, once back",
+            },
+            "lost_at": {
+                "type": "number",
+                "description": "link diagnostics: when a link that is back was lost (Unix s)",
+            },
             "packets": {"type": "integer", "description": "pcap packets concerned"},
             "packets_read": {"type": "integer", "description": "pcap packets read until then"},
             "frames_read": {"type": "integer", "description": "frames read until then"},
@@ -288,6 +322,7 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
     diag["required"] += ["kind", "detail", "raw"]
     out[TOPIC_DIAGNOSTICS] = diag
     out[TOPIC_ANALYSIS_RESPONSE] = response_schema()
+    out[TOPIC_CHECK_STEPS] = check_steps_schema()
     out[TOPIC_CAN_BUS_STATE] = bus_state_schema()
     assert set(out) == set(TOPICS)
     return out

@@ -17,6 +17,7 @@ TOPIC_DIAGNOSTICS = "/diagnostics"
 TOPIC_CAN_OTHER = "/can/other"
 TOPIC_CAN_BUS_STATE = "/can/bus_state"  # a CAN controller's error state, from error frames
 TOPIC_ANALYSIS_RESPONSE = "/analysis/response"  # findings of the response analysis
+TOPIC_CHECK_STEPS = "/check/steps"  # verdicts of the bench check's steps
 
 TOPICS = (
     TOPIC_COMMAND,
@@ -28,6 +29,7 @@ TOPICS = (
     TOPIC_UAV_TEXT,
     TOPIC_DIAGNOSTICS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_CHECK_STEPS,
     TOPIC_CAN_BUS_STATE,
 )
 

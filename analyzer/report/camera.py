@@ -47,8 +47,8 @@ class Picture(Protocol):
 
 
 def picture_jpeg(picture: Picture) -> bytes:
-    """The JPEG shown for ``picture``: the one place where a picture's image is produced
-    (anything drawn over the camera's view is drawn here)."""
+    """The JPEG shown for ``picture``: the one place where a picture's image is asked for
+    (a picture of ``analyzer.scene.timeline`` draws its overlay in then, and only then)."""
     return picture.jpeg
 
 

@@ -15,6 +15,7 @@ from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
 from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
     BUS_ERROR,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_ATTITUDE,
@@ -45,10 +46,16 @@ def _number(fields: dict[str, Any], name: str) -> float | None:
     return float(value)
 
 
+def _stop_rows(last: tuple[float, float, float]) -> list[Row]:
+    """A commanded speed holds until STOP_AFTER_S after its command, then falls to 0."""
+    t, pan, tilt = last
+    return [(t + STOP_AFTER_S, pan, tilt), (t + STOP_AFTER_S + 1e-3, 0.0, 0.0)]
+
+
 @dataclass
 class ReportData:
-    """Series and tables of the report: ``add(event)`` for every decoded event,
-    ``add_finding(fields)`` for every finding of the response analysis."""
+    """Series and tables of the report: ``add(event)`` for every event, findings of the
+    response analysis included (or ``add_finding(fields)`` for those)."""
 
     source: str = ""
     format_name: str = ""
@@ -85,6 +92,9 @@ class ReportData:
 
     def add(self, event: Event) -> None:
         t, topic, fields = event.time, event.topic, event.fields
+        if topic == TOPIC_ANALYSIS_RESPONSE:
+            self.add_finding(event.to_dict())
+            return
         self.topics[topic] += 1
         if self.first is None or t < self.first:
             self.first = t
@@ -154,9 +164,8 @@ class ReportData:
 
     def _speeds_stop(self, last: tuple[float, float, float]) -> None:
         """The commanded speed holds until STOP_AFTER_S after the last command, then 0."""
-        t, pan, tilt = last
-        self.commanded.add((t + STOP_AFTER_S, pan, tilt))
-        self.commanded.add((t + STOP_AFTER_S + 1e-3, 0.0, 0.0))
+        for row in _stop_rows(last):
+            self.commanded.add(row)
 
     def _gps(self, t: float, fields: dict[str, Any]) -> None:
         lat, lon = _number(fields, "latitude_deg"), _number(fields, "longitude_deg")
@@ -187,13 +196,14 @@ class ReportData:
         self.findings.clear()
         self.targets.clear()
 
-    def finish(self) -> None:
-        """The end of the input: a commanded speed still held returns to 0."""
-        if self._last_speed is not None:
-            self._speeds_stop(self._last_speed)
-            self._last_speed = None
-
     # -- what the page shows -------------------------------------------------------------
+
+    def commanded_rows(self) -> list[Row]:
+        """The commanded speeds, back to 0 after the last command of the input too."""
+        rows = self.commanded.rows()
+        if self._last_speed is not None:
+            rows += _stop_rows(self._last_speed)
+        return rows
 
     def feedback_per_second(self) -> list[Row]:
         return self.feedback.rows(self.last)

@@ -82,7 +82,7 @@ def _plot_data(data: ReportData) -> dict[str, Any]:
         "attitude": rel(data.attitude.rows()),
         "marks": [[round(r[0] - start, 3), _mark_label(r[1])] for r in data.marks.rows()],
         "targets": targets,
-        "commanded": rel(data.commanded.rows()),
+        "commanded": rel(data.commanded_rows()),
         "measured": rel(data.measured.rows()),
         "feedback": rel(data.feedback_per_second()),
         "errors": rel(data.errors_per_second()),
@@ -106,8 +106,14 @@ def _resolution(data: ReportData) -> str:
     )
 
 
-def render(data: ReportData, settings: str, pictures: camera.PictureChoice | None = None) -> str:
-    """The whole page (``pictures``: the camera pictures chosen for it, if any)."""
+def render(
+    data: ReportData,
+    settings: str,
+    pictures: camera.PictureChoice | None = None,
+    lead: str = "",
+) -> str:
+    """The whole page: ``pictures`` are the camera pictures chosen for it, if any; ``lead``
+    is HTML of a command's own shown first (the check's steps)."""
     plots = _plot_data(data)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
@@ -128,6 +134,7 @@ def render(data: ReportData, settings: str, pictures: camera.PictureChoice | Non
         "The protocol has no acknowledgements: each command is judged from the attitude "
         "feedback that followed it.</p>",
         notes,
+        lead,
         "<h2>Overview</h2>",
         tables.overview(data, settings),
         "<h2>Gimbal attitude</h2>",

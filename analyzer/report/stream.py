@@ -2,28 +2,30 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from analyzer.pipeline import Batch, Stage
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
 from analyzer.report.collect import ReportData
 
 
 class EventsInto:
-    """A sink handing every decoded event to ``data.add`` (findings stored in the input
-    are left out: the report judges the commands afresh, with its own settings)."""
+    """A sink handing every decoded event to ``add`` (findings stored in the input are left
+    out: the report judges the commands afresh, with its own settings)."""
 
     keeps_items = False  # only events are looked at
 
-    def __init__(self, data: ReportData) -> None:
-        self.data = data
+    def __init__(self, add: Callable[[Event], None]) -> None:
+        self.add = add
 
     def handle(self, batch: Batch) -> None:
-        add = self.data.add
+        add = self.add
         for event in batch.events:
             if event.topic != TOPIC_ANALYSIS_RESPONSE:
                 add(event)
 
     def close(self) -> None:
-        self.data.finish()
+        pass
 
 
 class FindingsInto:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import select
 import selectors
 import socket
 import time
@@ -254,9 +255,16 @@ class TcpClientLink:
             why = exc.strerror or str(exc)
             raise SourceError(f"cannot connect to {spec.host}:{spec.port}: {why}") from None
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.sock.settimeout(3.0)  # for sends; receive waits with select, so one thread may
+        # receive while another sends (the socket's timeout is never changed under it)
 
     def receive(self, timeout: float) -> list[Item]:
-        self.sock.settimeout(max(0.001, timeout))
+        try:
+            ready, _, _ = select.select([self.sock], [], [], max(0.0, timeout))
+        except (OSError, ValueError) as exc:  # closed under us
+            raise SourceError(f"{self.name}: {exc}") from None
+        if not ready:
+            return []
         try:
             data = self.sock.recv(RECV_SIZE)
         except (TimeoutError, BlockingIOError):
@@ -268,7 +276,6 @@ class TcpClientLink:
         return [StreamChunk(time.time(), data, source=self.name, direction=FROM_IDU)]
 
     def send(self, can_id: int, data: bytes) -> None:
-        self.sock.settimeout(3.0)
         try:
             self.sock.sendall(to_stream(can_id, data))
         except OSError as exc:

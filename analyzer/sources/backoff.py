@@ -4,7 +4,8 @@ from __future__ import annotations
 
 
 class Backoff:
-    """Capped exponential backoff shared by every reconnecting source (``tcp:``, video).
+    """Capped exponential backoff shared by every reconnecting link (``tcp:``, ``can:``,
+    ``serial:`` through ``analyzer.sources.reconnect``, and the camera video).
 
     ``delay`` is the wait before the next attempt; ``failed()`` returns it and doubles
     it (up to ``maximum``) for the attempt after; ``reset()`` starts over, once a

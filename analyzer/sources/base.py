@@ -39,9 +39,12 @@ class Source(Protocol):
     def close(self) -> None: ...
 
 
-def link_event(source: str, detail: str, state: str, **extra: Any) -> Event:
-    """A /diagnostics event of kind ``link``: a connection state change of a live source."""
-    return diagnostic(time.time(), source, LINK, detail, state=state, **extra)
+def link_event(
+    source: str, detail: str, state: str, *, at: float | None = None, **extra: Any
+) -> Event:
+    """A /diagnostics event of kind ``link``: a connection state change of a live source
+    (at time ``at``, now by default)."""
+    return diagnostic(time.time() if at is None else at, source, LINK, detail, state=state, **extra)
 
 
 def overflow_event(source: str, items: int, size: int, total: int) -> Event:

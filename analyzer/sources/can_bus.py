@@ -1,15 +1,19 @@
-"""A python-can bus opened passively: frames are received, nothing is ever transmitted."""
+"""A python-can bus opened passively (nothing is ever transmitted), reopened when it fails."""
 
 from __future__ import annotations
 
 import contextlib
-from typing import Any
+import threading
+from collections.abc import Callable
+from typing import Any, Protocol
 
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import UsageError
 from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
-from analyzer.protocol.types import CanFrame
-from analyzer.sources.base import MAX_ITEMS_PER_READ, SourceItem, link_event
+from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
+from analyzer.sources.socketcan_links import bring_up, socketcan_down
 from analyzer.sources.spec import CanSpec
+
+RECV_POLL_S = 0.25  # how long one recv waits, so that close() is heard in time
 
 # How each python-can interface is asked for listen-only (silent / monitor) mode.
 # Interfaces not listed have no such option in python-can: they are opened normally and
@@ -28,6 +32,17 @@ LISTEN_ONLY_OPTIONS: dict[str, dict[str, Any]] = {
 }
 
 
+class ReceivingBus(Protocol):
+    """What a capture uses of a ``can.BusABC``: receive and shut down, never send."""
+
+    def recv(self, timeout: float | None = None) -> Any: ...  # a can.Message or None
+
+    def shutdown(self) -> None: ...
+
+
+BusOpener = Callable[[CanSpec], ReceivingBus]
+
+
 def listen_only_kwargs(interface: str) -> dict[str, Any]:
     """The python-can keyword arguments requesting listen-only mode, {} where there are none."""
     options = dict(LISTEN_ONLY_OPTIONS.get(interface, {}))
@@ -38,83 +53,119 @@ def listen_only_kwargs(interface: str) -> dict[str, Any]:
     return options
 
 
-class CanSource:
-    """Receive-only access to a python-can bus.
+def bus_arguments(spec: CanSpec) -> dict[str, Any]:
+    """Every keyword ``can.Bus`` gets for ``spec``: the same at the first open and each reopen."""
+    kwargs: dict[str, Any] = {
+        "interface": spec.interface,
+        "channel": spec.channel,
+        "receive_own_messages": False,
+    }
+    if spec.bitrate is not None:
+        kwargs["bitrate"] = spec.bitrate
+    kwargs.update(listen_only_kwargs(spec.interface))
+    return kwargs
 
-    The bus object is private and only ``recv`` and ``shutdown`` are ever called on it;
-    where python-can exposes a listen-only mode for the interface it is requested, so
-    the adapter does not even acknowledge frames (see ``LISTEN_ONLY_OPTIONS``).
-    """
 
-    def __init__(self, spec: CanSpec, *, bus: Any = None) -> None:
+def open_bus(spec: CanSpec) -> ReceivingBus:
+    """``can.Bus`` for ``spec``; an interface python-can does not know is a UsageError."""
+    import can
+
+    try:
+        bus: ReceivingBus = can.Bus(**bus_arguments(spec))
+        return bus
+    except (can.CanInterfaceNotImplementedError, NotImplementedError) as exc:
+        if spec.interface not in can.VALID_INTERFACES:
+            known = ", ".join(sorted(can.VALID_INTERFACES))
+            raise UsageError(
+                f"unknown CAN interface {spec.interface!r}; python-can knows: {known}"
+            ) from exc
+        raise
+
+
+class CanLink(DeviceLink):
+    """One python-can bus at a time: only ``recv`` and ``shutdown`` are ever called on it
+    (python-can buses are not thread-safe: ``recv`` polls, so ``close`` is heard)."""
+
+    def __init__(self, spec: CanSpec, opener: BusOpener) -> None:
         self.spec = spec
-        self.bitrate = spec.bitrate or 1_000_000
+        self.opener = opener
         rate = f"@{spec.bitrate}" if spec.bitrate else ""
         self.description = f"can:{spec.interface}:{spec.channel}{rate}"
-        self.source_name = spec.channel  # the decoder names CAN events by channel
         self.listen_only = bool(LISTEN_ONLY_OPTIONS.get(spec.interface))
-        self._bus = bus if bus is not None else self._open(spec)
-        self._closed = False
-        self._announced = False
-        self._pending_error: BaseException | None = None
+        self._bus: ReceivingBus | None = None
+        self._lock = threading.Lock()
 
-    def _open(self, spec: CanSpec) -> Any:
-        import can
+    def open(self) -> None:
+        bus = self.opener(self.spec)
+        channel = self.spec.channel
+        if self.spec.interface == "socketcan" and socketcan_down(channel):
+            # bound to a down interface, the socket would wait in silence
+            with contextlib.suppress(Exception):
+                bus.shutdown()
+            raise ConnectionError(f"{channel} is down ({bring_up(channel)})")
+        with self._lock:
+            self._bus = bus
 
-        kwargs: dict[str, Any] = {"receive_own_messages": False}
-        if spec.bitrate is not None:
-            kwargs["bitrate"] = spec.bitrate
-        kwargs.update(listen_only_kwargs(spec.interface))
-        try:
-            return can.Bus(interface=spec.interface, channel=spec.channel, **kwargs)
-        except (can.CanInterfaceNotImplementedError, NotImplementedError) as exc:
-            if spec.interface not in can.VALID_INTERFACES:
-                known = ", ".join(sorted(can.VALID_INTERFACES))
-                raise UsageError(
-                    f"unknown CAN interface {spec.interface!r}; python-can knows: {known}"
-                ) from exc
-            raise SourceError(f"cannot open {self.description}: {exc}") from exc
-        except Exception as exc:  # python-can, driver and OS errors all mean "cannot open"
-            raise SourceError(f"cannot open {self.description}: {_one_line(exc)}") from exc
-
-    def read(self, timeout: float) -> list[SourceItem]:
-        if self._closed:
-            raise EOFError
-        if self._pending_error is not None:
-            exc, self._pending_error = self._pending_error, None
-            raise SourceError(f"{self.description} failed: {_one_line(exc)}") from exc
-        out: list[SourceItem] = []
-        if not self._announced:
-            self._announced = True
-            mode = "listen-only" if self.listen_only else "receive-only"
-            out.append(link_event(self.source_name, f"opened {self.description} ({mode})", "open"))
-        try:
-            msg = self._bus.recv(timeout=max(0.0, timeout))
-            while msg is not None:
-                out.append(self._frame(msg))
-                if len(out) >= MAX_ITEMS_PER_READ:
-                    break
-                msg = self._bus.recv(timeout=0.0)
-        except Exception as exc:  # an unplugged adapter or a driver error ends the capture
-            if out:
-                # hand over what was read; the next read reports the failure
-                self._pending_error = exc
-                return out
-            raise SourceError(f"{self.description} failed: {_one_line(exc)}") from exc
-        return out
-
-    def _frame(self, msg: Any) -> CanFrame:
+    def receive(self, put: Put, stopping: threading.Event) -> tuple[bool, str]:
+        bus = self._bus
+        if bus is None:
+            return False, "not open"
+        got_data = False
+        channel = self.spec.channel
+        # error frames of these interfaces carry linux/can/error.h classes in their ID
         socketcan_errors = self.spec.interface in SOCKETCAN_ERROR_INTERFACES
-        return frame_from_message(msg, self.spec.channel, socketcan_errors=socketcan_errors)
+        while not stopping.is_set():
+            try:
+                msg = bus.recv(timeout=RECV_POLL_S)
+            except Exception as exc:  # an unplugged adapter, an interface down, a driver error
+                return got_data, error_words(exc)
+            if msg is not None:
+                got_data = True
+                put(frame_from_message(msg, channel, socketcan_errors=socketcan_errors))
+        return got_data, "capture stopped"
 
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        with contextlib.suppress(Exception):
-            self._bus.shutdown()
+    def release(self) -> None:
+        with self._lock:
+            bus, self._bus = self._bus, None
+        if bus is not None:
+            with contextlib.suppress(Exception):  # an unplugged adapter cannot say goodbye
+                bus.shutdown()
+
+    def opened_words(self) -> str:
+        mode = "listen-only" if self.listen_only else "receive-only"
+        return f"opened {self.description} ({mode})"
 
 
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else exc.__class__.__name__
+class CanSource(ReconnectingSource):
+    """Receive-only access to a python-can bus, opened again when it fails.
+
+    Where python-can exposes a listen-only mode for the interface it is requested, so
+    the adapter does not even acknowledge frames (see ``LISTEN_ONLY_OPTIONS``). A bus
+    that cannot be opened at the start is a SourceError (or a UsageError for an
+    interface python-can does not know); a bus that fails later (USB adapter unplugged,
+    interface down, driver error) is shut down and reopened with the same arguments
+    and the same backoff as ``tcp:`` (``analyzer.sources.reconnect``), while the
+    capture goes on. ``open_bus`` replaces ``can.Bus`` (tests).
+    """
+
+    thread_name = "can"
+
+    def __init__(
+        self,
+        spec: CanSpec,
+        *,
+        open_bus: BusOpener = open_bus,
+        backoff_initial: float = 0.5,
+        backoff_max: float = 10.0,
+    ) -> None:
+        link = CanLink(spec, open_bus)
+        self.spec = spec
+        self.bitrate = spec.bitrate or 1_000_000
+        self.listen_only = link.listen_only
+        super().__init__(
+            link,
+            source_name=spec.channel,  # the decoder names CAN events by channel
+            open_now=True,
+            backoff_initial=backoff_initial,
+            backoff_max=backoff_max,
+        )

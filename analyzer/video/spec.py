@@ -57,7 +57,9 @@ def add_video_options(parser: argparse.ArgumentParser) -> None:
         metavar="SPEC",
         help="main, sub1, sub2, thermal (the document's streams at --camera) or NAME=rtsp://...; "
         "repeatable. Each goes to /camera/NAME (foxglove.CompressedVideo) and "
-        "/camera/NAME/thumbnail (JPEG, foxglove.CompressedImage)",
+        "/camera/NAME/thumbnail (JPEG, foxglove.CompressedImage), with the tracking box, "
+        "taps and angles over them on /camera/NAME/annotations and "
+        "/camera/NAME/thumbnail/annotations",
     )
     group.add_argument(
         "--camera",

@@ -11,6 +11,12 @@ THUMBNAIL_WIDTH = 320
 DECODERS = {"h264": "h264", "h265": "hevc"}  # Foxglove's format names -> FFmpeg's decoders
 
 
+def thumbnail_size(width: int, height: int, max_width: int = THUMBNAIL_WIDTH) -> tuple[int, int]:
+    """The size of the thumbnail of a ``width`` x ``height`` picture (even numbers)."""
+    scale = min(1.0, max_width / max(1, width))
+    return max(2, int(width * scale) // 2 * 2), max(2, int(height * scale) // 2 * 2)
+
+
 def jpeg_thumbnail(codec: str, access_unit: bytes, width: int = THUMBNAIL_WIDTH) -> bytes | None:
     """A JPEG of the keyframe in ``access_unit`` (Annex B with its parameter sets), at most
     ``width`` pixels wide; None when it does not decode."""
@@ -20,9 +26,7 @@ def jpeg_thumbnail(codec: str, access_unit: bytes, width: int = THUMBNAIL_WIDTH)
         if not frames:
             return None
         frame = frames[0]
-        scale = min(1.0, width / max(1, frame.width))
-        w = max(2, int(frame.width * scale) // 2 * 2)
-        h = max(2, int(frame.height * scale) // 2 * 2)
+        w, h = thumbnail_size(frame.width, frame.height, width)
         small = frame.reformat(width=w, height=h, format="yuvj420p")
         encoder = cast(av.VideoCodecContext, av.CodecContext.create("mjpeg", "w"))
         encoder.width, encoder.height = w, h

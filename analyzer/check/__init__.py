@@ -1,0 +1,1 @@
+"""The bench check (`gimbal-analyzer check`): steps, their run on a live link, and verdicts."""

@@ -1,0 +1,54 @@
+"""`check --dry-run`: the frames the steps would send, with their latest times; nothing is sent."""
+
+from __future__ import annotations
+
+from analyzer.check.runner import AFTER_DEADLINE_S, encode
+from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Send, Step
+from analyzer.protocol.framing import wrap_control
+from analyzer.protocol.ids import CONTROL_ID
+from analyzer.protocol.types import hexstr
+
+
+def _line(at: float, step: str, what: str, data: bytes, extra: str = "") -> str:
+    return (
+        f"  +{at:6.2f} s  {step:<13} {what:<52} {CONTROL_ID:08X}#{data.hex().upper()}  "
+        f"TCP {hexstr(wrap_control(data))}{extra}"
+    )
+
+
+def dry_run_lines(steps: tuple[Step, ...], options: Options, allowed_s: float) -> list[str]:
+    """Every frame of ``steps`` (and the final centring) for a gimbal that starts centred.
+
+    A step waits for the gimbal to settle, at most the time allowed: the times shown are
+    the latest each frame would go."""
+    lines: list[str] = []
+    at = 0.0
+    attitude = Attitude()
+    wait = allowed_s + AFTER_DEADLINE_S
+    for step in steps:
+        plan = step.plan(attitude, options)
+        for action in plan.actions:
+            if isinstance(action, Listen):
+                lines.append(
+                    f"  +{at:6.2f} s  {step.name:<13} listen {action.seconds:g} s (send nothing)"
+                )
+                at += action.seconds
+            elif isinstance(action, Hold):
+                params = {"pan_speed_dps": action.pan_dps, "tilt_speed_dps": action.tilt_dps}
+                what = Send("gimbal_control", params).describe()
+                every = f"  x{action.count} every {REPEAT_S * 1000:g} ms"
+                lines.append(_line(at, step.name, what, encode("gimbal_control", params), every))
+                at += action.count * REPEAT_S
+                stop = {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}
+                what = Send("gimbal_control", stop).describe()
+                lines.append(_line(at, step.name, what, encode("gimbal_control", stop)))
+                at += wait  # the rate and stop findings come within the time allowed
+            else:
+                data = encode(action.name, action.params)
+                lines.append(_line(at, step.name, action.describe(), data))
+                at += (wait if action.goals or action.check else 0.0) + action.pause
+        attitude = plan.end
+    for name, params in (("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}),):
+        lines.append(_line(at, "(centre)", Send(name, params).describe(), encode(name, params)))
+    lines.append(_line(at, "(centre)", "forward", encode("forward", {})))
+    return lines

@@ -1,0 +1,227 @@
+"""A step's verdict: the response analysis' findings, the measured figures and the pass limits."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from analyzer.analysis.findings import (
+    CHECK_RATE,
+    CHECK_REPEAT,
+    CHECK_STOP,
+    CHECK_TARGET,
+    CHECK_TRACKING,
+    NOT_OBEYED,
+    OBEYED,
+    PARTIAL,
+    UNKNOWN,
+    worst,
+)
+from analyzer.analysis.response import Settings
+from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample
+from analyzer.check.figures import (
+    feedback_figures,
+    longest_silence,
+    move_figures,
+    rate_figure,
+)
+from analyzer.check.steps import Hold, Listen, Plan, Send
+from analyzer.protocol.check_fields import FAIL, PASS, SKIPPED
+from analyzer.protocol.response_fields import REFERENCE_AIRFRAME
+from analyzer.tally import EXPECTED_FEEDBACK_HZ, FEEDBACK_TOLERANCE, GAP_THRESHOLD_S
+from analyzer.timefmt import format_clock
+
+JUDGED_CHECKS = frozenset({CHECK_TARGET, CHECK_RATE, CHECK_STOP, CHECK_REPEAT, CHECK_TRACKING})
+PERIOD_S = 1.0 / EXPECTED_FEEDBACK_HZ
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The pass limits: the analysis' settings, the slowest slew, how far a speed may be off."""
+
+    settings: Settings = field(default_factory=Settings)
+    min_slew_dps: float = 30.0
+    speed_tolerance: float = 0.25
+
+
+@dataclass
+class StepResult:
+    """One step's verdict, with the figures it measured."""
+
+    step: str
+    verdict: str
+    detail: str
+    figures: dict[str, Any] = field(default_factory=dict)
+    index: int = 0
+    started_at: float = 0.0
+    duration_s: float = 0.0
+    findings: list[str] = field(default_factory=list)
+
+    def fields(self) -> dict[str, Any]:
+        """The /check/steps event fields and the --json object: figures as top-level keys."""
+        out: dict[str, Any] = {"step": self.step, "verdict": self.verdict, "detail": self.detail}
+        for key, value in self.figures.items():
+            out[key] = round(value, 3) if isinstance(value, float) else value
+        out.update(
+            index=self.index,
+            started_at=round(self.started_at, 3),
+            duration_s=round(self.duration_s, 2),
+            findings=list(self.findings),
+        )
+        return out
+
+
+@dataclass
+class Evidence:
+    """What one step sent and saw: its judged commands (name, time) and the feedback."""
+
+    plan: Plan
+    started_at: float
+    ended_at: float
+    judged: list[tuple[Send | Hold, float, float]]  # action, its first and last send time
+    samples: list[Sample]
+    feedback_times: list[float]
+    damaged: int
+    findings: dict[int, list[dict[str, Any]]]  # index into ``judged`` -> its findings
+
+
+def required_check(action: Send | Hold) -> str:
+    """The check whose finding decides a judged action."""
+    return CHECK_RATE if isinstance(action, Hold) else action.check
+
+
+def judge_feedback(evidence: Evidence) -> tuple[str, str, dict[str, Any]]:
+    start, end = evidence.started_at, evidence.ended_at
+    figures = feedback_figures(evidence.feedback_times, evidence.damaged, start, end, PERIOD_S)
+    numbers: dict[str, Any] = dict(figures.as_dict())
+    span = end - start
+    if not figures.messages:
+        damaged = f", {figures.crc_errors} damaged" if figures.crc_errors else ""
+        text = f"no feedback: no whole message in {span:.1f} s ({figures.lost} lost{damaged})"
+        return FAIL, text, numbers
+    problems = []
+    period = figures.period_s
+    if period is not None and abs(period - PERIOD_S) > FEEDBACK_TOLERANCE * PERIOD_S:
+        problems.append(f"a message every {period:.2f} s instead of {PERIOD_S:.2f}")
+    if figures.lost:
+        problems.append(f"{figures.lost} of {figures.messages + figures.lost} messages lost")
+    if figures.crc_errors:
+        problems.append(f"{figures.crc_errors} damaged (CRC error / incomplete)")
+    if figures.longest_gap_s > GAP_THRESHOLD_S:
+        problems.append(f"a silence of {figures.longest_gap_s:.1f} s")
+    if problems:
+        return FAIL, f"over {span:.1f} s: " + ", ".join(problems), numbers
+    every = f"every {period:.2f} s" if period is not None else ""
+    text = f"{figures.messages} messages {every} over {span:.1f} s, none lost, no CRC error"
+    return PASS, text, numbers
+
+
+def _finding_line(f: dict[str, Any]) -> str:
+    return f"{f.get('command')} {f.get('check')}: {f.get('verdict')}"
+
+
+def _move_axis(plan: Plan, findings: list[dict[str, Any]]) -> str:
+    """The axis the figures are measured on: for a yaw target the reference the analysis
+    judged it in (one truth: the same yaw as the verdict)."""
+    if plan.axis == YAW:
+        for f in findings:
+            if f.get("yaw_reference") == REFERENCE_AIRFRAME:
+                return MOTOR_YAW
+    return plan.axis
+
+
+def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[str]]:
+    """The figures of a step's judged commands, and how they miss the pass limits."""
+    plan = evidence.plan
+    figures: dict[str, Any] = {}
+    tolerance = limits.settings.tolerance_deg
+    problems: list[str] = []
+    for number, (action, first, last) in enumerate(evidence.judged):
+        found = evidence.findings.get(number, [])
+        during = [s for s in evidence.samples if first < s.time <= evidence.ended_at]
+        before = None
+        for s in evidence.samples:
+            if s.time <= first:
+                before = s
+        if isinstance(action, Hold):
+            axis = MOTOR_YAW if action.pan_dps else PITCH
+            asked = action.pan_dps or action.tilt_dps
+            inside = [s for s in during if s.time <= last + 0.05]
+            rate = rate_figure(axis, ([before] if before else []) + inside, tolerance)
+            figures["asked_dps"] = asked
+            if rate is None:
+                problems.append("the rate could not be measured: too little feedback")
+            else:
+                figures["rate_dps"] = rate
+                off = abs(rate - asked) / abs(asked)
+                if off > limits.speed_tolerance:
+                    problems.append(
+                        f"turned at {rate:.1f} deg/s for {asked:g} asked "
+                        f"({rate / asked * 100:.0f} %, more than "
+                        f"{limits.speed_tolerance * 100:g} % off)"
+                    )
+        elif plan.axis and plan.target is not None and isinstance(action, Send) and action.goals:
+            axis = _move_axis(plan, found)
+            move = move_figures(axis, plan.target, first, before, during, tolerance)
+            figures.update(move.as_dict())
+            figures["axis"] = axis
+            figures["target_deg"] = plan.target
+            if move.slew_dps is None:
+                problems.append(
+                    "the slew rate could not be measured: fewer than 2 feedback samples in "
+                    "the moving part"
+                )
+            elif move.slew_dps < limits.min_slew_dps:
+                problems.append(
+                    f"moved at {move.slew_dps:.1f} deg/s, slower than the minimum "
+                    f"{limits.min_slew_dps:g} deg/s"
+                )
+    return figures, problems
+
+
+def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
+    """Verdict, detail, figures and finding lines of a step that sends judged commands."""
+    figures, problems = measure(evidence, limits)
+    lines = [_finding_line(f) for fs in evidence.findings.values() for f in fs]
+    silence, since = longest_silence(
+        evidence.feedback_times, evidence.started_at, evidence.ended_at
+    )
+    if silence > GAP_THRESHOLD_S:
+        return (
+            FAIL,
+            f"no feedback for {silence:.1f} s during the step (from {format_clock(since)}): "
+            "it cannot be judged",
+            figures,
+            lines,
+        )
+    pairs: list[tuple[str, str]] = []  # (verdict, detail) of every deciding finding
+    for number, (action, _, _) in enumerate(evidence.judged):
+        found = [f for f in evidence.findings.get(number, []) if f.get("check") in JUDGED_CHECKS]
+        name = action.name if isinstance(action, Send) else "gimbal_control"
+        if not any(f.get("check") == required_check(action) for f in found):
+            pairs.append((UNKNOWN, f"{name}: the analysis gave no verdict"))
+            continue
+        pairs += [(str(f.get("verdict")), str(f.get("detail"))) for f in found]
+    verdict = worst(*(v for v, _ in pairs)) if pairs else UNKNOWN
+    bad = [d for v, d in pairs if v != OBEYED]
+    if verdict in (PARTIAL, NOT_OBEYED):
+        return FAIL, "; ".join(bad + problems), figures, lines
+    if verdict == UNKNOWN:
+        text = "; ".join(bad)
+        if "no attitude feedback" in text or "no feedback" in text:
+            text = "no feedback: " + text
+        return FAIL, text, figures, lines
+    if problems:
+        return FAIL, "; ".join(problems + list(dict.fromkeys(d for _, d in pairs))), figures, lines
+    return PASS, "; ".join(dict.fromkeys(d for _, d in pairs)), figures, lines
+
+
+def judge(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
+    """Verdict, one-line detail, figures and the finding lines of a finished step."""
+    plan = evidence.plan
+    if any(isinstance(a, Listen) for a in plan.actions):
+        verdict, text, figures = judge_feedback(evidence)
+        return verdict, text, figures, []
+    if plan.skipped:
+        return SKIPPED, plan.skipped, {}, []
+    return judge_motion(evidence, limits)
