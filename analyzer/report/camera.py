@@ -7,11 +7,12 @@ import base64
 import html
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 from analyzer import timefmt
 from analyzer.report.decimate import Decimator
 from analyzer.report.finding_groups import whole_run
+from analyzer.scene.timeline import Picture  # a camera picture: stream, time, jpeg
 
 STRIP_SIZE = 8  # pictures in the strip along the flight
 MAX_FINDING_PICTURES = 40  # findings shown with their pictures
@@ -31,19 +32,6 @@ figcaption { font-size: 11px; color: #555; }
         align-items: start; }
 .seen img { width: 200px; display: block; border-radius: 2px; }
 """
-
-
-class Picture(Protocol):
-    """A thumbnail of a camera stream (``analyzer.mcapio.video_reading.Thumbnail``)."""
-
-    @property
-    def stream(self) -> str: ...
-
-    @property
-    def time(self) -> float: ...
-
-    @property
-    def jpeg(self) -> bytes: ...
 
 
 def picture_jpeg(picture: Picture) -> bytes:
