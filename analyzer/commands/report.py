@@ -57,7 +57,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
@@ -121,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     size = len(page)
     print(
         f"wrote {args.output} ({size / 1024:,.0f} KiB): {data.findings.total:,} findings "
-        f"({verdict_line(data.verdicts())})"
+        f"(verdicts: {data.counts.verdict_line()}; feedback: {data.counts.health_line()})"
     )
     for note in reader.notes:
         sys.stderr.write(f"note: {note}\n")

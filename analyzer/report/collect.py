@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
+from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
     BUS_ERROR,
@@ -82,6 +83,7 @@ class ReportData:
     texts: list[tuple[float, str]] = field(default_factory=list)  # UAV status texts
     text_count: int = 0
     findings: FindingGroups = field(default_factory=FindingGroups)
+    counts: VerdictCounts = field(default_factory=VerdictCounts)  # as analyze counts them
     notes: list[str] = field(default_factory=list)
     bus: BusFigures = field(default_factory=BusFigures)  # what the CAN error frames say
     frames: int = 0  # CAN frames read, error frames included (for the bus hints)
@@ -180,6 +182,7 @@ class ReportData:
     def add_finding(self, finding: dict[str, Any]) -> None:
         """One finding of the response analysis (an /analysis/response event's dict)."""
         self.findings.add(finding)
+        self.counts.add(finding)
         target = _number(finding, "target_deg")
         if target is None:
             return
@@ -194,6 +197,7 @@ class ReportData:
     def drop_findings(self) -> None:
         """Forget every finding (an input without a clock cannot time a response)."""
         self.findings.clear()
+        self.counts.clear()
         self.targets.clear()
 
     # -- what the page shows -------------------------------------------------------------

@@ -73,8 +73,9 @@ def overview(data: ReportData, settings: str) -> str:
         ("diagnostics", ", ".join(f"{_e(k)} {n:,}" for k, n in kinds.most_common()) or "none")
     )
     rows.extend(_bus_rows(data))
-    verdicts = data.verdicts()
+    verdicts = data.counts.verdicts  # the commands' findings, as analyze counts them
     rows.append(("verdicts", " ".join(f"{_verdict(v)} {verdicts.get(v, 0):,}" for v in VERDICTS)))
+    rows.append(("feedback", _e(data.counts.health_line())))
     rows.append(("judged with", _e(settings)))
     body = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
     return f'<table class="kv">{body}</table>'
