@@ -44,20 +44,25 @@ def report(tmp_path: Path, source: Path, *extra: str) -> Path:
     return out
 
 
-def browser(page: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    """Run Debian's Chromium headless on ``page`` with a fresh profile."""
+def browser(
+    page: Path, tmp_path: Path, *args: str, fragment: str = ""
+) -> subprocess.CompletedProcess[str]:
+    """Run Debian's Chromium headless on ``page`` (and its ``#fragment``), fresh profile."""
     if CHROMIUM is None:
         if REQUIRE:
             pytest.fail("chromium is not installed (.ci/run installs it)")
         pytest.skip("chromium is not installed")
     profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
-    command = [CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args, page.as_uri()]
+    address = page.as_uri() + fragment
+    command = [CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args, address]
     return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
 
 
-def load(page: Path, tmp_path: Path) -> tuple[str, list[str]]:
+def load(page: Path, tmp_path: Path, fragment: str = "") -> tuple[str, list[str]]:
     """The DOM after the page's scripts ran, and every console message it produced."""
-    done = browser(page, tmp_path, "--enable-logging=stderr", "--v=0", "--dump-dom")
+    done = browser(
+        page, tmp_path, "--enable-logging=stderr", "--v=0", "--dump-dom", fragment=fragment
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     console = [line for line in done.stderr.splitlines() if ":CONSOLE" in line]
     return done.stdout, console
@@ -140,6 +145,10 @@ def test_report_of_every_sample_loads(name: str, samples: dict[str, Path], tmp_p
     if name == "uart-dump.bin":  # no times and no feedback: said instead of empty plots
         assert list(canvases(dom)) == ["plot-track"]  # positions need no clock
         assert "nothing to plot over time" in dom and "no timestamps" in dom
+        # the responses say why there are none, not that no command had an effect
+        responses = page.read_text().split("<h2>Responses</h2>")[1].split("<h2>")[0]
+        assert "carries no timestamps" in responses and "cannot be timed" in responses
+        assert "no command with a visible effect" not in responses
 
 
 def test_report_of_a_demo_recording(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

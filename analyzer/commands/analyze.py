@@ -120,24 +120,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-class KeepFindings:
-    """A pipeline stage around the response analyzer that also keeps what it found."""
-
-    def __init__(self, analyzer: Any) -> None:
-        self.analyzer = analyzer
-        self.findings: list[Any] = []
-
-    def process(self, events: list[Any]) -> list[Any]:
-        found: list[Any] = self.analyzer.process(events)
-        self.findings += found
-        return found
-
-    def close(self) -> list[Any]:
-        found: list[Any] = self.analyzer.close()
-        self.findings += found
-        return found
-
-
 def open_reader(args: argparse.Namespace) -> Any:
     from analyzer.inputs import open_input
     from analyzer.protocol.ids import PROTOCOL_IDS

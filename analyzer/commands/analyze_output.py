@@ -5,38 +5,26 @@ from __future__ import annotations
 import json
 import shutil
 import tempfile
-from collections import Counter
 from collections.abc import Callable
 from typing import IO, Any, Protocol
 
 from analyzer import timefmt
-from analyzer.analysis.findings import (
-    CHECK_FEEDBACK_GAP,
-    FEEDBACK_COMMAND,
-    VERDICTS,
-    verdict_line,
-)
 from analyzer.analysis.time_order import TimeOrder
+from analyzer.analysis.verdict_counts import VerdictCounts, verdict_word
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import Event
-from analyzer.summary import gap_words
 from analyzer.tally import Tally
 from analyzer.terminal_text import printable_lines
 
-VERDICT_WORDS = {
-    "obeyed": "obeyed",
-    "partial": "PARTIAL",
-    "not_obeyed": "NOT OBEYED",
-    "unknown": "unknown",
-}
-# Findings about the feedback itself say how healthy the link is, not what was obeyed.
-HEALTH_WORDS = {
-    "obeyed": "healthy",
-    "partial": "DEGRADED",
-    "not_obeyed": "SILENT",
-    "unknown": "unknown",
-}
-GAP_WORD = "LOST"
+_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
+    ("target_deg", "target", lambda v: f"{v:g} deg"),
+    ("start_deg", "start", lambda v: f"{v:.2f} deg"),
+    ("final_deg", "final", lambda v: f"{v:.2f} deg"),
+    ("response_s", "response", lambda v: f"{v:.2f} s"),
+    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
+    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
+    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
+)
 
 
 class Judging(Protocol):
@@ -97,9 +85,7 @@ class FindingsOutput:
         self.written = 0
         self.first_time: float | None = None  # of the first finding shown
         self.untimed = False
-        self.verdicts: Counter[str] = Counter()  # of the commands' findings
-        self.health: Counter[str] = Counter()  # of the feedback windows, by verdict
-        self.gaps = self.lost = 0
+        self.counts = VerdictCounts()  # commands' verdicts apart from the feedback's health
         self.stage = _Judged(analysis, self)
 
     def to(self, out: IO[str]) -> FindingsOutput:
@@ -110,7 +96,7 @@ class FindingsOutput:
         """Findings of the stage: counted, and held (as text) until their turn."""
         for event in findings:
             self.found += 1
-            self._count(event.fields)
+            self.counts.add(event.fields)
             if self.problems and event.fields.get("verdict") == "obeyed":
                 continue
             if self.first_time is None or event.time < self.first_time:
@@ -127,9 +113,7 @@ class FindingsOutput:
         if self.untimed:
             self.order.clear()
             self.first_time = None
-            self.verdicts.clear()
-            self.health.clear()
-            self.gaps = self.lost = 0
+            self.counts.clear()
         self._write(self.order.drain())
 
     def finish(self, header: str) -> None:
@@ -147,29 +131,8 @@ class FindingsOutput:
         spool.close()
         if not self.written:
             out.write("no findings\n")
-        out.write(f"\nverdicts: {verdict_line(self.verdicts)}\n")
-        out.write(f"feedback: {self.health_line()}\n")
-
-    def health_line(self) -> str:
-        """'2 minutes healthy, 1 degraded; 1 gap, 1 message lost (...)'."""
-        windows = [
-            f"{n} {HEALTH_WORDS[v].lower()}" for v in VERDICTS if (n := self.health.get(v, 0))
-        ]
-        if windows:
-            total = sum(self.health.values())
-            minutes = f" of {total} minute{'s' if total > 1 else ''} "
-            windows[0] = windows[0].replace(" ", minutes, 1)
-        return "; ".join([", ".join(windows) or "not judged", gap_words(self.gaps, self.lost)])
-
-    def _count(self, fields: dict[str, Any]) -> None:
-        verdict = str(fields.get("verdict"))
-        if fields.get("command") != FEEDBACK_COMMAND:
-            self.verdicts[verdict] += 1
-        elif fields.get("check") == CHECK_FEEDBACK_GAP:
-            self.gaps += 1
-            self.lost += int(fields.get("lost_messages", 1))
-        else:
-            self.health[verdict] += 1
+        out.write(f"\nverdicts: {self.counts.verdict_line()}\n")
+        out.write(f"feedback: {self.counts.health_line()}\n")
 
     def _line(self, event: Event) -> str:
         if self.json_lines:
@@ -203,27 +166,6 @@ def finding_line(event: Event) -> str:
         f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
         f"{verdict_word(f):<10}  {f['detail']}" + (f"  [{numbers}]" if numbers else "")
     )
-
-
-def verdict_word(fields: dict[str, Any]) -> str:
-    """How the text report names a finding's verdict: in health words for the feedback."""
-    verdict = str(fields["verdict"])
-    if fields.get("command") != FEEDBACK_COMMAND:
-        return VERDICT_WORDS.get(verdict, verdict)
-    if fields.get("check") == CHECK_FEEDBACK_GAP:
-        return GAP_WORD
-    return HEALTH_WORDS.get(verdict, verdict)
-
-
-_NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
-    ("target_deg", "target", lambda v: f"{v:g} deg"),
-    ("start_deg", "start", lambda v: f"{v:.2f} deg"),
-    ("final_deg", "final", lambda v: f"{v:.2f} deg"),
-    ("response_s", "response", lambda v: f"{v:.2f} s"),
-    ("error_deg", "error", lambda v: f"{v:.2f} deg"),
-    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
-    ("lag_s", "lag", lambda v: f"{v:.2f} s"),
-)
 
 
 def _numbers(fields: dict[str, Any]) -> str:

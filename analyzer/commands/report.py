@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
-from typing import IO, Any, cast
+from typing import IO, cast
 
 HELP = "write a flight report: one offline HTML file with plots, findings and diagnostics"
 
@@ -12,11 +11,19 @@ DESCRIPTION = """\
 Writes one self-contained HTML file (no network needed to open it, fit to attach
 to a support ticket) from any input `decode` reads, recordings included:
 
-  overview       source, time range, counts, verdicts per command
-  plots          gimbal pitch / yaw over time with command markers and targets,
-                 commanded against measured rates, feedback rate and diagnostics
-                 over time, UAV altitude and track (in metres, no map tiles)
-  tables         the responses of `gimbal-analyzer analyze` and the diagnostics
+  overview       source, time range, counts, verdicts
+  plots          gimbal pitch / yaw over time with a mark for every command and the
+                 targets, commanded against measured rates, feedback rate and
+                 diagnostics over time, UAV altitude and track (in metres, equal
+                 scale, no map tiles); drag across a time plot to zoom in
+  tables         the findings of `gimbal-analyzer analyze` counted per command and
+                 check, with the worst examples; the flight controller's status
+                 texts; the diagnostics; pictures of a recording's camera before
+                 each command not obeyed and at its verdict
+
+The file stays small for any length of flight: plots keep each time bucket's
+lowest and highest samples, findings are counted (every one is in `analyze
+--json` and in a recording's /analysis/response).
 
   gimbal-analyzer report flight.log -o report.html
   gimbal-analyzer report demo.mcap -o demo-report.html --tolerance 2
@@ -47,69 +54,64 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_settings_arguments(parser)
 
 
-class EventsInto:
-    """A sink handing every decoded event (not findings stored in the input) to ``add``."""
-
-    def __init__(self, add: Callable[[Any], None]) -> None:
-        self.add = add
-
-    def handle(self, batch: Any) -> None:
-        from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
-
-        add = self.add
-        for event in batch.events:
-            if event.topic != TOPIC_ANALYSIS_RESPONSE:
-                add(event)
-
-    def close(self) -> None:
-        pass
-
-
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from analyzer.analysis.findings import verdict_line
     from analyzer.analysis.response import ResponseAnalyzer
-    from analyzer.commands.analyze import KeepFindings, open_reader, settings_from
+    from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.progress import Progress
+    from analyzer.report import camera
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
-    from analyzer.scene.timeline import OverlayTimeline
+    from analyzer.report.stream import EventsInto, FindingsInto
+    from analyzer.report.tables import UNTIMED
 
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
     settings = settings_from(args)
     reader = open_reader(args)
-    analyzer = ResponseAnalyzer(settings)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    kept = KeepFindings(analyzer)
-    overlays = OverlayTimeline()  # the camera pictures show what Foxglove draws over them
-    # The same decoding and counting as every command; the analyzer is a stage of it.
-    pipeline = Pipeline([EventsInto(data.add), EventsInto(overlays.add)], stages=[kept])
+    stage = FindingsInto(ResponseAnalyzer(settings), data)
+    sinks = [EventsInto(data.add)]
+    overlays = None
+    if reader.format_name == "mcap":  # only a recording has camera pictures to draw over
+        from analyzer.scene.timeline import OverlayTimeline
+
+        overlays = OverlayTimeline()  # the pictures show what Foxglove draws over them
+        sinks.append(EventsInto(overlays.add))
+    # The same decoding and counting as every command; the analysis is a stage of it.
+    pipeline = Pipeline(sinks, stages=[stage])
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
     try:
         run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
-    for finding in kept.findings:
-        data.add(finding)
     data.notes.extend(reader.notes)
     lead = ""
     data.frames = pipeline.tally.frames
-    if reader.format_name == "mcap":  # camera thumbnails of a recording with --video
+    if data.first is not None and data.first == data.last and data.topics.total() > 1:
+        # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
+        data.untimed = True
+        if data.findings.total or data.commands:
+            data.drop_findings()
+            data.notes.append(UNTIMED)
+    pictures = None
+    if overlays is not None and data.first is not None and data.last is not None:
         from analyzer.check.output import recorded_steps_html
-        from analyzer.mcapio.read.video import read_thumbnails
+        from analyzer.mcapio.read.video import read_thumbnails  # camera pictures
 
-        data.pictures.extend(overlays.pictures(read_thumbnails(args.file)))
+        shown = camera.shown_findings(data.findings.worst_first())
+        thumbnails = overlays.pictures(read_thumbnails(args.file))
+        pictures = camera.choose(thumbnails, data.first, data.last, shown)
+        if not pictures.count:
+            pictures = None
         lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
-    if data.first is not None and data.first == data.last and data.findings:
-        data.findings.clear()
-        data.notes.append("the input carries no timestamps: responses cannot be timed")
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
+        pictures,
         lead,
     )
     page = text.encode("utf-8")
@@ -117,8 +119,8 @@ def run(args: argparse.Namespace) -> int:
         cast("IO[bytes]", out.file).write(page)
     size = len(page)
     print(
-        f"wrote {args.output} ({size / 1024:,.0f} KiB): {len(data.findings)} findings "
-        f"({verdict_line(data.verdicts())})"
+        f"wrote {args.output} ({size / 1024:,.0f} KiB): {data.findings.total:,} findings "
+        f"(verdicts: {data.counts.verdict_line()}; feedback: {data.counts.health_line()})"
     )
     for note in reader.notes:
         sys.stderr.write(f"note: {note}\n")

@@ -1,4 +1,8 @@
-"""What the report shows, folded from decoded events and findings; no IO."""
+"""What the report shows, folded event by event into bounded summaries; no IO.
+
+Nothing here grows with the flight: plot series are :class:`Decimator` buckets, findings
+are counted per command and check with a few examples kept, tables keep their first rows.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +11,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
+from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
+from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
     BUS_ERROR,
@@ -17,36 +23,40 @@ from analyzer.protocol.types import (
     TOPIC_GIMBAL_RANGING,
     TOPIC_UAV_ALTITUDE,
     TOPIC_UAV_GPS,
+    TOPIC_UAV_TEXT,
     Event,
 )
+from analyzer.report.decimate import ATTITUDE_BUCKETS, Decimator, PerSecond, Row
+from analyzer.report.finding_groups import FindingGroups
 
 EARTH_M_PER_DEG = 111_320.0
-MAX_POINTS = 4000  # per plotted series; longer ones are thinned evenly
 MAX_ROWS = 2000  # rows of the diagnostics table
+MAX_TEXTS = 500  # rows of the UAV status texts table
+MAX_MARKS = 1500  # command marks kept (buckets of the whole flight)
+MAX_TARGETS = 1500  # target crosses kept per verdict
 STOP_AFTER_S = 0.3  # a gimbal_control speed counts as commanded this long after it was sent
-
-
-def thin(points: list[Any], limit: int = MAX_POINTS) -> list[Any]:
-    """Every n-th point so that at most ``limit`` remain (the last one always kept)."""
-    if len(points) <= limit:
-        return points
-    step = math.ceil(len(points) / limit)
-    kept = points[::step]
-    if kept[-1] is not points[-1]:
-        kept.append(points[-1])
-    return kept
+MAX_RATE_GAP_S = 2.0  # attitude messages further apart give no measured rate
 
 
 def _number(fields: dict[str, Any], name: str) -> float | None:
     value = fields.get(name)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
+    if not math.isfinite(value):
+        return None
     return float(value)
+
+
+def _stop_rows(last: tuple[float, float, float]) -> list[Row]:
+    """A commanded speed holds until STOP_AFTER_S after its command, then falls to 0."""
+    t, pan, tilt = last
+    return [(t + STOP_AFTER_S, pan, tilt), (t + STOP_AFTER_S + 1e-3, 0.0, 0.0)]
 
 
 @dataclass
 class ReportData:
-    """Series and tables of the report; ``add(event)`` for every event and finding."""
+    """Series and tables of the report: ``add(event)`` for every event, findings of the
+    response analysis included (or ``add_finding(fields)`` for those)."""
 
     source: str = ""
     format_name: str = ""
@@ -55,23 +65,37 @@ class ReportData:
     topics: Counter[str] = field(default_factory=Counter)
     commands: Counter[str] = field(default_factory=Counter)
     diagnostic_kinds: Counter[str] = field(default_factory=Counter)
-    attitude: list[tuple[float, float, float, float]] = field(default_factory=list)
-    command_marks: list[tuple[float, str]] = field(default_factory=list)
-    speeds: list[tuple[float, float, float]] = field(default_factory=list)  # gimbal_control
-    altitude: list[tuple[float, float]] = field(default_factory=list)
-    gps: list[tuple[float, float, float]] = field(default_factory=list)
+    # (t, pitch, yaw, motor yaw)
+    attitude: Decimator = field(default_factory=lambda: Decimator((1, 2, 3), ATTITUDE_BUCKETS))
+    # (t, command event): each command its mark; gimbal_control one per burst of the same
+    # speeds, as the response analysis judges them
+    marks: Decimator = field(default_factory=lambda: Decimator((), MAX_MARKS))
+    commanded: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, pan, tilt)
+    # (t, pan, tilt)
+    measured: Decimator = field(default_factory=lambda: Decimator((1, 2), ATTITUDE_BUCKETS))
+    altitude: Decimator = field(default_factory=lambda: Decimator((1,)))
+    track: Decimator = field(default_factory=lambda: Decimator((1, 2)))  # (t, east m, north m)
+    feedback: PerSecond = field(default_factory=lambda: PerSecond(zeros=True))
+    errors: PerSecond = field(default_factory=lambda: PerSecond(zeros=False))
+    # (t, target, verdict, text, axis) per verdict and axis
+    targets: dict[tuple[str, str], Decimator] = field(default_factory=dict)
     diagnostics: list[tuple[float, str, str]] = field(default_factory=list)
-    feedback_times: list[float] = field(default_factory=list)  # attitude and ranging
-    findings: list[dict[str, Any]] = field(default_factory=list)
+    texts: list[tuple[float, str]] = field(default_factory=list)  # UAV status texts
+    text_count: int = 0
+    findings: FindingGroups = field(default_factory=FindingGroups)
+    counts: VerdictCounts = field(default_factory=VerdictCounts)  # as analyze counts them
     notes: list[str] = field(default_factory=list)
-    pictures: list[Any] = field(default_factory=list)  # camera thumbnails (report.camera)
     bus: BusFigures = field(default_factory=BusFigures)  # what the CAN error frames say
     frames: int = 0  # CAN frames read, error frames included (for the bus hints)
+    untimed: bool = False  # set when the input has no clock (responses not judged)
+    _last_attitude: tuple[float, float, float] | None = None  # (t, pitch, motor yaw)
+    _last_speed: tuple[float, float, float] | None = None  # (t, pan, tilt)
+    _gps_origin: tuple[float, float] | None = None
 
     def add(self, event: Event) -> None:
         t, topic, fields = event.time, event.topic, event.fields
         if topic == TOPIC_ANALYSIS_RESPONSE:
-            self.findings.append(event.to_dict())
+            self.add_finding(event.to_dict())
             return
         self.topics[topic] += 1
         if self.first is None or t < self.first:
@@ -79,79 +103,120 @@ class ReportData:
         if self.last is None or t > self.last:
             self.last = t
         if topic in (TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING):
-            self.feedback_times.append(t)
+            self.feedback.add(t)
         if topic == TOPIC_GIMBAL_ATTITUDE:
-            pitch, yaw = _number(fields, "pitch_deg"), _number(fields, "yaw_deg")
-            motor = _number(fields, "motor_yaw_deg")
-            if pitch is not None and yaw is not None and motor is not None:
-                self.attitude.append((t, pitch, yaw, motor))
+            self._attitude(t, fields)
         elif topic == TOPIC_COMMAND:
-            name = str(fields.get("name", "unknown"))
-            self.commands[name] += 1
-            if name == "gimbal_control":
-                pan = _number(fields, "pan_speed_dps") or 0.0
-                tilt = _number(fields, "tilt_speed_dps") or 0.0
-                self.speeds.append((t, pan, tilt))
-            if not self.command_marks or self.command_marks[-1][1] != name:
-                self.command_marks.append((t, name))  # a repeated command marks once
+            self._command(event)
         elif topic == TOPIC_UAV_ALTITUDE:
             altitude = _number(fields, "altitude_m")
             if altitude is not None:
-                self.altitude.append((t, altitude))
+                self.altitude.add((t, altitude))
         elif topic == TOPIC_UAV_GPS:
-            lat, lon = _number(fields, "latitude_deg"), _number(fields, "longitude_deg")
-            if lat is not None and lon is not None and (lat, lon) != (0.0, 0.0):
-                self.gps.append((t, lat, lon))
+            self._gps(t, fields)
+        elif topic == TOPIC_UAV_TEXT:
+            self.text_count += 1
+            if len(self.texts) < MAX_TEXTS:
+                self.texts.append((t, str(fields.get("text", ""))))
         elif topic == TOPIC_DIAGNOSTICS:
             kind = str(fields.get("kind", "unknown"))
             self.diagnostic_kinds[kind] += 1
+            self.errors.add(t)
             if kind == BUS_ERROR:
                 self.bus.add_events((event,))
             if len(self.diagnostics) < MAX_ROWS:
                 self.diagnostics.append((t, kind, str(fields.get("detail", ""))))
 
-    # -- derived series ------------------------------------------------------------------
+    def _attitude(self, t: float, fields: dict[str, Any]) -> None:
+        pitch, yaw = _number(fields, "pitch_deg"), _number(fields, "yaw_deg")
+        motor = _number(fields, "motor_yaw_deg")
+        if pitch is None or yaw is None or motor is None:
+            return
+        self.attitude.add((t, pitch, yaw, motor))
+        last = self._last_attitude
+        if last is not None:
+            dt = t - last[0]
+            if 0 < dt <= MAX_RATE_GAP_S:
+                self.measured.add(
+                    ((last[0] + t) / 2, (motor - last[2]) / dt, (pitch - last[1]) / dt)
+                )
+        self._last_attitude = (t, pitch, motor)
 
-    def measured_rates(self) -> list[tuple[float, float, float]]:
-        """(mid time, pan deg/s, tilt deg/s) between consecutive attitude messages."""
-        out = []
-        for (t0, p0, _, m0), (t1, p1, _, m1) in zip(self.attitude, self.attitude[1:], strict=False):
-            dt = t1 - t0
-            if 0 < dt <= 2.0:
-                out.append(((t0 + t1) / 2, (m1 - m0) / dt, (p1 - p0) / dt))
-        return out
+    def _command(self, event: Event) -> None:
+        t, fields = event.time, event.fields
+        name = str(fields.get("name", "unknown"))
+        self.commands[name] += 1
+        if name != "gimbal_control":
+            self.marks.add((t, event))
+            return
+        pan = _number(fields, "pan_speed_dps") or 0.0
+        tilt = _number(fields, "tilt_speed_dps") or 0.0
+        last = self._last_speed
+        if last is not None and t - last[0] > STOP_AFTER_S:
+            self._speeds_stop(last)
+        if (
+            last is None
+            or t - last[0] > BURST_GAP_S
+            or abs(pan - last[1]) >= SAME_SPEED
+            or abs(tilt - last[2]) >= SAME_SPEED
+        ):
+            self.marks.add((t, event))  # a new burst
+        self.commanded.add((t, pan, tilt))
+        self._last_speed = (t, pan, tilt)
 
-    def commanded_rates(self) -> list[tuple[float, float, float]]:
-        """A step series of the commanded speeds, back to 0 when the commands stop."""
-        out: list[tuple[float, float, float]] = []
-        for i, (t, pan, tilt) in enumerate(self.speeds):
-            nxt = self.speeds[i + 1][0] if i + 1 < len(self.speeds) else None
-            out.append((t, pan, tilt))
-            if nxt is None or nxt - t > STOP_AFTER_S:
-                out.append((t + STOP_AFTER_S, pan, tilt))
-                out.append((t + STOP_AFTER_S, 0.0, 0.0))
-        return out
+    def _speeds_stop(self, last: tuple[float, float, float]) -> None:
+        """The commanded speed holds until STOP_AFTER_S after the last command, then 0."""
+        for row in _stop_rows(last):
+            self.commanded.add(row)
 
-    def track_m(self) -> list[tuple[float, float]]:
-        """(east, north) metres from the first GPS fix (flat earth, fine for one flight)."""
-        if not self.gps:
-            return []
-        _, lat0, lon0 = self.gps[0]
-        scale = EARTH_M_PER_DEG * math.cos(math.radians(lat0))
-        return [((lon - lon0) * scale, (lat - lat0) * EARTH_M_PER_DEG) for _, lat, lon in self.gps]
+    def _gps(self, t: float, fields: dict[str, Any]) -> None:
+        lat, lon = _number(fields, "latitude_deg"), _number(fields, "longitude_deg")
+        if lat is None or lon is None or (lat, lon) == (0.0, 0.0):
+            return
+        if self._gps_origin is None:
+            self._gps_origin = (lat, lon)
+        lat0, lon0 = self._gps_origin
+        east = (lon - lon0) * EARTH_M_PER_DEG * math.cos(math.radians(lat0))
+        self.track.add((t, east, (lat - lat0) * EARTH_M_PER_DEG))
 
-    def feedback_per_second(self) -> list[tuple[float, int]]:
-        """(second, feedback messages in it) for every second from the first to the last."""
-        if self.first is None or self.last is None or not self.feedback_times:
-            return []
-        counts: Counter[int] = Counter(math.floor(t) for t in self.feedback_times)
-        start, end = math.floor(self.first), math.floor(self.last)
-        first = self.first
-        return [(max(s, first), counts.get(s, 0)) for s in range(start, end + 1)]
+    def add_finding(self, finding: dict[str, Any]) -> None:
+        """One finding of the response analysis (an /analysis/response event's dict)."""
+        self.findings.add(finding)
+        self.counts.add(finding)
+        target = _number(finding, "target_deg")
+        if target is None:
+            return
+        verdict = str(finding.get("verdict"))
+        what = f"{finding.get('command')} {target:g}: {finding.get('detail', '')}"
+        for axis in str(finding.get("axis", "")).split("+"):
+            series = self.targets.get((verdict, axis))
+            if series is None:
+                series = self.targets[verdict, axis] = Decimator((1,), MAX_TARGETS)
+            series.add((float(finding["time"]), target, verdict, what, axis))
 
-    def errors_per_second(self) -> list[tuple[float, int]]:
-        counts: Counter[int] = Counter(math.floor(t) for t, _, _ in self.diagnostics)
-        return sorted(counts.items())
+    def drop_findings(self) -> None:
+        """Forget every finding (an input without a clock cannot time a response)."""
+        self.findings.clear()
+        self.counts.clear()
+        self.targets.clear()
+
+    # -- what the page shows -------------------------------------------------------------
+
+    def commanded_rows(self) -> list[Row]:
+        """The commanded speeds, back to 0 after the last command of the input too."""
+        rows = self.commanded.rows()
+        if self._last_speed is not None:
+            rows += _stop_rows(self._last_speed)
+        return rows
+
+    def feedback_per_second(self) -> list[Row]:
+        return self.feedback.rows(self.last)
+
+    def errors_per_second(self) -> list[Row]:
+        return self.errors.rows()
+
+    def target_rows(self) -> list[Row]:
+        return [row for series in self.targets.values() for row in series.rows()]
 
     def verdicts(self) -> Counter[str]:
-        return Counter(str(f.get("verdict")) for f in self.findings)
+        return self.findings.verdicts

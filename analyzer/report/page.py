@@ -2,20 +2,25 @@
 
 from __future__ import annotations
 
-import html
 import json
 import time
 from importlib import resources
 from typing import Any
 
 from analyzer import __version__, timefmt
-from analyzer.analysis.findings import VERDICTS
-from analyzer.report import camera
-from analyzer.report.collect import MAX_ROWS, ReportData, thin
+from analyzer.protocol.types import Event
+from analyzer.render import describe_event
+from analyzer.report import camera, tables
+from analyzer.report.collect import ReportData
+from analyzer.report.decimate import Row
+from analyzer.report.tables import _e, _rows
+
+MARK_LABEL = 34  # characters of a command mark's label
+
+__all__ = ["CHART_JS", "CHECK_JS", "CSS", "_e", "_plot", "_rows", "render"]
 
 CHART_JS = "chart.umd.min.js"  # Chart.js 4.6.1, MIT (vendor/chart.js-LICENSE.md)
 CHECK_JS = "plots_check.js"  # shared with the fleet report: what the page checks can read
-TARGET_AXES = ("pitch", "yaw", "motor_yaw")
 
 CSS = """
 body { font: 14px/1.45 system-ui, sans-serif; margin: 0 auto; max-width: 1200px;
@@ -34,22 +39,10 @@ table.kv td:first-child { width: 200px; color: #555; }
 .v-obeyed { background: #2ca02c; } .v-partial { background: #ff9800; }
 .v-not_obeyed { background: #d62728; } .v-unknown { background: #888; }
 .small { font-size: 12px; color: #666; }
+h3.group { font-size: 15px; margin: 18px 0 2px; }
+.zoom-box { position: absolute; background: rgba(31,119,180,0.15); pointer-events: none; }
+button#zoom-reset { font-size: 12px; margin: 0 0 6px; }
 """
-
-
-def _clock(t: float, with_date: bool = False) -> str:
-    """The one time rule (analyzer.timefmt): UTC with Z, or local time with --local-time."""
-    if not timefmt.is_absolute(t):
-        return f"{t:.3f} s"
-    return timefmt.format_datetime(t) if with_date else timefmt.format_clock(t)
-
-
-def _e(value: Any) -> str:
-    return html.escape(str(value), quote=True)
-
-
-def _verdict(verdict: str) -> str:
-    return f'<span class="v v-{_e(verdict)}">{_e(verdict.replace("_", " "))}</span>'
 
 
 def _plot(plot_id: str, has_data: bool, empty: str, square: bool = False) -> str:
@@ -59,148 +52,68 @@ def _plot(plot_id: str, has_data: bool, empty: str, square: bool = False) -> str
     return f'<div class="{cls}"><canvas id="{plot_id}"></canvas></div>'
 
 
-def _rows(rows: list[list[str]], head: list[str], numeric: frozenset[int] = frozenset()) -> str:
-    out = ["<table><tr>" + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>"]
-    for row in rows:
-        cells = "".join(
-            f'<td class="num">{c}</td>' if i in numeric else f"<td>{c}</td>"
-            for i, c in enumerate(row)
-        )
-        out.append(f"<tr>{cells}</tr>")
-    out.append("</table>")
-    return "\n".join(out)
+def _mark_label(event: Event) -> str:
+    """A command in words, short enough to stand along a plot's height."""
+    words = " ".join(describe_event(event).split())
+    return words if len(words) <= MARK_LABEL else words[: MARK_LABEL - 1] + "\u2026"
+
+
+def _zone_words() -> str:
+    if timefmt.local_time():
+        return "Times in the tables are local time (with their UTC offset); the plots' are UTC."
+    return "Times are UTC."
 
 
 def _plot_data(data: ReportData) -> dict[str, Any]:
     start = data.first or 0.0
 
-    def rel(rows: list[tuple[Any, ...]]) -> list[list[Any]]:
-        return [[round(r[0] - start, 3), *(round(v, 3) for v in r[1:])] for r in thin(rows)]
+    def rel(rows: list[Row]) -> list[list[Any]]:
+        return [[round(r[0] - start, 3), *(round(v, 3) for v in r[1:])] for r in rows]
 
-    targets = []
-    for f in data.findings:
-        axis = str(f.get("axis", ""))
-        if "target_deg" not in f:
-            continue
-        for part in axis.split("+"):
-            if part in TARGET_AXES:
-                what = f"{f['command']} {f['target_deg']:g}: {f['detail']}"
-                targets.append(
-                    [round(f["time"] - start, 3), f["target_deg"], f["verdict"], what, part]
-                )
+    track = [[round(r[1], 1), round(r[2], 1)] for r in data.track.rows()]
+    bounds = None
+    if track:
+        easts, norths = [p[0] for p in track], [p[1] for p in track]
+        bounds = [min(easts), max(easts), min(norths), max(norths)]
+    targets = [[round(r[0] - start, 3), *r[1:]] for r in data.target_rows()]
     return {
         "start": start,
         "span": round((data.last or start) - start, 3),
-        "attitude": rel(data.attitude),
-        "marks": [[round(t - start, 3), name] for t, name in thin(data.command_marks, 400)],
+        "attitude": rel(data.attitude.rows()),
+        "marks": [[round(r[0] - start, 3), _mark_label(r[1])] for r in data.marks.rows()],
         "targets": targets,
-        "commanded": rel(data.commanded_rates()),
-        "measured": rel(data.measured_rates()),
+        "commanded": rel(data.commanded_rows()),
+        "measured": rel(data.measured.rows()),
         "feedback": rel(data.feedback_per_second()),
         "errors": rel(data.errors_per_second()),
-        "altitude": rel(data.altitude),
-        "track": [[round(e, 1), round(n, 1)] for e, n in thin(data.track_m())],
+        "altitude": rel(data.altitude.rows()),
+        "track": track,
+        "track_bounds": bounds,
     }
 
 
-def _overview(data: ReportData, settings: str) -> str:
-    rows: list[tuple[str, str]] = [("source", f"{_e(data.source)} ({_e(data.format_name)})")]
-    if data.first is not None and data.last is not None:
-        span = data.last - data.first
-        rows.append(
-            (
-                "time range",
-                f"{_e(_clock(data.first, True))} to {_e(_clock(data.last, True))} ({span:.1f} s)",
-            )
-        )
-    rows.append(
-        ("events", ", ".join(f"{_e(t)} {n:,}" for t, n in sorted(data.topics.items())) or "none")
+def _resolution(data: ReportData) -> str:
+    """What the plots hold: every sample, or each time bucket's extremes."""
+    series = [data.attitude, data.commanded, data.measured, data.altitude, data.track]
+    if all(s.whole for s in series):
+        return "The plots hold every sample."
+    width = max(s.width for s in series if not s.whole)
+    attitude = "The attitude plots hold every sample. " if data.attitude.whole else ""
+    return (
+        f"{attitude}Where a series is long, the plots hold per time bucket (here up to "
+        f"{width * 1000:,.0f} ms) the samples with the lowest and the highest value, so no "
+        "peak is lost; every sample is in <code>gimbal-analyzer decode FILE --json</code>."
     )
-    rows.append(
-        ("commands", ", ".join(f"{_e(c)} {n:,}" for c, n in data.commands.most_common()) or "none")
-    )
-    kinds = data.diagnostic_kinds
-    rows.append(
-        ("diagnostics", ", ".join(f"{_e(k)} {n:,}" for k, n in kinds.most_common()) or "none")
-    )
-    rows.extend(_bus_rows(data))
-    verdicts = data.verdicts()
-    rows.append(("verdicts", " ".join(f"{_verdict(v)} {verdicts.get(v, 0)}" for v in VERDICTS)))
-    per_command: dict[str, dict[str, int]] = {}
-    for f in data.findings:
-        per_command.setdefault(str(f["command"]), {}).setdefault(str(f["verdict"]), 0)
-        per_command[str(f["command"])][str(f["verdict"])] += 1
-    for command, counts in sorted(per_command.items()):
-        words = ", ".join(f"{n} {v.replace('_', ' ')}" for v, n in counts.items())
-        rows.append((f"&nbsp;&nbsp;{_e(command)}", _e(words)))
-    rows.append(("judged with", _e(settings)))
-    body = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
-    return f'<table class="kv">{body}</table>'
 
 
-def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
-    """The CAN bus's worst state and when, its error frames by class, and what to do."""
-    from analyzer.bus_hints import bus_hints
-
-    worst = data.bus.worst()
-    if worst is None:
-        return []
-    state, when, channel = worst
-    at = f" at {_e(_clock(when, True))}" if when is not None else ""
-    classes = ", ".join(f"{_e(k)} {n:,}" for k, n in data.bus.classes().most_common())
-    rows = [
-        ("CAN bus", f"worst {_e(state)}{at} on {_e(channel)}"),
-        ("error frames", f"{data.bus.error_frames:,}: {classes}"),
-    ]
-    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames)]
-    return rows
-
-
-def _responses(data: ReportData) -> str:
-    if not data.findings:
-        return '<p class="empty">no command with a visible effect, and no feedback</p>'
-    rows = []
-    for f in sorted(data.findings, key=lambda f: f["time"]):
-        rows.append(
-            [
-                _e(_clock(f["time"])),
-                _e(f["command"]),
-                _e(f["check"]),
-                _verdict(str(f["verdict"])),
-                _e(f["detail"]),
-                _e(f"{f['target_deg']:g}") if "target_deg" in f else "",
-                _yaw_reference(f),
-                _e(f"{f['response_s']:.2f}") if "response_s" in f else "",
-                _e(f"{f['error_deg']:.2f}") if "error_deg" in f else "",
-            ]
-        )
-    head = ["time", "command", "check", "verdict", "detail", "target °", "yaw reference"]
-    head += ["response s", "error °"]
-    return _rows(rows, head, frozenset({5, 7, 8}))
-
-
-def _yaw_reference(finding: dict[str, Any]) -> str:
-    """'north' or 'airframe' over the reason, for a yaw target; empty otherwise."""
-    if "yaw_reference" not in finding:
-        return ""
-    reason = finding.get("reference_reason", "")
-    small = f'<br><span class="small">{_e(reason)}</span>' if reason else ""
-    return _e(finding["yaw_reference"]) + small
-
-
-def _diagnostics(data: ReportData) -> str:
-    if not data.diagnostics:
-        return '<p class="empty">none: every frame decoded cleanly</p>'
-    rows = [[_e(_clock(t)), _e(kind), _e(detail)] for t, kind, detail in data.diagnostics]
-    table = _rows(rows, ["time", "kind", "detail"])
-    total = sum(data.diagnostic_kinds.values())
-    if total > len(data.diagnostics):
-        table += f'<p class="small">the first {MAX_ROWS:,} of {total:,} are listed</p>'
-    return table
-
-
-def render(data: ReportData, settings: str, lead: str = "") -> str:
-    """The whole page; ``lead`` is HTML of a command's own shown first (the check's steps)."""
+def render(
+    data: ReportData,
+    settings: str,
+    pictures: camera.PictureChoice | None = None,
+    lead: str = "",
+) -> str:
+    """The whole page: ``pictures`` are the camera pictures chosen for it, if any; ``lead``
+    is HTML of a command's own shown first (the check's steps)."""
     plots = _plot_data(data)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
@@ -217,15 +130,18 @@ def render(data: ReportData, settings: str, lead: str = "") -> str:
     notes = "".join(f'<p class="small">note: {_e(n)}</p>' for n in data.notes)
     sections = [
         f"<h1>{_e(title)}</h1>",
-        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. Times are UTC. '
+        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. {_zone_words()} '
         "The protocol has no acknowledgements: each command is judged from the attitude "
         "feedback that followed it.</p>",
         notes,
         lead,
         "<h2>Overview</h2>",
-        _overview(data, settings),
+        tables.overview(data, settings),
         "<h2>Gimbal attitude</h2>",
-        '<p class="small">Dashed lines: commands. Crosses: target angles, coloured by verdict.</p>',
+        '<p class="small">Dashed lines: commands. Crosses: target angles, coloured by verdict. '
+        "Drag across a time plot to zoom in (every time plot follows), double-click to zoom "
+        f"out. {_resolution(data)}</p>",
+        '<button id="zoom-reset" hidden>show the whole flight</button>',
         _plot("plot-pitch", has["attitude"], why("no attitude feedback in this input")),
         _plot("plot-yaw", has["attitude"], why("no attitude feedback in this input")),
         "<h2>Commanded and measured rates</h2>",
@@ -239,11 +155,15 @@ def render(data: ReportData, settings: str, lead: str = "") -> str:
         "<h2>UAV</h2>",
         _plot("plot-altitude", has["altitude"], why("no UAV altitude (0x0000FF16) in this input")),
         _plot("plot-track", has["track"], "no UAV GPS position (0x0000FF15) in this input", True),
+        "<h2>UAV status texts</h2>",
+        tables.texts(data),
         "<h2>Responses</h2>",
-        _responses(data),
-        camera.camera_section(data.pictures, data.findings),
+        tables.responses(data),
+        camera.camera_section(pictures, camera.shown_findings(data.findings.worst_first()))
+        if pictures is not None
+        else "",
         "<h2>Diagnostics</h2>",
-        _diagnostics(data),
+        tables.diagnostics(data),
     ]
     return "\n".join(
         [
@@ -251,7 +171,7 @@ def render(data: ReportData, settings: str, lead: str = "") -> str:
             '<html lang="en"><head><meta charset="utf-8">',
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
             f"<title>{_e(title)}</title>",
-            f"<style>{CSS}{camera.CSS if data.pictures else ''}</style>",
+            f"<style>{CSS}{camera.CSS if pictures is not None else ''}</style>",
             "</head><body>",
             *sections,
             f'<script id="report-data" type="application/json">{payload}</script>',

@@ -1,5 +1,6 @@
 // Runs after a page's plots are drawn (the report's and the fleet report's), for checks:
-// how many painted pixels and data points each plot has (a blank canvas has none).
+// how many painted pixels and data points each plot has (a blank canvas has none), and its
+// x and y axes: range, plot-area size in pixels, and the ticks as [value, label].
 (function () {
   "use strict";
   Array.prototype.forEach.call(document.querySelectorAll("canvas"), function (canvas) {
@@ -16,6 +17,23 @@
       });
     }
     canvas.setAttribute("data-points", String(count));
+    if (drawn && drawn.scales.x && drawn.scales.y) {
+      var axes = {};
+      ["x", "y"].forEach(function (id) {
+        var scale = drawn.scales[id];
+        axes[id] = { min: scale.min, max: scale.max,
+                     pixels: id === "x" ? scale.width : scale.height,
+                     ticks: scale.ticks.map(function (t) { return [t.value, t.label]; }) };
+      });
+      axes.points = [];
+      drawn.data.datasets.forEach(function (d) {
+        d.data.forEach(function (v) { if (v !== null) { axes.points.push([v.x, v.y]); } });
+      });
+      if (axes.points.length > 5000) { axes.points = []; }  // only small plots list theirs
+      canvas.setAttribute("data-axes", JSON.stringify(axes));
+    }
   });
   document.body.setAttribute("data-plots-ready", "yes");
+  // milliseconds from the start of loading the page to its plots drawn
+  document.body.setAttribute("data-drawn-ms", String(Math.round(performance.now())));
 })();

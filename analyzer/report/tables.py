@@ -1,0 +1,186 @@
+"""The report's HTML tables: overview, findings per command and check, texts, diagnostics."""
+
+from __future__ import annotations
+
+import html
+from typing import Any
+
+from analyzer import timefmt
+from analyzer.analysis.findings import VERDICTS
+from analyzer.report.collect import MAX_ROWS, ReportData
+from analyzer.report.finding_groups import Group
+
+UNTIMED = (
+    "the input carries no timestamps (a raw TCP/UART byte dump?), so responses cannot be "
+    "timed; record with `gimbal-analyzer record` to get times"
+)
+EVERY_FINDING = (
+    "Every finding, one per line, is in <code>gimbal-analyzer analyze FILE --json</code>, "
+    "and in a recording's <code>/analysis/response</code> topic "
+    "(<code>gimbal-analyzer convert</code> writes it)."
+)
+
+
+def _e(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _clock(t: float, with_date: bool = False) -> str:
+    """The one time rule (analyzer.timefmt): UTC with Z, or local time with --local-time."""
+    if not timefmt.is_absolute(t):
+        return f"{t:.3f} s"
+    return timefmt.format_datetime(t) if with_date else timefmt.format_clock(t)
+
+
+def _verdict(verdict: str) -> str:
+    return f'<span class="v v-{_e(verdict)}">{_e(verdict.replace("_", " "))}</span>'
+
+
+def _rows(rows: list[list[str]], head: list[str], numeric: frozenset[int] = frozenset()) -> str:
+    out = ["<table><tr>" + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>"]
+    for row in rows:
+        cells = "".join(
+            f'<td class="num">{c}</td>' if i in numeric else f"<td>{c}</td>"
+            for i, c in enumerate(row)
+        )
+        out.append(f"<tr>{cells}</tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def _counts(counts: dict[str, int]) -> str:
+    return ", ".join(f"{counts[v]:,} {v.replace('_', ' ')}" for v in VERDICTS if counts.get(v))
+
+
+def overview(data: ReportData, settings: str) -> str:
+    rows: list[tuple[str, str]] = [("source", f"{_e(data.source)} ({_e(data.format_name)})")]
+    if data.first is not None and data.last is not None:
+        span = data.last - data.first
+        rows.append(
+            (
+                "time range",
+                f"{_e(_clock(data.first, True))} to {_e(_clock(data.last, True))} ({span:.1f} s)",
+            )
+        )
+    rows.append(
+        ("events", ", ".join(f"{_e(t)} {n:,}" for t, n in sorted(data.topics.items())) or "none")
+    )
+    rows.append(
+        ("commands", ", ".join(f"{_e(c)} {n:,}" for c, n in data.commands.most_common()) or "none")
+    )
+    kinds = data.diagnostic_kinds
+    rows.append(
+        ("diagnostics", ", ".join(f"{_e(k)} {n:,}" for k, n in kinds.most_common()) or "none")
+    )
+    rows.extend(_bus_rows(data))
+    verdicts = data.counts.verdicts  # the commands' findings, as analyze counts them
+    rows.append(("verdicts", " ".join(f"{_verdict(v)} {verdicts.get(v, 0):,}" for v in VERDICTS)))
+    rows.append(("feedback", _e(data.counts.health_line())))
+    rows.append(("judged with", _e(settings)))
+    body = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
+    return f'<table class="kv">{body}</table>'
+
+
+def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
+    """The CAN bus's worst state and when, its error frames by class, and what to do."""
+    from analyzer.bus_hints import bus_hints
+
+    worst = data.bus.worst()
+    if worst is None:
+        return []
+    state, when, channel = worst
+    at = f" at {_e(_clock(when, True))}" if when is not None else ""
+    classes = ", ".join(f"{_e(k)} {n:,}" for k, n in data.bus.classes().most_common())
+    rows = [
+        ("CAN bus", f"worst {_e(state)}{at} on {_e(channel)}"),
+        ("error frames", f"{data.bus.error_frames:,}: {classes}"),
+    ]
+    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames)]
+    return rows
+
+
+def _example(finding: dict[str, Any]) -> list[str]:
+    return [
+        _e(_clock(float(finding["time"]))),
+        _verdict(str(finding["verdict"])),
+        _e(finding.get("detail", "")),
+        _e(f"{finding['target_deg']:g}") if "target_deg" in finding else "",
+        _yaw_reference(finding),
+        _e(f"{finding['response_s']:.2f}") if "response_s" in finding else "",
+        _e(f"{finding['error_deg']:.2f}") if "error_deg" in finding else "",
+    ]
+
+
+def _group(group: Group) -> str:
+    examples = group.examples()
+    span = ""
+    if group.first is not None and group.last is not None and group.total > 1:
+        span = f", {_e(_clock(group.first))} to {_e(_clock(group.last))}"
+    shown = (
+        f"{len(examples)} examples of {group.total:,}"
+        if len(examples) < group.total
+        else f"all {group.total:,}"
+    )
+    head = (
+        f'<h3 class="group" data-command="{_e(group.command)}" data-check="{_e(group.check)}">'
+        f"{_e(group.command)} &middot; {_e(group.check)}: {group.total:,} "
+        f'<span class="small">({_e(_counts(group.verdicts))}{span})</span></h3>'
+        f'<p class="small">{shown}, the worst first:</p>'
+    )
+    columns = ["time", "verdict", "detail", "target °", "yaw reference", "response s", "error °"]
+    return head + _rows([_example(f) for f in examples], columns, frozenset({3, 5, 6}))
+
+
+def responses(data: ReportData) -> str:
+    """Findings per command and check: exact counts by verdict, the worst examples."""
+    if data.untimed:
+        return f'<p class="empty">{_e(UNTIMED)}</p>'
+    groups = data.findings.ordered()
+    if not groups:
+        return '<p class="empty">no command with a visible effect, and no feedback</p>'
+    rows = [
+        [
+            _e(g.command),
+            _e(g.check),
+            *(f"{g.verdicts.get(v, 0):,}" for v in VERDICTS),
+            f"{g.total:,}",
+        ]
+        for g in groups
+    ]
+    head = ["command", "check", *(v.replace("_", " ") for v in VERDICTS), "findings"]
+    table = _rows(rows, head, frozenset(range(2, 3 + len(VERDICTS))))
+    intro = (
+        f'<p class="small">{data.findings.total:,} findings, counted per command and check; '
+        f"below each, up to {data.findings.keep} examples, the worst first. {EVERY_FINDING}</p>"
+    )
+    return "\n".join([intro, table, *(_group(g) for g in groups)])
+
+
+def _yaw_reference(finding: dict[str, Any]) -> str:
+    """'north' or 'airframe' over the reason, for a yaw target; empty otherwise."""
+    if "yaw_reference" not in finding:
+        return ""
+    reason = finding.get("reference_reason", "")
+    small = f'<br><span class="small">{_e(reason)}</span>' if reason else ""
+    return _e(finding["yaw_reference"]) + small
+
+
+def texts(data: ReportData) -> str:
+    """The flight controller's status texts (0x02008201 / 0x02008202)."""
+    if not data.texts:
+        return '<p class="empty">no status text from the flight controller in this input</p>'
+    table = _rows([[_e(_clock(t)), _e(text)] for t, text in data.texts], ["time", "text"])
+    if data.text_count > len(data.texts):
+        table += f'<p class="small">the first {len(data.texts):,} of {data.text_count:,}</p>'
+    return table
+
+
+def diagnostics(data: ReportData) -> str:
+    if not data.diagnostics:
+        return '<p class="empty">none: every frame decoded cleanly</p>'
+    rows = [[_e(_clock(t)), _e(kind), _e(detail)] for t, kind, detail in data.diagnostics]
+    table = _rows(rows, ["time", "kind", "detail"])
+    total = sum(data.diagnostic_kinds.values())
+    if total > len(data.diagnostics):
+        table += f'<p class="small">the first {MAX_ROWS:,} of {total:,} are listed</p>'
+    return table
