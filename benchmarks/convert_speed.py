@@ -123,7 +123,7 @@ def write_candump(frames: list[CanFrame], path: Path) -> None:
 def run_convert(
     source_path: Path, frames: list[CanFrame], out: Path, compression: str
 ) -> tuple[float, Any, str]:
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.pipeline import Pipeline, run_items
 
     open_input: Any = None

@@ -91,7 +91,7 @@ def write_log(path: Path, frame_count: int) -> int:
 
 
 def ours(path: Path) -> int:
-    from analyzer.inputs.dataflash import DataFlashReader
+    from analyzer.inputs.dataflash.reader import DataFlashReader
     from analyzer.protocol.types import CanFrame
 
     with DataFlashReader(str(path)) as reader:

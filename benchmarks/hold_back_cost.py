@@ -31,8 +31,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from convert_speed import make_frames  # noqa: E402
 
-from analyzer.mcapio.channels import can_frame_json, time_ns  # noqa: E402
-from analyzer.mcapio.chunked_writer import ChunkedWriter  # noqa: E402
+from analyzer.mcapio.channels import can_frame_json  # noqa: E402
+from analyzer.mcapio.log_time import time_ns  # noqa: E402
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter  # noqa: E402
 from analyzer.video.spec import VIDEO_HOLD_BACK_S  # noqa: E402
 
 S = 1_000_000_000

@@ -204,7 +204,7 @@ def run(
     sink: Any
     if sink_kind == "mcap":
         try:
-            from analyzer.mcapio.writer import McapSink, recording_metadata
+            from analyzer.mcapio.write.sink import McapSink, recording_metadata
         except ImportError:
             sink_kind = "count"
         else:

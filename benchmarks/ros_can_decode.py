@@ -4,7 +4,7 @@ Encodes mixed gimbal traffic (the frames of the convert benchmark: commands, fee
 status, foreign IDs; every frame different) as ros2_socketcan publishes it, with
 mcap-ros2-support's CDR encoder, then times, in the same run and best of ``--repeat``:
 
-- per message: ``analyzer.mcapio.ros_can.frame_from_cdr`` against mcap-ros2-support's
+- per message: ``analyzer.mcapio.read.ros_can.frame_from_cdr`` against mcap-ros2-support's
   decoder (``mcap_ros2.decoder.DecoderFactory``) plus building the same
   CanFrame from the decoded fields;
 - whole file: a rosbag2-style MCAP read by ``Recording.items()`` against
@@ -32,8 +32,8 @@ from mcap.writer import CompressionType, Writer
 from mcap_ros2._dynamic import serialize_dynamic
 from mcap_ros2.decoder import DecoderFactory
 
-from analyzer.mcapio.reader import Recording
-from analyzer.mcapio.ros_can import ROS2_CAN_FRAME, frame_from_cdr
+from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.ros_can import ROS2_CAN_FRAME, frame_from_cdr
 from analyzer.protocol.types import CanFrame
 from benchmarks.convert_speed import make_frames
 

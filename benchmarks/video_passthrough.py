@@ -31,8 +31,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import av
 
-from analyzer.mcapio.video_channels import VideoRecorder
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.write.sink import McapSink
+from analyzer.mcapio.write.video import VideoRecorder
 from analyzer.pipeline import Batch
 from analyzer.video.rtsp_stream import VideoStream
 from analyzer.video.spec import parse_video_spec

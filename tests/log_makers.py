@@ -25,7 +25,7 @@ from typing import Any
 import dpkt
 
 from analyzer.inputs import open_input
-from analyzer.inputs.dataflash_gps_time import utc_to_gps
+from analyzer.inputs.dataflash.gps_time import utc_to_gps
 from analyzer.protocol.types import CanFrame
 
 SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "flight-candump.log"

@@ -22,7 +22,7 @@ import jsonschema
 import pytest
 from mcap.reader import make_reader
 
-from analyzer.mcapio.reader import read_replay
+from analyzer.mcapio.read.reader import read_replay
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk
 from tests.mcap_doctor import examine

@@ -12,7 +12,7 @@ import jsonschema
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.reader import read_events
+from analyzer.mcapio.read.reader import read_events
 from analyzer.protocol.types import TO_IDU, CanFrame, StreamChunk
 from analyzer.samplegen import write_samples
 from analyzer.sim.behaviour import Behaviour

@@ -18,7 +18,7 @@ import pytest
 from can.interfaces.socketcan import constants, socketcan
 
 from analyzer.cli import main
-from analyzer.inputs.python_can import frame_from_message
+from analyzer.inputs.python_can.reader import frame_from_message
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import TOPIC_CAN_BUS_STATE, TOPIC_DIAGNOSTICS
 
@@ -260,8 +260,8 @@ def test_live_capture_records_the_bus_state(tmp_path: Path) -> None:
     from mcap.reader import make_reader
 
     from analyzer.capture import Capture
-    from analyzer.mcapio.info import recording_info
-    from analyzer.mcapio.writer import McapSink
+    from analyzer.mcapio.read.info import recording_info
+    from analyzer.mcapio.write.sink import McapSink
     from analyzer.protocol.schema import topic_schemas
     from analyzer.sources import open_source
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from analyzer.inputs.candump import CandumpParser
-from analyzer.inputs.candump_scan import stamp_times
+from analyzer.inputs.candump.reader import CandumpParser
+from analyzer.inputs.candump.scan import stamp_times
 from analyzer.protocol.types import CanFrame
 
 # candump -L writes ``(%010lu.%06lu)``; the line parser takes up to 15 digits before the point.

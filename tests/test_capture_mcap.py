@@ -42,7 +42,7 @@ def mcap_topics(path: Path) -> dict[str, int]:
 
 
 def test_virtual_bus_recorded_to_mcap(tmp_path: Path) -> None:
-    writer = pytest.importorskip("analyzer.mcapio.writer")
+    writer = pytest.importorskip("analyzer.mcapio.write.sink")
     channel = f"rec-{uuid.uuid4().hex[:8]}"
     sender = can.Bus(interface="virtual", channel=channel)
     source = open_source(f"can:virtual:{channel}")

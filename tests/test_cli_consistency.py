@@ -183,7 +183,7 @@ def test_send_help_says_the_repeat_unit_is_required(capsys: pytest.CaptureFixtur
 def test_a_live_record_that_received_nothing_is_exit_1(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from analyzer.mcapio.reader import Recording
+    from analyzer.mcapio.read.reader import Recording
 
     probe = socket.create_server(("127.0.0.1", 0))
     port = probe.getsockname()[1]

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from analyzer.errors import EXIT_FAILED, EXIT_OK
-from analyzer.mcapio.reader import Recording
+from analyzer.mcapio.read.reader import Recording
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "samples" / "flight-candump.log"

@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.reader import Recording, read_events, read_items
+from analyzer.mcapio.read.reader import Recording, read_events, read_items
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import CanFrame, Event
 from tests.test_mcap_support import traffic

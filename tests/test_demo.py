@@ -13,7 +13,7 @@ from analyzer.cli import main
 from analyzer.commands import demo
 from analyzer.sim.ground import DEMO_SCRIPT, GroundScript
 
-HAVE_MCAP_SINK = importlib.util.find_spec("analyzer.mcapio.writer") is not None
+HAVE_MCAP_SINK = importlib.util.find_spec("analyzer.mcapio.write.sink") is not None
 
 
 def topics_in(path: Path) -> Counter[str]:
@@ -24,7 +24,9 @@ def topics_in(path: Path) -> Counter[str]:
         return Counter(channel.topic for _, channel, _ in reader.iter_messages())
 
 
-@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+@pytest.mark.skipif(
+    not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
+)
 def test_demo_off_a_terminal_ends_by_itself_and_records_demo_mcap(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -42,7 +44,9 @@ def test_demo_off_a_terminal_ends_by_itself_and_records_demo_mcap(
     assert topics["/gimbal/attitude"] >= 4
 
 
-@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+@pytest.mark.skipif(
+    not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
+)
 def test_demo_clean_has_no_fault_diagnostics(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -86,11 +90,13 @@ def test_demo_replaces_demo_mcap_but_no_other_file_without_force(
     assert precious.read_bytes() == b"keep me"
 
 
-@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+@pytest.mark.skipif(
+    not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
+)
 def test_demo_with_a_heading_is_judged_from_north_without_a_false_stopped_short(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from analyzer.mcapio.reader import read_events
+    from analyzer.mcapio.read.reader import read_events
 
     path = tmp_path / "heading.mcap"
     args = ["demo", "--no-tui", "--clean", "--heading", "30", "--duration", "6", "-o", str(path)]
@@ -138,11 +144,13 @@ def test_demo_help_names_only_what_exists(capsys: pytest.CaptureFixture[str]) ->
     assert set(re.findall(r"gimbal-analyzer (\w+)", text)) <= set(COMMANDS)
 
 
-@pytest.mark.skipif(not HAVE_MCAP_SINK, reason="analyzer.mcapio.writer (the MCAP sink) is absent")
+@pytest.mark.skipif(
+    not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
+)
 def test_demo_metadata_repeats_the_fault_and_behaviour_options(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from analyzer.mcapio.info import recording_info
+    from analyzer.mcapio.read.info import recording_info
 
     path = tmp_path / "faulty.mcap"
     args = ["demo", "--no-tui", "--duration", "1", "-o", str(path), "--drop", "0.1"]

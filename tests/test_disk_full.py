@@ -16,8 +16,8 @@ import pytest
 
 from analyzer import output_file
 from analyzer.capture import Capture
-from analyzer.mcapio.reader import Recording, read_items
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.protocol.types import CanFrame
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -20,7 +20,7 @@ from analyzer.fleet import column_sink
 from analyzer.fleet.column_sink import CollectedTables, ColumnSink
 from analyzer.fleet.columns import CRC_RATE_UNIT
 from analyzer.fleet.rows import FileWork, error_text, file_rows
-from analyzer.mcapio.file_end import RecordingError
+from analyzer.mcapio.read.file_end import RecordingError
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, Event
 from tests.fleet_flights import built_fleet, cli, questions, recording, rows

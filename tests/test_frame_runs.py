@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs.base import by_frames
-from analyzer.inputs.candump import CandumpParser, CandumpReader
+from analyzer.inputs.candump.reader import CandumpParser, CandumpReader
 from analyzer.pipeline import Batch, Pipeline, default_decoder, run_items
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.info import recording_info
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.read.info import recording_info
+from analyzer.mcapio.write.sink import McapSink
 from tests.test_mcap_support import T0, batches, decode_all, traffic, write_recording
 
 

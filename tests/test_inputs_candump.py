@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs import open_input
-from analyzer.inputs.candump import CandumpParser, CandumpReader
+from analyzer.inputs.candump.reader import CandumpParser, CandumpReader
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.protocol.types import BAD_LINE, TOPIC_DIAGNOSTICS, CanFrame, Event
 

@@ -8,8 +8,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from analyzer.inputs.candump import CandumpParser
-from analyzer.inputs.candump_scan import id_texts, scanner
+from analyzer.inputs.candump.reader import CandumpParser
+from analyzer.inputs.candump.scan import id_texts, scanner
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.protocol.types import CanFrame, Event
 

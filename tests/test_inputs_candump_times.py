@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 
 from analyzer.cli import main
 from analyzer.inputs import open_input
-from analyzer.inputs.candump import DECIDE_AFTER
-from analyzer.inputs.python_can_text import ABSOLUTE, DELTA, RELATIVE_TO_START
+from analyzer.inputs.candump.reader import DECIDE_AFTER
+from analyzer.inputs.python_can.text_logs import ABSOLUTE, DELTA, RELATIVE_TO_START
 from analyzer.inputs.stdin import StdinCandumpReader
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.types import CanFrame
@@ -179,7 +179,7 @@ def test_an_asc_file_named_log_says_which_format_to_try(tmp_path: Path) -> None:
 
 
 def test_a_ten_byte_frame_is_refused_in_both_layouts() -> None:
-    from analyzer.inputs.candump import CandumpParser
+    from analyzer.inputs.candump.reader import CandumpParser
 
     ten = "00 11 22 33 44 55 66 77 88 99"
     lines = [

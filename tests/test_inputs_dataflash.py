@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from pymavlink import DFReader
 
 from analyzer.inputs import InputReader, detect_format, open_input
-from analyzer.inputs.dataflash_gps_time import gps_to_utc, leap_seconds, utc_to_gps
+from analyzer.inputs.dataflash.gps_time import gps_to_utc, leap_seconds, utc_to_gps
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event
 from tests.log_makers import (
     CAFD,

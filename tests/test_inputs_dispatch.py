@@ -200,8 +200,8 @@ def test_dash_cannot_be_pcap() -> None:
 
 
 def test_mcap_recording_gives_its_raw_items(tmp_path: Path) -> None:
-    pytest.importorskip("analyzer.mcapio.writer")
-    from analyzer.mcapio.writer import McapSink
+    pytest.importorskip("analyzer.mcapio.write.sink")
+    from analyzer.mcapio.write.sink import McapSink
     from analyzer.pipeline import Batch
 
     items: list[Any] = [
@@ -222,6 +222,6 @@ def test_mcap_support_missing_is_a_clear_error(
 ) -> None:
     path = tmp_path / "rec.mcap"
     path.write_bytes(b"\x89MCAP0\r\n")
-    monkeypatch.setitem(sys.modules, "analyzer.mcapio.reader", None)
+    monkeypatch.setitem(sys.modules, "analyzer.mcapio.read.reader", None)
     with pytest.raises(UsageError, match="MCAP support is not available"):
         open_input(str(path))

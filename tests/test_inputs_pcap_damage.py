@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs import open_input
-from analyzer.inputs.tcp_flows import FlowTable
-from analyzer.inputs.tcp_reassembly import MAX_PENDING_SEGMENTS, TcpDirection
+from analyzer.inputs.pcap.tcp_flows import FlowTable
+from analyzer.inputs.pcap.tcp_reassembly import MAX_PENDING_SEGMENTS, TcpDirection
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude

@@ -8,7 +8,7 @@ import random
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analyzer.inputs.tcp_reassembly import Delivered, Gap, Result, TcpDirection
+from analyzer.inputs.pcap.tcp_reassembly import Delivered, Gap, Result, TcpDirection
 
 ISN = 1000
 

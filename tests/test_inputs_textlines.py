@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs import open_input
-from analyzer.inputs.candump import CandumpReader
+from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.inputs.stdin import StdinCandumpReader
 from analyzer.inputs.textlines import MAX_LINE, TolerantGunzip, split_blocks
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event

@@ -1,22 +1,150 @@
-"""The sans-IO protocol core imports nothing from the layers above it."""
+"""The layers keep: imports point only down the layers, and no modules import each other."""
 
 from __future__ import annotations
 
 import ast
 from pathlib import Path
 
-PROTOCOL = Path(__file__).resolve().parent.parent / "analyzer" / "protocol"
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGE = ROOT / "analyzer"
+PROTOCOL = PACKAGE / "protocol"
+
+# Bottom first. A module may import from its own package and from any package listed
+# before its own; never from one listed after it. Every module of the analyzer must fall
+# under one of these (a new package is placed here on purpose, not by accident).
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("the sans-IO protocol core", ("protocol",)),
+    (
+        "shared plumbing",
+        (
+            "errors",
+            "timefmt",
+            "terminal_text",
+            "stdio",
+            "output_file",
+            "bus_figures",
+            "bus_hints",
+            "tally",
+            "progress",
+            "pipeline",
+        ),
+    ),
+    (
+        "sources, inputs and sinks",
+        (
+            "scene",  # where the gimbal points, from the events: drawn by mcapio and report
+            "sources",
+            "video",
+            "mcapio",
+            "inputs",
+            "input_options",
+            "link_status",
+            "render",
+            "summary",
+            "export",
+        ),
+    ),
+    ("analysis", ("analysis",)),
+    ("engines", ("capture", "live", "sim", "samplegen")),
+    ("user interfaces", ("report", "tui", "fleet", "check")),
+    ("commands", ("commands", "cli", "__main__")),
+)
+ORDER = [package for _, packages in LAYERS for package in packages]
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
 
 
 def imported_modules(path: Path) -> set[str]:
-    """Every module ``path`` imports, at the top or inside a function."""
+    """Every module ``path`` imports, at the top, inside a function or for type checking;
+    ``from analyzer.x import y`` counts as importing ``analyzer.x.y`` when that is a
+    module."""
     names: set[str] = set()
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
     return names
+
+
+def analyzer_graph() -> dict[str, set[str]]:
+    """Module -> the analyzer modules it imports (packages count as their __init__)."""
+    paths = {module_name(path): path for path in PACKAGE.rglob("*.py")}
+    return {
+        name: {other for other in imported_modules(path) if other in paths and other != name}
+        for name, path in paths.items()
+    }
+
+
+def package_of(module: str) -> str:
+    """``analyzer.inputs.pcap.reader`` -> ``inputs``; the package root itself -> ``errors``
+    (its ``__init__`` holds only the version, the lowest thing there is)."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "errors"
+
+
+def test_every_module_has_a_place_in_the_layers() -> None:
+    unplaced = sorted({package_of(m) for m in analyzer_graph()} - set(ORDER))
+    assert not unplaced, f"put these in LAYERS (tests/test_layering.py): {unplaced}"
+
+
+def test_imports_point_only_down_the_layers() -> None:
+    rank = {package: i for i, package in enumerate(ORDER)}
+    upward = sorted(
+        f"{module} imports {other}"
+        for module, imports in analyzer_graph().items()
+        for other in imports
+        if rank.get(package_of(other), -1) > rank.get(package_of(module), len(ORDER))
+    )
+    assert not upward, "imports that run up a layer:\n" + "\n".join(upward)
+
+
+def circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for other in sorted(graph.get(node, ())):
+            if other not in index:
+                visit(other)
+                low[node] = min(low[node], low[other])
+            elif other in on_stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            group = []
+            while True:
+                other = stack.pop()
+                on_stack.discard(other)
+                group.append(other)
+                if other == node:
+                    break
+            if len(group) > 1:
+                found.append(sorted(group))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+def test_no_modules_import_each_other() -> None:
+    found = circles(analyzer_graph())
+    assert not found, "modules that import each other (directly or round a circle):\n" + (
+        "\n".join(" <-> ".join(group) for group in found)
+    )
 
 
 def test_the_protocol_core_imports_only_itself_from_the_analyzer() -> None:
@@ -29,7 +157,27 @@ def test_the_protocol_core_imports_only_itself_from_the_analyzer() -> None:
     assert not upward, f"analyzer.protocol imports from layers above it: {sorted(upward)}"
 
 
-def test_the_check_sees_imports_inside_functions(tmp_path: Path) -> None:
+def test_the_checks_see_imports_inside_functions_and_for_type_checking(tmp_path: Path) -> None:
     module = tmp_path / "m.py"
-    module.write_text("def f():\n    from analyzer.analysis.findings import VERDICTS\n")
-    assert imported_modules(module) == {"analyzer.analysis.findings"}
+    module.write_text(
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    from analyzer.tally import Tally\n"
+        "def f():\n    from analyzer.analysis.findings import VERDICTS\n"
+    )
+    assert {"analyzer.tally", "analyzer.analysis.findings"} <= imported_modules(module)
+
+
+def test_the_checks_find_an_upward_import_and_a_circle() -> None:
+    assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    rank = {package: i for i, package in enumerate(ORDER)}
+    assert rank["commands"] > rank["fleet"] > rank["analysis"] > rank["inputs"]
+    assert rank["inputs"] > rank["protocol"]
+
+
+def test_every_package_says_what_it_holds() -> None:
+    silent = [
+        str(init.relative_to(ROOT))
+        for init in PACKAGE.rglob("__init__.py")
+        if not (ast.get_docstring(ast.parse(init.read_text())) or "").strip()
+    ]
+    assert not silent, f"packages without a one-line docstring: {silent}"

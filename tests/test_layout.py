@@ -9,10 +9,10 @@ from typing import Any
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
 from analyzer.mcapio.foxglove import VIEW_SCHEMAS, view_schema
 from analyzer.mcapio.layout import layout
-from analyzer.mcapio.video_channels import thumbnail_annotations_topic, thumbnail_topic
+from analyzer.mcapio.scene_views import TOPIC_SCENE, TOPIC_TF
+from analyzer.mcapio.write.video import thumbnail_annotations_topic, thumbnail_topic
 from analyzer.protocol.schema import topic_schemas
 from analyzer.scene.scene3d import GIMBAL
 

@@ -30,7 +30,7 @@ from analyzer.inputs import open_input
 from analyzer.live.attach import foxglove_status
 from analyzer.live.options import ListenAddress, listen_words, parse_listen_address
 from analyzer.live.server import FoxgloveLive, status_words
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.types import CanFrame
 from analyzer.tui.state import MonitorState

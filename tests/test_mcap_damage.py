@@ -18,9 +18,9 @@ from mcap.data_stream import RecordBuilder
 from mcap.records import ChunkIndex
 
 from analyzer.cli import main
-from analyzer.mcapio.chunks import MAX_CHUNK_UNCOMPRESSED, RECORD_HEAD
-from analyzer.mcapio.info import recording_info
-from analyzer.mcapio.reader import Recording, RecordingError, read_replay
+from analyzer.mcapio.read.info import recording_info
+from analyzer.mcapio.read.reader import Recording, RecordingError, read_replay
+from analyzer.mcapio.read.records import MAX_CHUNK_UNCOMPRESSED, RECORD_HEAD
 from analyzer.protocol.types import INCOMPLETE, TOPIC_DIAGNOSTICS, Event
 from analyzer.tally import Tally
 from tests.test_mcap_support import traffic, write_recording

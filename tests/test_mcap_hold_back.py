@@ -14,10 +14,10 @@ from mcap.reader import NonSeekingReader, make_reader
 from analyzer import output_file
 from analyzer.errors import SourceError
 from analyzer.mcapio.channels import STATS_METADATA_NAME
-from analyzer.mcapio.chunked_writer import ChunkedWriter
-from analyzer.mcapio.reader import Recording, read_items
-from analyzer.mcapio.write_failure import keep_complete_chunks
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.write.chunked_writer import ChunkedWriter
+from analyzer.mcapio.write.failure import keep_complete_chunks
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.protocol.types import CanFrame
 from tests.mcap_doctor import examine
 from tests.test_mcap_writer import _FullDisk  # a disk that fills up after `room` bytes

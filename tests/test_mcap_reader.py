@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from analyzer.mcapio.reader import Recording, RecordingError, read_events, read_items
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.read.reader import Recording, RecordingError, read_events, read_items
+from analyzer.mcapio.write.sink import McapSink
 from tests.test_mcap_support import batches, decode_all, event_dicts, traffic, write_recording
 
 
@@ -130,7 +130,7 @@ def test_not_an_mcap_file(tmp_path: Path) -> None:
 
 
 def test_replay_carries_link_and_bad_line_diagnostics(tmp_path: Path) -> None:
-    from analyzer.mcapio.reader import read_replay
+    from analyzer.mcapio.read.reader import read_replay
     from analyzer.protocol.decoder import Decoder
     from analyzer.protocol.types import BAD_LINE, LINK, Event, diagnostic
 

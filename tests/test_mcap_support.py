@@ -130,7 +130,7 @@ def batches(items: list[RawItem], *, emit_other: bool = False, size: int = 25) -
 def write_recording(
     path: Path, items: list[RawItem] | None = None, *, emit_other: bool = False, **kwargs: Any
 ) -> list[Batch]:
-    from analyzer.mcapio.writer import McapSink
+    from analyzer.mcapio.write.sink import McapSink
 
     kwargs.setdefault("flush_interval", None)
     sink = McapSink(path, metadata={"source": "test:traffic"}, **kwargs)

@@ -15,10 +15,10 @@ from mcap.reader import NonSeekingReader, make_reader
 
 from analyzer import PROTOCOL_DOCUMENT, __version__, output_file
 from analyzer.errors import SourceError
-from analyzer.mcapio.channels import time_ns
 from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
-from analyzer.mcapio.reader import Recording, read_items
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.log_time import time_ns
+from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.schema import topic_schemas
@@ -202,7 +202,7 @@ def test_timed_flush_puts_older_messages_on_disk(tmp_path: Path) -> None:
 def test_a_large_provisional_summary_is_not_rewritten_at_every_flush(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from analyzer.mcapio import chunked_writer
+    from analyzer.mcapio.write import chunked_writer
 
     monkeypatch.setattr(chunked_writer, "LIVE_SUMMARY_FREE", 4096)
     path = tmp_path / "live.mcap"
@@ -295,7 +295,7 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path, compress
     from mcap.stream_reader import StreamReader
     from mcap.writer import CompressionType, Writer
 
-    from analyzer.mcapio.chunked_writer import ChunkedWriter
+    from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 
     def fill(writer: Any) -> None:
         writer.start("", "test")
@@ -352,7 +352,7 @@ def test_chunked_writer_matches_the_mcap_library_writer(tmp_path: Path, compress
 def test_chunked_writer_writes_in_log_time_order(tmp_path: Path) -> None:
     """Out-of-order input: each chunk is sorted; a message older than a chunk on disk is
     moved up to that chunk's end (its publish time keeps the original)."""
-    from analyzer.mcapio.chunked_writer import ChunkedWriter
+    from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 
     path = tmp_path / "order.mcap"
     with open(path, "wb") as f:

@@ -10,7 +10,7 @@ import pytest
 from analyzer import output_file
 from analyzer.cli import main
 from analyzer.commands import demo
-from analyzer.mcapio.reader import Recording
+from analyzer.mcapio.read.reader import Recording
 from analyzer.output_file import OutputFile, OutputRefused, check_output, write_output
 
 CANDUMP = "".join(f"({1715680800 + n * 0.01:.6f}) can0 0F01#0F040CFE00000000\n" for n in range(50))

@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from analyzer.mcapio.reader import read_events, read_items
-from analyzer.mcapio.writer import McapSink
+from analyzer.mcapio.read.reader import read_events, read_items
+from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.types import BAD_LINE, TOPIC_COMMAND, Event, diagnostic
 from tests.test_mcap_support import decode_all, event_dicts, traffic

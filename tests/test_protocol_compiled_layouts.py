@@ -20,7 +20,7 @@ from analyzer.protocol.feedback import (
     FeedbackLayout,
     decode_feedback_fields,
 )
-from analyzer.protocol.fields import Layout
+from analyzer.protocol.layout import Layout
 from analyzer.protocol.uav import EIGHT_BYTE_DECODERS, STATUS_FRAMES, USED_BYTES
 
 LAYOUTS: list[Layout] = [

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
-from analyzer.mcapio.reader import Recording, read_events, read_items
+from analyzer.mcapio.read.reader import Recording, read_events, read_items
 from analyzer.protocol.feedback import encode_attitude
 from analyzer.protocol.types import StreamChunk
 from tests.mcap_doctor import examine

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from analyzer.mcapio.reader import read_events
+from analyzer.mcapio.read.reader import read_events
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLE = ROOT / "samples" / "flight-candump.log"

@@ -11,7 +11,7 @@ import dpkt
 import pytest
 
 from analyzer.inputs import open_input
-from analyzer.inputs.candump import CandumpParser
+from analyzer.inputs.candump.reader import CandumpParser
 from analyzer.mcapio.channels import can_frame_from_dict, can_frame_json
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.ids import PROTOCOL_IDS

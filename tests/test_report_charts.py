@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from analyzer.mcapio.video_reading import Thumbnail
+from analyzer.mcapio.read.video import Thumbnail
 from analyzer.report import camera
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig

@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 from analyzer.cli import main
 from analyzer.errors import InputError
 from analyzer.inputs import open_input
-from analyzer.mcapio.info import recording_info
-from analyzer.mcapio.ros_can import RosFrameError, frame_from_cdr
+from analyzer.mcapio.read.info import recording_info
+from analyzer.mcapio.read.ros_can import RosFrameError, frame_from_cdr
 from analyzer.protocol.types import BAD_FRAME, CanFrame, Event
 from tests.rosbag2_files import (
     FD_FRAME_DEFINITION,

@@ -20,9 +20,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
 from analyzer.mcapio.foxglove import FoxgloveViews, view_schema
-from analyzer.mcapio.video_reading import Thumbnail
+from analyzer.mcapio.read.video import Thumbnail
+from analyzer.mcapio.scene_views import TOPIC_SCENE, TOPIC_TF
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments

@@ -23,8 +23,8 @@ import jsonschema
 import pytest
 from mcap.reader import make_reader
 
-from analyzer.mcapio.reader import Recording
-from analyzer.mcapio.video_channels import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
+from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.write.video import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
 from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 from analyzer.video.spec import VIDEO_HOLD_BACK_S
 from tests.mcap_doctor import examine

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from analyzer.errors import UsageError
 from analyzer.mcapio.schema_subset import foxglove_problems
-from analyzer.mcapio.video_channels import (
+from analyzer.mcapio.write.video import (
     COMPRESSED_IMAGE_SCHEMA,
     COMPRESSED_VIDEO_SCHEMA,
     message_json,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from analyzer.protocol.response_fields import (
     CHECK_FEEDBACK,
@@ -22,6 +22,14 @@ from analyzer.protocol.response_fields import (
     VERDICTS,
 )
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
+
+
+class Timed(Protocol):
+    """The first and last time of a run's input (a Tally has them)."""
+
+    first_time: float | None
+    last_time: float | None
+
 
 _RANK = {OBEYED: 0, UNKNOWN: 1, PARTIAL: 2, NOT_OBEYED: 3}
 
@@ -84,3 +92,9 @@ __all__ = [
     "verdict_line",
     "worst",
 ]
+
+
+def untimed(tally: Timed, findings: list[Any]) -> bool:
+    """True when findings were made of an input without a clock (a raw byte dump): every
+    "0.0 s later" would be nonsense, so they are not reported."""
+    return bool(findings) and (tally.first_time is None or tally.first_time == tally.last_time)

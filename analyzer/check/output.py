@@ -119,7 +119,7 @@ def result_from_fields(fields: dict[str, Any]) -> StepResult:
 
 def recorded_steps_html(path: str) -> str:
     """The steps table of a recording `check` made ('' for any other recording)."""
-    from analyzer.mcapio.reader import Recording
+    from analyzer.mcapio.read.reader import Recording
     from analyzer.protocol.types import TOPIC_CHECK_STEPS
 
     results = []

@@ -129,12 +129,6 @@ def open_reader(args: argparse.Namespace) -> Any:
     return open_input(args.file, args.format, args.port, wanted_ids=PROTOCOL_IDS)
 
 
-def untimed(tally: Any, findings: list[Any]) -> bool:
-    """True when findings were made of an input without a clock (a raw byte dump): every
-    "0.0 s later" would be nonsense, so they are not reported."""
-    return bool(findings) and (tally.first_time is None or tally.first_time == tally.last_time)
-
-
 def settings_from(args: argparse.Namespace) -> Any:
     from analyzer.analysis.response import Settings
 

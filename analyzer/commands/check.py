@@ -198,7 +198,7 @@ def _run_check(
     from analyzer.check.observer import Observer
     from analyzer.check.output import JsonPrinter, TablePrinter, summary
     from analyzer.check.runner import CheckRunner
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.protocol.check_fields import FAIL
     from analyzer.sim.transports import parse_link

@@ -10,7 +10,7 @@ import time
 from typing import Any
 
 from analyzer.errors import EXIT_INTERRUPTED, UsageError
-from analyzer.mcapio.options import add_compression_argument
+from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Pipeline, run_items
 from analyzer.progress import Progress
 from analyzer.stdio import interrupt_name, interrupts_deferred
@@ -54,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.inputs import open_input
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.output_file import check_output
 
     if args.input != "-" and not os.path.exists(args.input):

@@ -153,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         raise failure.error
     decoder_stats: dict[str, int] = getattr(pipeline.decoder, "stats", {})
     tally = pipeline.tally
-    from analyzer.inputs.content import raw_stream_mismatch
+    from analyzer.inputs.raw_stream import raw_stream_mismatch
 
     mismatch = raw_stream_mismatch(reader, decoder_stats, tally.crc_checked, tally.crc_errors)
     if args.summary:

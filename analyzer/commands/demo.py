@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
-import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -20,7 +18,7 @@ from analyzer.commands.simulate import (
 )
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.live.options import add_foxglove_options
-from analyzer.mcapio.options import add_compression_argument
+from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
@@ -208,7 +206,7 @@ def _plain(event: Event) -> str:
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
-    from analyzer.mcapio.reader import Recording
+    from analyzer.mcapio.read.reader import Recording
 
     try:
         return Recording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
@@ -217,22 +215,17 @@ def written_by_demo(path: Path) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.stage import analysis_stages
-    from analyzer.capture import OUTPUT_CLOSED, Capture
-    from analyzer.live.attach import (
-        foxglove_status,
-        foxglove_summary,
-        start_foxglove,
-        with_foxglove,
-    )
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.capture import OUTPUT_CLOSED
+    from analyzer.commands.live_recording import Companion, open_live_recording
+    from analyzer.commands.video_options import silent_streams, video_metadata
+    from analyzer.live.attach import foxglove_summary
+    from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
     from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
-    from analyzer.video.recording import silent_streams, video_metadata, video_recorder
     from analyzer.video.spec import VIDEO_HOLD_BACK_S, video_specs
 
     # a wrong --video is a usage error before anything starts; video needs the hold-back
@@ -259,35 +252,23 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
 
-    live = start_foxglove(args)
     source = open_source(str(spec))
-    try:
-        sink = McapSink(
-            path,
-            metadata=recording_metadata(
-                f"demo: simulated gimbal and ground station on {spec}",
-                command="demo",
-                **simulator_metadata(args, config),
-                **video_metadata(args),
-            ),
-            compression=args.compression,
-            force=args.force,
-            replaceable=written_by_demo,
-            tee=live,
-            hold_back=hold_back,
-        )
-    except SourceError:
-        source.close()
-        if live is not None:
-            live.close()
-        raise
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
-    video = video_recorder(args, sink)
-    sinks: list[Any] = [s for s in (video, sink, printer, live) if s is not None]
-    stages = [*analysis_stages(), *([video.stage] if video else [])]
-    capture = Capture(source, sinks, stages=stages)
-    if video is not None:
-        video.start()
+    recording = open_live_recording(
+        args,
+        source,
+        path,
+        metadata=recording_metadata(
+            f"demo: simulated gimbal and ground station on {spec}",
+            command="demo",
+            **simulator_metadata(args, config),
+            **video_metadata(args),
+        ),
+        hold_back=hold_back,
+        sinks_after=lambda sink, video: [printer],
+        replaceable=written_by_demo,
+    )
+    capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
     try:
         scene = Scene(spec, config)
     except BaseException:
@@ -296,58 +277,22 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
         raise
+    recording.companions.append(Companion(scene.start, scene.stop))
 
-    def finish() -> None:
-        capture.stop()
-        scene.stop()
+    def first_line() -> None:
+        print(
+            f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
+            f"recording {path}; faults: {faults.describe()}; {duration:g} s",
+            flush=True,
+        )
 
-    timer: threading.Timer | None = None
-    if duration is not None:
-        timer = threading.Timer(duration, finish)
-        timer.daemon = True
-    result = 0
-    try:
-        if tui:
-            scene.start()
-            if timer is not None:
-                timer.start()
-            result = int(
-                run_app(
-                    capture,
-                    recording=path,
-                    source_label=with_foxglove(f"demo on {spec}", live),
-                    exit_when_done=args.duration is not None,
-                    live_status=foxglove_status(live),
-                )
-            )
-        else:
-            # Inside the try: a failed write here must still finish the recording.
-            print(
-                f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
-                f"recording {path}; faults: {faults.describe()}; {duration:g} s",
-                flush=True,
-            )
-            capture.start()
-            scene.start()
-            if timer is not None:
-                timer.start()
-            try:
-                capture.wait()
-            except KeyboardInterrupt:
-                capture.stop()
-                print(file=sys.stderr)
-    finally:
-        if timer is not None:
-            timer.cancel()
-        scene.stop()
-        if video is not None:
-            video.stop()
-        if capture.running:
-            capture.stop()
-            capture.join()
-        source.close()  # the capture closes it too; here for a failure before it started
-        with contextlib.suppress(SourceError):  # a write error is reported below
-            sink.close()
+    result = recording.run(
+        duration,
+        tui=run_app if tui else None,
+        label=f"demo on {spec}",
+        exit_when_done=args.duration is not None,
+        started=first_line,
+    )
     if sink.error is not None:
         raise SourceError(sink.error)
     if capture.error is not None:

@@ -11,7 +11,7 @@ from analyzer.terminal_text import printable
 from analyzer.timefmt import format_datetime
 
 if TYPE_CHECKING:
-    from analyzer.mcapio.info import RecordingInfo
+    from analyzer.mcapio.read.info import RecordingInfo
 
 HELP = "summarise an MCAP recording: duration, counts and rates per topic, diagnostics, gaps"
 DESCRIPTION = """\
@@ -148,9 +148,9 @@ def render(info: RecordingInfo) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.mcapio.info import recording_info
-    from analyzer.mcapio.video_channels import COMPRESSED_VIDEO, VIDEO_METADATA_KEY
-    from analyzer.mcapio.video_reading import video_dicts, video_lines
+    from analyzer.mcapio.read.info import recording_info
+    from analyzer.mcapio.read.video import video_dicts, video_lines
+    from analyzer.mcapio.write.video import COMPRESSED_VIDEO, VIDEO_METADATA_KEY
 
     info = recording_info(args.recording, scan=args.scan)
     has_video = any(t.schema == COMPRESSED_VIDEO for t in info.topics) or bool(

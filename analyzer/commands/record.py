@@ -3,22 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
 import sys
-import threading
 import time
 from collections.abc import Callable
 from typing import IO, Any
 
+from analyzer.commands.video_options import video_summary
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
 from analyzer.live.options import add_foxglove_options
-from analyzer.mcapio.options import add_compression_argument
+from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
-from analyzer.video.recording import is_camera_event, video_summary
-from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options
+from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options, is_camera_event
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
 DESCRIPTION = f"""\
@@ -223,24 +221,12 @@ def _input_files(spec: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.stage import analysis_stages
-    from analyzer.capture import Capture, run_until_interrupted
-    from analyzer.live.attach import (
-        foxglove_note,
-        foxglove_status,
-        foxglove_summary,
-        start_foxglove,
-        with_foxglove,
-    )
-    from analyzer.mcapio.writer import McapSink, recording_metadata
+    from analyzer.commands.live_recording import open_live_recording
+    from analyzer.commands.video_options import silent_streams, video_frames, video_metadata
+    from analyzer.live.attach import foxglove_note, foxglove_summary
+    from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
-    from analyzer.video.recording import (
-        silent_streams,
-        video_frames,
-        video_metadata,
-        video_recorder,
-    )
     from analyzer.video.spec import video_specs
 
     if args.duration is not None and not args.duration > 0:
@@ -266,80 +252,53 @@ def run(args: argparse.Namespace) -> int:
             from analyzer.tui.app import run_app
         except ImportError as exc:
             raise UsageError(f"the monitor UI is not available ({exc})") from None
-    live = start_foxglove(args)  # said on start, like the proxy's address
     source = open_source(args.source, replay_speed=args.speed)
     description = str(getattr(source, "description", args.source))
     note = getattr(source, "listen_note", None)
     if note and not args.tui:  # where a proxy listens: said at start, whatever --quiet
         print(f"{description}: {note}", file=sys.stderr, flush=True)
-    try:
-        sink = McapSink(
-            path,
-            metadata=recording_metadata(
-                description, spec=args.source, command="record", **video_metadata(args)
-            ),
-            compression=args.compression,
-            force=args.force,
-            inputs=inputs,
-            tee=live,
-            hold_back=hold_back,
-        )
-    except SourceError:
-        source.close()
-        if live is not None:
-            live.close()
-        raise
-    video = video_recorder(args, sink)
     link = LinkWatch()
-    sinks: list[Any] = [s for s in (video, sink, link, live) if s is not None]
-    status = None
-    if not args.quiet and not args.tui:
-        address = getattr(source, "address", None)
-        waiting = f"connecting to {address}" if address else "waiting for data"
-        status = StatusLine(sys.stderr, path, link, waiting)
-        status.notes.append(lambda: foxglove_note(live))
-        status.video = video
-        sinks.append(status)
-    if args.print and not args.tui:
-        sinks.append(EventPrinter(sys.stdout))
-    stages = [*analysis_stages(), *([video.stage] if video is not None else [])]
-    capture = Capture(source, sinks, stages=stages)
-    if video is not None:
-        video.start()
+    status: StatusLine | None = None
+
+    def own_sinks(sink: Any, video: Any) -> list[Any]:
+        nonlocal status
+        own: list[Any] = [link]
+        if not args.quiet and not args.tui:
+            address = getattr(source, "address", None)
+            waiting = f"connecting to {address}" if address else "waiting for data"
+            status = StatusLine(sys.stderr, path, link, waiting)
+            status.video = video
+            own.append(status)
+        if args.print and not args.tui:
+            own.append(EventPrinter(sys.stdout))
+        return own
+
+    recording = open_live_recording(
+        args,
+        source,
+        path,
+        metadata=recording_metadata(
+            description, spec=args.source, command="record", **video_metadata(args)
+        ),
+        hold_back=hold_back,
+        sinks_after=own_sinks,
+        inputs=inputs,
+    )
+    capture, sink, video, live = (
+        recording.capture,
+        recording.sink,
+        recording.video,
+        recording.live,
+    )
     if status is not None:
+        status.notes.append(lambda: foxglove_note(live))
         status.capture = capture
-    timer: threading.Timer | None = None
-    if args.duration is not None:
-        timer = threading.Timer(args.duration, capture.stop)
-        timer.daemon = True
-    try:
-        if args.tui:
-            if timer is not None:
-                timer.start()
-            result = int(
-                run_app(
-                    capture,
-                    recording=path,
-                    source_label=with_foxglove(description, live),
-                    exit_when_done=args.duration is not None,
-                    live_status=foxglove_status(live),
-                )
-            )
-        else:
-            capture.start()
-            if timer is not None:
-                timer.start()
-            result = run_until_interrupted(capture)
-    finally:
-        if timer is not None:
-            timer.cancel()
-        if video is not None:
-            video.stop()
-        if capture.running:
-            capture.stop()
-            capture.join()
-        with contextlib.suppress(SourceError):  # a write error is reported below
-            sink.close()  # normally done by the capture; makes sure the file is finished
+    result = recording.run(
+        args.duration,
+        tui=run_app if args.tui else None,
+        label=description,
+        exit_when_done=args.duration is not None,
+    )
     stats = capture.stats
     if sink.error is not None:
         raise SourceError(sink.error)

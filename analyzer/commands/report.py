@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     pictures = None
     if overlays is not None and data.first is not None and data.last is not None:
         from analyzer.check.output import recorded_steps_html
-        from analyzer.mcapio.video_reading import read_thumbnails  # camera pictures
+        from analyzer.mcapio.read.video import read_thumbnails  # camera pictures
 
         shown = camera.shown_findings(data.findings.worst_first())
         thumbnails = overlays.pictures(read_thumbnails(args.file))

@@ -122,8 +122,8 @@ _ERROR_WORDS = {
 
 
 def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None:
+    from analyzer.analysis.findings import untimed
     from analyzer.analysis.response import ResponseAnalyzer, Settings
-    from analyzer.commands.analyze import untimed
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.progress import Progress

@@ -50,7 +50,7 @@ class InputReader:
         self.last_time: float | None = None
         # How the file's times were written, when it is worth saying: "absolute",
         # "relative to the start of the recording" or "time since the previous frame
-        # (accumulated)" (see analyzer.inputs.python_can_text); None when not known.
+        # (accumulated)" (see analyzer.inputs.python_can.text_logs); None when not known.
         self.time_base: str | None = None
         # Facts about the input for the user that are no protocol diagnostic, known once
         # it has been read (e.g. "no TCP traffic on port 2000; ports seen: ...").

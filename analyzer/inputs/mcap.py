@@ -9,8 +9,8 @@ from typing import Any
 from analyzer.errors import NothingReadable, UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
 from analyzer.mcapio.channels import RAW_TOPICS, ROLE_EVENT, ROLE_RAW
-from analyzer.mcapio.ros_can import ROS2_CAN_FRAME, ROS_CAN_ROLES
-from analyzer.mcapio.stored_message import ChannelKind
+from analyzer.mcapio.read.ros_can import ROS2_CAN_FRAME, ROS_CAN_ROLES
+from analyzer.mcapio.read.stored_message import ChannelKind
 from analyzer.protocol.types import INCOMPLETE, TOPIC_DIAGNOSTICS, diagnostic
 
 
@@ -44,7 +44,7 @@ class McapReader(InputReader):
         open_binary(path).close()  # a missing or unreadable file: one-line UsageError
         self.size_bytes = os.path.getsize(path)
         try:
-            from analyzer.mcapio.reader import read_events, read_replay
+            from analyzer.mcapio.read.reader import read_events, read_replay
         except ImportError as exc:
             raise UsageError(f"cannot read {path}: MCAP support is not available ({exc})") from None
         # stored: the events as recorded (decoded by the version that wrote the file).

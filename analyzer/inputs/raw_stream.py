@@ -9,6 +9,9 @@ from analyzer.inputs.content import describe
 from analyzer.protocol.types import StreamChunk
 
 CHUNK_SIZE = 1 << 16
+MIN_BYTES = 64  # below this a stream says too little to judge
+DAMAGE_SHARE = 0.5  # discarded bytes from which a stream counts as almost all damage
+CRC_FAILED_SHARE = 0.9  # share of CRC-checked frames that failed
 
 
 class RawStreamReader(InputReader):
@@ -50,3 +53,33 @@ class RawStreamReader(InputReader):
     @property
     def stats(self) -> dict[str, int]:
         return {"bytes": self.position_bytes, "chunks": self.chunks}
+
+
+def raw_stream_mismatch(
+    reader: InputReader, decoder_stats: dict[str, int], crc_checked: int, crc_errors: int
+) -> list[str]:
+    """A note when a file read as a raw TCP/UART stream gave almost nothing but damage,
+    saying what the file looks like instead (text, an archive...) when the reader has not
+    said so already (it names the formats this tool reads, see RawStreamReader)."""
+    if not isinstance(reader, RawStreamReader):
+        return []
+    fed = decoder_stats.get("bytes_fed", 0)
+    discarded = decoder_stats.get("bytes_discarded", 0)
+    checked = crc_checked + crc_errors
+    mostly_garbage = fed >= MIN_BYTES and discarded >= DAMAGE_SHARE * fed
+    mostly_bad_crc = checked >= 4 and crc_errors >= CRC_FAILED_SHARE * checked
+    if not (mostly_garbage or mostly_bad_crc):
+        return []
+    seen = f"read as a raw TCP/UART stream, {discarded:,} of its {fed:,} bytes were no frame"
+    if checked:
+        seen += f" and {crc_errors:,} of {checked:,} framed messages failed their CRC"
+    looks = reader.looks_like
+    if looks is None:
+        return [
+            f"{reader.source} is almost all damage ({seen}): it is probably not a dump of "
+            "the gimbal's stream; check the file or give --format"
+        ]
+    words, fmt = looks
+    if fmt is not None:  # the reader has said what it is and which --format reads it
+        return [f"the damage in {reader.source} is no damage ({seen}): it is {words}"]
+    return [f"{reader.source} looks like {words}, not a raw stream ({seen})"]

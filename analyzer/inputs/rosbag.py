@@ -2,7 +2,7 @@
 
 Their ``can_msgs/Frame`` topics (ros_canopen's socketcan_bridge in ROS 1, ros2_socketcan in
 ROS 2) are read like any CAN capture: each topic becomes the frames' channel, the header
-stamp their time (see analyzer.mcapio.ros_can). rosbag2's MCAP storage is read by the MCAP
+stamp their time (see analyzer.mcapio.read.ros_can). rosbag2's MCAP storage is read by the MCAP
 reader (it copes with unfinished and damaged files); this one covers the two storages only
 ``rosbags`` reads. A bag that ``rosbags`` cannot read is a one-line error; when it fails
 part way, the frames before stay and an ``incomplete`` diagnostic says where it stopped.
@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from analyzer.errors import InputError, NothingReadable, UsageError
 from analyzer.inputs.base import InputItem, InputReader, open_binary
-from analyzer.mcapio.ros_can import (
+from analyzer.mcapio.read.ros_can import (
     ROS2_CAN_FRAME,
     ROS2_CANFD_FRAME,
     RosFrameError,

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from analyzer.inputs.base import InputItem, InputReader, time_problem
-from analyzer.inputs.python_can_text import ABSOLUTE, RAW_LIMIT, RELATIVE_TO_START, text_lines
+from analyzer.inputs.python_can.text_logs import ABSOLUTE, RAW_LIMIT, RELATIVE_TO_START, text_lines
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
 SAVVYCAN_HEADER_START = b"time stamp,id,extended,"

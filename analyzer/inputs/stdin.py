@@ -8,7 +8,7 @@ from collections.abc import Iterable, Iterator
 from typing import IO
 
 from analyzer.inputs.base import InputItem, InputReader
-from analyzer.inputs.candump import CandumpParser
+from analyzer.inputs.candump.reader import CandumpParser
 from analyzer.inputs.textlines import MAX_LINE
 from analyzer.protocol.types import StreamChunk
 

@@ -39,7 +39,7 @@ def camera_channels(args: argparse.Namespace) -> list[ChannelSpec]:
     (a channel advertised while a client is connected may not reach it at once)."""
     if not getattr(args, "video", None):
         return []
-    from analyzer.mcapio.video_channels import camera_channel_specs
+    from analyzer.mcapio.write.video import camera_channel_specs
     from analyzer.video.spec import video_specs
 
     return [spec for video in video_specs(args) for spec in camera_channel_specs(video.name)]

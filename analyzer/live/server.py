@@ -42,9 +42,9 @@ from analyzer.mcapio.channels import (
     json_bytes,
     known_channel_specs,
     stream_chunk_json,
-    time_ns,
 )
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
+from analyzer.mcapio.log_time import time_ns
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import CanFrame
 from analyzer.sources.netutil import address

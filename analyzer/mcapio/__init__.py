@@ -1,3 +1,3 @@
-"""MCAP recordings: the writer sink, the (crash-tolerant) reader and the recording summary."""
+"""MCAP recordings: channels and Foxglove views here, the sink in write/, the reader in read/."""
 
 from __future__ import annotations

@@ -9,6 +9,7 @@ from typing import Any, Protocol
 
 import orjson
 
+from analyzer.mcapio.foxglove import VIEW_SCHEMAS, view_schema
 from analyzer.protocol.types import CanFrame, StreamChunk, hexstr
 
 TOPIC_CAN_FRAMES = "/can/frames"
@@ -16,8 +17,6 @@ TOPIC_STREAM_BYTES = "/stream/bytes"
 RAW_TOPICS = (TOPIC_CAN_FRAMES, TOPIC_STREAM_BYTES)
 # Where the gimbal points (views of the feedback, commands and UAV status): the frames of
 # world, aircraft, gimbal and camera, and the 3D scene (aircraft, field of view, target).
-TOPIC_TF = "/tf"
-TOPIC_SCENE = "/gimbal/scene"
 
 # Name of the metadata record describing the recording, and of the one written at the end
 # with counts gathered while writing (so `info` needs no scan of a finalised file).
@@ -158,16 +157,6 @@ def stream_chunk_from_dict(obj: dict[str, Any]) -> StreamChunk:
     )
 
 
-MAX_LOG_SECONDS = (2**64 - 1) / 1e9
-
-
-def time_ns(seconds: float) -> int:
-    """Event time in seconds -> MCAP log time in nanoseconds (clamped to the uint64 range)."""
-    if 0 < seconds < MAX_LOG_SECONDS:  # False for NaN too
-        return round(seconds * 1e9)
-    return 2**64 - 1 if seconds >= MAX_LOG_SECONDS else 0
-
-
 def schema_name(topic: str) -> str:
     """'/gimbal/command' -> 'gimbal_analyzer.gimbal.command'."""
     return "gimbal_analyzer." + topic.strip("/").replace("/", ".")
@@ -238,8 +227,6 @@ def channel_spec(topic: str, role: str, schemas: dict[str, dict[str, Any]]) -> C
         schema = CAN_FRAME_SCHEMA if topic == TOPIC_CAN_FRAMES else STREAM_BYTES_SCHEMA
         name = str(schema["title"])
     elif role == ROLE_VIEW:
-        from analyzer.mcapio.foxglove import view_schema  # it imports this module
-
         name, schema = view_schema(topic)
     else:
         name = schema_name(topic)
@@ -263,8 +250,6 @@ class MessageTee(Protocol):
 def known_channel_specs(schemas: dict[str, dict[str, Any]]) -> list[ChannelSpec]:
     """Every channel a recording can hold: the raw ones, one per event topic with a schema
     and the Foxglove views (a recording holds those that got messages, as they come)."""
-    from analyzer.mcapio.foxglove import VIEW_SCHEMAS  # it imports this module
-
     return [
         *(channel_spec(topic, ROLE_RAW, schemas) for topic in RAW_TOPICS),
         *(channel_spec(topic, ROLE_EVENT, schemas) for topic in schemas),

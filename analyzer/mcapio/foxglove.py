@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from analyzer.mcapio.channels import time_ns
+from analyzer.mcapio.log_time import time_ns
 from analyzer.mcapio.scene_views import (
     ANNOTATIONS_SCHEMA,
     SCENE_SCHEMAS,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from analyzer.mcapio.channels import TOPIC_SCENE
 from analyzer.mcapio.foxglove import TOPIC_DIAGNOSTICS_LOG, TOPIC_TARGET_FIX, TOPIC_UAV_FIX
+from analyzer.mcapio.scene_views import TOPIC_SCENE
 from analyzer.protocol.types import (
     TOPIC_CAN_BUS_STATE,
     TOPIC_CHECK_STEPS,

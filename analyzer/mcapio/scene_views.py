@@ -6,11 +6,13 @@ import json
 from importlib import resources
 from typing import Any
 
-from analyzer.mcapio.channels import TOPIC_SCENE, TOPIC_TF
 from analyzer.protocol.types import Event
 from analyzer.scene.overlays import image_annotations, overlay
 from analyzer.scene.scene3d import DEFAULT_ASPECT, frame_transforms, optical_frame, scene_update
 from analyzer.scene.state import COMMAND, FEEDBACK, INPUT_TOPICS, RANGING, GimbalState
+
+TOPIC_TF = "/tf"  # the frames: world -> uav (or base) -> gimbal -> camera_NAME
+TOPIC_SCENE = "/gimbal/scene"  # aircraft, field of view and laser target for the 3D panel
 
 FRAME_TRANSFORMS = "foxglove.FrameTransforms"
 SCENE_UPDATE = "foxglove.SceneUpdate"

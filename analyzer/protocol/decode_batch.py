@@ -3,23 +3,44 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from analyzer.protocol.command_decoders import COMMAND_DECODERS
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
+from analyzer.protocol.reassembly import FeedbackReassembler, Message
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, Event, FrameRun, StreamChunk
 from analyzer.protocol.uav import EIGHT_BYTE_DECODERS, STATUS_FRAMES
-
-if TYPE_CHECKING:
-    from analyzer.protocol.decoder import Decoder
 
 # The extra fields of a plain CAN frame: none. Shared and never written to.
 NO_EXTRA: dict[str, Any] = {}
 STATUS_TOPICS = {can_id: status.topic for can_id, status in STATUS_FRAMES.items()}
 
 
+class BatchDecoder(Protocol):
+    """The decoder state ``feed_batch`` works on (``Decoder`` takes it as a method)."""
+
+    frames: int
+    protocol_frames: int
+    last_time: float
+    _recent: FeedbackReassembler | None
+    _recent_source: str | None
+    _given_up: list[Event]
+
+    def _reassembler(self, source: str) -> FeedbackReassembler: ...
+    def _take_given_up(self) -> list[Event]: ...
+    def _feedback(
+        self,
+        source: str,
+        results: list[Message | Event],
+        extra: dict[str, Any],
+        warnings: list[str] | None = None,
+    ) -> list[Event]: ...
+    def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]: ...
+    def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
+
+
 def feed_batch(
-    decoder: Decoder,
+    decoder: BatchDecoder,
     items: Iterable[object],
     raw: list[CanFrame | StreamChunk],
     events: list[Event],
@@ -119,7 +140,7 @@ def feed_batch(
                 break
 
 
-def feed_run(decoder: Decoder, run: FrameRun, events: list[Event]) -> None:
+def feed_run(decoder: BatchDecoder, run: FrameRun, events: list[Event]) -> None:
     """Decode a run of plain frames, column by column, as ``feed_batch`` decodes them
     one CanFrame at a time (a frame not decoded here goes through ``_can_any``)."""
     add_event = events.append

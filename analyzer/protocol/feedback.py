@@ -8,13 +8,14 @@ from typing import Any
 
 from analyzer.protocol.compiled import Code
 from analyzer.protocol.crc import crc_bytes
-from analyzer.protocol.fields import Field, Layout
+from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import (
     FEEDBACK_MESSAGE_SIZE,
     FRAME_ATTITUDE,
     FRAME_RANGING,
     HEADER,
 )
+from analyzer.protocol.layout import Layout
 from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING
 
 GIMBAL_TYPES = {

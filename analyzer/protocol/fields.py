@@ -6,10 +6,8 @@ import math
 import re
 import struct
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
-
-from analyzer.protocol.compiled import compile_decoder, layout_struct
 
 # kind -> (struct format, size, minimum raw, maximum raw)
 _KINDS: dict[str, tuple[str, int, int, int]] = {
@@ -269,38 +267,6 @@ class Field:
             text = f"{text}; {', '.join(notes)}" if text else ", ".join(notes)
         schema["description"] = text
         return schema
-
-
-@dataclass(frozen=True)
-class Layout:
-    """An ordered set of fields that together describe one frame or message."""
-
-    fields: tuple[Field, ...]
-    size: int
-    extra: Mapping[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        whole = layout_struct(self.fields)
-        object.__setattr__(self, "_struct", whole)
-        object.__setattr__(self, "_decode", compile_decoder(self.fields))
-
-    def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
-        whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
-        if whole is not None and len(data) >= whole.size:
-            # One precompiled struct.Struct and a decoder made for this layout.
-            decoded: dict[str, Any] = self._decode(data, warnings)  # type: ignore[attr-defined]
-            return decoded
-        out: dict[str, Any] = {}
-        for f in self.fields:
-            f.decode_into(data, out, warnings)
-        return out
-
-    def encode(self, values: Mapping[str, Any], *, check_range: bool = True) -> bytearray:
-        buffer = bytearray(self.size)
-        for f in self.fields:
-            value = values.get(f.name, f.default if f.default is not None else 0)
-            f.write(buffer, value, check_range=check_range)
-        return buffer
 
 
 def pad(data: bytes, size: int, what: str, warnings: list[str]) -> bytes:

@@ -7,8 +7,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from analyzer.protocol.compiled import compile_frame_decoder
-from analyzer.protocol.fields import Field, Layout
+from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID, TEXT_END_ID, TEXT_ID, UAV_ATTITUDE_ID
+from analyzer.protocol.layout import Layout
 from analyzer.protocol.types import (
     TEXT_UNTERMINATED,
     TOPIC_UAV_ALTITUDE,

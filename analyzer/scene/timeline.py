@@ -13,7 +13,7 @@ from analyzer.scene.state import COMMAND, FEEDBACK, INPUT_TOPICS, GimbalState
 
 
 class Picture(Protocol):
-    """A camera picture (``analyzer.mcapio.video_reading.Thumbnail``)."""
+    """A camera picture (``analyzer.mcapio.read.video.Thumbnail``)."""
 
     @property
     def stream(self) -> str: ...

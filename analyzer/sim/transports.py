@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from analyzer.errors import SourceError, UsageError
-from analyzer.inputs.python_can import frame_from_message
+from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.framing import wrap_can, wrap_control
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, TCP_PORT
 from analyzer.protocol.types import FROM_IDU, TO_IDU, CanFrame, StreamChunk

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from analyzer.errors import UsageError
-from analyzer.inputs.python_can import SOCKETCAN_ERROR_INTERFACES, frame_from_message
+from analyzer.protocol.can_message import SOCKETCAN_ERROR_INTERFACES, frame_from_message
 from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
 from analyzer.sources.socketcan_links import bring_up, socketcan_down
 from analyzer.sources.spec import CanSpec

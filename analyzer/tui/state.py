@@ -43,7 +43,7 @@ from analyzer.tui.id_rows import (
     frame_bits,
     stream_key,
 )
-from analyzer.video.recording import is_camera_event
+from analyzer.video.spec import is_camera_event
 
 # The names importers know from here; most are defined in the modules above.
 __all__ = [

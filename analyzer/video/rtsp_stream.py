@@ -29,7 +29,7 @@ from analyzer.video.annexb import (
     split_nals,
 )
 from analyzer.video.frame_clock import FrameClock, Stamp
-from analyzer.video.spec import DEFAULT_THUMBNAIL_S, VideoSpec
+from analyzer.video.spec import CAMERA_SOURCE_PREFIX, DEFAULT_THUMBNAIL_S, VideoSpec
 from analyzer.video.thumbnail import jpeg_thumbnail
 
 # What a stream may queue ahead of the recorder: about 30 s of a 1080p30 stream.
@@ -99,7 +99,7 @@ class VideoStream:
         max_bytes: int = MAX_QUEUED_BYTES,
     ) -> None:
         self.spec = spec
-        self.source_name = f"camera/{spec.name}"
+        self.source_name = f"{CAMERA_SOURCE_PREFIX}{spec.name}"
         self.thumbnail_interval = thumbnail_interval
         self.backoff = Backoff(backoff_initial, backoff_max)
         self.max_frames = max_frames

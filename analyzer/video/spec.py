@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from urllib.parse import quote, unquote, urlsplit, urlunsplit
 
 from analyzer.errors import UsageError
+from analyzer.protocol.types import Event
 
 # Vendor document section 1.3: the camera's address and its RTSP streams.
 DEFAULT_CAMERA = "192.168.42.108:554"
@@ -196,3 +197,11 @@ def _spec(name: str, url: str, user: str | None, password: str | None) -> VideoS
     named = quote(user, safe="") + "@" if user else ""
     shown = urlunsplit((parts.scheme, named + where, parts.path, parts.query, ""))
     return VideoSpec(name, full, shown)
+
+
+CAMERA_SOURCE_PREFIX = "camera/"  # the source of a camera stream's events: camera/NAME
+
+
+def is_camera_event(event: Event) -> bool:
+    """A diagnostic of a camera stream (not of the telemetry link)."""
+    return event.source.startswith(CAMERA_SOURCE_PREFIX)

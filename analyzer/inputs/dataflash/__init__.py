@@ -1,0 +1,1 @@
+"""ArduPilot DataFlash logs (.bin): FMT-described records, CANF / CAFD frames on GPS time."""

@@ -1,0 +1,1 @@
+"""Reading recordings back: indexed, sequential and damaged files, stored messages, `info`."""

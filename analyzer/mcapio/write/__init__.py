@@ -1,0 +1,1 @@
+"""Writing recordings: the McapSink, its lean chunked writer, channels and write failures."""
