@@ -5,9 +5,11 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.protocol.fields import CODE_SUFFIX
+from analyzer.protocol.response_fields import verdict_word
 from analyzer.protocol.types import (
     FROM_IDU,
     TO_IDU,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_BUS_STATE,
     TOPIC_CAN_OTHER,
     TOPIC_COMMAND,
@@ -184,6 +186,8 @@ def describe(event: Event) -> str:
             tail.append(value_words(key, value, fields))
         elif topic == TOPIC_COMMAND and key == "axis" and isinstance(value, str):
             continue  # the value's own name says it: "pitch -45.00 deg"
+        elif topic == TOPIC_ANALYSIS_RESPONSE and key == "verdict":
+            words.append(f"verdict {verdict_word(fields)}")  # a gap is LOST, not NOT OBEYED
         else:
             words.append(value_words(key, value, fields))
     return "  ".join(head + words + tail)

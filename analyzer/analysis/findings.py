@@ -15,6 +15,7 @@ from analyzer.protocol.response_fields import (
     CHECK_TARGET,
     CHECK_TRACKING,
     CHECKS,
+    FEEDBACK_COMMAND,
     NOT_OBEYED,
     OBEYED,
     PARTIAL,
@@ -33,7 +34,6 @@ class Timed(Protocol):
 
 _RANK = {OBEYED: 0, UNKNOWN: 1, PARTIAL: 2, NOT_OBEYED: 3}
 
-FEEDBACK_COMMAND = "feedback"  # the ``command`` of findings about the feedback itself
 SOURCE = "analysis"
 
 

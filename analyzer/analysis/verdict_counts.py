@@ -6,33 +6,8 @@ from collections import Counter
 from typing import Any
 
 from analyzer.analysis.findings import FEEDBACK_COMMAND, verdict_line
-from analyzer.protocol.response_fields import CHECK_FEEDBACK_GAP, VERDICTS
+from analyzer.protocol.response_fields import CHECK_FEEDBACK_GAP, HEALTH_WORDS, VERDICTS
 from analyzer.summary import gap_words
-
-VERDICT_WORDS = {
-    "obeyed": "obeyed",
-    "partial": "PARTIAL",
-    "not_obeyed": "NOT OBEYED",
-    "unknown": "unknown",
-}
-# Findings about the feedback itself say how healthy the link is, not what was obeyed.
-HEALTH_WORDS = {
-    "obeyed": "healthy",
-    "partial": "DEGRADED",
-    "not_obeyed": "SILENT",
-    "unknown": "unknown",
-}
-GAP_WORD = "LOST"
-
-
-def verdict_word(fields: dict[str, Any]) -> str:
-    """How the text report names a finding's verdict: in health words for the feedback."""
-    verdict = str(fields["verdict"])
-    if fields.get("command") != FEEDBACK_COMMAND:
-        return VERDICT_WORDS.get(verdict, verdict)
-    if fields.get("check") == CHECK_FEEDBACK_GAP:
-        return GAP_WORD
-    return HEALTH_WORDS.get(verdict, verdict)
 
 
 class VerdictCounts:

@@ -10,8 +10,9 @@ from typing import IO, Any, Protocol
 
 from analyzer import timefmt
 from analyzer.analysis.time_order import TimeOrder
-from analyzer.analysis.verdict_counts import VerdictCounts, verdict_word
+from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.pipeline import Batch
+from analyzer.protocol.response_fields import verdict_word
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally
 from analyzer.terminal_text import printable_lines

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 OBEYED = "obeyed"
 PARTIAL = "partial"
 NOT_OBEYED = "not_obeyed"
@@ -86,3 +88,30 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
 }
 # Optional fields whose value is one of a few words.
 FIELD_ENUMS: dict[str, tuple[str, ...]] = {"yaw_reference": YAW_REFERENCES}
+
+
+FEEDBACK_COMMAND = "feedback"  # the ``command`` of findings about the feedback itself
+VERDICT_WORDS = {
+    "obeyed": "obeyed",
+    "partial": "PARTIAL",
+    "not_obeyed": "NOT OBEYED",
+    "unknown": "unknown",
+}
+# Findings about the feedback itself say how healthy the link is, not what was obeyed.
+HEALTH_WORDS = {
+    "obeyed": "healthy",
+    "partial": "DEGRADED",
+    "not_obeyed": "SILENT",
+    "unknown": "unknown",
+}
+GAP_WORD = "LOST"
+
+
+def verdict_word(fields: dict[str, Any]) -> str:
+    """How the text report names a finding's verdict: in health words for the feedback."""
+    verdict = str(fields["verdict"])
+    if fields.get("command") != FEEDBACK_COMMAND:
+        return VERDICT_WORDS.get(verdict, verdict)
+    if fields.get("check") == CHECK_FEEDBACK_GAP:
+        return GAP_WORD
+    return HEALTH_WORDS.get(verdict, verdict)
