@@ -259,6 +259,14 @@ def test_a_trc_frame_whose_type_column_is_damaged_is_a_bad_line(tmp_path: Path) 
     assert len(frames) == 11
     assert [e.fields["line"] for e in events] == [first + 4]
     assert "'nan'" in events[0].fields["detail"]
+    # A ';' where the message number was makes python-can take a frame for a comment,
+    # the first one (then read as the header's last line) included.
+    for k in (0, 6):
+        lines[first + k] = lines[first + k].replace(f"{k} ", "; ", 1)
+    path.write_text("".join(lines))
+    frames, events, _ = items_of(path)
+    assert len(frames) == 9
+    assert [e.fields["line"] for e in events] == [first + 1, first + 4, first + 7]
 
 
 def test_asc_and_trc_events_that_are_no_frames_are_not_damage(tmp_path: Path) -> None:
@@ -267,6 +275,7 @@ def test_asc_and_trc_events_that_are_no_frames_are_not_damage(tmp_path: Path) ->
         "   0.100000 1  Statistic: D 0 R 3 XD 0 XR 0 E 0 O 0 B 0.10%\n",
         "   0.100000 CAN 1 Status:chip status error active\n",
         "   0.100000 SV: 1 0 1 ::System::Voltage = 12.1\n",
+        "   0.100000 1  J1939TP FEE3p        6    0  0   -   Rx   d 23 A0 0F A6 60 3B D1\n",
         "// a comment\n",
         "\n",
     ]

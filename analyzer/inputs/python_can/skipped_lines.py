@@ -2,9 +2,9 @@
 
 python-can's ASC reader skips every line that does not look like a frame (a damaged
 time included), and its TRC reader every line of a type it does not know (a damaged
-type column included). A line that is a legitimate event of the format (a comment, a
-trigger block, a status or statistics line, a TRC status or error counter) may be
-skipped; any other line python-can would skip is damage, and is raised as
+type column included) or that starts with ``;``. A line that is a legitimate event of
+the format (a comment, a trigger block, a status or statistics line, a TRC status or
+error counter) may be skipped; any other line python-can would skip is damage, and is raised as
 ``SkippedLine`` so that it becomes a ``bad_line`` diagnostic with its number.
 """
 
@@ -20,16 +20,20 @@ _ASC_READ = re.compile(
     r"|begin\s+triggerblock\s+\w+\s+\S)",
     re.ASCII | re.IGNORECASE,
 )
-# Lines of an ASC file that hold no frame: blank, comments, the header's keywords, the
-# end of a trigger block, and timed events (``Start of measurement``, ``1 Statistic:``,
-# ``CAN 1 Status:``, ``SV:``, ``log trigger event``, J1939...): a decimal time, perhaps a
-# channel number, then a word that is no CAN identifier, with no Rx / Tx direction.
-_ASC_NOT_A_FRAME = re.compile(
-    r"\s*($|//|date\s|base\s|(no\s+)?internal\s+events\s+logged|(begin|end)\s+triggerblock"
-    r"|\d+\.\d+\s+(\d+\s+)?(?![0-9a-f]+x?\b)[a-z](?!.*\b[RT]x\b))",
+# Lines of an ASC file that hold no frame and no time: blank, comments, the header's
+# keywords, the trigger block's lines.
+_ASC_UNTIMED = re.compile(
+    r"\s*($|//|date\s|base\s|(no\s+)?internal\s+events\s+logged|(begin|end)\s+triggerblock)",
     re.ASCII | re.IGNORECASE,
 )
-_ASC_TIME = re.compile(r"\s*\d+\.\d+(\s|$)", re.ASCII)
+_DECIMAL = re.compile(r"\d+\.\d+", re.ASCII)
+_CAN_ID = re.compile(r"[0-9a-f]+x?", re.ASCII | re.IGNORECASE)
+# The name of an event (``Statistic:``, ``Status:...``, ``J1939TP``); Rx / Tx there is a
+# frame's line that lost its ID.
+_EVENT_NAME = re.compile(r"(?![RT]x$)[a-z]\w*(:.*)?", re.ASCII | re.IGNORECASE)
+# A frame's line with a damaged channel or ID: ``time ? ? Rx``, ``time ? ErrorFrame``
+# (CAN FD: ``time CANFD CHANNEL Rx``).
+_FRAME_SHAPE = re.compile(r"\s*\S+\s+\S+\s+(\S+\s+(Rx|Tx)|ErrorFrame)(\s|$)", re.ASCII)
 
 # The TRC record types of PEAK's format: python-can reads the frames' types and skips
 # the others (status, error counters, error frames, events; warnings in version 1.x).
@@ -37,6 +41,7 @@ _TRC_FRAMES_2 = frozenset({"DT", "FD", "FB", "FE", "BI", "RR"})
 _TRC_OTHERS_2 = frozenset({"ST", "EC", "ER", "EV"})
 _TRC_TYPES_1 = frozenset({"Rx", "Tx", "Warng", "Error"})
 _TRC_TYPE_COLUMN_1 = {"1.1": 2, "1.3": 3}
+_DIRECTIONS = frozenset({"Rx", "Tx"})
 
 
 class SkippedLine(ValueError):
@@ -44,12 +49,22 @@ class SkippedLine(ValueError):
 
 
 def asc_problem(line: str) -> str | None:
-    """Why python-can would silently skip this damaged ASC line (None: not damage)."""
-    if _ASC_READ.match(line) or _ASC_NOT_A_FRAME.match(line):
+    """Why python-can would silently skip this damaged ASC line (None: not damage).
+
+    A timed line that is no frame is an event of the format when the word after its time
+    (and channel) is a name: ``Start of measurement``, ``1 Statistic:``, ``CAN 1
+    Status:``, ``SV:``, ``1 J1939TP``...; a frame's line with a damaged field is not.
+    """
+    if _ASC_READ.match(line) or _ASC_UNTIMED.match(line):
         return None
-    if not _ASC_TIME.match(line):
-        first = line.split(None, 1)[0] if line.strip() else ""
-        return f"its time {first[:20]!r} is not a decimal number"
+    words = line.split(None, 3)
+    if not _DECIMAL.fullmatch(words[0]):
+        return f"its time {words[0][:20]!r} is not a decimal number"
+    if _FRAME_SHAPE.match(line):
+        return "a frame's channel or ID is damaged"
+    rest = words[2:] if len(words) > 2 and words[1].isdigit() else words[1:]
+    if rest and _EVENT_NAME.fullmatch(rest[0]) and not _CAN_ID.fullmatch(rest[0]):
+        return None  # an event python-can does not read
     return "not a frame nor an event of the format"
 
 
@@ -65,16 +80,21 @@ def trc_checker(header: list[str]) -> Callable[[str], str | None]:
             columns = text.split("=", 1)[1].strip().split(",")
     if version.startswith("2") and "T" in columns:
         where = columns.index("T")
-        known = _TRC_FRAMES_2 | _TRC_OTHERS_2
+        known, frames = _TRC_FRAMES_2 | _TRC_OTHERS_2, _TRC_FRAMES_2
     elif version in _TRC_TYPE_COLUMN_1:
         where = _TRC_TYPE_COLUMN_1[version]
-        known = _TRC_TYPES_1
+        known, frames = _TRC_TYPES_1, _DIRECTIONS
     else:  # version 1.0 has no type column: python-can says what it cannot parse
         return _no_problem
 
     def check(line: str) -> str | None:
         words = line.split(None, where + 1)
-        if not words or words[0].startswith(";"):
+        if not words:
+            return None
+        if words[0].startswith(";"):  # a comment; a frame's line that became one is not
+            tokens = set(line.replace(";", " ").split())
+            if tokens & frames and tokens & _DIRECTIONS and len(tokens) > where + 2:
+                return "a frame's line made a comment by a ';'"
             return None
         if len(words) <= where:
             return None  # too short: python-can's own parse error says so

@@ -164,6 +164,10 @@ class TextLogReading:
     def messages(self) -> Iterator[Any]:
         """python-can messages and diagnostic Events, in file order."""
         feed = self.feed
+        if feed.check is not None:  # a frame's line taken for the header (made a comment)
+            for number, line in enumerate(self.header, 1):
+                if (problem := feed.check(line)) is not None:
+                    yield self.bad_line(number, line, SkippedLine(problem))
         feed.restart(self._replay())
         reported = 0
         while True:
