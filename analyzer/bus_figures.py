@@ -2,7 +2,8 @@
 
 Folded from the ``bus_error`` diagnostics (so a recording's events give the same figures
 as the run that made it), kept in the run's :class:`analyzer.tally.Tally`, and read by
-``decode --summary``, ``info``, the monitor, the report and the fleet table.
+``decode --summary``, ``info``, the monitor and ``record``'s status line (in the same
+words, ``status_words``), the report and the fleet table.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 from analyzer.protocol.bus_state import ERROR_ACTIVE, LEVELS
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import BUS_ERROR, TOPIC_DIAGNOSTICS, Event
+from analyzer.timefmt import format_clock
 
 
 def _level(state: str) -> int:
@@ -175,3 +177,35 @@ class BusFigures:
             },
             untracked=int(data.get("untracked", 0)),
         )
+
+
+@dataclass(frozen=True)
+class BusStatus:
+    """The bus in a status line's words: ``CAN bus-off``, ``worst bus-off 10:00:08.000Z``
+    (empty while no channel left error-active), ``46 error frames: bus-error 40, ...``;
+    ``state`` and ``worst_state`` name the states (for the monitor's colours)."""
+
+    state: str
+    now: str
+    worst_state: str
+    worst: str
+    errors: str
+
+    def words(self) -> list[str]:
+        return [self.now, *([self.worst] if self.worst else []), self.errors]
+
+
+def status_words(bus: BusFigures) -> BusStatus | None:
+    """What the monitor's status bar and ``record``'s status line say of the bus (None
+    before the first error frame)."""
+    if not bus.channels:
+        return None
+    now = max((b.state for b in bus.channels.values()), key=_level)
+    worst = bus.worst()
+    worst_state, worst_words = ERROR_ACTIVE, ""
+    if worst is not None and _level(worst[0]) and worst[1] is not None:
+        worst_state, worst_words = worst[0], f"worst {worst[0]} {format_clock(worst[1])}"
+    classes = ", ".join(f"{name} {n:,}" for name, n in bus.classes().most_common(2))
+    count = bus.error_frames
+    errors = f"{count:,} error frame{'' if count == 1 else 's'}"
+    return BusStatus(now, f"CAN {now}", worst_state, worst_words, f"{errors}: {classes}")

@@ -106,8 +106,9 @@ def test_a_text_log_that_gives_no_frame_says_so(tmp_path: Path) -> None:
     path = tmp_path / "junk.asc"
     path.write_text("this is\nnot an ASC export\nat all\n")
     items: list[Any] = list(open_input(str(path)))
-    assert len(items) == 1 and items[0].fields["kind"] == BAD_LINE
-    assert "no CAN frame could be read" in items[0].fields["detail"]
+    assert all(item.fields["kind"] == BAD_LINE for item in items)
+    assert [item.fields.get("line") for item in items[:-1]] == [1, 2, 3]  # each line said
+    assert "no CAN frame could be read" in items[-1].fields["detail"]
 
 
 def test_not_a_blf_is_a_usage_error(tmp_path: Path) -> None:

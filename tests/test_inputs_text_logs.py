@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime
 import gzip
 import itertools
+import random
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +16,7 @@ from hypothesis import strategies as st
 from analyzer.inputs import open_input
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event
+from tests.test_fuzz_readers import TEXT_NOISE, mangle_line
 
 T0 = 1_715_680_800.0  # 2024-05-14 10:00:00 UTC
 
@@ -210,3 +212,99 @@ def test_any_damaged_line_costs_at_most_that_line(
     assert all(any(data == g for g in it) for data in kept)  # in order, none lost
     assert all(e.fields["kind"] == BAD_LINE for e in events)
     assert len(events) <= 1
+
+
+# -- lines python-can would skip without a word ----------------------------------------------
+
+
+def test_an_asc_frame_whose_time_is_damaged_is_a_bad_line_not_a_silent_loss(
+    tmp_path: Path,
+) -> None:
+    # python-can's ASCReader skips a line whose time column is no decimal number (1e309,
+    # nan, garbage) as if it were a comment; the frame must not vanish without a word.
+    written = write(tmp_path / "clean.asc", flight(12)).read_text().splitlines(keepends=True)
+    first = first_frame_line(written, "asc")
+    for noise in TEXT_NOISE:
+        lines = list(written)
+        time_word = lines[first + 5].split()[0]
+        lines[first + 5] = lines[first + 5].replace(time_word, noise, 1)
+        path = tmp_path / "damaged.asc"
+        path.write_text("".join(lines))
+        frames, events, reader = items_of(path)
+        assert len(frames) == 11, noise
+        assert [e.fields["line"] for e in events] == [first + 6], noise
+        assert events[0].fields["kind"] == BAD_LINE
+        assert "not a ASC frame" in events[0].fields["detail"]
+        assert reader.stats["bad_lines"] == 1
+
+
+def test_a_relative_asc_time_of_1e309_adds_no_time(tmp_path: Path) -> None:
+    path = tmp_path / "relative.asc"
+    text = vector_relative_asc([0.5] * 10).splitlines(keepends=True)
+    text[10] = text[10].replace("0.500000", "1e309", 1)
+    path.write_text("".join(text))
+    frames, events, _ = items_of(path)
+    assert len(frames) == 9 and [e.fields["line"] for e in events] == [11]
+    assert abs(frames[-1].time - frames[0].time - 4.0) < 1e-6
+
+
+def test_a_trc_frame_whose_type_column_is_damaged_is_a_bad_line(tmp_path: Path) -> None:
+    # python-can's TRCReader drops a record of an unknown type at log level INFO.
+    lines = write(tmp_path / "clean.trc", flight(12)).read_text().splitlines(keepends=True)
+    first = first_frame_line(lines, "trc")
+    lines[first + 3] = lines[first + 3].replace(" DT ", " nan ", 1)
+    path = tmp_path / "damaged.trc"
+    path.write_text("".join(lines))
+    frames, events, _ = items_of(path)
+    assert len(frames) == 11
+    assert [e.fields["line"] for e in events] == [first + 4]
+    assert "'nan'" in events[0].fields["detail"]
+    # A ';' where the message number was makes python-can take a frame for a comment,
+    # the first one (then read as the header's last line) included.
+    for k in (0, 6):
+        lines[first + k] = lines[first + k].replace(f"{k} ", "; ", 1)
+    path.write_text("".join(lines))
+    frames, events, _ = items_of(path)
+    assert len(frames) == 9
+    assert [e.fields["line"] for e in events] == [first + 1, first + 4, first + 7]
+
+
+def test_asc_and_trc_events_that_are_no_frames_are_not_damage(tmp_path: Path) -> None:
+    asc = vector_relative_asc([0.1] * 3).splitlines(keepends=True)
+    asc[7:7] = [
+        "   0.100000 1  Statistic: D 0 R 3 XD 0 XR 0 E 0 O 0 B 0.10%\n",
+        "   0.100000 CAN 1 Status:chip status error active\n",
+        "   0.100000 SV: 1 0 1 ::System::Voltage = 12.1\n",
+        "   0.100000 1  J1939TP FEE3p        6    0  0   -   Rx   d 23 A0 0F A6 60 3B D1\n",
+        "// a comment\n",
+        "\n",
+    ]
+    (tmp_path / "events.asc").write_text("".join(asc))
+    frames, events, _ = items_of(tmp_path / "events.asc")
+    assert len(frames) == 3 and events == []
+    trc = write(tmp_path / "plain.trc", flight(3)).read_text().splitlines(keepends=True)
+    first = first_frame_line(trc, "trc")
+    trc.insert(first + 1, "      9       100.000 ST  1  Bus heavy\n")
+    (tmp_path / "events.trc").write_text("".join(trc))
+    frames, events, _ = items_of(tmp_path / "events.trc")
+    assert len(frames) == 3 and events == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(fmt=st.sampled_from(["asc", "trc", "csv"]), seed=st.integers(0, 2**32))
+def test_a_mangled_frame_line_is_read_or_reported_never_dropped(
+    tmp_path_factory: Any, fmt: str, seed: int
+) -> None:
+    # The fuzz test's own damage of a text line, on the frame lines of python-can's file.
+    path = write(tmp_path_factory.mktemp("m") / f"f.{fmt}", flight(12))
+    lines = path.read_bytes().split(b"\n")
+    first = first_frame_line([line.decode() for line in lines], fmt)
+    head, body = lines[:first], lines[first : first + 12]
+    mangled, how = mangle_line(random.Random(seed), b"\n".join(body), b"")
+    index = int(how.split(":")[0].split()[1]) - 1
+    path.write_bytes(b"\n".join([*head, mangled, *lines[first + 12 :]]))
+    frames, events, _ = items_of(path)
+    reported = [e for e in events if "line" in e.fields]
+    assert all(e.fields["kind"] == BAD_LINE for e in events)
+    blank = not mangled.split(b"\n")[index].strip()  # no line left to speak of
+    assert len(frames) + len(reported) >= 12 - blank, (how, events)

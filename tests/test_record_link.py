@@ -15,6 +15,7 @@ from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
 from analyzer.protocol.types import LINK, Event, diagnostic
 from analyzer.sources.base import link_event
+from analyzer.tally import Tally
 
 ROOT = Path(__file__).resolve().parent.parent
 T0 = 1_700_000_000.0
@@ -82,10 +83,14 @@ class Stats:
     frames = chunks = bytes = events = diagnostics = dropped = 0
     frames_per_s = bytes_per_s = 0.0
 
+    def __init__(self) -> None:
+        self.tally = Tally()
+
 
 class FakeCapture:
-    stats = Stats()
-    error = None
+    def __init__(self) -> None:
+        self.stats = Stats()
+        self.error = None
 
 
 def test_status_line_shows_connecting_then_the_link_message() -> None:
@@ -217,3 +222,35 @@ def test_the_monitor_status_bar_says_how_long_an_adapter_was_gone() -> None:
     state.advance(T0 + 6.0)
     text = render_status(state, StatusInfo(source=source)).plain
     assert f"{back} (lost 22:13:20.000Z, back 22:13:25.500Z)" in text
+
+
+def test_the_status_line_shows_the_bus_state_in_the_status_bar_s_words() -> None:
+    # SocketCAN error frames (linux/can/error.h): bus-off, then restarted, then a missing
+    # ACK, through the same pipeline and counters as a capture.
+    from analyzer.pipeline import Pipeline
+    from analyzer.protocol.types import CanFrame
+    from analyzer.tui.state import MonitorState
+    from analyzer.tui.status_bar import StatusInfo, render_status
+
+    line = StatusLine(io.StringIO(), "out.mcap", LinkWatch())
+    line.capture = FakeCapture()
+    pipeline = Pipeline([])
+    ok = CanFrame(T0, 0xF01, bytes(8), True, "can0")
+    pipeline.feed([ok])
+    line.capture.stats.tally = pipeline.snapshot()
+    assert "CAN" not in line.line() and "error frame" not in line.line()  # none seen yet
+
+    errors = [
+        CanFrame(T0 + 1, 0x040, bytes(8), True, "can0", is_error=True),  # bus-off
+        CanFrame(T0 + 2, 0x100, bytes(8), True, "can0", is_error=True),  # restarted
+        CanFrame(T0 + 3, 0x020, bytes(8), True, "can0", is_error=True),  # no ACK
+    ]
+    pipeline.feed(errors)
+    batch = pipeline.deliver(T0 + 3)
+    line.capture.stats.tally = pipeline.snapshot()
+    words = "CAN error-active  worst bus-off 22:13:21.000Z  3 error frames: bus-off 1, "
+    assert words in line.line()
+    state = MonitorState()
+    state.fold(batch, wall_time=T0 + 3)
+    bar = render_status(state, StatusInfo(source="can:socketcan:can0")).plain
+    assert words in bar  # what the monitor's status bar says, word for word

@@ -30,8 +30,9 @@ from analyzer.protocol.ids import ALTITUDE_ID, CONTROL_ID, FEEDBACK_ID, GPS_ID, 
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_uav_attitude
 from analyzer.scene.geometry import Quaternion, Vector, azimuth_elevation, multiply, rotate
-from analyzer.scene.overlays import box_corners, text_place
+from analyzer.scene.overlays import box_corners, overlay, text_place
 from analyzer.scene.scene3d import HFOV_1X_DEG, field_of_view
+from analyzer.scene.state import GimbalState
 from analyzer.scene.stroke_font import GLYPHS, text_segments
 from analyzer.scene.timeline import OverlayTimeline
 
@@ -356,16 +357,16 @@ def rgb_at(jpeg: bytes, x: int, y: int) -> tuple[int, int, int]:
 
 def test_the_report_pictures_show_the_overlay_of_their_moment() -> None:
     bench = Bench()
-    timeline = OverlayTimeline()
     events = []
     events += bench.frames(FEEDBACK_ID, *segments(encode_attitude(pitch_deg=-45, yaw_deg=90)))
     before = bench.time
     events += bench.frames(
         CONTROL_ID, encode_command("tracking", x=4096, y=4096, width=1600, height=1600)
     )
+    picture = Thumbnail("main", bench.time + 0.5, grey_jpeg(320, 180))
+    timeline = OverlayTimeline([before - 1, before, picture.time])  # the pictures' times
     for event in events:
         timeline.add(event)
-    picture = Thumbnail("main", bench.time + 0.5, grey_jpeg(320, 180))
     (early,) = timeline.pictures([Thumbnail("main", before, picture.jpeg)])
     (late,) = timeline.pictures([picture])
     assert early.overlay.box is None and late.overlay.box is not None  # type: ignore[attr-defined]
@@ -425,9 +426,56 @@ def test_any_field_values_give_valid_views_and_never_raise(
     events: list[tuple[str, dict[str, Any]]],
 ) -> None:
     bench = Bench()
-    timeline = OverlayTimeline()
+    timeline = OverlayTimeline(1_700_000_000.0 + n + 0.5 for n in range(len(events)))
     for n, (topic, fields) in enumerate(events):
         event = Event(topic, 1_700_000_000.0 + n, "test", dict(fields))
         timeline.add(event)
         for view_topic, message in bench.views.views(event):
             VALIDATORS[view_topic].validate(json.loads(json.dumps(message, allow_nan=False)))
+
+
+def _moving_gimbal(count: int, rate_hz: float = 100.0) -> list[Event]:
+    """Feedback of a gimbal sweeping its pitch and yaw, and a zoom command now and then."""
+    events = []
+    for n in range(count):
+        t = 1_700_000_000.0 + n / rate_hz
+        fields = {"pitch_deg": -45 + 40 * math.sin(n / 300), "yaw_deg": (n * 0.7) % 360 - 180}
+        events.append(Event("/gimbal/attitude", t, "test", fields))
+        if n % 1000 == 500:
+            events.append(Event("/gimbal/command", t, "test", {"name": "zoom_1x"}))
+    return events
+
+
+def test_the_overlay_at_each_picture_is_that_of_the_last_feedback_before_it() -> None:
+    events = _moving_gimbal(3000)
+    # Pictures every 2 s, one exactly at a feedback's time, one before the first feedback.
+    moments = [
+        events[0].time - 1,
+        events[700].time,
+        *(events[0].time + 0.013 + 2 * k for k in range(15)),
+    ]
+    timeline = OverlayTimeline(moments)
+    reference = GimbalState()
+    after: list[tuple[float, Any]] = []  # every feedback's overlay, as drawn in Foxglove
+    for event in events:
+        timeline.add(event)
+        if reference.observe(event):
+            after.append((event.time, overlay(reference)))
+    for t in moments:
+        passed = [shown for when, shown in after if when <= t]
+        assert timeline.at(t) == (passed[-1] if passed else None), t
+    assert timeline.at(moments[0]) is None
+    with pytest.raises(KeyError):
+        timeline.at(moments[1] + 0.001)  # not a picture's moment
+
+
+def test_the_overlays_kept_grow_with_the_pictures_not_with_the_feedback() -> None:
+    pictures = [1_700_000_000.0 + 2.0 * k + 0.5 for k in range(50)]  # the first 100 s
+    kept = []
+    for count in (20_000, 200_000):  # 200 s and 2000 s of 100 Hz feedback
+        timeline = OverlayTimeline(pictures)
+        for event in _moving_gimbal(count):
+            timeline.add(event)
+        kept.append(timeline.kept)
+        assert all(timeline.at(t) is not None for t in pictures)
+    assert kept == [50, 50]  # one overlay per picture, however long the flight

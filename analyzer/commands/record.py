@@ -10,6 +10,7 @@ import time
 from collections.abc import Callable
 from typing import IO, Any
 
+from analyzer.bus_figures import status_words
 from analyzer.commands.video_options import video_summary
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.link_status import LinkStatus
@@ -163,6 +164,9 @@ class StatusLine:
             parts.append(f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)")
         if stats.chunks:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
+        words = status_words(stats.tally.bus)
+        if words is not None:  # error frames seen: the words of the monitor's status bar
+            parts.append("  ".join(words.words()))
         parts.append(f"{stats.events} events")
         parts.append(f"{stats.diagnostics} diagnostics")
         if self.video is not None:

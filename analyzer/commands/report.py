@@ -77,10 +77,14 @@ def run(args: argparse.Namespace) -> int:
     sinks = [EventsInto(data.add)]
     overlays = None
     if reader.format_name == "mcap":  # only a recording has camera pictures to draw over
+        from analyzer.mcapio.read.video import thumbnail_times
         from analyzer.scene.timeline import OverlayTimeline
 
-        overlays = OverlayTimeline()  # the pictures show what Foxglove draws over them
-        sinks.append(EventsInto(overlays.add))
+        # The pictures show what Foxglove draws over them: the overlay at each picture's
+        # moment is kept as the events go by (not the overlay of every feedback).
+        overlays = OverlayTimeline(thumbnail_times(args.file))
+        if overlays.moments:
+            sinks.append(EventsInto(overlays.add))
     # The same decoding and counting as every command; the analysis is a stage of it.
     pipeline = Pipeline(sinks, stages=[stage])
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)

@@ -1,8 +1,8 @@
-"""The overlay over time, followed from events, for pictures taken at any moment (the report)."""
+"""The overlay at the moments pictures were taken, followed from events (the report)."""
 
 from __future__ import annotations
 
-import bisect
+from collections import deque
 from collections.abc import Iterable, Iterator
 from functools import cached_property
 from typing import Protocol
@@ -26,29 +26,48 @@ class Picture(Protocol):
 
 
 class OverlayTimeline:
-    """``add`` every event in time order; ``at(t)`` is the overlay shown at ``t`` (the one
-    after the last feedback or command before it, None before the first)."""
+    """``add`` every event in time order; ``at(t)``, for ``t`` one of the ``moments`` given
+    (the pictures' times, read before the events), is the overlay shown at ``t``: the one
+    after the last feedback or command at or before it, None before the first.
 
-    def __init__(self) -> None:
+    Only the overlays of those moments are kept (one shared by the moments between two
+    feedbacks), so memory grows with the pictures, not with the flight's feedback.
+    """
+
+    def __init__(self, moments: Iterable[float]) -> None:
         self._state = GimbalState()
-        self._times: list[float] = []
-        self._overlays: list[Overlay] = []
+        self.moments = frozenset(moments)
+        self._pending = deque(sorted(self.moments))  # moments no feedback has passed yet
+        self._shown: dict[float, Overlay | None] = {}
+        self._current: Overlay | None = None
+        self._last: float | None = None
 
     def add(self, event: Event) -> None:
         if event.topic in INPUT_TOPICS and self._state.observe(event) in (FEEDBACK, COMMAND):
-            if self._times and event.time < self._times[-1]:
+            if self._last is not None and event.time < self._last:
                 return  # out of order: the overlay of that moment is already past
-            self._times.append(event.time)
-            self._overlays.append(overlay(self._state))
+            pending = self._pending
+            while pending and pending[0] < event.time:  # these show the overlay before it
+                self._shown[pending.popleft()] = self._current
+            self._last = event.time
+            # No overlay is worked out (nor kept) that no picture shows.
+            self._current = overlay(self._state) if pending else None
+
+    @property
+    def kept(self) -> int:
+        """How many overlays are kept (one per moment passed, and the current one)."""
+        return len(self._shown) + (self._current is not None)
 
     def at(self, t: float) -> Overlay | None:
-        i = bisect.bisect_right(self._times, t)
-        return self._overlays[i - 1] if i else None
+        if t not in self.moments:
+            raise KeyError(f"{t} is not one of the moments the timeline follows")
+        return self._shown.get(t, self._current)
 
     def pictures(self, pictures: Iterable[Picture]) -> Iterator[Picture]:
-        """The pictures with the overlay of their moment drawn in (when they are shown)."""
+        """The pictures with the overlay of their moment drawn in (when they are shown); a
+        picture of a moment not followed is left as it is."""
         for picture in pictures:
-            shown = self.at(picture.time)
+            shown = self.at(picture.time) if picture.time in self.moments else None
             yield picture if shown is None else OverlaidPicture(picture, shown)
 
 

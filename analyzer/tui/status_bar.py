@@ -6,11 +6,11 @@ from dataclasses import dataclass
 
 from rich.text import Text
 
-from analyzer.bus_figures import BusFigures
+from analyzer.bus_figures import BusFigures, status_words
 from analyzer.protocol.bus_state import LEVELS
 from analyzer.tui.fit import join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
-from analyzer.tui.formatting import format_size, format_time
+from analyzer.tui.formatting import format_size
 from analyzer.tui.state import MonitorState
 
 
@@ -54,18 +54,13 @@ BUS_STYLES = ("bold green", "bold yellow", "bold red", "bold white on red")
 
 def bus_cell(bus: BusFigures) -> Text | None:
     """``CAN bus-off │ worst bus-off 10:00:08.000 │ 46 errors: bus-error 40, ...``."""
-    if not bus.channels:
+    words = status_words(bus)
+    if words is None:
         return None
-    now = max((b.state for b in bus.channels.values()), key=lambda s: LEVELS.get(s, 0))
-    cell = Text(f" CAN {now} ", BUS_STYLES[LEVELS.get(now, 0)])
-    worst = bus.worst()
-    if worst is not None and LEVELS.get(worst[0], 0) and worst[1] is not None:
-        cell.append(
-            f" worst {worst[0]} {format_time(worst[1]).strip()}", BUS_STYLES[LEVELS[worst[0]]]
-        )
-    classes = ", ".join(f"{name} {n:,}" for name, n in bus.classes().most_common(2))
-    count = bus.error_frames
-    cell.append(f"  {count:,} error frame{'' if count == 1 else 's'}: {classes}", "dim")
+    cell = Text(f" {words.now} ", BUS_STYLES[LEVELS.get(words.state, 0)])
+    if words.worst:
+        cell.append(f" {words.worst}", BUS_STYLES[LEVELS.get(words.worst_state, 0)])
+    cell.append(f"  {words.errors}", "dim")
     return cell
 
 

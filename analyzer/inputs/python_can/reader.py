@@ -124,8 +124,8 @@ class PythonCanReader(InputReader):
             yield from self._library_messages()
         self.position_bytes = self.size_bytes or _tell(self._raw)
         if not self.frames and self.size_bytes:
-            # python-can's text readers skip lines they do not understand without a word;
-            # a non-empty file that gave nothing is worth saying so.
+            # A non-empty file that gave no frame is worth saying so (a file of another
+            # format gives one damaged line after another, or none at all).
             kind = BAD_LINE if READERS[self.format_name][1] else BAD_FRAME
             yield diagnostic(
                 0.0,
@@ -156,7 +156,9 @@ class PythonCanReader(InputReader):
         for msg in text.messages():
             if isinstance(msg, Event):
                 if delta and msg.fields.get("kind") == BAD_LINE and "line" in msg.fields:
-                    elapsed += _leading_number(text.feed.last)  # its time still passed
+                    step = _leading_number(text.feed.last)  # its time still passed
+                    if step > 0 and time_problem(start + elapsed + step) is None:
+                        elapsed += step  # (a damaged time, 1e309, is no time passed)
                 yield msg
                 continue
             frame = frame_from_message(msg)

@@ -5,8 +5,10 @@ them, and a generator cannot be resumed. So the lines are fed to the reader by
 ``LineFeed``, which counts them; when the reader raises, the line it was on is reported
 with its number, and a fresh reader is started on the rest of the file with the file's
 header lines replayed in front (uncounted), so it knows the number base, the columns
-and the start time again. Each damaged line costs one new reader; python-can keeps
-doing all the parsing of the many layouts these formats have.
+and the start time again. A damaged line python-can would skip without a word (an ASC
+line whose time is damaged, a TRC line of an unknown type: ``skipped_lines``) is raised
+as it is handed out, and reported the same way. Each damaged line costs one new reader;
+python-can keeps doing all the parsing of the many layouts these formats have.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import re
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from analyzer.inputs.python_can.skipped_lines import SkippedLine, asc_problem, trc_checker
 from analyzer.inputs.textlines import MAX_LINE, open_lines, split_blocks
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
@@ -37,7 +40,9 @@ class LineFeed:
     """The file's lines as python-can's readers iterate them, with replayed header lines.
 
     ``lineno`` is the number of the last real line handed out; replayed lines do not
-    count. ``watch`` (optional) sees every real line.
+    count. ``watch`` (optional) sees every real line; ``check`` (optional) says why a
+    real line is damage python-can would skip without a word, and it is then raised as
+    ``SkippedLine`` in place of the line.
     """
 
     def __init__(self, lines: Iterator[str], replay: list[str]) -> None:
@@ -46,6 +51,7 @@ class LineFeed:
         self.lineno = 0
         self.last = ""
         self.watch: Callable[[str], None] | None = None
+        self.check: Callable[[str], str | None] | None = None
 
     def restart(self, replay: list[str]) -> None:
         self._replay = list(replay)
@@ -61,6 +67,8 @@ class LineFeed:
         self.last = line
         if self.watch is not None:
             self.watch(line)
+        if self.check is not None and (problem := self.check(line)) is not None:
+            raise SkippedLine(problem)
         return line
 
     def readline(self) -> str:
@@ -119,6 +127,9 @@ class TextLogReading:
             if any(_ASC_RELATIVE.match(line) for line in self.header):
                 self.time_base = DELTA
             self.feed.watch = self._watch_asc
+            self.feed.check = asc_problem
+        elif fmt == "trc":
+            self.feed.check = trc_checker(self.header)
         self.last_time = 0.0
 
     def _take_header(self, lines: Iterator[str]) -> list[str]:
@@ -153,6 +164,10 @@ class TextLogReading:
     def messages(self) -> Iterator[Any]:
         """python-can messages and diagnostic Events, in file order."""
         feed = self.feed
+        if feed.check is not None:  # a frame's line taken for the header (made a comment)
+            for number, line in enumerate(self.header, 1):
+                if (problem := feed.check(line)) is not None:
+                    yield self.bad_line(number, line, SkippedLine(problem))
         feed.restart(self._replay())
         reported = 0
         while True:
@@ -206,6 +221,8 @@ class TextLogReading:
         text = shown if len(shown) <= 60 else shown[:57] + "..."
         why = str(exc).strip().splitlines()
         reason = f"{type(exc).__name__}: {why[0]}" if why else type(exc).__name__
+        if isinstance(exc, SkippedLine):
+            reason = str(exc)
         if len(line) >= MAX_LINE:
             reason = f"line longer than {MAX_LINE:,} bytes"
         return diagnostic(

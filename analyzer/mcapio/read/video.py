@@ -57,9 +57,12 @@ class VideoSummary:
         return intervals / span if intervals > 0 and span > 0 else 0.0
 
 
-def _camera_messages(path: str | os.PathLike[str], roles: set[str]) -> Iterator[_Message]:
+def _camera_messages(
+    path: str | os.PathLike[str], roles: set[str], *, decode: bool = True
+) -> Iterator[_Message]:
     """The camera messages of a recording with their JSON, through the project's reader (a
-    recording cut short by a full disk or ``kill -9`` is recovered like for every command)."""
+    recording cut short by a full disk or ``kill -9`` is recovered like for every command).
+    Without ``decode`` their data is left out (empty)."""
     from analyzer.mcapio.read.reader import Recording
 
     for message in Recording(path).messages(roles=roles):
@@ -67,7 +70,7 @@ def _camera_messages(path: str | os.PathLike[str], roles: set[str]) -> Iterator[
             obj = json.loads(message.data)
             stamp = obj["timestamp"]
             when = int(stamp["sec"]) + int(stamp["nsec"]) / 1e9
-            data = base64.b64decode(obj["data"])
+            data = base64.b64decode(obj["data"]) if decode else b""
         except (ValueError, KeyError, TypeError):
             continue  # not a message of ours: nothing to show
         yield _Message(message.topic, message.role, when, str(obj.get("format", "")), data)
@@ -143,6 +146,11 @@ def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
     for message in _camera_messages(path, {ROLE_THUMBNAIL}):
         name = message.topic.removeprefix(TOPIC_PREFIX).removesuffix("/thumbnail")
         yield Thumbnail(name, message.time, message.data)
+
+
+def thumbnail_times(path: str | os.PathLike[str]) -> list[float]:
+    """The times of every camera stream's thumbnails (those ``read_thumbnails`` gives)."""
+    return [message.time for message in _camera_messages(path, {ROLE_THUMBNAIL}, decode=False)]
 
 
 def video_lines(path: str | os.PathLike[str]) -> list[str]:
