@@ -318,3 +318,28 @@ def test_the_latest_response_finding_and_the_verdicts_so_far() -> None:
     text = render_response(state, 60).plain
     assert "NOT OBEYED  look_down target" in text and "never moved" in text
     assert "1 not obeyed" in text and state.verdicts["not_obeyed"] == 1
+
+
+def test_a_feedback_gap_is_lost_feedback_not_a_disobeyed_command() -> None:
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+    from analyzer.tui.response_panel import response_lines
+
+    state = MonitorState()
+    command = {"command": "look_down", "check": "target", "verdict": "obeyed", "detail": "ok"}
+    gap = {
+        "command": "feedback",
+        "check": "feedback_gap",
+        "verdict": "not_obeyed",
+        "detail": "feedback lost: 1 message missing",
+        "lost_messages": 1,
+    }
+    events = [
+        Event(TOPIC_ANALYSIS_RESPONSE, T0, "analysis", command),
+        Event(TOPIC_ANALYSIS_RESPONSE, T0 + 1, "analysis", gap),
+    ]
+    state.fold(Batch([], events))
+    assert dict(state.verdicts) == {"obeyed": 1}  # as analyze counts: commands only
+    assert (state.counts.gaps, state.counts.lost) == (1, 1)
+    text = "\n".join(line.plain for line in response_lines(state, 100))
+    assert "LOST" in text and "NOT OBEYED" not in text
+    assert "1 obeyed" in text and "0 not obeyed" in text

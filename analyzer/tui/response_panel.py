@@ -5,6 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 
 from analyzer.analysis.findings import VERDICTS
+from analyzer.protocol.response_fields import verdict_word
 from analyzer.tui.fit import fold, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import short_age
@@ -29,7 +30,7 @@ def response_lines(state: MonitorState, width: int) -> list[Text]:
     verdict = str(f.get("verdict", "unknown"))
     cells = [
         head
-        + Text(verdict.replace("_", " ").upper(), style=VERDICT_STYLES.get(verdict, "bold"))
+        + Text(verdict_word(f).upper(), style=VERDICT_STYLES.get(verdict, "bold"))
         + Text(f"  {f.get('command', '?')} {f.get('check', '')}", style="bold"),
         Text(short_age(state.age(finding)), style="dim"),
     ]

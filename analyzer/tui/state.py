@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections import Counter, deque
 
+from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.bus_figures import BusFigures
 from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
@@ -90,7 +91,8 @@ class MonitorState:
         self.last_commands: dict[str, Event] = {}
         # response analysis: the latest finding and the verdicts so far
         self.finding: Event | None = None
-        self.verdicts: Counter[str] = Counter()
+        self.counts = VerdictCounts()  # as analyze counts: commands apart from the feedback
+        self.verdicts: Counter[str] = self.counts.verdicts  # the commands' findings
         # UAV
         self.gps: Event | None = None
         self.altitude: Event | None = None
@@ -313,7 +315,7 @@ class MonitorState:
                 self._note_feedback(event)
             elif topic == TOPIC_ANALYSIS_RESPONSE:
                 self.finding = event
-                self.verdicts[str(event.fields.get("verdict", "unknown"))] += 1
+                self.counts.add(event.fields)
 
     def _note_feedback(self, event: Event) -> None:
         self.feedback_count += 1
