@@ -179,7 +179,7 @@ def permissive_schema(topic: str) -> dict[str, Any]:
     }
 
 
-def _json_default(value: Any) -> Any:
+def json_default(value: Any) -> Any:
     if isinstance(value, (bytes, bytearray, memoryview)):
         return bytes(value).hex(" ").upper()
     if isinstance(value, (set, frozenset, tuple)):
@@ -190,9 +190,9 @@ def _json_default(value: Any) -> Any:
 # One encoder for every event and view message (json.dumps with options builds a new one per
 # call). Events never hold reference cycles, so the cycle check is skipped.
 encode_json = json.JSONEncoder(
-    separators=(",", ":"), default=_json_default, check_circular=False
+    separators=(",", ":"), default=json_default, check_circular=False
 ).encode
-_ORJSON_OPTIONS = orjson.OPT_NON_STR_KEYS
+ORJSON_OPTIONS = orjson.OPT_NON_STR_KEYS
 
 
 def json_bytes(value: Any) -> bytes:
@@ -200,7 +200,7 @@ def json_bytes(value: Any) -> bytes:
     written (orjson: several times faster than the json module, which is used only for
     what orjson refuses, such as an integer beyond 64 bits)."""
     try:
-        return orjson.dumps(value, default=_json_default, option=_ORJSON_OPTIONS)
+        return orjson.dumps(value, default=json_default, option=ORJSON_OPTIONS)
     except (orjson.JSONEncodeError, TypeError):
         return encode_json(value).encode()
 
