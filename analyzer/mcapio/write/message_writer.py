@@ -130,7 +130,7 @@ class MessageWriter:
                     tail = tails.get(key) or frame_tail(frame)
                     encoded = (
                         f'{{"time":{t!r},"id":{frame.can_id},"extended":'
-                        f'{TRUE_FALSE[frame.extended]},'
+                        f"{TRUE_FALSE[frame.extended]},"
                         f'"dlc":{frame.remote_dlc if is_remote else len(data)},'
                         f'"data":"{data.hex(" ").upper()}{tail}'
                     ).encode()
