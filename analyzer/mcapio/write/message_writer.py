@@ -90,62 +90,78 @@ class MessageWriter:
         channels = registry.ids
         views = self._views
         can_id = channels.get(TOPIC_CAN_FRAMES, 0)
+        can_number = sequence[can_id] if can_id else 0  # kept here, stored at the end
         tails = FRAME_TAILS
         dumps = orjson.dumps
-        items = events = extra = 0
-        for message in messages:
-            kind = type(message)
-            if kind is Event:
-                event: Event = message  # type: ignore[assignment]
-                topic = event.topic
-                channel_id = channels.get(topic) or self._channel(topic, ROLE_EVENT, out)
-                t = event.time
-                log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
-                number = sequence[channel_id] + 1
-                sequence[channel_id] = number
-                try:  # json_bytes, inlined: every event
-                    data = dumps(event.to_dict(), default=json_default, option=ORJSON_OPTIONS)
-                except (orjson.JSONEncodeError, TypeError):
-                    data = json_bytes(event.to_dict())
-                add((channel_id, log_time, data, log_time, number))
-                events += 1
-                if views is not None and topic in VIEW_INPUT_TOPICS:
-                    for view_topic, view in views.views(event):
-                        view_id = channels.get(view_topic)
-                        view_id = view_id or self._channel(view_topic, ROLE_VIEW, out)
-                        number = sequence[view_id] + 1
-                        sequence[view_id] = number
-                        add((view_id, log_time, json_bytes(view), log_time, number))
-                        extra += 1
-                continue
-            if kind is CanFrame:
-                channel_id = can_id or self._channel(TOPIC_CAN_FRAMES, ROLE_RAW, out)
-                can_id = channel_id
-                frame: CanFrame = message  # type: ignore[assignment]
-                t = frame.time
-                if type(t) is float and t - t == 0:  # can_frame_json, inlined: every frame
-                    is_remote = frame.is_remote
-                    data = frame.data
-                    key = (frame.channel, is_remote, frame.is_error, frame.is_fd, frame.direction)
-                    tail = tails.get(key) or frame_tail(frame)
-                    encoded = (
-                        f'{{"time":{t!r},"id":{frame.can_id},"extended":'
-                        f"{TRUE_FALSE[frame.extended]},"
-                        f'"dlc":{frame.remote_dlc if is_remote else len(data)},'
-                        f'"data":"{data.hex(" ").upper()}{tail}'
-                    ).encode()
+        events = extra = 0
+        try:
+            for message in messages:
+                kind = type(message)
+                if kind is CanFrame:
+                    frame: CanFrame = message  # type: ignore[assignment]
+                    if not can_id:
+                        can_id = self._channel(TOPIC_CAN_FRAMES, ROLE_RAW, out)
+                        can_number = sequence[can_id]
+                    t = frame.time
+                    if type(t) is float and 0 < t < MAX_LOG_SECONDS:
+                        # can_frame_json and the log time, inlined: every frame
+                        is_remote = frame.is_remote
+                        data = frame.data
+                        key = (
+                            frame.channel,
+                            is_remote,
+                            frame.is_error,
+                            frame.is_fd,
+                            frame.direction,
+                        )
+                        tail = tails.get(key) or frame_tail(frame)
+                        encoded = (
+                            f'{{"time":{t!r},"id":{frame.can_id},"extended":'
+                            f"{TRUE_FALSE[frame.extended]},"
+                            f'"dlc":{frame.remote_dlc if is_remote else len(data)},'
+                            f'"data":"{data.hex(" ").upper()}{tail}'
+                        ).encode()
+                        log_time = round(t * 1e9)
+                    else:
+                        encoded = can_frame_json(frame)
+                        log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    can_number += 1
+                    add((can_id, log_time, encoded, log_time, can_number))
+                elif kind is Event:
+                    event: Event = message  # type: ignore[assignment]
+                    topic = event.topic
+                    channel_id = channels.get(topic) or self._channel(topic, ROLE_EVENT, out)
+                    t = event.time
+                    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    number = sequence[channel_id] + 1
+                    sequence[channel_id] = number
+                    try:  # json_bytes, inlined: every event
+                        data = dumps(event.to_dict(), default=json_default, option=ORJSON_OPTIONS)
+                    except (orjson.JSONEncodeError, TypeError):
+                        data = json_bytes(event.to_dict())
+                    add((channel_id, log_time, data, log_time, number))
+                    events += 1
+                    if views is not None and topic in VIEW_INPUT_TOPICS:
+                        for view_topic, view in views.views(event):
+                            view_id = channels.get(view_topic)
+                            view_id = view_id or self._channel(view_topic, ROLE_VIEW, out)
+                            number = sequence[view_id] + 1
+                            sequence[view_id] = number
+                            add((view_id, log_time, json_bytes(view), log_time, number))
+                            extra += 1
                 else:
-                    encoded = can_frame_json(frame)
-            else:
-                topic = TOPIC_STREAM_BYTES
-                channel_id = channels.get(topic) or self._channel(topic, ROLE_RAW, out)
-                encoded = stream_chunk_json(message)  # type: ignore[arg-type]
-            t = message.time
-            log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
-            number = sequence[channel_id] + 1
-            sequence[channel_id] = number
-            add((channel_id, log_time, encoded, log_time, number))
-            items += 1
+                    topic = TOPIC_STREAM_BYTES
+                    channel_id = channels.get(topic) or self._channel(topic, ROLE_RAW, out)
+                    encoded = stream_chunk_json(message)  # type: ignore[arg-type]
+                    t = message.time
+                    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    number = sequence[channel_id] + 1
+                    sequence[channel_id] = number
+                    add((channel_id, log_time, encoded, log_time, number))
+        finally:
+            if can_id:
+                sequence[can_id] = can_number
+        items = len(messages) - events
         self._write(out)
         self.items_written += items
         self.events_written += events
