@@ -124,6 +124,40 @@ def can_frame_json(frame: CanFrame) -> bytes:
     ).encode()
 
 
+# From here up to 1e16, orjson writes a float as repr does (the shortest digits that
+# read back the same, no exponent): the writer's fast path for frame times
+# (tests/test_mcap_frame_messages.py).
+FLOAT_AS_REPR_FROM = 1e-4
+FRAME_OPEN = b'{"time":'
+# (CAN ID, extended, data length, channel, error, fd, direction) -> frame_parts
+FRAME_PARTS: dict[tuple[int, bool, int, str, bool, bool, str], tuple[bytes, bytes]] = {}
+
+
+def frame_parts(frame: CanFrame) -> tuple[bytes, bytes]:
+    """The /can/frames message of a frame that is not remote, between its time and its data
+    and after its data: the same for every frame of one ID and length on one channel."""
+    data = frame.data
+    key = (
+        frame.can_id,
+        frame.extended,
+        len(data),
+        frame.channel,
+        frame.is_error,
+        frame.is_fd,
+        frame.direction,
+    )
+    parts = FRAME_PARTS.get(key)
+    if parts is None:
+        middle = (
+            f',"id":{frame.can_id},"extended":{TRUE_FALSE[frame.extended]},'
+            f'"dlc":{len(data)},"data":"'
+        )
+        parts = (middle.encode(), frame_tail(frame).encode())
+        if len(FRAME_PARTS) < 4096:
+            FRAME_PARTS[key] = parts
+    return parts
+
+
 def stream_chunk_json(chunk: StreamChunk) -> bytes:
     """The /stream/bytes message of one chunk."""
     return (

@@ -8,17 +8,18 @@ from collections.abc import Sequence
 import orjson
 
 from analyzer.mcapio.channels import (
-    FRAME_TAILS,
+    FLOAT_AS_REPR_FROM,
+    FRAME_OPEN,
+    FRAME_PARTS,
     ORJSON_OPTIONS,
     ROLE_EVENT,
     ROLE_RAW,
     ROLE_VIEW,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
-    TRUE_FALSE,
     MessageTee,
     can_frame_json,
-    frame_tail,
+    frame_parts,
     json_bytes,
     json_default,
     stream_chunk_json,
@@ -91,7 +92,8 @@ class MessageWriter:
         views = self._views
         can_id = channels.get(TOPIC_CAN_FRAMES, 0)
         can_number = sequence[can_id] if can_id else 0  # kept here, stored at the end
-        tails = FRAME_TAILS
+        known_parts = FRAME_PARTS
+        join = b"".join
         dumps = orjson.dumps
         events = extra = 0
         try:
@@ -103,24 +105,25 @@ class MessageWriter:
                         can_id = self._channel(TOPIC_CAN_FRAMES, ROLE_RAW, out)
                         can_number = sequence[can_id]
                     t = frame.time
-                    if type(t) is float and 0 < t < MAX_LOG_SECONDS:
-                        # can_frame_json and the log time, inlined: every frame
-                        is_remote = frame.is_remote
+                    if (
+                        type(t) is float
+                        and FLOAT_AS_REPR_FROM <= t < MAX_LOG_SECONDS
+                        and not frame.is_remote
+                    ):  # can_frame_json and the log time, inlined: every frame
                         data = frame.data
                         key = (
+                            frame.can_id,
+                            frame.extended,
+                            len(data),
                             frame.channel,
-                            is_remote,
                             frame.is_error,
                             frame.is_fd,
                             frame.direction,
                         )
-                        tail = tails.get(key) or frame_tail(frame)
-                        encoded = (
-                            f'{{"time":{t!r},"id":{frame.can_id},"extended":'
-                            f"{TRUE_FALSE[frame.extended]},"
-                            f'"dlc":{frame.remote_dlc if is_remote else len(data)},'
-                            f'"data":"{data.hex(" ").upper()}{tail}'
-                        ).encode()
+                        middle, tail = known_parts.get(key) or frame_parts(frame)
+                        encoded = join(
+                            (FRAME_OPEN, dumps(t), middle, data.hex(" ").upper().encode(), tail)
+                        )
                         log_time = round(t * 1e9)
                     else:
                         encoded = can_frame_json(frame)
