@@ -138,10 +138,18 @@ class MessageWriter:
                     log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
                     number = sequence[channel_id] + 1
                     sequence[channel_id] = number
-                    try:  # json_bytes, inlined: every event
-                        data = dumps(event.to_dict(), default=json_default, option=ORJSON_OPTIONS)
+                    # json_bytes(event.to_dict()), inlined: every event
+                    content = {
+                        "topic": topic,
+                        "time": t,
+                        "source": event.source,
+                        "warnings": event.warnings,
+                        **event.fields,
+                    }
+                    try:
+                        data = dumps(content, default=json_default, option=ORJSON_OPTIONS)
                     except (orjson.JSONEncodeError, TypeError):
-                        data = json_bytes(event.to_dict())
+                        data = json_bytes(content)
                     add((channel_id, log_time, data, log_time, number))
                     events += 1
                     if views is not None and topic in VIEW_INPUT_TOPICS:
