@@ -39,7 +39,7 @@ SOURCE = "analysis"
 
 def worst(*verdicts: str) -> str:
     """The verdict that says the least good about the gimbal."""
-    return max(verdicts, key=lambda v: _RANK[v])
+    return max(verdicts, key=_RANK.__getitem__)
 
 
 @dataclass
