@@ -42,7 +42,7 @@ def worst(*verdicts: str) -> str:
     return max(verdicts, key=_RANK.__getitem__)
 
 
-@dataclass
+@dataclass(slots=True)
 class Finding:
     """One judgement; ``extra`` holds the optional fields of analyzer.protocol.response_fields."""
 
