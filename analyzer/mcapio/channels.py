@@ -130,31 +130,21 @@ def can_frame_json(frame: CanFrame) -> bytes:
 FLOAT_AS_REPR_FROM = 1e-4
 FRAME_OPEN = b'{"time":'
 # (CAN ID, extended, data length, channel, error, fd, direction) -> frame_parts
-FRAME_PARTS: dict[tuple[int, bool, int, str, bool, bool, str], tuple[bytes, bytes]] = {}
+FramePartsKey = tuple[int, bool, int, str, bool, bool, str]
+FRAME_PARTS: dict[FramePartsKey, tuple[bytes, bytes]] = {}
 
 
-def frame_parts(frame: CanFrame) -> tuple[bytes, bytes]:
+def frame_parts(frame: CanFrame, key: FramePartsKey) -> tuple[bytes, bytes]:
     """The /can/frames message of a frame that is not remote, between its time and its data
-    and after its data: the same for every frame of one ID and length on one channel."""
-    data = frame.data
-    key = (
-        frame.can_id,
-        frame.extended,
-        len(data),
-        frame.channel,
-        frame.is_error,
-        frame.is_fd,
-        frame.direction,
+    and after its data: the same for every frame of one ``key`` (kept in FRAME_PARTS, made
+    by the writer's loop, the one place that reads it)."""
+    middle = (
+        f',"id":{frame.can_id},"extended":{TRUE_FALSE[frame.extended]},'
+        f'"dlc":{len(frame.data)},"data":"'
     )
-    parts = FRAME_PARTS.get(key)
-    if parts is None:
-        middle = (
-            f',"id":{frame.can_id},"extended":{TRUE_FALSE[frame.extended]},'
-            f'"dlc":{len(data)},"data":"'
-        )
-        parts = (middle.encode(), frame_tail(frame).encode())
-        if len(FRAME_PARTS) < 4096:
-            FRAME_PARTS[key] = parts
+    parts = (middle.encode(), frame_tail(frame).encode())
+    if len(FRAME_PARTS) < 4096:
+        FRAME_PARTS[key] = parts
     return parts
 
 

@@ -17,6 +17,7 @@ from analyzer.mcapio.channels import (
     ROLE_VIEW,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
+    FramePartsKey,
     MessageTee,
     can_frame_json,
     frame_parts,
@@ -111,7 +112,7 @@ class MessageWriter:
                         and not frame.is_remote
                     ):  # can_frame_json and the log time, inlined: every frame
                         data = frame.data
-                        key = (
+                        key: FramePartsKey = (
                             frame.can_id,
                             frame.extended,
                             len(data),
@@ -120,7 +121,7 @@ class MessageWriter:
                             frame.is_fd,
                             frame.direction,
                         )
-                        middle, tail = known_parts.get(key) or frame_parts(frame)
+                        middle, tail = known_parts.get(key) or frame_parts(frame, key)
                         encoded = join(
                             (FRAME_OPEN, dumps(t), middle, data.hex(" ").upper().encode(), tail)
                         )
