@@ -39,10 +39,10 @@ SOURCE = "analysis"
 
 def worst(*verdicts: str) -> str:
     """The verdict that says the least good about the gimbal."""
-    return max(verdicts, key=lambda v: _RANK[v])
+    return max(verdicts, key=_RANK.__getitem__)
 
 
-@dataclass
+@dataclass(slots=True)
 class Finding:
     """One judgement; ``extra`` holds the optional fields of analyzer.protocol.response_fields."""
 

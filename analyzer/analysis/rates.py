@@ -21,10 +21,18 @@ from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 
 RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
 SLOW_REPEAT_S = 2 * RECOMMENDED_REPEAT_S  # mean interval above this is "too slowly"
+_SENT_ONCE = (
+    "sent once, not repeated: the gimbal stops when the commands stop "
+    f"(the document recommends repeating every {RECOMMENDED_REPEAT_S * 1000:.0f} ms)"
+)
 BURST_GAP_S = 1.0  # commands further apart than this are separate bursts
 RATE_OK = (0.75, 1.33)  # measured / commanded within this range: obeyed
 RATE_NONE = 0.1  # below this (or negative): it did not follow
 MIN_SPAN_S = 0.4  # the feedback used to measure a rate must span at least this long
+_NOT_MEASURABLE = (
+    f" not measurable: fewer than two feedback messages {MIN_SPAN_S:g} s apart while the "
+    "commands lasted"
+)
 SAME_SPEED = 0.005  # deg/s: speeds that differ less are the same command repeated
 
 
@@ -125,10 +133,7 @@ def judge_rate(burst: Burst, before: Sample | None, inside: list[Sample]) -> Fin
                 texts.append(f"{word} turned until its limit {limit:.1f}")
             else:
                 verdicts.append(UNKNOWN)
-                texts.append(
-                    f"{word} not measurable: fewer than two feedback messages "
-                    f"{MIN_SPAN_S:g} s apart while the commands lasted"
-                )
+                texts.append(f"{word}{_NOT_MEASURABLE}")
             continue
         extra[key] = rate
         ratio = rate / commanded
@@ -197,11 +202,8 @@ def judge_repeat(burst: Burst, rate_verdict: str) -> Finding | None:
     """Commands repeated too slowly to keep the gimbal moving (None when fast enough)."""
     verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
     if burst.count == 1:
-        text = (
-            "sent once, not repeated: the gimbal stops when the commands stop "
-            f"(the document recommends repeating every {RECOMMENDED_REPEAT_S * 1000:.0f} ms)"
-        )
-        return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, text, {"command_count": 1})
+        once: dict[str, Any] = {"command_count": 1}
+        return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, _SENT_ONCE, once)
     mean = burst.interval_sum / (burst.count - 1)
     if mean <= SLOW_REPEAT_S:
         return None

@@ -124,6 +124,30 @@ def can_frame_json(frame: CanFrame) -> bytes:
     ).encode()
 
 
+# From here up to 1e16, orjson writes a float as repr does (the shortest digits that
+# read back the same, no exponent): the writer's fast path for frame times
+# (tests/test_mcap_frame_messages.py).
+FLOAT_AS_REPR_FROM = 1e-4
+FRAME_OPEN = b'{"time":'
+# (CAN ID, extended, data length, channel, error, fd, direction) -> frame_parts
+FramePartsKey = tuple[int, bool, int, str, bool, bool, str]
+FRAME_PARTS: dict[FramePartsKey, tuple[bytes, bytes]] = {}
+
+
+def frame_parts(frame: CanFrame, key: FramePartsKey) -> tuple[bytes, bytes]:
+    """The /can/frames message of a frame that is not remote, between its time and its data
+    and after its data: the same for every frame of one ``key`` (kept in FRAME_PARTS, made
+    by the writer's loop, the one place that reads it)."""
+    middle = (
+        f',"id":{frame.can_id},"extended":{TRUE_FALSE[frame.extended]},'
+        f'"dlc":{len(frame.data)},"data":"'
+    )
+    parts = (middle.encode(), frame_tail(frame).encode())
+    if len(FRAME_PARTS) < 4096:
+        FRAME_PARTS[key] = parts
+    return parts
+
+
 def stream_chunk_json(chunk: StreamChunk) -> bytes:
     """The /stream/bytes message of one chunk."""
     return (
@@ -179,7 +203,7 @@ def permissive_schema(topic: str) -> dict[str, Any]:
     }
 
 
-def _json_default(value: Any) -> Any:
+def json_default(value: Any) -> Any:
     if isinstance(value, (bytes, bytearray, memoryview)):
         return bytes(value).hex(" ").upper()
     if isinstance(value, (set, frozenset, tuple)):
@@ -190,9 +214,9 @@ def _json_default(value: Any) -> Any:
 # One encoder for every event and view message (json.dumps with options builds a new one per
 # call). Events never hold reference cycles, so the cycle check is skipped.
 encode_json = json.JSONEncoder(
-    separators=(",", ":"), default=_json_default, check_circular=False
+    separators=(",", ":"), default=json_default, check_circular=False
 ).encode
-_ORJSON_OPTIONS = orjson.OPT_NON_STR_KEYS
+ORJSON_OPTIONS = orjson.OPT_NON_STR_KEYS
 
 
 def json_bytes(value: Any) -> bytes:
@@ -200,7 +224,7 @@ def json_bytes(value: Any) -> bytes:
     written (orjson: several times faster than the json module, which is used only for
     what orjson refuses, such as an integer beyond 64 bits)."""
     try:
-        return orjson.dumps(value, default=_json_default, option=_ORJSON_OPTIONS)
+        return orjson.dumps(value, default=json_default, option=ORJSON_OPTIONS)
     except (orjson.JSONEncodeError, TypeError):
         return encode_json(value).encode()
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from analyzer.mcapio.log_time import time_ns
+from analyzer.mcapio.log_time import timestamp
 from analyzer.mcapio.scene_views import (
     ANNOTATIONS_SCHEMA,
     SCENE_SCHEMAS,
@@ -139,12 +139,6 @@ _ZERO_COVARIANCE = [0.0] * 9
 _GOOD_LINK_STATES = frozenset({"open", "connected", "gs_connected", "listening"})
 
 
-def timestamp(seconds: float) -> dict[str, int]:
-    """Seconds -> foxglove time {sec, nsec}, equal to the message's log time."""
-    sec, nsec = divmod(time_ns(seconds), 1_000_000_000)
-    return {"sec": sec, "nsec": nsec}
-
-
 def _number(value: Any) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
@@ -221,7 +215,7 @@ class FoxgloveViews:
     def views(self, event: Event) -> list[tuple[str, dict[str, Any]]]:
         """(topic, message) pairs to publish for one event (most events give none)."""
         topic = event.topic
-        out = self.scene.views(event, timestamp(event.time))
+        out = self.scene.views(event)
         if topic == TOPIC_UAV_ALTITUDE:
             altitude = _number(event.fields.get("altitude_m"))
             if altitude is not None:

@@ -10,3 +10,9 @@ def time_ns(seconds: float) -> int:
     if 0 < seconds < MAX_LOG_SECONDS:  # False for NaN too
         return round(seconds * 1e9)
     return 2**64 - 1 if seconds >= MAX_LOG_SECONDS else 0
+
+
+def timestamp(seconds: float) -> dict[str, int]:
+    """Seconds -> foxglove time {sec, nsec}, equal to the message's log time."""
+    sec, nsec = divmod(time_ns(seconds), 1_000_000_000)
+    return {"sec": sec, "nsec": nsec}

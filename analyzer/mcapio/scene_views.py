@@ -6,6 +6,7 @@ import json
 from importlib import resources
 from typing import Any
 
+from analyzer.mcapio.log_time import timestamp
 from analyzer.protocol.types import Event
 from analyzer.scene.overlays import image_annotations, overlay
 from analyzer.scene.scene3d import DEFAULT_ASPECT, frame_transforms, optical_frame, scene_update
@@ -73,27 +74,29 @@ class SceneViews:
                 self.aspect = width / height
             self.overlays[topic] = (width, height, stroked)
 
-    def views(self, event: Event, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
+    def views(self, event: Event) -> list[tuple[str, dict[str, Any]]]:
         if event.topic not in INPUT_TOPICS:
             return []
         change = self.state.observe(event)
         out: list[tuple[str, dict[str, Any]]] = []
         if change == FEEDBACK:
+            stamp = timestamp(event.time)
             transforms = frame_transforms(
                 self.state, stamp, self.optical_frames or [DEFAULT_CAMERA_FRAME]
             )
             if transforms is not None:
                 out.append((TOPIC_TF, transforms))
         if change in (FEEDBACK, COMMAND, RANGING):
-            out.extend(self._scene(event.time, stamp))
+            out.extend(self._scene(event.time))
         if change in (FEEDBACK, COMMAND) and self.overlays:
+            stamp = timestamp(event.time)
             shapes = overlay(self.state)
             for topic, (width, height, stroked) in self.overlays.items():
                 message = image_annotations(shapes, width, height, stamp, stroked=stroked)
                 out.append((topic, message))
         return out
 
-    def _scene(self, time: float, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
+    def _scene(self, time: float) -> list[tuple[str, dict[str, Any]]]:
         """The scene when its shape changed (zoom, a target found or lost, UAV status), else
         at most every ``SCENE_EVERY_S`` (a new laser range, a viewer that joined late)."""
         state = self.state
@@ -104,4 +107,4 @@ class SceneViews:
         if not (due or key != self._scene_key):
             return []
         self._scene_at, self._scene_key = time, key
-        return [(TOPIC_SCENE, scene_update(state, stamp, self.aspect))]
+        return [(TOPIC_SCENE, scene_update(state, timestamp(time), self.aspect))]

@@ -22,6 +22,7 @@ import errno
 import struct
 import zlib
 from collections import Counter
+from collections.abc import Iterable
 from typing import IO
 
 from mcap.opcode import Opcode
@@ -49,6 +50,7 @@ from analyzer.mcapio.write.summary_tail import MAGIC, serialise, summary_tail
 # Message record: opcode, record length, channel id, sequence, log time, publish time.
 _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_FIXED = 2 + 4 + 8 + 8
+_OPCODE_MESSAGE = int(Opcode.MESSAGE)  # a plain int packs faster than the IntEnum
 # Message index record head: opcode, record length, channel id, byte length of the pairs.
 _INDEX_HEAD = struct.Struct("<BQHI")
 
@@ -202,26 +204,44 @@ class ChunkedWriter:
     def add_message(
         self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0
     ) -> None:
-        if log_time < self._chunk_last:
-            if log_time < self._floor:
-                log_time = self._floor  # older than a chunk on disk already
-                self.retimed += 1
-                self.retimed_topics[self._channels[channel_id].topic] += 1
-            if log_time < self._chunk_last:
-                self._unsorted = True
-        else:
-            self._chunk_last = log_time
-        chunk = self._chunk
-        index = self._index.get(channel_id)
-        if index is None:
-            index = self._index[channel_id] = []
-        index += (log_time, len(chunk))
-        chunk += _MESSAGE.pack(
-            Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel_id, sequence, log_time, publish_time
-        )
-        chunk += data
-        if len(chunk) >= self._close_at:
-            self._chunk_full()
+        self.add_messages(((channel_id, log_time, data, publish_time, sequence),))
+
+    def add_messages(self, messages: Iterable[tuple[int, int, bytes, int, int]]) -> None:
+        """``add_message`` of each (channel id, log time, data, publish time, sequence), in
+        order: one call per batch, the open chunk's state in local variables (this runs
+        for every message of a file)."""
+        pack = _MESSAGE.pack
+        chunk, index_of, last, floor = self._chunk, self._index, self._chunk_last, self._floor
+        close_at = self._close_at
+        for channel_id, log_time, data, publish_time, sequence in messages:
+            if log_time < last:
+                if log_time < floor:
+                    log_time = floor  # older than a chunk on disk already
+                    self.retimed += 1
+                    self.retimed_topics[self._channels[channel_id].topic] += 1
+                if log_time < last:
+                    self._unsorted = True
+            else:
+                last = log_time
+            index = index_of.get(channel_id)
+            if index is None:
+                index = index_of[channel_id] = []
+            index += (log_time, len(chunk))
+            chunk += pack(
+                _OPCODE_MESSAGE,
+                _MESSAGE_FIXED + len(data),
+                channel_id,
+                sequence,
+                log_time,
+                publish_time,
+            )
+            chunk += data
+            if len(chunk) >= close_at:
+                self._chunk_last = last
+                self._chunk_full()
+                chunk, index_of, last = self._chunk, self._index, self._chunk_last
+                floor, close_at = self._floor, self._close_at
+        self._chunk_last = last
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         record = self._record(Metadata(name=name, metadata=dict(data)))

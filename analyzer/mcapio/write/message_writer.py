@@ -5,18 +5,24 @@ from __future__ import annotations
 import operator
 from collections.abc import Sequence
 
+import orjson
+
 from analyzer.mcapio.channels import (
-    FRAME_TAILS,
+    FLOAT_AS_REPR_FROM,
+    FRAME_OPEN,
+    FRAME_PARTS,
+    ORJSON_OPTIONS,
     ROLE_EVENT,
     ROLE_RAW,
     ROLE_VIEW,
     TOPIC_CAN_FRAMES,
     TOPIC_STREAM_BYTES,
-    TRUE_FALSE,
+    FramePartsKey,
     MessageTee,
     can_frame_json,
-    frame_tail,
+    frame_parts,
     json_bytes,
+    json_default,
     stream_chunk_json,
 )
 from analyzer.mcapio.foxglove import VIEW_INPUT_TOPICS, FoxgloveViews
@@ -75,77 +81,119 @@ class MessageWriter:
 
     def _put(self, messages: Sequence[RawItem | Event]) -> None:
         """Each raw item to its lossless channel, each event to its topic's channel (and its
-        views), in the order given: one loop, as this runs for every frame of a file."""
+        views), in the order given: one loop, as this runs for every frame of a file. The
+        messages go to the writer together at the end (or before a new channel's record)."""
         if not messages:
             return
-        add = self._writer.add_message if self._tee is None else self._add_teed
+        out: list[tuple[int, int, bytes, int, int]] = []
+        add = out.append
         registry = self._registry
         sequence = registry.sequence
         channels = registry.ids
         views = self._views
         can_id = channels.get(TOPIC_CAN_FRAMES, 0)
-        tails = FRAME_TAILS
-        items = events = extra = 0
-        for message in messages:
-            kind = type(message)
-            if kind is Event:
-                event: Event = message  # type: ignore[assignment]
-                topic = event.topic
-                channel_id = channels.get(topic) or registry.channel(topic, ROLE_EVENT)
-                t = event.time
-                log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
-                number = sequence[channel_id] + 1
-                sequence[channel_id] = number
-                add(channel_id, log_time, json_bytes(event.to_dict()), log_time, number)
-                events += 1
-                if views is not None and topic in VIEW_INPUT_TOPICS:
-                    for view_topic, view in views.views(event):
-                        view_id = channels.get(view_topic)
-                        view_id = view_id or registry.channel(view_topic, ROLE_VIEW)
-                        number = sequence[view_id] + 1
-                        sequence[view_id] = number
-                        add(view_id, log_time, json_bytes(view), log_time, number)
-                        extra += 1
-                continue
-            if kind is CanFrame:
-                channel_id = can_id or registry.channel(TOPIC_CAN_FRAMES, ROLE_RAW)
-                can_id = channel_id
-                frame: CanFrame = message  # type: ignore[assignment]
-                t = frame.time
-                if type(t) is float and t - t == 0:  # can_frame_json, inlined: every frame
-                    key = (
-                        frame.channel,
-                        frame.is_remote,
-                        frame.is_error,
-                        frame.is_fd,
-                        frame.direction,
-                    )
-                    tail = tails.get(key) or frame_tail(frame)
-                    data = (
-                        f'{{"time":{t!r},"id":{frame.can_id},"extended":'
-                        f'{TRUE_FALSE[frame.extended]},"dlc":{frame.dlc},'
-                        f'"data":"{frame.data.hex(" ").upper()}{tail}'
-                    ).encode()
+        can_number = sequence[can_id] if can_id else 0  # kept here, stored at the end
+        known_parts = FRAME_PARTS
+        join = b"".join
+        dumps = orjson.dumps
+        events = extra = 0
+        try:
+            for message in messages:
+                kind = type(message)
+                if kind is CanFrame:
+                    frame: CanFrame = message  # type: ignore[assignment]
+                    if not can_id:
+                        can_id = self._channel(TOPIC_CAN_FRAMES, ROLE_RAW, out)
+                        can_number = sequence[can_id]
+                    t = frame.time
+                    if (
+                        type(t) is float
+                        and FLOAT_AS_REPR_FROM <= t < MAX_LOG_SECONDS
+                        and not frame.is_remote
+                    ):  # can_frame_json and the log time, inlined: every frame
+                        data = frame.data
+                        key: FramePartsKey = (
+                            frame.can_id,
+                            frame.extended,
+                            len(data),
+                            frame.channel,
+                            frame.is_error,
+                            frame.is_fd,
+                            frame.direction,
+                        )
+                        middle, tail = known_parts.get(key) or frame_parts(frame, key)
+                        encoded = join(
+                            (FRAME_OPEN, dumps(t), middle, data.hex(" ").upper().encode(), tail)
+                        )
+                        log_time = round(t * 1e9)
+                    else:
+                        encoded = can_frame_json(frame)
+                        log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    can_number += 1
+                    add((can_id, log_time, encoded, log_time, can_number))
+                elif kind is Event:
+                    event: Event = message  # type: ignore[assignment]
+                    topic = event.topic
+                    channel_id = channels.get(topic) or self._channel(topic, ROLE_EVENT, out)
+                    t = event.time
+                    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    number = sequence[channel_id] + 1
+                    sequence[channel_id] = number
+                    # json_bytes(event.to_dict()), inlined: every event
+                    content = {
+                        "topic": topic,
+                        "time": t,
+                        "source": event.source,
+                        "warnings": event.warnings,
+                        **event.fields,
+                    }
+                    try:
+                        data = dumps(content, default=json_default, option=ORJSON_OPTIONS)
+                    except (orjson.JSONEncodeError, TypeError):
+                        data = json_bytes(content)
+                    add((channel_id, log_time, data, log_time, number))
+                    events += 1
+                    if views is not None and topic in VIEW_INPUT_TOPICS:
+                        for view_topic, view in views.views(event):
+                            view_id = channels.get(view_topic)
+                            view_id = view_id or self._channel(view_topic, ROLE_VIEW, out)
+                            number = sequence[view_id] + 1
+                            sequence[view_id] = number
+                            add((view_id, log_time, json_bytes(view), log_time, number))
+                            extra += 1
                 else:
-                    data = can_frame_json(frame)
-            else:
-                topic = TOPIC_STREAM_BYTES
-                channel_id = channels.get(topic) or registry.channel(topic, ROLE_RAW)
-                data = stream_chunk_json(message)  # type: ignore[arg-type]
-            t = message.time
-            log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
-            number = sequence[channel_id] + 1
-            sequence[channel_id] = number
-            add(channel_id, log_time, data, log_time, number)
-            items += 1
+                    topic = TOPIC_STREAM_BYTES
+                    channel_id = channels.get(topic) or self._channel(topic, ROLE_RAW, out)
+                    encoded = stream_chunk_json(message)  # type: ignore[arg-type]
+                    t = message.time
+                    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    number = sequence[channel_id] + 1
+                    sequence[channel_id] = number
+                    add((channel_id, log_time, encoded, log_time, number))
+        finally:
+            if can_id:
+                sequence[can_id] = can_number
+        items = len(messages) - events
+        self._write(out)
         self.items_written += items
         self.events_written += events
         self.messages_written += items + events + extra
         self.dirty = True
         self.last_time = messages[-1].time
 
-    def _add_teed(
-        self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int
-    ) -> None:
-        self._writer.add_message(channel_id, log_time, data, publish_time, sequence)
-        self._tee.add_message(channel_id, log_time, data)  # type: ignore[union-attr]
+    def _channel(
+        self, topic: str, role: str, pending: list[tuple[int, int, bytes, int, int]]
+    ) -> int:
+        """A new channel: the messages before it are written first, so that its record
+        goes into the open chunk where the message that needs it comes."""
+        self._write(pending)
+        pending.clear()
+        return self._registry.channel(topic, role)
+
+    def _write(self, messages: list[tuple[int, int, bytes, int, int]]) -> None:
+        if self._tee is None:
+            self._writer.add_messages(messages)
+            return
+        for channel_id, log_time, data, publish_time, number in messages:
+            self._writer.add_message(channel_id, log_time, data, publish_time, number)
+            self._tee.add_message(channel_id, log_time, data)
