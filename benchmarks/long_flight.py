@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -68,7 +69,11 @@ def arguments(command: str, log: Path, out: Path) -> list[str]:
         return ["convert", str(log), "-o", str(out / "flight.mcap"), "--force", "-q"]
     if command == "report":
         return ["report", str(log), "-o", str(out / "flight.html"), "--force"]
-    return ["table", str(log), "-o", str(out / f"fleet-{log.stem}"), "--workers", "1", "-q"]
+    # A new dataset each run: table skips an input already in its dataset.
+    dataset = out / f"fleet-{log.stem}"
+    if dataset.exists():
+        shutil.rmtree(dataset)
+    return ["table", str(log), "-o", str(dataset), "--workers", "1", "-q"]
 
 
 def run(command: str, log: Path, out: Path) -> tuple[float, float]:
