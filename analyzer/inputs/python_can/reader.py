@@ -32,7 +32,7 @@ READERS: dict[str, tuple[str, bool]] = {
 class PythonCanReader(InputReader):
     """Frames of a python-can log file, plain or gzip-compressed.
 
-    ASC, TRC and CSV are read line by line (``python_can_text``): a damaged line becomes
+    ASC, TRC and CSV are read line by line (``text_logs``): a damaged line becomes
     a ``bad_line`` diagnostic with its line number and reading goes on. An ASC file whose
     header says ``timestamps relative`` holds the time since the previous frame: those
     are added up from the ``date`` in the header, as can-utils' ``asc2log`` does. A BLF
