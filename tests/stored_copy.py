@@ -6,6 +6,9 @@ import difflib
 import gzip
 import hashlib
 import json
+import sys
+import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -38,3 +41,14 @@ def assert_same(case: str, want: dict[str, str], got: dict[str, str], command: s
             want["output"].splitlines(), got["output"].splitlines(), "stored", "now", lineterm=""
         )
         pytest.fail(f"{case}: {command} differs\n" + "\n".join(list(diff)[:40]))
+
+
+def store_from_command_line(
+    path: Path, outputs: Callable[[Path], Cases], usage: str | None
+) -> None:
+    """``python tests/test_X_equality.py --store``: the outputs of today's code, made in a
+    temporary folder, become the stored copy (only on purpose, with the reason committed)."""
+    if sys.argv[1:] != ["--store"]:
+        raise SystemExit(usage)
+    with tempfile.TemporaryDirectory() as folder:
+        save(path, outputs(Path(folder)))

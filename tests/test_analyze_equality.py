@@ -25,7 +25,12 @@ if __name__ == "__main__":
 
 from analyzer.cli import main  # noqa: E402
 from tests.analysis_corpus import write_corpus  # noqa: E402
-from tests.stored_copy import assert_same, entry, load, save  # noqa: E402
+from tests.stored_copy import (  # noqa: E402
+    assert_same,
+    entry,
+    load,
+    store_from_command_line,
+)
 
 STORED = ROOT / "tests" / "data" / "analyze_json.json.gz"
 OPTIONS: dict[str, tuple[str, ...]] = {
@@ -80,14 +85,5 @@ def test_the_corpus_has_findings_of_every_verdict(current: dict[str, dict[str, s
     }  # fmt: skip
 
 
-def store() -> None:
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as folder:
-        save(STORED, outputs(Path(folder)))
-
-
 if __name__ == "__main__":
-    if sys.argv[1:] != ["--store"]:
-        raise SystemExit(__doc__)
-    store()
+    store_from_command_line(STORED, outputs, __doc__)

@@ -25,7 +25,12 @@ if __name__ == "__main__":
 
 from analyzer.cli import main  # noqa: E402
 from tests.fault_logs import CANDUMP_NAME, STREAM_NAME, write_fault_logs  # noqa: E402
-from tests.stored_copy import assert_same, entry, load, save  # noqa: E402
+from tests.stored_copy import (  # noqa: E402
+    assert_same,
+    entry,
+    load,
+    store_from_command_line,
+)
 
 STORED = ROOT / "tests" / "data" / "decode_json.json.gz"
 SAMPLES = ROOT / "samples"
@@ -100,14 +105,5 @@ def test_the_fault_logs_hold_every_kind_of_trouble(current: dict[str, dict[str, 
     assert len({e["raw"] for e in commands}) > 0.9 * len(commands)  # hardly any repeats
 
 
-def store() -> None:
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as folder:
-        save(STORED, outputs(Path(folder)))
-
-
 if __name__ == "__main__":
-    if sys.argv[1:] != ["--store"]:
-        raise SystemExit(__doc__)
-    store()
+    store_from_command_line(STORED, outputs, __doc__)
