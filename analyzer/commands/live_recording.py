@@ -129,8 +129,9 @@ def open_live_recording(
     from analyzer.live.attach import start_foxglove
     from analyzer.mcapio.write.sink import McapSink
 
-    live = start_foxglove(args)  # said on start, like the proxy's address
+    live: FoxgloveLive | None = None
     try:
+        live = start_foxglove(args)  # said on start, like the proxy's address
         sink = McapSink(
             path,
             metadata=metadata,
