@@ -45,6 +45,11 @@ class Batch:
     wall_time: float = 0.0
     # Frames read as runs (only when no sink keeps raw items): counted, never in ``items``.
     runs: list[FrameRun] = field(default_factory=list)
+    # The pipeline's counters once this batch is counted, and how many batches it
+    # delivered before this one: a sink that got every batch from the first may take the
+    # counters as its own instead of counting each batch a second time.
+    counted: Tally | None = None
+    sequence: int = 0
 
 
 class Sink(Protocol):
@@ -133,6 +138,7 @@ class Pipeline:
         self.lock = threading.Lock()
         self.failures: list[SinkFailure] = []
         self.batch = Batch()
+        self.delivered = 0  # batches handed to the sinks
         self.finished = False
         self.frame_runs = False  # the input may hold FrameRuns (set by ``run_items``)
 
@@ -169,6 +175,8 @@ class Pipeline:
         batch = self.batch
         self.batch = Batch()
         batch.wall_time = wall_time
+        batch.counted, batch.sequence = self.tally, self.delivered
+        self.delivered += 1
         events = batch.events
         for stage in self.stages:
             extra = stage.process(events)

@@ -54,11 +54,19 @@ class MessageWriter:
         self._registry = channels
         self._views = views
         self.tally = tally
+        self._shared = False  # ``tally`` is the pipeline's, which counts every batch
         self.items_written = 0
         self.events_written = 0
         self.messages_written = 0
         self.last_time: float | None = None
         self.dirty = False  # written since the last flush
+
+    def share_tally(self, tally: Tally) -> None:
+        """Take ``tally`` as this writer's counters, before anything is written: counters
+        that count every batch this writer gets (the pipeline's, from its first batch),
+        so that no batch is counted twice. Only for a writer no other thread reads."""
+        if self.messages_written == 0 and not self._shared:
+            self.tally, self._shared = tally, True
 
     def write_batch(self, items: list[RawItem], events: list[Event]) -> None:
         """Items and events of one batch, merged in time order (an item before its events)."""
@@ -68,16 +76,24 @@ class MessageWriter:
             self._put(events)
         else:
             self._put(sorted([*items, *events], key=_time_of))
-        self.tally.add_items(items)
-        self.tally.add_events(events)
+        if not self._shared:
+            self.tally.add_items(items)
+            self.tally.add_events(events)
 
     def write_items(self, items: list[RawItem]) -> None:
         self._put(items)
-        self.tally.add_items(items)
+        self._own_tally().add_items(items)
 
     def write_events(self, events: list[Event]) -> None:
         self._put(events)
-        self.tally.add_events(events)
+        self._own_tally().add_events(events)
+
+    def _own_tally(self) -> Tally:
+        """The counters to add a message written outside the batches to: a shared tally
+        is copied first (the pipeline never saw that message)."""
+        if self._shared:
+            self.tally, self._shared = self.tally.copy(), False
+        return self.tally
 
     def _put(self, messages: Sequence[RawItem | Event]) -> None:
         """Each raw item to its lossless channel, each event to its topic's channel (and its

@@ -93,7 +93,6 @@ class McapSink:
         self.error_reason: str | None = None  # just the reason ("No space left on device")
         self.kept_messages = 0  # after a write error: messages the file still holds
         self.kept_until: float | None = None  # ... and the newest log time among them
-        self.tally = Tally()  # the run's figures, written as a metadata record at the end
         self._schemas = default_schemas() if schemas is None else dict(schemas)
         self._views = FoxgloveViews() if foxglove_views else None
         self._tee = tee  # gets every channel and message written (the live server)
@@ -127,7 +126,7 @@ class McapSink:
             self._messages = MessageWriter(
                 self._writer,
                 self._channels,
-                self.tally,
+                Tally(),
                 self._views,
                 self._tee,
             )
@@ -153,6 +152,8 @@ class McapSink:
                 self._raise_pending()
                 return
             try:
+                if batch.sequence == 0 and batch.counted is not None and self._thread is None:
+                    self._messages.share_tally(batch.counted)  # counted once, not twice
                 self._messages.write_batch(batch.items, batch.events)
                 if (
                     self._flush_interval is not None
@@ -197,6 +198,13 @@ class McapSink:
         with self._lock:
             if self._views is not None:
                 self._views.scene.add_overlay(topic, width, height, stroked=stroked)
+
+    @property
+    def tally(self) -> Tally:
+        """The run's figures, written as a metadata record at the end: the pipeline's own
+        counters when this sink got every batch from the first and no flush thread reads
+        them (``handle``), else its own count of what it was given."""
+        return self._messages.tally
 
     @property
     def tee(self) -> MessageTee | None:
