@@ -29,7 +29,15 @@ from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.ids import ALTITUDE_ID, CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_uav_attitude
-from analyzer.scene.geometry import Quaternion, Vector, azimuth_elevation, multiply, rotate
+from analyzer.scene.geometry import (
+    Quaternion,
+    Vector,
+    azimuth_elevation,
+    gimbal_rotation,
+    multiply,
+    rotate,
+    yaw_pitch_roll,
+)
 from analyzer.scene.overlays import box_corners, overlay, text_place
 from analyzer.scene.scene3d import HFOV_1X_DEG, field_of_view
 from analyzer.scene.state import GimbalState
@@ -154,6 +162,14 @@ def test_the_gimbal_x_axis_points_where_the_feedback_says(
     right_wing = rotate(aircraft, Vector(0, -1, 0))
     roll = math.degrees(math.asin(-right_wing.z / math.cos(math.radians(uav_pitch))))
     assert abs(roll - uav_roll) < 0.5
+
+
+@given(azimuth=st.floats(-720, 720), elevation=st.floats(-180, 180))
+def test_the_gimbal_rotation_multiplied_out_is_the_product_of_its_turns(
+    azimuth: float, elevation: float
+) -> None:
+    product = yaw_pitch_roll(math.radians(-azimuth), math.radians(-elevation), 0.0)
+    assert gimbal_rotation(azimuth, elevation) == pytest.approx(product, abs=1e-12)
 
 
 @pytest.mark.parametrize(("heading", "motor_yaw", "pitch"), [(30, 20, -45), (300, -90, 10)])

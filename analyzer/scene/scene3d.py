@@ -40,20 +40,34 @@ def optical_frame(camera: str) -> str:
     return f"camera_{camera}"
 
 
+def _translation(at: Vector) -> dict[str, float]:
+    return {"x": round(at.x, 3), "y": round(at.y, 3), "z": round(at.z, 3)}
+
+
+def _rotation(q: Quaternion) -> dict[str, float]:
+    return {"x": round(q.x, 7), "y": round(q.y, 7), "z": round(q.z, 7), "w": round(q.w, 7)}
+
+
+# The parts that never change, made once (every feedback sends them; nobody edits them).
+_AT_ORIGIN = _translation(Vector(0.0, 0.0, 0.0))
+_UNDER_MOUNT = _translation(Vector(0.0, 0.0, -GIMBAL_DROP_M))
+_NOT_TURNED = _rotation(IDENTITY)
+_TO_OPTICAL = _rotation(OPTICAL)
+
+
 def _transform(
-    stamp: dict[str, int], parent: str, child: str, q: Quaternion, at: Vector
+    stamp: dict[str, int],
+    parent: str,
+    child: str,
+    rotation: dict[str, float],
+    translation: dict[str, float],
 ) -> dict[str, Any]:
     return {
         "timestamp": stamp,
         "parent_frame_id": parent,
         "child_frame_id": child,
-        "translation": {"x": round(at.x, 3), "y": round(at.y, 3), "z": round(at.z, 3)},
-        "rotation": {
-            "x": round(q.x, 7),
-            "y": round(q.y, 7),
-            "z": round(q.z, 7),
-            "w": round(q.w, 7),
-        },
+        "translation": translation,
+        "rotation": rotation,
     }
 
 
@@ -64,19 +78,17 @@ def frame_transforms(
     world -> aircraft (or world -> base without UAV status) -> gimbal -> optical frames."""
     if state.pitch_deg is None or state.motor_yaw_deg is None:
         return None
-    origin = Vector(0.0, 0.0, 0.0)
     if state.aircraft is not None:
         heading, pitch, roll = state.aircraft
         mount = AIRCRAFT
-        first = _transform(
-            stamp, WORLD, AIRCRAFT, aircraft_rotation(heading, pitch, roll), Vector(*state.position)
-        )
+        body = _rotation(aircraft_rotation(heading, pitch, roll))
+        first = _transform(stamp, WORLD, AIRCRAFT, body, _translation(Vector(*state.position)))
     else:
         mount = BASE
-        first = _transform(stamp, WORLD, BASE, IDENTITY, origin)
-    gimbal = gimbal_rotation(state.motor_yaw_deg, state.pitch_deg)
-    transforms = [first, _transform(stamp, mount, GIMBAL, gimbal, Vector(0.0, 0.0, -GIMBAL_DROP_M))]
-    transforms.extend(_transform(stamp, GIMBAL, f, OPTICAL, origin) for f in optical_frames)
+        first = _transform(stamp, WORLD, BASE, _NOT_TURNED, _AT_ORIGIN)
+    gimbal = _rotation(gimbal_rotation(state.motor_yaw_deg, state.pitch_deg))
+    transforms = [first, _transform(stamp, mount, GIMBAL, gimbal, _UNDER_MOUNT)]
+    transforms.extend(_transform(stamp, GIMBAL, f, _TO_OPTICAL, _AT_ORIGIN) for f in optical_frames)
     return {"transforms": transforms}
 
 
