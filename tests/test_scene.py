@@ -24,6 +24,7 @@ from analyzer.mcapio.foxglove import FoxgloveViews, view_schema
 from analyzer.mcapio.read.video import Thumbnail
 from analyzer.mcapio.scene_views import TOPIC_SCENE, TOPIC_TF
 from analyzer.protocol.codec import encode_command
+from analyzer.protocol.command_table import COMMANDS
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.ids import ALTITUDE_ID, CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
@@ -40,7 +41,7 @@ from analyzer.scene.geometry import (
 )
 from analyzer.scene.overlays import box_corners, overlay, text_place
 from analyzer.scene.scene3d import HFOV_1X_DEG, field_of_view
-from analyzer.scene.state import GimbalState
+from analyzer.scene.state import SCENE_COMMANDS, Box, GimbalState
 from analyzer.scene.stroke_font import GLYPHS, text_segments
 from analyzer.scene.timeline import OverlayTimeline
 
@@ -297,6 +298,25 @@ def test_the_tracking_box_is_drawn_on_the_stream_pixels_until_tracking_stops() -
     assert box_pixels(bench.last(ANNOTATIONS))[3] == pytest.approx(8080 / 8191 * 1080, abs=0.02)
     bench.command("tracking_stop")
     assert bench.last(ANNOTATIONS)["points"] == []
+
+
+def test_only_the_scene_commands_change_what_is_drawn() -> None:
+    """Every other command of the table is skipped by the views: none of them, with every
+    field a scene command reads, changes the state or gives a view."""
+    reads = {"x": 100, "y": 100, "width": 50, "height": 50, "x_pct": 10, "y_pct": 10}
+    reads |= {"action": "zoom_1x", "axis": "zoom", "zoom": 3.0}
+    names = {row.name for row in COMMANDS}
+    assert names >= SCENE_COMMANDS
+    for name in sorted(names - SCENE_COMMANDS):
+        state = GimbalState(zoom=2.0)
+        event = Event("/gimbal/command", 1.0, "can0", {"name": name, **reads})
+        assert state.observe(event) == ""
+        assert state == GimbalState(zoom=2.0), name
+        assert FoxgloveViews().views(event) == [], name
+    for name in sorted(SCENE_COMMANDS):  # each of them does change it, given its fields
+        state = GimbalState(zoom=2.0, box=Box(1, 1, 1, 1))
+        event = Event("/gimbal/command", 1.0, "can0", {"name": name, **reads})
+        assert state.observe(event) == "command", name
 
 
 def test_taps_are_marked_where_they_were_sent_for_a_while() -> None:

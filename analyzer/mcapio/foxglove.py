@@ -16,6 +16,7 @@ from analyzer.mcapio.scene_views import (
 from analyzer.protocol.types import (
     BUS_ERROR,
     LINK,
+    TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
     TOPIC_GIMBAL_RANGING,
     TOPIC_UAV_ALTITUDE,
@@ -23,6 +24,7 @@ from analyzer.protocol.types import (
     Event,
 )
 from analyzer.scene.state import INPUT_TOPICS as SCENE_INPUT_TOPICS
+from analyzer.scene.state import SCENE_COMMANDS
 
 LOCATION_FIX = "foxglove.LocationFix"
 LOG = "foxglove.Log"
@@ -215,6 +217,8 @@ class FoxgloveViews:
     def views(self, event: Event) -> list[tuple[str, dict[str, Any]]]:
         """(topic, message) pairs to publish for one event (most events give none)."""
         topic = event.topic
+        if topic == TOPIC_COMMAND and event.fields.get("name") not in SCENE_COMMANDS:
+            return []  # a command that changes nothing drawn: most of a busy bus's traffic
         out = self.scene.views(event)
         if topic == TOPIC_UAV_ALTITUDE:
             altitude = _number(event.fields.get("altitude_m"))

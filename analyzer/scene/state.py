@@ -40,6 +40,11 @@ INPUT_TOPICS = frozenset(
         TOPIC_UAV_GPS,
     }
 )
+# The commands that change what is drawn (``GimbalState._command``); any other command
+# changes nothing, and the views skip it without a look (most are gimbal_control).
+SCENE_COMMANDS = frozenset(
+    {"tracking", "tracking_stop", "tap_zoom", "tap_focus", "zoom_1x", "zoom", "specified_angle"}
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,7 +113,7 @@ class GimbalState:
             self.taps = [t for t in self.taps if event.time - t.time < TAP_SHOWN_S]
             return FEEDBACK
         if topic == TOPIC_COMMAND:
-            return COMMAND if self._command(event) else ""
+            return COMMAND if f.get("name") in SCENE_COMMANDS and self._command(event) else ""
         if topic == TOPIC_GIMBAL_RANGING:
             distance = _number(f.get("distance_m"))
             ok = f.get("success") is not False and distance is not None and distance > 0
