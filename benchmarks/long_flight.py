@@ -21,9 +21,10 @@ and prints, in the same run, the ratios the goals are about:
     2N frames <= 2.3x the time of N frames (time linear in the flight),
     peak memory at 2N frames <= 150 MB for analyze, convert, report; <= 350 MB for table.
 
-Each command runs ``--repeat`` times per file (default 2), the commands alternating, and
+Each command runs ``--repeat`` times per file (default 3), the commands alternating, and
 the fastest run counts: on a shared machine a run is only ever slowed down by other work,
-never sped up (the load average is printed with the figures). Peak memory is the
+never sped up (the load average is printed with the figures). Two runs were not enough:
+decode's own time moved by a fifth between them, and with it every ratio. Peak memory is the
 largest of the runs. The package's bytecode is compiled first, as ``pip install`` does.
 """
 
@@ -107,7 +108,7 @@ def main() -> int:
     parser.add_argument(
         "--only", default=",".join(COMMANDS[1:]), help="commands besides decode (comma-separated)"
     )
-    parser.add_argument("--repeat", type=int, default=2, help="runs per command and file")
+    parser.add_argument("--repeat", type=int, default=3, help="runs per command and file")
     args = parser.parse_args()
     wanted = ["decode", *[c for c in args.only.split(",") if c and c != "decode"]]
     for name in wanted:
