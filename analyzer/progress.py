@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
 import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from typing import IO, Protocol
 
 PROGRESS_INTERVAL_S = 0.2  # redrawn at most this often
@@ -15,6 +19,15 @@ class Sized(Protocol):
     source: str
     size_bytes: int | None
     position_bytes: int
+
+
+@dataclass
+class FileRead:
+    """A read of a file that no input reader does (a further pass over a recording)."""
+
+    source: str
+    size_bytes: int | None
+    position_bytes: int = 0
 
 
 class Progress:
@@ -73,6 +86,11 @@ class Progress:
         self.stream.flush()
         self.drawn = True
 
+    def read(self, position: int) -> None:
+        """A further pass (``FileRead``) got through ``position`` bytes: redraw."""
+        self.reader.position_bytes = position
+        self.update()
+
     def clear(self) -> None:
         if self.drawn:
             self.stream.write("\r\033[K")
@@ -85,3 +103,22 @@ def isatty(stream: IO[str] | None) -> bool:
         return stream is not None and bool(stream.isatty())
     except (AttributeError, ValueError):
         return False
+
+
+@contextlib.contextmanager
+def further_pass(
+    path: str, err: IO[str], *, quiet: bool = False, label: str = ""
+) -> Iterator[Callable[[int], None] | None]:
+    """The progress line of a further read of the file ``path`` (a second pass over a
+    recording): gives what to tell the bytes read so far, or None when no line shows
+    (as ``Progress.maybe``); the line is cleared at the end."""
+    try:
+        size: int | None = os.path.getsize(path)
+    except OSError:
+        size = None
+    progress = Progress.maybe(FileRead(path, size), err, quiet=quiet, label=label)
+    try:
+        yield None if progress is None else progress.read
+    finally:
+        if progress is not None:
+            progress.clear()

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
-    from analyzer.progress import Progress
+    from analyzer.progress import Progress, further_pass
     from analyzer.report import camera
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
@@ -82,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
 
         # The pictures show what Foxglove draws over them: the overlay at each picture's
         # moment is kept as the events go by (not the overlay of every feedback).
-        overlays = OverlayTimeline(thumbnail_times(args.file))
+        with further_pass(args.file, sys.stderr, quiet=args.quiet, label="camera times ") as read:
+            overlays = OverlayTimeline(thumbnail_times(args.file, read))
         if overlays.moments:
             sinks.append(EventsInto(overlays.add))
     # The same decoding and counting as every command; the analysis is a stage of it.
@@ -107,8 +108,9 @@ def run(args: argparse.Namespace) -> int:
         from analyzer.mcapio.read.video import read_thumbnails  # camera pictures
 
         shown = camera.shown_findings(data.findings.worst_first())
-        thumbnails = overlays.pictures(read_thumbnails(args.file))
-        pictures = camera.choose(thumbnails, data.first, data.last, shown)
+        with further_pass(args.file, sys.stderr, quiet=args.quiet, label="pictures ") as read:
+            thumbnails = overlays.pictures(read_thumbnails(args.file, read))
+            pictures = camera.choose(thumbnails, data.first, data.last, shown)
         if not pictures.count:
             pictures = None
         lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top

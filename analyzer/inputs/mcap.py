@@ -69,8 +69,12 @@ class McapReader(InputReader):
         )
 
     def __iter__(self) -> Iterator[InputItem]:
+        recording = getattr(self._items, "recording", None)
+        read = recording.position if recording is not None else None
         for item in self._items:
             self.items += 1
+            if read is not None:
+                self.position_bytes = read.bytes  # for the progress line
             if self.first_time is None:
                 self.first_time = item.time
             self.last_time = item.time

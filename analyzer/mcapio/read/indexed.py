@@ -20,7 +20,7 @@ from analyzer.mcapio.read.records import (
     walk,
 )
 from analyzer.mcapio.read.recover import Damage
-from analyzer.mcapio.read.stored_message import RawMessage
+from analyzer.mcapio.read.stored_message import RawMessage, ReadPosition
 
 _MESSAGE_HEAD = struct.Struct("<HIQ")  # channel id, sequence, log time
 
@@ -43,9 +43,11 @@ def read_indexed(
     data_end: int,
     chosen: dict[int, tuple[str, str]],
     damaged_chunks: set[int],
+    position: ReadPosition | None = None,
 ) -> Iterator[RawMessage | Damage]:
     """Messages of the ``chosen`` channels (id -> topic, role), reading only the chunks that
-    hold them; a damaged chunk is skipped, its offset added to ``damaged_chunks``."""
+    hold them; a damaged chunk is skipped, its offset added to ``damaged_chunks``.
+    ``position`` follows the end of the chunk read last."""
     indexes = [
         index
         for index in unique_chunk_indexes(summary)
@@ -53,6 +55,8 @@ def read_indexed(
     ]
     with open(path, "rb") as f:
         for index in indexes:
+            if position is not None:
+                position.bytes = index.chunk_start_offset + index.chunk_length
             try:
                 records = chunk_records(f, index, data_end)
                 found = [

@@ -22,6 +22,7 @@ from analyzer.mcapio.read.stored_message import (
     ChannelKind,
     MessageTally,
     RawMessage,
+    ReadPosition,
     channel_kind,
     channel_role,
     raw_item,
@@ -88,6 +89,7 @@ class Recording:
             self.damage.append(Damage(0, "the file's leading magic bytes are damaged"))
         self._damaged_chunks: set[int] = set()  # offsets of chunks already in ``damage``
         self._verified = False
+        self.position = ReadPosition()  # how far the current read has got, in bytes
 
     @property
     def recovery_note(self) -> str:
@@ -211,7 +213,9 @@ class Recording:
         }
         if not chosen:
             return
-        yield from read_indexed(self.path, summary, self._data_end(), chosen, self._damaged_chunks)
+        yield from read_indexed(
+            self.path, summary, self._data_end(), chosen, self._damaged_chunks, self.position
+        )
 
     def verify(self) -> list[Damage]:
         """Check every chunk of a finished file (the data section CRC first: when it matches,
@@ -257,6 +261,7 @@ class Recording:
             report,
             kinds_seen=self._kinds_seen,
             damage=self.damage,
+            position=self.position,
         )
 
     # -- typed views -----------------------------------------------------------------------------

@@ -11,6 +11,7 @@ from analyzer.mcapio.read.stored_message import (
     ChannelKind,
     MessageTally,
     RawMessage,
+    ReadPosition,
     channel_kind,
 )
 
@@ -25,16 +26,20 @@ def read_sequentially(
     *,
     kinds_seen: dict[str, ChannelKind],
     damage: list[Damage],
+    position: ReadPosition | None = None,
 ) -> Iterator[RawMessage | Damage]:
     """Messages of the wanted channels and the damaged parts, in file order.
 
     ``channels`` are the channel records known beforehand (from a summary); the others are
     learnt on the way. ``kinds_seen`` gets topic -> kind of every channel met;
-    ``damage`` is the list of damaged parts the caller keeps (already yielded ones included)."""
+    ``damage`` is the list of damaged parts the caller keeps (already yielded ones included);
+    ``position`` follows the end of the last record read whole."""
     scan = Scan(size, report, channels=channels)
     roles: dict[int, tuple[str, str, bool]] = {}  # channel id -> topic, role, wanted
     with open(path, "rb") as f:
         for entry in scan_records(f, scan):
+            if position is not None:
+                position.bytes = report.good_bytes
             if isinstance(entry, Damage):
                 yield entry
                 continue

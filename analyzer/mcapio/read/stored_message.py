@@ -31,6 +31,13 @@ MessageTally = Callable[[str, str, int], None]
 ChannelFilter = Callable[[str, str], bool]
 
 
+@dataclass(slots=True)
+class ReadPosition:
+    """How far a read of a recording has got in its file (bytes), for a progress line."""
+
+    bytes: int = 0
+
+
 @dataclass(frozen=True, slots=True)
 class RawMessage:
     """One message as stored: channel topic and role, log time (ns) and the JSON bytes."""

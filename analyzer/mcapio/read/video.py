@@ -6,7 +6,7 @@ import base64
 import itertools
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -58,14 +58,22 @@ class VideoSummary:
 
 
 def _camera_messages(
-    path: str | os.PathLike[str], roles: set[str], *, decode: bool = True
+    path: str | os.PathLike[str],
+    roles: set[str],
+    *,
+    decode: bool = True,
+    read: Callable[[int], None] | None = None,
 ) -> Iterator[_Message]:
     """The camera messages of a recording with their JSON, through the project's reader (a
     recording cut short by a full disk or ``kill -9`` is recovered like for every command).
-    Without ``decode`` their data is left out (empty)."""
+    Without ``decode`` their data is left out (empty). ``read`` is told how many bytes of
+    the file the read has got through, with each message (for a progress line)."""
     from analyzer.mcapio.read.reader import Recording
 
-    for message in Recording(path).messages(roles=roles):
+    recording = Recording(path)
+    for message in recording.messages(roles=roles):
+        if read is not None:
+            read(recording.position.bytes)
         try:
             obj = json.loads(message.data)
             stamp = obj["timestamp"]
@@ -141,16 +149,23 @@ class Thumbnail:
     jpeg: bytes
 
 
-def read_thumbnails(path: str | os.PathLike[str]) -> Iterator[Thumbnail]:
-    """The thumbnails of every camera stream, in file order (times: capture times)."""
-    for message in _camera_messages(path, {ROLE_THUMBNAIL}):
+def read_thumbnails(
+    path: str | os.PathLike[str], read: Callable[[int], None] | None = None
+) -> Iterator[Thumbnail]:
+    """The thumbnails of every camera stream, in file order (times: capture times);
+    ``read`` as for ``thumbnail_times``."""
+    for message in _camera_messages(path, {ROLE_THUMBNAIL}, read=read):
         name = message.topic.removeprefix(TOPIC_PREFIX).removesuffix("/thumbnail")
         yield Thumbnail(name, message.time, message.data)
 
 
-def thumbnail_times(path: str | os.PathLike[str]) -> list[float]:
-    """The times of every camera stream's thumbnails (those ``read_thumbnails`` gives)."""
-    return [message.time for message in _camera_messages(path, {ROLE_THUMBNAIL}, decode=False)]
+def thumbnail_times(
+    path: str | os.PathLike[str], read: Callable[[int], None] | None = None
+) -> list[float]:
+    """The times of every camera stream's thumbnails (those ``read_thumbnails`` gives);
+    ``read`` is told how many bytes of the file were read, with each thumbnail."""
+    messages = _camera_messages(path, {ROLE_THUMBNAIL}, decode=False, read=read)
+    return [message.time for message in messages]
 
 
 def video_lines(path: str | os.PathLike[str]) -> list[str]:
