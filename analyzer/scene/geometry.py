@@ -76,11 +76,12 @@ def gimbal_rotation(azimuth_deg: float, elevation_deg: float) -> Quaternion:
     """The gimbal's frame under its mount: x along the line of sight, turned ``azimuth_deg``
     clockwise seen from above (the yaw motor's angle) and raised ``elevation_deg`` (pitch).
 
-    ``yaw_pitch_roll`` without a roll, multiplied out: this runs with every feedback."""
+    ``yaw_pitch_roll`` without a roll, multiplied out (this runs with every feedback): the
+    very floats the products give, a zero as +0.0 as their sums make it."""
     half_yaw, half_pitch = math.radians(-azimuth_deg) / 2, math.radians(-elevation_deg) / 2
     sz, cz = math.sin(half_yaw), math.cos(half_yaw)
     sy, cy = math.sin(half_pitch), math.cos(half_pitch)
-    return Quaternion(-sz * sy, cz * sy, sz * cy, cz * cy)
+    return Quaternion(-sz * sy + 0.0, cz * sy + 0.0, sz * cy + 0.0, cz * cy)
 
 
 def azimuth_elevation(v: Vector) -> tuple[float, float]:
