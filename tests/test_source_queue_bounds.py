@@ -81,14 +81,17 @@ def test_bytes_are_bounded_as_well_as_items() -> None:
 
 
 class HeldSink:
-    """Holds the capture's first batch until released, as a slow disk would."""
+    """Holds the capture's first batch until released, as a slow disk would; ``holding``
+    is set once it holds one."""
 
     def __init__(self) -> None:
         self.release = threading.Event()
+        self.holding = threading.Event()
         self.events: list[Event] = []
         self.data = 0
 
     def handle(self, batch: Batch) -> None:
+        self.holding.set()
         self.release.wait(DEADLINE_S)
         self.events.extend(batch.events)
         self.data += sum(len(i.data) for i in batch.items)
@@ -104,18 +107,24 @@ def test_a_burst_from_the_idu_is_bounded_and_every_byte_is_accounted_for(
     server = socket.create_server(("127.0.0.1", 0))
     port = server.getsockname()[1]
     total = 8 * 1024 * 1024
+    first = 16
     sent = threading.Event()
+    sink = HeldSink()
 
     def idu() -> None:
         conn, _ = server.accept()
         with conn:
-            conn.sendall(bytes(total))
+            # A first few bytes, then the burst once the capture is stuck in the slow
+            # sink: sent at once, a fast capture could take it all into its first batch
+            # before any queue filled up, and nothing would be dropped.
+            conn.sendall(bytes(first))
+            sink.holding.wait(DEADLINE_S)
+            conn.sendall(bytes(total - first))
             sent.wait(DEADLINE_S)  # keep the link up until the test has looked
 
     thread = threading.Thread(target=idu, daemon=True)
     thread.start()
     source = TcpClientSource("127.0.0.1", port)
-    sink = HeldSink()
     capture = Capture(source, [sink], batch_interval=0.02)
     capture.start()
     deadline = time.monotonic() + DEADLINE_S
