@@ -109,6 +109,13 @@ def cli(*args: str) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+def cli_output(*args: str) -> str:
+    """What a command that must succeed prints on standard output."""
+    code, out, err = cli(*args)
+    assert code == 0, err
+    return out
+
+
 def built_fleet(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The fleet above in two `table` runs (A with one worker, B with two), for a fixture."""
     root = tmp_path_factory.mktemp("fleet")

@@ -17,7 +17,7 @@ import pytest
 
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.tally import GAP_PERIODS, lost_messages
-from tests.fleet_flights import cli as fleet_cli
+from tests.fleet_flights import cli_output as cli
 
 T0 = 1_700_000_000.0
 PERIOD = 0.5
@@ -55,12 +55,6 @@ def write_log(path: Path, times: list[float]) -> Path:
             lines.append(f"({t:.6f}) can0 030F0001#{part.hex().upper()}")
     path.write_text("\n".join(lines) + "\n")
     return path
-
-
-def cli(*args: str) -> str:
-    code, out, err = fleet_cli(*args)
-    assert code == 0, err
-    return out
 
 
 @pytest.fixture(scope="module")

@@ -11,15 +11,9 @@ from typing import Any
 import pytest
 
 from tests.analysis_corpus import write_corpus
-from tests.fleet_flights import cli as fleet_cli
+from tests.fleet_flights import cli_output as cli
 
 NUMBER = r"(-?\d+\.\d)"
-
-
-def cli(*args: str) -> str:
-    code, out, err = fleet_cli(*args)
-    assert code == 0, err
-    return out
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ separate processes on 127.0.0.1, started and stopped by the test."""
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
 import re
@@ -22,10 +21,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from analyzer.cli import main
 from analyzer.fleet.columns import TABLES
 from analyzer.fleet.dataset import Dataset
-from tests.fleet_flights import make_fleet
+from tests.fleet_flights import cli, make_fleet
 
 distributed = pytest.importorskip("distributed")  # pip install '.[cluster]' (the test extra has it)
 
@@ -130,13 +128,6 @@ def wait_for_port(port: int, process: subprocess.Popen[bytes]) -> None:
                 return
         time.sleep(0.1)
     pytest.fail(f"the scheduler did not listen on port {port} within {START_TIMEOUT_S} s")
-
-
-def cli(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
 
 
 def dataset_tables(dataset: Path) -> dict[str, pa.Table]:
