@@ -303,9 +303,7 @@ class Recording:
                 if item is not None:
                     yield item
                 elif isinstance(obj, dict) and obj.get("kind") in SOURCE_KINDS:
-                    obj.setdefault("topic", entry.topic)
-                    obj.setdefault("time", entry.log_time / 1e9)
-                    yield Event.from_dict(obj)
+                    yield _stored_event(entry, obj)
             except (ValueError, KeyError, TypeError):
                 continue
         yield from self._unread_damage(last)
@@ -325,11 +323,8 @@ class Recording:
             last = entry.log_time
             try:
                 obj = json.loads(entry.data)
-                if not isinstance(obj, dict):
-                    continue
-                obj.setdefault("topic", entry.topic)
-                obj.setdefault("time", entry.log_time / 1e9)
-                yield Event.from_dict(obj)
+                if isinstance(obj, dict):
+                    yield _stored_event(entry, obj)
             except (ValueError, KeyError, TypeError):
                 continue
         yield from self._unread_damage(last)
@@ -337,6 +332,14 @@ class Recording:
     def _damage_event(self, damage: Damage, last: int) -> Event:
         when = (damage.log_time or last) / 1e9
         return diagnostic(when, self.path, INCOMPLETE, f"damaged recording: {damage.detail}")
+
+
+def _stored_event(entry: RawMessage, obj: dict[str, Any]) -> Event:
+    """The event a message holds; one without a topic or time takes its channel's topic
+    and its log time (ValueError / KeyError / TypeError when it is not an event)."""
+    obj.setdefault("topic", entry.topic)
+    obj.setdefault("time", entry.log_time / 1e9)
+    return Event.from_dict(obj)
 
 
 def _raw_or_ros(topic: str, role: str) -> bool:
