@@ -39,11 +39,12 @@ UI on a terminal (q quits), plain decoded lines otherwise or with --no-tui
 
 The simulator injects a few faults by default (dropped, corrupted, repeated and
 late feedback segments) so the diagnostics have something to show; --clean
-turns them off. --sluggish, --fall-short, --ignore, --drift and
+turns them off. --sluggish, --fall-short, --ignore, --drift, --lag and
 --geodetic-as-airframe make a gimbal that does not always obey, for
 `gimbal-analyzer analyze` and `report` to find. --heading 30 keeps the
 aircraft's nose at 30 deg while it flies, so the gimbal's yaw from north
-(psi) is 30 deg more than its yaw motor angle. Afterwards:
+(psi) is 30 deg more than its yaw motor angle. --stick makes the ground
+station drive the gimbal like a pilot's stick. Afterwards:
 
   gimbal-analyzer info demo.mcap       what was recorded, and the simulator's options
   gimbal-analyzer report demo.mcap     did the gimbal obey? (an HTML page)
@@ -94,6 +95,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_foxglove_options(parser)
     add_video_options(parser)  # a camera on the bench recorded next to the simulated gimbal
     first = len(parser._actions)
+    parser.add_argument(
+        "--stick",
+        action="store_true",
+        help="the ground station drives like a pilot: gimbal_control from a stick every "
+        "50 ms, smooth movements whose speeds change in every command (with an analog "
+        "stick's jitter), zeros while the stick is centred",
+    )
     add_heading_argument(parser, uav_always=True)
     faults = len(parser._actions)
     add_fault_arguments(parser)
@@ -223,6 +231,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.output_file import check_output
     from analyzer.sim.engine import SimConfig
     from analyzer.sim.faults import FaultConfig
+    from analyzer.sim.ground import GroundScript, pilot_script
     from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
@@ -270,7 +279,8 @@ def run(args: argparse.Namespace) -> int:
     )
     capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
     try:
-        scene = Scene(spec, config)
+        script = GroundScript(pilot_script()) if args.stick else None
+        scene = Scene(spec, config, script=script)
     except BaseException:
         source.close()
         sink.close()

@@ -147,6 +147,13 @@ def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
         help="keep turning S seconds after gimbal_control commands stop",
     )
     group.add_argument(
+        "--lag",
+        type=seconds_value,
+        default=0.0,
+        metavar="S",
+        help="act on every command S seconds after it came (e.g. 0.3)",
+    )
+    group.add_argument(
         "--geodetic-as-airframe",
         action="store_true",
         help="take specified_angle yaw targets of the geodetic frame (DATA4 not 1) from the "
@@ -168,6 +175,7 @@ def behaviour(args: argparse.Namespace) -> Behaviour:
         ignore=frozenset(args.ignore),
         drift_s=args.drift,
         geodetic_as_airframe=args.geodetic_as_airframe,
+        lag_s=args.lag,
     )
 
 

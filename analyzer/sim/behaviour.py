@@ -1,4 +1,4 @@
-"""How the simulated gimbal disobeys: sluggish, short, ignoring, drifting, wrong yaw frame."""
+"""How the simulated gimbal disobeys: sluggish, short, ignoring, drifting, late, wrong yaw frame."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ class Behaviour:
     ignore: frozenset[str] = frozenset()  # command names it does not act on
     drift_s: float = 0.0  # keeps turning this much longer after gimbal_control stops
     geodetic_as_airframe: bool = False  # takes geodetic yaw targets from the airframe's nose
+    lag_s: float = 0.0  # acts on each command this much later than it came
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.speed <= 10.0:
@@ -22,6 +23,8 @@ class Behaviour:
             raise ValueError(f"reach {self.reach}: must be between 0 and 1")
         if self.drift_s < 0:
             raise ValueError(f"drift {self.drift_s} s: must not be negative")
+        if not 0.0 <= self.lag_s <= 10.0:
+            raise ValueError(f"lag {self.lag_s} s: must be between 0 and 10")
 
     @property
     def active(self) -> bool:
@@ -39,4 +42,6 @@ class Behaviour:
             parts.append(f"keeps turning {self.drift_s:g} s after gimbal_control stops")
         if self.geodetic_as_airframe:
             parts.append("takes geodetic yaw targets from the airframe's nose")
+        if self.lag_s:
+            parts.append(f"acts on each command {self.lag_s:g} s late")
         return "; ".join(parts) or "obeys"

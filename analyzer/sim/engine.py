@@ -68,12 +68,19 @@ class SimulatedGimbal:
         self._feedback_clear = start  # segments leave in order: none before this time
         self._next_attitude = start
         self._next_ranging = start + self.config.feedback_period  # the second slot
+        self._late: list[tuple[float, int, dict[str, Any]]] = []  # commands acted on later
 
     # -- input -----------------------------------------------------------------------------
 
     def handle(self, event: Event, now: float) -> bool:
         """Act on one decoded event; True when it was a command the gimbal acted on."""
         if event.topic == TOPIC_COMMAND:
+            lag = self.config.behaviour.lag_s
+            if lag:
+                name = str(event.fields.get("name"))
+                heapq.heappush(self._late, (now + lag, self._seq, event.fields))
+                self._seq += 1
+                return name not in self.config.behaviour.ignore
             return self.model.apply(event.fields, now)
         if self.uav is None:
             for attribute, name in _UAV_FIELDS.get(event.topic, ()):
@@ -90,10 +97,15 @@ class SimulatedGimbal:
             times.append(self.uav.next_time())
         if self._queue:
             times.append(self._queue[0][0])
+        if self._late:
+            times.append(self._late[0][0])
         return min(times)
 
     def poll(self, now: float) -> list[tuple[int, bytes]]:
         model = self.model
+        while self._late and self._late[0][0] <= now:
+            when, _, fields = heapq.heappop(self._late)
+            model.apply(fields, when)
         if self.uav is not None:
             model.uav = self.uav.pose(now)
             for can_id, data in self.uav.due(now):

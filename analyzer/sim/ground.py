@@ -10,6 +10,7 @@ from typing import Any
 
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.ids import CONTROL_ID
+from analyzer.sim.pilot import Stick
 from analyzer.sim.transports import Link
 
 REPEAT_S = 0.05  # gimbal_control is repeated every 50 ms, as the document recommends
@@ -18,15 +19,35 @@ EPSILON = 1e-6  # times are sums of floats: compare with a little slack
 
 @dataclass(frozen=True)
 class Step:
-    """Send command ``name`` at ``at`` seconds; with ``until``, repeat it every 50 ms."""
+    """Send command ``name`` at ``at`` seconds; with ``until``, repeat it every 50 ms.
+
+    With ``stick`` (a gimbal_control), the speeds are a pilot's stick movement from ``at``
+    to ``until`` instead of ``params``' fixed ones, followed by the stick's centred time
+    with 0, 0 sent; ``params`` may still name the ``component``."""
 
     at: float
     name: str
     params: dict[str, Any] = field(default_factory=dict)
     until: float | None = None
+    stick: Stick | None = None
 
     def data(self) -> bytes:
-        return encode_command(self.name, **self.params)
+        return self.data_at(self.at)
+
+    def data_at(self, t: float) -> bytes:
+        """The command's bytes when sent at ``t`` seconds (a stick's speeds change)."""
+        stick = self.stick
+        if stick is None or self.until is None:
+            return encode_command(self.name, **self.params)
+        pan, tilt = stick.speeds(t - self.at, self.until - self.at)
+        return encode_command(self.name, **self.params, pan_speed_dps=pan, tilt_speed_dps=tilt)
+
+    @property
+    def stream_end(self) -> float | None:
+        """When its repeats end: ``until``, and a stick's centred time after it."""
+        if self.until is None:
+            return None
+        return self.until + (self.stick.centred_s if self.stick is not None else 0.0)
 
 
 DEMO_SCRIPT: tuple[Step, ...] = (
@@ -49,6 +70,24 @@ DEMO_SCRIPT: tuple[Step, ...] = (
     Step(13.0, "forward"),
 )
 DEMO_PERIOD = 15.0  # the script starts over after this many seconds
+STICK_PEAK = 1.3  # a stick movement peaks above the speed a fixed step asks (its mean is less)
+STICK_CENTRED_S = 0.15  # zeros sent after each movement (before the next command comes)
+
+
+def pilot_script(steps: tuple[Step, ...] = DEMO_SCRIPT) -> tuple[Step, ...]:
+    """``steps`` with each repeated gimbal_control played on a pilot's stick: the same
+    direction and time, smooth with a reading's noise, speeds changing in every command,
+    and a short centred stretch of zeros after it."""
+    out: list[Step] = []
+    for n, step in enumerate(steps):
+        if step.name == "gimbal_control" and step.until is not None and step.stick is None:
+            params = dict(step.params)
+            pan = float(params.pop("pan_speed_dps", 0.0)) * STICK_PEAK
+            tilt = float(params.pop("tilt_speed_dps", 0.0)) * STICK_PEAK
+            stick = Stick(pan, tilt, centred_s=STICK_CENTRED_S, seed=n)
+            step = Step(step.at, step.name, params, until=step.until, stick=stick)
+        out.append(step)
+    return tuple(out)
 
 
 class GroundScript:
@@ -60,7 +99,8 @@ class GroundScript:
         self._data = [s.data() for s in self.steps]
         self._round = 0
         self._index = 0
-        self._repeat: list[tuple[float, float, bytes]] = []  # (next time, until, data)
+        # (next time, until, the round's start, the step's index) of the steps repeating
+        self._repeat: list[tuple[float, float, float, int]] = []
 
     def due(self, elapsed: float) -> list[bytes]:
         out: list[bytes] = []
@@ -76,24 +116,26 @@ class GroundScript:
             if base + step.at > elapsed + EPSILON:
                 break
             out.append(self._data[self._index])
-            if step.until is not None:
+            end = step.stream_end
+            if end is not None:
                 start = base + step.at
-                self._repeat.append((start + REPEAT_S, base + step.until, self._data[self._index]))
+                self._repeat.append((start + REPEAT_S, base + end, base, self._index))
             self._index += 1
-        still: list[tuple[float, float, bytes]] = []
-        for when, until, data in self._repeat:
+        still: list[tuple[float, float, float, int]] = []
+        for when, until, base, index in self._repeat:
             if when <= elapsed + EPSILON and when <= until + EPSILON:
-                out.append(data)
+                step = self.steps[index]
+                out.append(self._data[index] if step.stick is None else step.data_at(when - base))
                 when = max(when + REPEAT_S, elapsed)
             if when <= until + EPSILON:
-                still.append((when, until, data))
+                still.append((when, until, base, index))
         self._repeat = still
         return out
 
     def next_due(self, elapsed: float) -> float:
         """Seconds until the next frame could be due (at most one repeat interval)."""
         if self._repeat:
-            return max(0.0, min(w for w, _, _ in self._repeat) - elapsed)
+            return max(0.0, min(r[0] for r in self._repeat) - elapsed)
         return REPEAT_S
 
 
