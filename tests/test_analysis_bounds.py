@@ -27,10 +27,33 @@ def command(t: float, name: str, **fields: object) -> Event:
     return Event(TOPIC_COMMAND, t, "can0", {"name": name, **fields})
 
 
-def flight(seconds: float, every: int, seed: int = 1) -> list[Event]:
-    """A moving gimbal, a pilot's stick at random speeds 9 times per feedback message and,
-    every ``every`` messages, a target command (specified_angle, look_down or tracking)."""
+class Pilot:
+    """A pilot's stick: movements of 0.5 to 3 s at random peak speeds (the values change in
+    every command), then 0.5 to 2 s centred, the ground station sending zeros."""
+
+    def __init__(self, rng: random.Random) -> None:
+        self.rng = rng
+        self.until = 0.0
+        self.centred = True
+        self.peak = (0.0, 0.0)
+
+    def speeds(self, t: float) -> tuple[float, float]:
+        rng = self.rng
+        if t >= self.until:
+            self.centred = not self.centred
+            self.until = t + (rng.uniform(0.5, 2) if self.centred else rng.uniform(0.5, 3))
+            self.peak = (rng.uniform(-60, 60), rng.uniform(-60, 60))
+        if self.centred:
+            return 0.0, 0.0
+        return tuple(p + rng.gauss(0, 0.03) for p in self.peak)  # type: ignore[return-value]
+
+
+def flight(seconds: float, every: int, seed: int = 1, pilot: bool = True) -> list[Event]:
+    """A moving gimbal, a pilot's stick 9 times per feedback message (``pilot``; else the
+    stick held off centre at random speeds all the time) and, every ``every`` messages, a
+    target command (specified_angle, look_down or tracking)."""
     rng = random.Random(seed)
+    stick = Pilot(random.Random(seed + 1))
     events: list[Event] = []
     pitch, yaw = -30.0, 180.0
     targets = [
@@ -46,7 +69,10 @@ def flight(seconds: float, every: int, seed: int = 1) -> list[Event]:
         yaw = (yaw + rng.uniform(-5, 5)) % 360
         events.append(attitude(t, pitch, yaw))
         for k in range(9):
-            pan, tilt = rng.uniform(-100, 100), rng.uniform(-100, 100)
+            if pilot:
+                pan, tilt = stick.speeds(t + 0.001 * (k + 1))
+            else:
+                pan, tilt = rng.uniform(-100, 100), rng.uniform(-100, 100)
             events.append(
                 command(
                     t + 0.001 * (k + 1), "gimbal_control", pan_speed_dps=pan, tilt_speed_dps=tilt
@@ -75,10 +101,29 @@ def test_samples_examined_per_command_do_not_grow_with_the_flight() -> None:
         analyzer, kept = run(events)
         commands = sum(1 for e in events if e.topic == TOPIC_COMMAND)
         per_command.append(analyzer.samples.examined / commands)
-        assert kept <= 8  # each stick command ends the one before: hardly anything pending
+        # A movement (3 s at most) and its watch after it (2.5 s): never the flight.
+        assert kept <= 7 * FEEDBACK_HZ
     # A scan of the kept history would examine thousands of samples per command.
-    assert max(per_command) <= 6
+    assert max(per_command) <= 1
     assert per_command[1] <= per_command[0] * 1.2
+
+
+def test_a_stick_held_off_centre_all_flight_is_judged_a_minute_at_a_time() -> None:
+    """No movement is kept open without end: one held for the whole flight is judged in
+    pieces of MAX_MOVEMENT_S, so the samples and commands kept stay bounded."""
+    from analyzer.analysis.streams import MAX_MOVEMENT_S
+
+    for seconds in (70.0, 190.0):
+        events = flight(seconds, every=0, pilot=False)
+        analyzer = ResponseAnalyzer()
+        kept = 0
+        rates = []
+        for event in events:
+            rates += [f for f in analyzer.feed(event) if f.fields["check"] == "rate"]
+            kept = max(kept, len(analyzer.samples))
+        rates += [f for f in analyzer.close() if f.fields["check"] == "rate"]
+        assert len(rates) == int(seconds // MAX_MOVEMENT_S) + 1
+        assert kept <= (MAX_MOVEMENT_S + 3) * FEEDBACK_HZ
 
 
 def test_target_commands_look_only_at_their_time_allowed() -> None:

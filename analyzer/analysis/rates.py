@@ -1,9 +1,8 @@
-"""gimbal_control bursts: measured against commanded rate, stop when commands stop, repeats."""
+"""A stick movement judged: its commanded motion against the feedback, its cadence, the stop."""
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -17,160 +16,132 @@ from analyzer.analysis.findings import (
     Finding,
     worst,
 )
+from analyzer.analysis.motion_fit import AxisFit, CommandedMotion, fit
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
+from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, Movement
 
-RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
-SLOW_REPEAT_S = 2 * RECOMMENDED_REPEAT_S  # mean interval above this is "too slowly"
+RATE_OK = (0.75, 1.33)  # measured / commanded motion within this range: obeyed
+RATE_NONE = 0.1  # below this (or negative): it did not follow
+LATE_S = 0.25  # a lag this long is said
+NAME = "gimbal_control"
+# (word, feedback axis, index in the commanded motion, finding key)
+AXES = (("pan", MOTOR_YAW, 0, "pan"), ("tilt", PITCH, 1, "tilt"))
 _SENT_ONCE = (
     "sent once, not repeated: the gimbal stops when the commands stop "
     f"(the document recommends repeating every {RECOMMENDED_REPEAT_S * 1000:.0f} ms)"
 )
-BURST_GAP_S = 1.0  # commands further apart than this are separate bursts
-RATE_OK = (0.75, 1.33)  # measured / commanded within this range: obeyed
-RATE_NONE = 0.1  # below this (or negative): it did not follow
-MIN_SPAN_S = 0.4  # the feedback used to measure a rate must span at least this long
-_NOT_MEASURABLE = (
-    f" not measurable: fewer than two feedback messages {MIN_SPAN_S:g} s apart while the "
-    "commands lasted"
-)
-SAME_SPEED = 0.005  # deg/s: speeds that differ less are the same command repeated
 
 
-@dataclass
-class Burst:
-    """gimbal_control commands with the same speeds, repeated without a long pause.
+def judge_movement(
+    movement: Movement, before: Sample | None, inside: list[Sample], min_motion: float
+) -> Finding:
+    """The movement's commanded motion against the motion the feedback shows.
 
-    Only what the judgements need is kept of the commands (first and last time, count,
-    sum and longest of the intervals), so a burst held for an hour takes no more room."""
-
-    name: str
-    pan: float
-    tilt: float
-    start: float
-    last: float = field(init=False)
-    count: int = 1
-    interval_sum: float = 0.0  # summed in order, as sum() of the intervals would be
-    interval_max: float = 0.0
-    stopped_at: float | None = None  # an explicit zero-speed command
-
-    def __post_init__(self) -> None:
-        self.last = self.start
-
-    def add(self, t: float) -> None:
-        """One more command of the burst, at ``t``."""
-        interval = t - self.last
-        self.interval_sum += interval
-        self.interval_max = interval if self.count == 1 else max(self.interval_max, interval)
-        self.count += 1
-        self.last = t
-
-    @property
-    def end(self) -> float:
-        """When the commands stopped: the explicit stop, else the last command."""
-        return self.stopped_at if self.stopped_at is not None else self.last
-
-    def same_speeds(self, pan: float, tilt: float) -> bool:
-        return abs(pan - self.pan) < SAME_SPEED and abs(tilt - self.tilt) < SAME_SPEED
-
-
-def _slope(samples: list[Sample], axis: str) -> float:
-    n = len(samples)
-    mean_t = sum(s.time for s in samples) / n
-    mean_v = sum(s.value(axis) for s in samples) / n
-    num = sum((s.time - mean_t) * (s.value(axis) - mean_v) for s in samples)
-    den = sum((s.time - mean_t) ** 2 for s in samples)
-    return num / den if den > 0 else 0.0
-
-
-def _measure(
-    burst: Burst, axis: str, before: Sample | None, inside: list[Sample]
-) -> tuple[float | None, float | None, float | None]:
-    """(measured rate, lag, limit reached) of one axis from the samples during the burst."""
-    limit = None
-    usable: list[Sample] = []
-    for s in inside:
-        limit = s.at_limit(axis)
-        if limit is not None:
-            break
-        usable.append(s)
-    if not usable:
-        return None, None, limit
-    if len(usable) < 2 or usable[-1].time - usable[0].time < MIN_SPAN_S:
-        # One message cannot tell movement from lag; two close together (a late segment)
-        # make the slope meaningless.
-        return None, None, limit
-    rate = _slope(usable, axis)
-    lag = None
-    if before is not None and abs(rate) > 1e-6 and len(usable) >= 2:
-        moved = usable[-1].value(axis) - before.value(axis)
-        span = usable[-1].time - burst.start
-        lag = max(0.0, min(span, span - moved / rate))
-    return rate, lag, limit
-
-
-def judge_rate(burst: Burst, before: Sample | None, inside: list[Sample]) -> Finding:
-    """Measured rate of each commanded axis against the commanded speed."""
+    ``before`` is the last attitude sample before the movement, ``inside`` those up to
+    its window's end; an axis counts as commanded when the commands asked it to turn by
+    more than ``min_motion`` degrees (the tolerance; both ways counted)."""
+    end = movement.end if movement.end is not None else movement.last + HOLD_S
+    motion = CommandedMotion(movement.commands, HOLD_S)
+    asked = motion.at(end)
+    duration = max(end - movement.start, 1e-9)
+    path = motion.path(movement.start, end)
     extra: dict[str, Any] = {
-        "commanded_pan_dps": burst.pan,
-        "commanded_tilt_dps": burst.tilt,
-        "duration_s": burst.last - burst.start,
-        "command_count": burst.count,
+        "component": movement.component,
+        "command_count": movement.count,
+        "duration_s": end - movement.start,
+        "interval_mean_s": movement.interval_mean,
+        "interval_max_s": movement.interval_max if movement.count > 1 else None,
     }
+    points = ([before] if before is not None else []) + inside
+    series: dict[int, list[tuple[float, float]]] = {}
+    limits: dict[int, float | None] = {}
+    commanded: list[tuple[str, str, int, str]] = []
+    for word, axis, index, key in AXES:
+        if path[index] <= min_motion:
+            continue
+        commanded.append((word, axis, index, key))
+        extra[f"commanded_{key}_dps"] = asked[index] / duration
+        extra[f"peak_{key}_dps"] = movement.peak_pan if index == 0 else movement.peak_tilt
+        usable, limits[index] = _until_limit(points, axis)
+        series[index] = [(s.time, s.value(axis)) for s in usable]
+    if points:
+        extra["observed_at"] = points[-1].time
+    if not commanded:
+        text = (
+            f"too little commanded motion to measure: {max(path):.1f} deg over "
+            f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
+        )
+        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+    found = fit(motion, {i: p for i, p in series.items() if len(p) >= 2})
     verdicts: list[str] = []
     texts: list[str] = []
     ratios: list[float] = []
-    lags: list[float] = []
-    for axis, word, commanded, key in (
-        (MOTOR_YAW, "pan", burst.pan, "measured_pan_dps"),
-        (PITCH, "tilt", burst.tilt, "measured_tilt_dps"),
-    ):
-        if abs(commanded) < SAME_SPEED:
-            continue
-        rate, lag, limit = _measure(burst, axis, before, inside)
-        if rate is None:
+    for word, _, index, key in commanded:
+        axis_fit = found.axes.get(index) if found is not None else None
+        limit = limits[index]
+        if axis_fit is None:
             if limit is not None:
                 verdicts.append(OBEYED)
                 texts.append(f"{word} turned until its limit {limit:.1f}")
             else:
                 verdicts.append(UNKNOWN)
-                texts.append(f"{word}{_NOT_MEASURABLE}")
+                texts.append(f"{word} not measurable: {_too_few(movement, len(series[index]))}")
             continue
-        extra[key] = rate
-        ratio = rate / commanded
-        ratios.append(ratio)
-        if lag is not None:
-            lags.append(lag)
-        said = f"{word} {rate:.1f} deg/s for {commanded:.1f} commanded ({ratio * 100:.0f} %)"
-        if ratio < 0:
-            verdicts.append(NOT_OBEYED)
-            said += ", the wrong way"
-        elif ratio < RATE_NONE:
-            verdicts.append(NOT_OBEYED)
-            said += ", it hardly moved"
-        elif ratio < RATE_OK[0]:
-            verdicts.append(PARTIAL)
-            said += ", sluggish"
-        elif ratio > RATE_OK[1]:
-            verdicts.append(PARTIAL)
-            said += ", too fast"
-        else:
-            verdicts.append(OBEYED)
+        verdict, said = _axis_verdict(word, axis_fit)
+        ratios.append(axis_fit.ratio)
+        extra[f"{key}_ratio"] = axis_fit.ratio
+        extra[f"measured_{key}_dps"] = axis_fit.ratio * asked[index] / duration + 0.0
         if limit is not None:
             said += f", then at its limit {limit:.1f}"
+        verdicts.append(verdict)
         texts.append(said)
     if ratios:
         extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
-    if lags:
-        extra["lag_s"] = max(lags)
-        if max(lags) >= 0.25:
-            texts.append(f"it started about {max(lags):.1f} s late")
-    verdict = worst(*verdicts) if verdicts else UNKNOWN
-    detail = "; ".join(texts) if texts else "no speed commanded"
-    return Finding(burst.name, burst.start, CHECK_RATE, verdict, detail, extra)
+    if found is not None and any(abs(r) >= RATE_NONE for r in ratios):
+        extra["lag_s"] = found.lag_s
+        if found.lag_s >= LATE_S:
+            texts.append(f"it followed about {found.lag_s:.1f} s late")
+    if movement.cut_short and UNKNOWN in verdicts:
+        texts.append(f"until {movement.cut_short}")
+    verdict = worst(*verdicts)
+    return Finding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
 
 
-def judge_stop(burst: Burst, after: list[Sample], tolerance: float) -> Finding | None:
-    """Still moving after the commands stopped? None when too few samples show it."""
+def _until_limit(points: list[Sample], axis: str) -> tuple[list[Sample], float | None]:
+    """The samples before the first one at a limit of ``axis``, and that limit."""
+    for n, s in enumerate(points):
+        limit = s.at_limit(axis)
+        if limit is not None:
+            return points[:n], limit
+    return points, None
+
+
+def _too_few(movement: Movement, count: int) -> str:
+    what = f"{count} attitude message{'s' if count != 1 else ''} from just before it"
+    until = f"until {movement.cut_short}" if movement.cut_short else "to after it"
+    return f"{what} {until} (two are needed)"
+
+
+def _axis_verdict(word: str, axis_fit: AxisFit) -> tuple[str, str]:
+    ratio = axis_fit.ratio
+    said = (
+        f"{word} turned {axis_fit.measured_deg:.1f} deg for {axis_fit.commanded_deg:.1f} "
+        f"commanded ({ratio * 100:.0f} % by the fit over {axis_fit.intervals} feedback "
+        f"interval{'s' if axis_fit.intervals != 1 else ''})"
+    )
+    if ratio < 0:
+        return NOT_OBEYED, said + ", the wrong way"
+    if ratio < RATE_NONE:
+        return NOT_OBEYED, said + ", it hardly moved"
+    if ratio < RATE_OK[0]:
+        return PARTIAL, said + ", sluggish"
+    if ratio > RATE_OK[1]:
+        return PARTIAL, said + ", too fast"
+    return OBEYED, said
+
+
+def judge_stop(name: str, end: float, after: list[Sample], tolerance: float) -> Finding | None:
+    """Still moving after the stick came back (``end``)? None when too few samples show it."""
     if len(after) < 2:
         return None
     first = after[0]
@@ -184,10 +155,10 @@ def judge_stop(burst: Burst, after: list[Sample], tolerance: float) -> Finding |
             moved = max(moved, total)
     extra: dict[str, Any] = {"moved_deg": moved, "observed_at": after[-1].time}
     if moved <= tolerance or moved_at is None:
-        extra["duration_s"] = after[-1].time - burst.end
-        text = f"stopped when the commands stopped (still for {after[-1].time - burst.end:.1f} s)"
-        return Finding(burst.name, burst.end, CHECK_STOP, OBEYED, text, extra)
-    still = moved_at - burst.end
+        extra["duration_s"] = after[-1].time - end
+        text = f"stopped when the commands stopped (still for {after[-1].time - end:.1f} s)"
+        return Finding(name, end, CHECK_STOP, OBEYED, text, extra)
+    still = moved_at - end
     extra["duration_s"] = still
     text = f"still moving {still:.1f} s after the commands stopped (moved {moved:.1f} deg more)"
     if moved_at >= after[-1].time:
@@ -195,25 +166,29 @@ def judge_stop(burst: Burst, after: list[Sample], tolerance: float) -> Finding |
             f"still moving {still:.1f} s after the commands stopped, and still moving "
             f"(moved {moved:.1f} deg more)"
         )
-    return Finding(burst.name, burst.end, CHECK_STOP, NOT_OBEYED, text, extra)
+    return Finding(name, end, CHECK_STOP, NOT_OBEYED, text, extra)
 
 
-def judge_repeat(burst: Burst, rate_verdict: str) -> Finding | None:
-    """Commands repeated too slowly to keep the gimbal moving (None when fast enough)."""
-    verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
-    if burst.count == 1:
-        once: dict[str, Any] = {"command_count": 1}
-        return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, _SENT_ONCE, once)
-    mean = burst.interval_sum / (burst.count - 1)
-    if mean <= SLOW_REPEAT_S:
+def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
+    """The stream repeated too slowly to keep the gimbal moving: said once per stream, at
+    the first movement it shows in (None when fast enough, or said already)."""
+    stream = movement.stream
+    if stream.cadence_said or not movement.too_slow():
         return None
-    text = (
-        f"repeated every {mean:.2f} s on average (longest pause {burst.interval_max:.2f} s); the "
-        f"document recommends {RECOMMENDED_REPEAT_S * 1000:.0f} ms to keep it moving"
-    )
+    stream.cadence_said = True
+    verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
     extra: dict[str, Any] = {
-        "interval_s": mean,
-        "max_interval_s": burst.interval_max,
-        "command_count": burst.count,
+        "component": movement.component,
+        "command_count": movement.count,
+        "interval_mean_s": movement.interval_mean,
+        "interval_max_s": movement.interval_max if movement.count > 1 else None,
     }
-    return Finding(burst.name, burst.start, CHECK_REPEAT, verdict, text, extra)
+    mean = movement.interval_mean
+    if mean is None:
+        return Finding(NAME, movement.start, CHECK_REPEAT, verdict, _SENT_ONCE, extra)
+    text = (
+        f"repeated every {mean:.2f} s on average (longest pause {movement.interval_max:.2f} s) "
+        f"while the stick was off centre; the document recommends "
+        f"{RECOMMENDED_REPEAT_S * 1000:.0f} ms to keep it moving"
+    )
+    return Finding(NAME, movement.start, CHECK_REPEAT, verdict, text, extra)

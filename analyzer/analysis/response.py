@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -16,11 +16,17 @@ from analyzer.analysis.findings import (
     Finding,
 )
 from analyzer.analysis.health import FeedbackHealth
-from analyzer.analysis.rates import BURST_GAP_S, Burst, judge_rate, judge_repeat, judge_stop
+from analyzer.analysis.rates import judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
+from analyzer.analysis.streams import STREAM_GAP_S, Movement, Streams
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
-from analyzer.analysis.tracking import TrackingCheck, judge_tracking, nothing_to_stop
+from analyzer.analysis.tracking import (
+    TrackingCheck,
+    TrackingSession,
+    judge_tracking,
+    nothing_to_stop,
+)
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -32,18 +38,22 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import EXPECTED_FEEDBACK_HZ, feedback_stream
+from analyzer.tally import DAMAGED_FEEDBACK, EXPECTED_FEEDBACK_HZ, feedback_stream
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
 # A state flag (tracking) shows a change in the next feedback messages: three periods.
 FLAG_PERIODS = 3
 DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the document's 2 Hz
+# A target re-sent within this of its last sending is still the same judgement; a judged
+# one is held for its re-sends at most this long after its time allowed.
+RESEND_GAP_S = STREAM_GAP_S
+RESEND_HOLD_S = 30.0
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
 FEEDBACK_WAIT_S = 1.0  # without feedback, a judgement waits this long past its deadline
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
-DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH, INCOMPLETE})
+DAMAGED_KINDS = frozenset({CRC_MISMATCH, INCOMPLETE})  # damaged feedback, in the health
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
 MOTION = frozenset(
     {"gimbal_control", "specified_angle", "look_down", "forward", "tap_zoom", "tracking"}
@@ -78,10 +88,11 @@ class Settings:
 
 
 @dataclass
-class _BurstCheck:
-    burst: Burst
-    observe_until: float
-    findings: list[Finding] = field(default_factory=list)
+class _StopCheck:
+    """After a movement the stick is centred: the gimbal is watched until ``until``."""
+
+    movement: Movement
+    until: float
 
 
 class ResponseAnalyzer:
@@ -94,12 +105,13 @@ class ResponseAnalyzer:
         self.samples = SampleWindow()  # only those a pending judgement can still need
         self._targets: list[TargetCheck] = []
         self._tracking: list[TrackingCheck] = []
-        self._burst: Burst | None = None
-        self._bursts: list[_BurstCheck] = []
+        self._streams = Streams()
+        self._stops: list[_StopCheck] = []
         self._fc_attitude: float | None = None
         self._motion: tuple[str, float] | None = None
         self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
         self._tracking_seen = False  # a feedback message has shown the tracking flag on
+        self._session: TrackingSession | None = None  # tracking commands since the first
 
     # -- input ---------------------------------------------------------------------------
 
@@ -112,14 +124,16 @@ class ResponseAnalyzer:
             if sample is not None:
                 self.samples.append(sample)
                 self._tracking_seen = self._tracking_seen or sample.tracking
+                self._follow_session(sample)
                 out += self._limits(sample)
                 out += self._settle(t, sample)
                 self.samples.forget_before(self._needed(t))
         elif topic == TOPIC_GIMBAL_RANGING:
             out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
-        elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_FEEDBACK:
-            out += self.health.error(t)
+        elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_KINDS:
+            damaged = event.fields.get("kind") in DAMAGED_FEEDBACK
+            out += self.health.error(t, feedback_stream(event), ends_silence=damaged)
             out += self._settle(t, None)
         else:
             out += self.health.tick(t)
@@ -150,15 +164,20 @@ class ResponseAnalyzer:
         last = self.samples.last
         end = last.time if last is not None else None
         for check in self._targets:
-            out.append(self._judge_target(check, "the input ended", end))
+            if check.finding is None:
+                self._judge_target(check, "the input ended", end)
+            out.append(check.release())
         self._targets = []
         for tracking in self._tracking:
             out.append(self._judge_tracking(tracking, None, "the input ended"))
         self._tracking = []
-        self._end_burst()
-        for pending in self._bursts:
-            out += self._judge_burst(pending)
-        self._bursts = []
+        self._stopped(self._streams.end())
+        for movement in self._streams.waiting:
+            out += self._judge_movement(movement, None)
+        self._streams.waiting = []
+        for stop in self._stops:
+            out += self._judge_stop(stop)
+        self._stops = []
         out += self.health.close()
         return self._emit(out)
 
@@ -172,83 +191,133 @@ class ResponseAnalyzer:
     def _command(self, t: float, fields: dict[str, Any]) -> list[Finding]:
         name = str(fields.get("name", ""))
         out: list[Finding] = []
-        pan = tilt = 0.0
         if name == "gimbal_control":
-            pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
-            burst = self._burst
-            if pan == 0 and tilt == 0:
-                if burst is not None:
-                    burst.stopped_at = t
-                    self._end_burst()
-                return out
-            if burst is not None and burst.same_speeds(pan, tilt) and t - burst.last <= BURST_GAP_S:
-                burst.add(t)
-                return out
+            return self._gimbal_control(t, fields)
         if name not in MOTION and name != "tracking_stop":
             return out
+        session = self._session
+        if name == "tracking" and session is not None:
+            session.update(t)  # the box moved: the same session
+            return out
+        allowed = self.settings.time_allowed_s
+        fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
+        check = target_check(name, t, fields, t + allowed, fresh)
+        if check is not None:
+            tolerance = self.settings.tolerance_deg
+            pending = next((c for c in self._targets if c.repeated_by(check, tolerance)), None)
+            if pending is not None:  # the same target re-sent: part of its judgement
+                pending.resent(t)
+                return out
         if name in MOTION:
             axes = AXES.get(name) or frozenset({PITCH if fields.get("axis") == "pitch" else YAW})
             if name == "specified_angle" and fields.get("axis") not in ("pitch", "yaw"):
                 axes = frozenset()  # zoom
             out += self._interrupt(t, name, axes)
             self._motion = (name, t)
-        allowed = self.settings.time_allowed_s
-        if name == "gimbal_control":
-            self._burst = Burst(name, pan, tilt, t)
-        else:
-            fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
-            check = target_check(name, t, fields, t + allowed, fresh)
-            if check is not None:
-                self._targets.append(check)
+        if check is not None:
+            self._targets.append(check)
         if name in ("tracking", "tracking_stop"):
             for old in self._tracking:
                 why = f"{name} came {t - old.time:.1f} s later" if t < old.deadline else ""
                 out.append(self._judge_tracking(old, None, why))
             self._tracking = []
             before = self._before(t)
+            if name == "tracking":
+                session = self._session = TrackingSession(t)
+            else:
+                self._session = None
             if name == "tracking_stop" and not (before is not None and before.tracking):
-                out.append(nothing_to_stop(t, before, seen_on=self._tracking_seen))
+                found = nothing_to_stop(t, before, seen_on=self._tracking_seen, session=session)
+                out.append(found)
             else:
                 flag_allowed = self.settings.flag_allowed_s
-                self._tracking.append(TrackingCheck(name, t, name == "tracking", t + flag_allowed))
+                want = name == "tracking"
+                self._tracking.append(TrackingCheck(name, t, want, t + flag_allowed, session))
         return out
 
-    def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
-        """A new motion command: earlier targets on its axes, and bursts, end here."""
+    def _follow_session(self, sample: Sample) -> None:
+        """The flag seen on starts counting; seen off after that, the session is over."""
+        session = self._session
+        if session is None:
+            return
+        if sample.tracking:
+            session.seen_on = True
+        elif session.seen_on and sample.time > session.last:
+            self._session = None  # the gimbal let go of its target
+
+    def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[Finding]:
+        """One command of a stick stream: targets end at a speed, movements open and close."""
+        pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
+        component = str(fields.get("component") or "gimbal")
+        out: list[Finding] = []
+        moving = pan != 0 or tilt != 0
+        if moving:
+            # A speed takes over both axes; zeros (a centred stick) leave targets alone.
+            out += self._end_targets(t, "gimbal_control", BOTH)
+            for stop in self._stops:
+                if stop.movement.component == component:
+                    stop.until = min(stop.until, t)  # the stick moved again
+        self._stopped(self._streams.command(t, component, pan, tilt))
+        stream = self._streams.open.get(component)
+        if moving and stream is not None and stream.movement is not None:
+            self._motion = ("gimbal_control", stream.movement.start)
+        return out
+
+    def _stopped(self, movements: list[Movement]) -> None:
+        """Movements the stick came back from: the gimbal must then hold still."""
+        for movement in movements:
+            if movement.ended_by in ("zeros", "pause"):
+                until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
+                self._stops.append(_StopCheck(movement, until))
+
+    def _end_targets(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
+        """A new motion command: earlier targets on its axes are judged as they stand."""
         out: list[Finding] = []
         keep: list[TargetCheck] = []
         for check in self._targets:
             if check.axes() & axes:
-                why = f"{name} came {t - check.time:.1f} s later" if t < check.deadline else ""
-                out.append(self._judge_target(check, why, t))
+                if check.finding is None:
+                    why = f"{name} came {t - check.time:.1f} s later" if t < check.deadline else ""
+                    self._judge_target(check, why, t)
+                out.append(check.release())
             else:
                 keep.append(check)
         self._targets = keep
-        self._end_burst()
-        for pending in self._bursts:
-            pending.observe_until = min(pending.observe_until, t)
-            out += self._judge_burst(pending)
-        self._bursts = []
         return out
 
-    def _end_burst(self) -> None:
-        burst, self._burst = self._burst, None
-        if burst is not None:
-            until = burst.end + STOP_GRACE_S + STOP_OBSERVE_S
-            self._bursts.append(_BurstCheck(burst, until))
+    def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
+        """A motion command other than gimbal_control: earlier targets on its axes, and
+        the stick streams, end here; what waits for feedback is judged on what came."""
+        out = self._end_targets(t, name, axes)
+        self._streams.cut(t, f"{name} came")
+        for movement in self._streams.waiting:
+            out += self._judge_movement(movement, None)
+        self._streams.waiting = []
+        for stop in self._stops:
+            stop.until = min(stop.until, t)
+            out += self._judge_stop(stop)
+        self._stops = []
+        return out
 
     # -- time passing ---------------------------------------------------------------------
 
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
-        if not (self._targets or self._tracking or self._burst or self._bursts):
+        if (
+            not (self._targets or self._tracking or self._streams.open or self._streams.waiting)
+            and not self._stops
+        ):
             return out
         late = FEEDBACK_WAIT_S
         keep: list[TargetCheck] = []
         for check in self._targets:
-            if t > check.deadline + (0.0 if sample is not None else late):
-                out.append(self._judge_target(check, "", check.deadline))
+            if check.finding is None and t > check.deadline + (0.0 if sample is not None else late):
+                self._judge_target(check, "", check.deadline)
+            if check.finding is not None and (
+                t - check.last_sent > RESEND_GAP_S or t - check.deadline > RESEND_HOLD_S
+            ):
+                out.append(check.release())
             else:
                 keep.append(check)
         self._targets = keep
@@ -261,15 +330,29 @@ class ResponseAnalyzer:
             else:
                 still.append(tracking)
         self._tracking = still
-        if self._burst is not None and t - self._burst.last > BURST_GAP_S:
-            self._end_burst()
-        waiting: list[_BurstCheck] = []
-        for pending in self._bursts:
-            if t > pending.observe_until + (0.0 if sample is not None else late):
-                out += self._judge_burst(pending)
-            else:
-                waiting.append(pending)
-        self._bursts = waiting
+        streams = self._streams
+        if streams.open:
+            self._stopped(streams.end_quiet(t))
+        if streams.waiting:
+            waiting: list[Movement] = []
+            for movement in streams.waiting:
+                end = movement.window_end
+                assert end is not None
+                if sample is not None and t >= end:
+                    out += self._judge_movement(movement, t)
+                elif t > end + late:
+                    out += self._judge_movement(movement, None)
+                else:
+                    waiting.append(movement)
+            streams.waiting = waiting
+        if self._stops:
+            watching: list[_StopCheck] = []
+            for stop in self._stops:
+                if t > stop.until + (0.0 if sample is not None else late):
+                    out += self._judge_stop(stop)
+                else:
+                    watching.append(stop)
+            self._stops = watching
         return out
 
     def _between(self, start: float, end: float) -> list[Sample]:
@@ -280,33 +363,35 @@ class ResponseAnalyzer:
 
     def _needed(self, now: float) -> float:
         """The earliest time whose samples a judgement still to be made can look at: a
-        pending check's command, a burst's first command, or (for commands to come) now."""
+        pending check's command, a stick movement's first command, the end of one whose
+        stop is watched, or (for commands to come) now."""
         times = [now]
-        times += [check.time for check in self._targets]
+        times += [check.time for check in self._targets if check.finding is None]
         times += [tracking.time for tracking in self._tracking]
-        times += [pending.burst.start for pending in self._bursts]
-        if self._burst is not None:
-            times.append(self._burst.start)
+        times += self._streams.starts()
+        times += [stop.movement.stopped_at for stop in self._stops]
         return min(times)
 
     def earliest_pending(self) -> float | None:
         """No finding still to come carries an earlier time than this (for input in time
-        order): a pending check's command, a burst, the motion command a limit finding would
-        name, the feedback window or silence still open. None before any input."""
+        order): a pending check's command, a stick movement, the motion command a limit
+        finding would name, the feedback window or silence still open. None before any
+        input."""
         now = self.health.last
         if now is None:
             return None
         times = [self._needed(now), *self.health.open_since()]
+        times += [check.time for check in self._targets if check.finding is not None]
         if self._motion is not None:
             times.append(self._motion[1])
         return min(times)
 
     # -- judgements -----------------------------------------------------------------------
 
-    def _judge_target(self, check: TargetCheck, cut_short: str, end: float | None) -> Finding:
+    def _judge_target(self, check: TargetCheck, cut_short: str, end: float | None) -> None:
         stop = check.deadline if end is None else min(end, check.deadline)
         settings = self.settings
-        return judge_target(
+        check.finding = judge_target(
             check,
             self._before(check.time),
             self._between(check.time, stop),
@@ -321,19 +406,23 @@ class ResponseAnalyzer:
         seen = [] if sample is not None else self._between(check.time, check.deadline)
         return judge_tracking(check, sample, seen, cut_short, self.settings.flag_allowed_s)
 
-    def _judge_burst(self, pending: _BurstCheck) -> list[Finding]:
-        burst = pending.burst
-        inside = self._between(burst.start, burst.last + 0.05)
-        rate = judge_rate(burst, self._before(burst.start), inside)
-        out = [rate]
-        repeat = judge_repeat(burst, rate.verdict)
-        if repeat is not None:
-            out.append(repeat)
-        after = self._between(burst.end + STOP_GRACE_S, pending.observe_until)
-        stop = judge_stop(burst, after, self.settings.tolerance_deg)
-        if stop is not None:
-            out.append(stop)
-        return out
+    def _judge_movement(self, movement: Movement, upto: float | None) -> list[Finding]:
+        """A stick movement against the feedback up to ``upto`` (a sample's time at or
+        after its window's end; None: up to the window's end), and its stream's cadence."""
+        end = movement.window_end
+        assert end is not None
+        last = end if upto is None or movement.cut_short else max(upto, end)
+        before = self._before(movement.start)
+        inside = self._between(movement.start, last)
+        rate = judge_movement(movement, before, inside, self.settings.tolerance_deg)
+        cadence = judge_cadence(movement, rate.verdict)
+        return [rate] if cadence is None else [rate, cadence]
+
+    def _judge_stop(self, stop: _StopCheck) -> list[Finding]:
+        end = stop.movement.stopped_at
+        after = self._between(end + STOP_GRACE_S, stop.until)
+        found = judge_stop("gimbal_control", end, after, self.settings.tolerance_deg)
+        return [] if found is None else [found]
 
     def _limits(self, sample: Sample) -> list[Finding]:
         out: list[Finding] = []

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.findings import CHECK_TARGET, Finding, worst
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample
 from analyzer.analysis.targets import AxisGoal, judge_axis
+from analyzer.analysis.yaw_geometry import shortest_difference
 from analyzer.analysis.yaw_reference import YawCommand, choose_reference, wrong_frame
 
 LOOK_DOWN_DEG = -90.0
@@ -16,17 +17,68 @@ LOOK_DOWN_DEG = -90.0
 @dataclass
 class TargetCheck:
     """A command asking for angles; ``yaw`` when it is a specified_angle yaw target, whose
-    reference (and so its goal's axis) is chosen when it is judged."""
+    reference (and so its goal's axis) is chosen when it is judged.
+
+    A ground station may re-send the same target until it is reached: each re-send is
+    counted here (``count``, ``last_sent``) instead of starting a judgement of its own.
+    Once judged (``finding``), the check is kept while re-sends still come, so that they
+    are counted in the one finding it gives."""
 
     command: str
     time: float
     goals: tuple[AxisGoal, ...]
     deadline: float
     yaw: YawCommand | None = None
+    count: int = 1
+    last_sent: float = field(init=False)
+    finding: Finding | None = None
+
+    def __post_init__(self) -> None:
+        self.last_sent = self.time
 
     def axes(self) -> set[str]:
         """The axes it takes over: pitch, yaw (both yaw references)."""
         return {PITCH if g.axis == PITCH else YAW for g in self.goals}
+
+    def repeated_by(self, other: TargetCheck, tolerance: float) -> bool:
+        """``other`` asks for this check's targets again: the same command, axes and yaw
+        frame, every target within ``tolerance`` degrees (yaw the short way round)."""
+        if other.command != self.command or len(other.goals) != len(self.goals):
+            return False
+        mine_yaw, their_yaw = self.yaw, other.yaw
+        if (mine_yaw is None) != (their_yaw is None):
+            return False
+        if (
+            mine_yaw is not None
+            and their_yaw is not None
+            and mine_yaw.airframe != their_yaw.airframe
+        ):
+            return False
+        for mine, theirs in zip(self.goals, other.goals, strict=True):
+            if mine.axis != theirs.axis:
+                return False
+            difference = theirs.target - mine.target
+            if mine.axis != PITCH:
+                difference = shortest_difference(mine.target, theirs.target)
+            if abs(difference) > tolerance:
+                return False
+        return True
+
+    def resent(self, t: float) -> None:
+        """The same target sent again at ``t``."""
+        self.count += 1
+        self.last_sent = t
+
+    def release(self) -> Finding:
+        """The judged finding, with the re-sends counted in."""
+        finding = self.finding
+        assert finding is not None
+        finding.extra["command_count"] = self.count
+        if self.count > 1:
+            span = self.last_sent - self.time
+            finding.extra["resent_for_s"] = span
+            finding.detail += f"; sent {self.count} times over {span:.1f} s"
+        return finding
 
 
 def target_check(

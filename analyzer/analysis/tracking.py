@@ -1,8 +1,8 @@
-"""tracking / tracking_stop against the feedback's tracking flag: a state flag's judgement."""
+"""tracking sessions against the feedback's tracking flag: when one starts, and at its stop."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.findings import CHECK_TRACKING, NOT_OBEYED, OBEYED, UNKNOWN, Finding
@@ -10,13 +10,44 @@ from analyzer.analysis.samples import Sample
 
 
 @dataclass
+class TrackingSession:
+    """A tracker at work: its first ``tracking`` command and the box updates after it,
+    until ``tracking_stop`` (or until the feedback shows the flag off after it was on)."""
+
+    start: float
+    count: int = 1
+    last: float = field(init=False)
+    seen_on: bool = False  # the feedback has shown the flag on since the start
+
+    def __post_init__(self) -> None:
+        self.last = self.start
+
+    def update(self, t: float) -> None:
+        """Another ``tracking`` command (the box moved) while the session is on."""
+        self.count += 1
+        self.last = t
+
+    def figures(self, end: float | None = None) -> dict[str, Any]:
+        """command_count and updates_hz (and duration_s up to ``end``) of the session."""
+        out: dict[str, Any] = {"command_count": self.count}
+        span = self.last - self.start
+        if self.count > 1 and span > 0:
+            out["updates_hz"] = (self.count - 1) / span
+        if end is not None:
+            out["duration_s"] = end - self.start
+        return out
+
+
+@dataclass
 class TrackingCheck:
-    """A tracking (``want`` on) or tracking_stop (``want`` off) waiting for the flag."""
+    """A tracking (``want`` on) or tracking_stop (``want`` off) waiting for the flag;
+    ``session`` is the session it starts or ends."""
 
     command: str
     time: float
     want: bool
     deadline: float  # the command's time and the flag's allowance
+    session: TrackingSession | None = None
 
 
 def judge_tracking(
@@ -31,6 +62,8 @@ def judge_tracking(
     unknown when ``cut_short`` names what ended the allowance early."""
     flag = "on" if check.want else "off"
     extra: dict[str, Any] = {}
+    if check.session is not None:
+        extra.update(check.session.figures(None if check.want else check.time))
     if sample is not None:
         extra["response_s"] = sample.time - check.time
         extra["observed_at"] = sample.time
@@ -56,9 +89,12 @@ def judge_tracking(
     return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
 
 
-def nothing_to_stop(t: float, before: Sample | None, *, seen_on: bool) -> Finding:
+def nothing_to_stop(
+    t: float, before: Sample | None, *, seen_on: bool, session: TrackingSession | None = None
+) -> Finding:
     """A tracking_stop at ``t`` when the feedback did not show tracking on: nothing to obey.
-    ``before``: the last attitude message before it; ``seen_on``: any showed the flag on."""
+    ``before``: the last attitude message before it; ``seen_on``: any showed the flag on;
+    ``session``: the session it ends, if one was on."""
     if not seen_on:
         text = "tracking was never on in the feedback: there was nothing to stop"
     elif before is None:
@@ -66,4 +102,6 @@ def nothing_to_stop(t: float, before: Sample | None, *, seen_on: bool) -> Findin
     else:
         text = "tracking was already off: there was nothing to stop"
     extra: dict[str, Any] = {"observed_at": before.time} if before is not None else {}
+    if session is not None:
+        extra.update(session.figures(t))
     return Finding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)

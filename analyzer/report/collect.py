@@ -11,7 +11,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.analysis.rates import BURST_GAP_S, SAME_SPEED
+from analyzer.analysis.streams import STREAM_GAP_S
 from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.bus_figures import BusFigures
 from analyzer.protocol.types import (
@@ -154,13 +154,11 @@ class ReportData:
         last = self._last_speed
         if last is not None and t - last[0] > STOP_AFTER_S:
             self._speeds_stop(last)
-        if (
-            last is None
-            or t - last[0] > BURST_GAP_S
-            or abs(pan - last[1]) >= SAME_SPEED
-            or abs(tilt - last[2]) >= SAME_SPEED
+        moving = pan != 0 or tilt != 0
+        if moving and (
+            last is None or t - last[0] > STREAM_GAP_S or (last[1] == 0 and last[2] == 0)
         ):
-            self.marks.add((t, event))  # a new burst
+            self.marks.add((t, event))  # the stick leaves its centre: a movement starts
         self.commanded.add((t, pan, tilt))
         self._last_speed = (t, pan, tilt)
 

@@ -1,0 +1,215 @@
+"""gimbal_control streams: a ground station's commands of one component, cut into stick movements.
+
+Commands of one component (gimbal, dual-sensor) that follow each other within
+``STREAM_GAP_S`` are one stream, whatever their speeds: a pilot's hand changes them in
+every command. A movement is a stretch of the stream with the stick off centre; it ends
+with a command of 0, 0 (many ground stations keep sending zeros while the stick is
+centred), with a pause that ends the stream, or when another motion command takes over.
+Each movement is judged once (``analyzer.analysis.rates``), the stream's cadence once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from analyzer.analysis.motion_fit import LAG_MAX_S, Command
+
+STREAM_GAP_S = 1.0  # commands further apart than this are separate streams
+RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
+# A command's speeds are taken to hold until the next command, or this long when none
+# comes sooner: the gimbal "will stop rotating" when the commands stop, and the document
+# does not say how soon; 0.3 s, as gimbals of this kind coast.
+HOLD_S = 0.3
+SLOW_REPEAT_S = 2 * RECOMMENDED_REPEAT_S  # a mean interval above this is too slow
+PAUSE_STOP_S = HOLD_S  # a silence longer than the hold inside a movement: it stopped there
+MAX_MOVEMENT_S = 60.0  # a stick held off centre longer is judged in pieces this long
+TAIL_S = HOLD_S + LAG_MAX_S  # the feedback is watched this long after a movement ends
+
+
+@dataclass(eq=False)
+class Movement:
+    """One stick movement: the commands from its first off-centre one, and those that
+    follow until its judgement (zeros, the next movement's start), for the motion the
+    stream asked for."""
+
+    component: str
+    start: float
+    stream: StickStream
+    commands: list[Command] = field(default_factory=list)
+    count: int = 0  # off-centre commands
+    last: float = 0.0  # the last off-centre command
+    interval_sum: float = 0.0
+    interval_max: float = 0.0
+    peak_pan: float = 0.0
+    peak_tilt: float = 0.0
+    end: float | None = None  # when the stick came back (None while it is off centre)
+    ended_by: str = ""  # "zeros", "pause", "a later command", "the input ended", "length"
+    window_end: float | None = None  # the feedback is judged up to here
+    cut_short: str = ""  # what ended the window early, if anything
+
+    def add(self, command: Command) -> None:
+        """A command of the stream while the movement is open or awaits its judgement."""
+        self.commands.append(command)
+        if self.end is not None or (command.pan == 0 and command.tilt == 0):
+            return
+        if self.count:
+            interval = command.time - self.last
+            self.interval_sum += interval
+            self.interval_max = max(self.interval_max, interval)
+        self.count += 1
+        self.last = command.time
+        if abs(command.pan) > abs(self.peak_pan):
+            self.peak_pan = command.pan
+        if abs(command.tilt) > abs(self.peak_tilt):
+            self.peak_tilt = command.tilt
+
+    def close(self, end: float, why: str) -> None:
+        """The stick is centred from ``end`` on (``why`` says how that was seen)."""
+        if self.end is None:
+            self.end, self.ended_by = end, why
+            self.window_end = end + TAIL_S
+
+    def cut(self, t: float, why: str) -> None:
+        """Another motion command at ``t``: nothing after it answers this movement."""
+        if self.end is None:
+            self.close(min(t, self.last + HOLD_S), why)
+        assert self.window_end is not None
+        if t < self.window_end:
+            self.window_end, self.cut_short = t, why
+
+    @property
+    def interval_mean(self) -> float | None:
+        return self.interval_sum / (self.count - 1) if self.count > 1 else None
+
+    @property
+    def stopped_at(self) -> float:
+        """When the commands stopped asking for speed: the 0, 0 command, else the last."""
+        if self.ended_by == "zeros" and self.end is not None:
+            return self.end
+        return self.last
+
+    def too_slow(self) -> bool:
+        """Repeated too slowly to keep the gimbal moving: sent once, a mean interval over
+        twice the document's, or a pause the gimbal stops in."""
+        mean = self.interval_mean
+        return mean is None or mean > SLOW_REPEAT_S or self.interval_max > PAUSE_STOP_S
+
+
+@dataclass(eq=False)
+class StickStream:
+    """The open stream of one component: its cadence and its movement now under way."""
+
+    component: str
+    start: float
+    last: float
+    count: int = 1
+    interval_sum: float = 0.0
+    interval_max: float = 0.0
+    movement: Movement | None = None
+    cadence_said: bool = False  # a stream's cadence is judged once
+
+    def add(self, t: float) -> None:
+        interval = t - self.last
+        self.interval_sum += interval
+        self.interval_max = max(self.interval_max, interval)
+        self.count += 1
+        self.last = t
+
+    @property
+    def interval_mean(self) -> float | None:
+        return self.interval_sum / (self.count - 1) if self.count > 1 else None
+
+
+class Streams:
+    """The open streams by component and the movements awaiting their judgement.
+
+    ``command`` takes a gimbal_control; ``due`` hands on the movements whose feedback
+    window is over; ``cut`` and ``end`` close what another command or the input's end
+    interrupts."""
+
+    def __init__(self) -> None:
+        self.open: dict[str, StickStream] = {}
+        self.waiting: list[Movement] = []  # closed, their window still open
+        self.closed_streams: list[StickStream] = []  # ended while movements still wait
+
+    def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
+        """One gimbal_control; returns the movements it closed (their stop checks start)."""
+        closed = self.end_quiet(t)
+        stream = self.open.get(component)
+        command = Command(t, pan, tilt)
+        for waiting in self.waiting:  # its motion goes on until it is judged
+            if waiting.component == component:
+                waiting.add(command)
+        if stream is None:
+            stream = self.open[component] = StickStream(component, t, t)
+        else:
+            stream.add(t)
+        movement = stream.movement
+        centred = pan == 0 and tilt == 0
+        if movement is not None:
+            if t - movement.start >= MAX_MOVEMENT_S and not centred:
+                movement.commands.append(command)  # the stick goes on: so does the motion
+                movement.close(t, "length")
+                self._retire(stream)
+                closed.append(movement)
+                movement = None
+            else:
+                movement.add(command)
+                if centred:
+                    movement.close(t, "zeros")
+                    self._retire(stream)
+                    closed.append(movement)
+                return closed
+        if not centred:
+            movement = stream.movement = Movement(component, t, stream)
+            movement.add(command)
+        return closed
+
+    def end_quiet(self, t: float) -> list[Movement]:
+        """End the streams whose last command is more than STREAM_GAP_S before ``t``."""
+        closed: list[Movement] = []
+        for component, stream in list(self.open.items()):
+            if t - stream.last > STREAM_GAP_S:
+                closed += self._end(component, None, "pause")
+        return closed
+
+    def cut(self, t: float, why: str) -> list[Movement]:
+        """Another motion command at ``t``: every stream ends, every window stops at ``t``."""
+        closed: list[Movement] = []
+        for component in list(self.open):
+            closed += self._end(component, t, why)
+        for waiting in self.waiting:
+            waiting.cut(t, why)
+        return closed
+
+    def end(self) -> list[Movement]:
+        """The input ended: every open stream ends."""
+        closed: list[Movement] = []
+        for component in list(self.open):
+            closed += self._end(component, None, "the input ended")
+        return closed
+
+    def _end(self, component: str, t: float | None, why: str) -> list[Movement]:
+        stream = self.open.pop(component)
+        movement = stream.movement
+        if movement is None:
+            return []
+        stream.movement = None
+        if t is None:
+            movement.close(movement.last + HOLD_S, why)
+        else:
+            movement.cut(t, why)
+        self.waiting.append(movement)
+        return [movement]
+
+    def _retire(self, stream: StickStream) -> None:
+        movement = stream.movement
+        if movement is not None:
+            stream.movement = None
+            self.waiting.append(movement)
+
+    def starts(self) -> list[float]:
+        """The first command of every movement under way or awaiting its judgement."""
+        out = [m.start for m in self.waiting]
+        out += [s.movement.start for s in self.open.values() if s.movement is not None]
+        return out
