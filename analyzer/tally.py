@@ -33,6 +33,10 @@ from analyzer.protocol.types import (
     StreamChunk,
 )
 
+# A feedback message that came with a bad CRC ends the silence before it: it is counted
+# as damaged, not also as lost. (An incomplete one lost a segment: it is reported when
+# the next message comes, and its silence counts.)
+DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH})
 # The gimbal answers with one feedback message (attitude or ranging) about every 500 ms.
 EXPECTED_FEEDBACK_HZ = 2.0
 FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
@@ -104,22 +108,37 @@ class FeedbackTrack:
     gaps_over_threshold: int = 0  # silences that lost messages (see lost_messages)
     lost_messages: int = 0  # feedback messages lost in them
     _longest_us: int = field(default=0, repr=False)
+    # The last message that came, whole or damaged: a silence ends with either.
+    _arrival: float | None = field(default=None, repr=False)
 
     def add(self, t: float) -> None:
-        last = self.last
-        if last is None:
+        if self.last is None:
             self.first = t
         else:
-            gap_us = round(t * _US) - round(last * _US)
-            if gap_us > self._longest_us:
-                self._longest_us = gap_us
-                self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
-            lost = lost_messages(gap_us / _US)
-            if lost:
-                self.gaps_over_threshold += 1
-                self.lost_messages += lost
+            self._silence_until(t)
         self.count += 1
-        self.last = t
+        self.last = self._arrival = t
+
+    def damaged(self, t: float) -> None:
+        """A damaged message (CRC error, incomplete) came at ``t``: the silence before it
+        ends there, and what it ends is counted; the message itself is damaged, not lost."""
+        arrival = self._arrival if self._arrival is not None else self.last
+        if arrival is None or t <= arrival:
+            return
+        self._silence_until(t)
+        self._arrival = t
+
+    def _silence_until(self, t: float) -> None:
+        last = self._arrival if self._arrival is not None else self.last
+        assert last is not None
+        gap_us = round(t * _US) - round(last * _US)
+        if gap_us > self._longest_us:
+            self._longest_us = gap_us
+            self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
+        lost = lost_messages(gap_us / _US)
+        if lost:
+            self.gaps_over_threshold += 1
+            self.lost_messages += lost
 
     @property
     def rate_hz(self) -> float | None:
@@ -267,6 +286,9 @@ class Tally:
             self.crc_errors += kinds.count(CRC_MISMATCH)
             if BUS_ERROR in kinds:
                 self.bus.add_events(events)
+            damaged = not DAMAGED_FEEDBACK.isdisjoint(kinds)
+        else:
+            damaged = False
         streamed = [e for e in events if "transport" in e.fields]  # read from a stream
         if streamed:
             self.crc_checked += sum(
@@ -277,7 +299,18 @@ class Tally:
                 and e.fields["transport"] == "stream"
                 and e.fields.get("crc_set", True)
             )
-        if not FEEDBACK_TOPICS.isdisjoint(present):
+        if damaged:
+            # In the order they came: a damaged message ends the silence before it.
+            for event in events:
+                if event.topic in FEEDBACK_TOPICS:
+                    self._add_feedback(event, event.fields)
+                elif event.topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in (
+                    DAMAGED_FEEDBACK
+                ):
+                    track = self.feedback.get(feedback_stream(event))
+                    if track is not None:
+                        track.damaged(event.time)
+        elif not FEEDBACK_TOPICS.isdisjoint(present):
             for event in [e for e in events if e.topic in FEEDBACK_TOPICS]:
                 self._add_feedback(event, event.fields)
 

@@ -70,7 +70,7 @@ def analyze_counts(path: Path) -> tuple[int, int, int, int]:
     found = [json.loads(line) for line in cli("analyze", str(path), "--json").splitlines()]
     gaps = [f for f in found if f["check"] == "feedback_gap"]
     (window,) = [f for f in found if f["check"] == "feedback"]
-    assert all(f["verdict"] == "not_obeyed" for f in gaps)
+    assert all(f["verdict"] == "lost" for f in gaps)
     return len(gaps), sum(f["lost_messages"] for f in gaps), window["gaps"], window["lost_messages"]
 
 

@@ -277,7 +277,8 @@ def test_fleet_sql_on_a_cluster_reads_the_named_columns_there(fleet: dict[str, A
     code, on_cluster, err = cli("fleet", local, "--sql", sql, "--csv", "--dask", address)
     assert code == 0, err
     code, here, _ = cli("fleet", local, "--sql", sql, "--csv")
-    assert on_cluster == here and here.startswith("verdict,n\nnot_obeyed,")
+    assert on_cluster == here and here.startswith("verdict,n\ndegraded,")
+    assert "\nlost," in here and "\nnot_obeyed," in here  # health words beside verdicts
     total = sum(int(line.split(",")[1]) for line in here.splitlines()[1:])
     assert err == (
         f"fleet: the workers of {address} read findings (verdict); {total:,} rows came back "

@@ -108,7 +108,7 @@ def test_decode_and_info_name_the_same_longest_gap(
     capsys.readouterr()
     assert main(["info", str(recording)]) == 0
     info = capsys.readouterr().out
-    gap = "longest gap 1.000 s, 2024-05-14 10:00:06.253Z .. 2024-05-14 10:00:07.253Z"
+    gap = "longest gap 1.000 s, 2024-05-14 10:00:13.253Z .. 2024-05-14 10:00:14.253Z"
     assert gap in summary and gap in info
     assert "387 (3 diagnostics" in summary and "387 (3 diagnostics" in info
 

@@ -68,16 +68,23 @@ def test_findings_are_counted_exactly_as_analyze_counts_them(
     text = page.read_text()
     head = re.search(r"<tr><th>command</th><th>check</th>(.*?)</tr>", text)
     assert head
-    verdicts = [v.replace(" ", "_") for v in re.findall(r"<th>([a-z ]+)</th>", head.group(1))]
-    assert verdicts[:4] == ["obeyed", "partial", "not_obeyed", "unknown"]
+    columns = re.findall(r"<th>([a-z /]+)</th>", head.group(1))
+    assert columns[:4] == ["obeyed / healthy", "partial / degraded", "not obeyed / lost", "unknown"]
+    # a command's verdict, or the feedback's health word, of each column
+    words = [[w.replace(" ", "_") for w in c.split(" / ")] for c in columns[:4]]
     counted: Counter[tuple[str, str, str]] = Counter()
     table = text.split("<h2>Responses</h2>")[1].split("</table>")[0]
     for row in re.findall(r"<tr><td>([^<]+)</td><td>([^<]+)</td>(.*?)</tr>", table):
         numbers = re.findall(r'<td class="num">([\d,]+)</td>', row[2])
-        for verdict, number in zip(verdicts[:4], numbers, strict=False):
+        for word, number in zip(words, numbers, strict=False):
+            verdict = word[-1] if row[0] == "feedback" else word[0]
             if int(number.replace(",", "")):
                 counted[row[0], row[1], verdict] = int(number.replace(",", ""))
-    assert counted == expected and sum(expected.values()) > 70_000
+    assert counted == expected
+    # 100 s of a pilot's stick: a finding per movement (and per cadence or stop), not one
+    # per command
+    movements = sum(n for (c, check, _), n in expected.items() if check == "rate")
+    assert 20 < movements < 60
     # a bounded list of examples per group, with their times, the worst first
     examples = re.findall(r"(\d+) examples of ([\d,]+), the worst first", text)
     assert examples and all(int(n) <= 12 for n, _ in examples)

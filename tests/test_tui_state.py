@@ -329,7 +329,7 @@ def test_a_feedback_gap_is_lost_feedback_not_a_disobeyed_command() -> None:
     gap = {
         "command": "feedback",
         "check": "feedback_gap",
-        "verdict": "not_obeyed",
+        "verdict": "lost",
         "detail": "feedback lost: 1 message missing",
         "lost_messages": 1,
     }

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from analyzer.protocol.response_fields import (
+    ALL_VERDICTS,
     CHECK_FEEDBACK,
     CHECK_FEEDBACK_GAP,
     CHECK_LIMIT,
@@ -15,7 +16,11 @@ from analyzer.protocol.response_fields import (
     CHECK_TARGET,
     CHECK_TRACKING,
     CHECKS,
+    DEGRADED,
     FEEDBACK_COMMAND,
+    HEALTH_VERDICTS,
+    HEALTHY,
+    LOST,
     NOT_OBEYED,
     OBEYED,
     PARTIAL,
@@ -73,6 +78,7 @@ def verdict_line(counts: dict[str, int]) -> str:
 
 
 __all__ = [
+    "ALL_VERDICTS",
     "CHECKS",
     "CHECK_FEEDBACK",
     "CHECK_FEEDBACK_GAP",
@@ -82,7 +88,11 @@ __all__ = [
     "CHECK_STOP",
     "CHECK_TARGET",
     "CHECK_TRACKING",
+    "DEGRADED",
     "FEEDBACK_COMMAND",
+    "HEALTHY",
+    "HEALTH_VERDICTS",
+    "LOST",
     "NOT_OBEYED",
     "OBEYED",
     "PARTIAL",

@@ -7,10 +7,10 @@ from typing import Any
 from analyzer.analysis.findings import (
     CHECK_FEEDBACK,
     CHECK_FEEDBACK_GAP,
+    DEGRADED,
     FEEDBACK_COMMAND,
-    NOT_OBEYED,
-    OBEYED,
-    PARTIAL,
+    HEALTHY,
+    LOST,
     UNKNOWN,
     Finding,
 )
@@ -68,6 +68,22 @@ class FeedbackHealth:
         self.messages += 1
         self._window_messages += 1
         self.last_feedback = t
+        return out + self._arrived(t, stream)
+
+    def error(self, t: float, stream: str = "", *, ends_silence: bool = True) -> list[Finding]:
+        """A damaged feedback message (CRC error, incomplete) at ``t`` of ``stream``,
+        counted as damaged. A message with a bad CRC came whole: the silence before it
+        ends there, so it is not also lost (``ends_silence``; as the tally times it)."""
+        out = self.tick(t)
+        self._window_errors += 1
+        previous = self._last_of.get(stream)
+        if not ends_silence or previous is None or t <= previous:
+            return out  # no message of that stream timed yet: nothing lost to tell
+        return out + self._arrived(t, stream)
+
+    def _arrived(self, t: float, stream: str) -> list[Finding]:
+        """A message (whole or damaged) of ``stream`` came at ``t``: the silence it ends."""
+        out: list[Finding] = []
         previous = self._last_of.get(stream)
         if previous is None and len(self._last_of) >= MAX_FEEDBACK_SOURCES:
             return out  # as the tally: streams beyond so many are counted, not timed
@@ -87,9 +103,7 @@ class FeedbackHealth:
                 f"(expected every {FEEDBACK_PERIOD_S:g} s)"
             )
             extra = {"gap_s": gap, "lost_messages": lost, "observed_at": t}
-            out.append(
-                Finding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, NOT_OBEYED, text, extra)
-            )
+            out.append(Finding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, LOST, text, extra))
         return out
 
     def open_since(self) -> list[float]:
@@ -101,11 +115,6 @@ class FeedbackHealth:
         if self.last_feedback is not None:
             times.append(self.last_feedback)
         return times
-
-    def error(self, t: float) -> list[Finding]:
-        out = self.tick(t)
-        self._window_errors += 1
-        return out
 
     def close(self) -> list[Finding]:
         if self.first is None or self.last is None:
@@ -128,7 +137,7 @@ class FeedbackHealth:
             "window_s": length,
         }
         if not messages:
-            verdict = UNKNOWN if self.messages == 0 else NOT_OBEYED
+            verdict = UNKNOWN if self.messages == 0 else LOST
             what = "no gimbal feedback in the input" if not self.messages else "no feedback"
             text = f"{what} for {length:.0f} s: the responses cannot be judged"
             return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, verdict, text, extra)
@@ -147,6 +156,6 @@ class FeedbackHealth:
         rate = f"{hz:.2f} messages/s" if hz is not None else f"{messages} messages"
         if problems:
             text = f"feedback over {length:.0f} s: " + ", ".join(problems)
-            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, PARTIAL, text, extra)
+            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, DEGRADED, text, extra)
         text = f"feedback healthy over {length:.0f} s: {rate}, no message lost, no CRC error"
-        return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, OBEYED, text, extra)
+        return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, HEALTHY, text, extra)

@@ -6,7 +6,7 @@ from collections import Counter
 from typing import Any
 
 from analyzer.analysis.findings import FEEDBACK_COMMAND, verdict_line
-from analyzer.protocol.response_fields import CHECK_FEEDBACK_GAP, HEALTH_WORDS, VERDICTS
+from analyzer.protocol.response_fields import CHECK_FEEDBACK_GAP, HEALTH_VERDICTS, HEALTH_WORDS
 from analyzer.summary import gap_words
 
 
@@ -41,7 +41,9 @@ class VerdictCounts:
     def health_line(self) -> str:
         """'2 minutes healthy, 1 degraded; 1 gap, 1 message lost (...)'."""
         windows = [
-            f"{n} {HEALTH_WORDS[v].lower()}" for v in VERDICTS if (n := self.health.get(v, 0))
+            f"{n} {HEALTH_WORDS[v].lower()}"
+            for v in HEALTH_VERDICTS
+            if (n := self.health.get(v, 0))
         ]
         if windows:
             total = sum(self.health.values())

@@ -23,8 +23,12 @@ _NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
     ("final_deg", "final", lambda v: f"{v:.2f} deg"),
     ("response_s", "response", lambda v: f"{v:.2f} s"),
     ("error_deg", "error", lambda v: f"{v:.2f} deg"),
-    ("rate_ratio", "ratio", lambda v: f"{v:.2f}"),
+    ("pan_ratio", "pan ratio", lambda v: f"{v:.2f}"),
+    ("tilt_ratio", "tilt ratio", lambda v: f"{v:.2f}"),
     ("lag_s", "lag", lambda v: f"{v:.2f} s"),
+    ("command_count", "commands", lambda v: f"{v:,}" if v > 1 else ""),
+    ("interval_mean_s", "every", lambda v: f"{v:.3f} s"),
+    ("updates_hz", "updates", lambda v: f"{v:.1f}/s"),
 )
 
 
@@ -170,6 +174,5 @@ def finding_line(event: Event) -> str:
 
 
 def _numbers(fields: dict[str, Any]) -> str:
-    return ", ".join(
-        f"{word} {fmt(fields[key])}" for key, word, fmt in _NUMBER_FIELDS if key in fields
-    )
+    shown = ((word, fmt(fields[key])) for key, word, fmt in _NUMBER_FIELDS if key in fields)
+    return ", ".join(f"{word} {text}" for word, text in shown if text)

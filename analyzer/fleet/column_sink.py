@@ -15,6 +15,7 @@ from typing import Any, Protocol
 import pyarrow as pa
 
 from analyzer.fleet.columns import EXTRA, KEY_FIELDS, TIME, TOPIC_TABLES, event_schema
+from analyzer.protocol.response_fields import FEEDBACK_COMMAND
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
 
 GROUP_ROWS = 16_384  # rows of one Parquet row group: what a table holds in memory at most
@@ -144,7 +145,9 @@ class ColumnSink:
         self.group_rows = group_rows or GROUP_ROWS
         self.tables: dict[str, TableColumns] = {}
         self.rows = 0
-        self.verdicts: Counter[str] = Counter()
+        self.findings = 0
+        self.verdicts: Counter[str] = Counter()  # of the commands' findings
+        self.health: Counter[str] = Counter()  # of the feedback's findings (health words)
 
     def handle(self, batch: Any) -> None:
         tables = self.tables
@@ -154,7 +157,10 @@ class ColumnSink:
             if name is None:
                 continue
             if topic == TOPIC_ANALYSIS_RESPONSE:
-                self.verdicts[str(event.fields["verdict"])] += 1
+                fields = event.fields
+                counts = self.health if fields.get("command") == FEEDBACK_COMMAND else self.verdicts
+                counts[str(fields["verdict"])] += 1
+                self.findings += 1
             columns = tables.get(name)
             if columns is None:
                 columns = tables[name] = TableColumns(topic)
@@ -171,8 +177,10 @@ class ColumnSink:
         """Forget every finding written (an input without a clock cannot time them)."""
         name = TOPIC_TABLES[TOPIC_ANALYSIS_RESPONSE]
         self.out.discard(name)
-        self.rows -= self.verdicts.total()
+        self.rows -= self.findings
+        self.findings = 0
         self.verdicts.clear()
+        self.health.clear()
         self.tables.pop(name, None)
 
     def _flush(self, name: str, columns: TableColumns) -> None:

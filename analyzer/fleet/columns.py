@@ -7,7 +7,7 @@ from typing import Any
 
 import pyarrow as pa
 
-from analyzer.analysis.findings import VERDICTS
+from analyzer.analysis.findings import HEALTH_VERDICTS, VERDICTS
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
@@ -86,7 +86,13 @@ def diagnostic_column(kind: str) -> str:
 
 
 def verdict_column(verdict: str) -> str:
+    """The column counting the commands' findings of one verdict."""
     return f"findings_{verdict}"
+
+
+def health_column(health: str) -> str:
+    """The column counting the feedback's findings (minutes, silences) of one health word."""
+    return f"feedback_{health}"
 
 
 def recordings_schema(tags: list[str]) -> pa.Schema:
@@ -120,6 +126,7 @@ def recordings_schema(tags: list[str]) -> pa.Schema:
         *(pa.field(diagnostic_column(k), pa.int64()) for k in DIAGNOSTIC_KINDS),
         pa.field("findings", pa.int64()),
         *(pa.field(verdict_column(v), pa.int64()) for v in VERDICTS),
+        *(pa.field(health_column(h), pa.int64()) for h in HEALTH_VERDICTS),
         pa.field("analyzer_version", pa.string()),
         pa.field("error", pa.string()),
         pa.field("notes", pa.list_(pa.string())),

@@ -23,6 +23,7 @@ from analyzer.fleet.columns import (
     RECORDINGS,
     TIME,
     diagnostic_column,
+    health_column,
     recordings_schema,
     verdict_column,
 )
@@ -153,12 +154,12 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
     summary.finish(
         input_stats=reader.stats,
         decoder_stats=getattr(pipeline.decoder, "stats", {}),
-        first_time=reader.first_time,
+        first_time=pipeline.clock.bounded(reader.first_time),
         last_time=reader.last_time,
         time_base=reader.time_base,
     )
     notes = list(reader.notes)
-    if untimed(pipeline.tally, [True] if sink.verdicts else []):
+    if untimed(pipeline.tally, [True] if sink.findings else []):
         sink.drop_findings()
         notes.append("the input carries no timestamps: responses cannot be timed")
     row = {
@@ -167,7 +168,8 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
         "figures": summary.to_dict(),
         "items": pipeline.tally.items(),
         "verdicts": dict(sink.verdicts),
-        "findings": sink.verdicts.total(),
+        "health": dict(sink.health),
+        "findings": sink.findings,
         "notes": notes,
     }
     result.tables[RECORDINGS] = recording_row(work, row)
@@ -224,12 +226,12 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
         )
         for kind in DIAGNOSTIC_KINDS:
             row[diagnostic_column(kind)] = int(kinds.get(kind, 0))
-        for verdict, count in run["verdicts"].items():
-            row[verdict_column(verdict)] = count
-        from analyzer.analysis.findings import VERDICTS
+        from analyzer.analysis.findings import HEALTH_VERDICTS, VERDICTS
 
         for verdict in VERDICTS:
-            row.setdefault(verdict_column(verdict), 0)
+            row[verdict_column(verdict)] = int(run["verdicts"].get(verdict, 0))
+        for health in HEALTH_VERDICTS:
+            row[health_column(health)] = int(run.get("health", {}).get(health, 0))
     schema = recordings_schema(list(tags))
     for name in ("start", "end", "bus_worst_time"):
         value = row.get(name)

@@ -8,14 +8,22 @@ OBEYED = "obeyed"
 PARTIAL = "partial"
 NOT_OBEYED = "not_obeyed"
 UNKNOWN = "unknown"
-VERDICTS = (OBEYED, PARTIAL, NOT_OBEYED, UNKNOWN)
+VERDICTS = (OBEYED, PARTIAL, NOT_OBEYED, UNKNOWN)  # of a command's findings
+# The feedback's own findings (command "feedback") say how healthy the link is instead:
+# healthy, degraded (late, damaged or lost messages in the window), lost (a silence that
+# lost messages, or no feedback in a window), unknown (no feedback in the whole input).
+HEALTHY = "healthy"
+DEGRADED = "degraded"
+LOST = "lost"
+HEALTH_VERDICTS = (HEALTHY, DEGRADED, LOST, UNKNOWN)
+ALL_VERDICTS = (*VERDICTS, HEALTHY, DEGRADED, LOST)
 
 # What was checked (the ``check`` field).
 CHECK_TARGET = "target"  # specified_angle / look_down / forward: reach an angle
-CHECK_RATE = "rate"  # gimbal_control: measured against commanded speed
-CHECK_STOP = "stop"  # gimbal_control: stopped when the commands stopped
-CHECK_REPEAT = "repeat"  # gimbal_control: repeated often enough to keep moving
-CHECK_TRACKING = "tracking"  # tracking / tracking_stop against the tracking flag
+CHECK_RATE = "rate"  # gimbal_control: a stick movement's motion against the commanded
+CHECK_STOP = "stop"  # gimbal_control: held still while the stick was centred
+CHECK_REPEAT = "repeat"  # gimbal_control: a stream repeated too slowly to keep it moving
+CHECK_TRACKING = "tracking"  # a tracking session's start, or its stop, against the flag
 CHECK_LIMIT = "limit"  # a mechanical limit reached
 CHECK_FEEDBACK = "feedback"  # feedback health over a minute
 CHECK_FEEDBACK_GAP = "feedback_gap"  # a silence in the feedback
@@ -60,16 +68,40 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
         "psi follows motor yaw'",
     ),
     "observed_at": ("number", "time (Unix seconds) of the feedback that decided the finding"),
-    "commanded_pan_dps": ("number", "commanded pan speed, deg/s"),
-    "commanded_tilt_dps": ("number", "commanded tilt speed, deg/s"),
-    "measured_pan_dps": ("number", "pan rate measured from the motor yaw feedback, deg/s"),
-    "measured_tilt_dps": ("number", "tilt rate measured from the pitch feedback, deg/s"),
-    "rate_ratio": ("number", "measured over commanded rate, the axis furthest from 1"),
-    "lag_s": ("number", "estimated delay before the gimbal started moving"),
-    "duration_s": ("number", "how long the commands (or the silence, the drift) lasted"),
-    "command_count": ("integer", "commands in the burst"),
-    "interval_s": ("number", "mean time between repeated commands"),
-    "max_interval_s": ("number", "longest time between repeated commands"),
+    "commanded_pan_dps": ("number", "mean commanded pan speed of a stick movement, deg/s"),
+    "commanded_tilt_dps": ("number", "mean commanded tilt speed of a stick movement, deg/s"),
+    "measured_pan_dps": (
+        "number",
+        "mean pan speed measured from the motor yaw feedback over the movement, deg/s",
+    ),
+    "measured_tilt_dps": (
+        "number",
+        "mean tilt speed measured from the pitch feedback over the movement, deg/s",
+    ),
+    "pan_ratio": (
+        "number",
+        "a stick movement's measured pan motion (motor yaw) over the motion its commanded "
+        "speeds add up to, fitted over the feedback intervals at the best lag",
+    ),
+    "tilt_ratio": ("number", "the same for tilt (pitch)"),
+    "rate_ratio": ("number", "pan_ratio or tilt_ratio, the one furthest from 1"),
+    "peak_pan_dps": ("number", "the fastest pan speed a stick movement commanded, deg/s"),
+    "peak_tilt_dps": ("number", "the fastest tilt speed a stick movement commanded, deg/s"),
+    "lag_s": ("number", "how late the gimbal followed the commanded motion (best fit)"),
+    "duration_s": (
+        "number",
+        "how long the stick movement (or the silence, the drift, the tracking session) lasted",
+    ),
+    "command_count": (
+        "integer",
+        "commands judged together: a stick movement's, a target's re-sends, a tracking "
+        "session's box updates",
+    ),
+    "interval_mean_s": ("number", "mean time between the commands of a stick movement"),
+    "interval_max_s": ("number", "longest time between the commands of a stick movement"),
+    "component": ("string", "gimbal or dual_sensor: whose gimbal_control stream it was"),
+    "resent_for_s": ("number", "how long a ground station re-sent the same target"),
+    "updates_hz": ("number", "box updates per second of a tracking session"),
     "moved_deg": ("number", "movement seen after the commands stopped"),
     "limit_deg": ("number", "the mechanical limit reached"),
     "gap_s": ("number", "length of a silence in the feedback"),
@@ -87,31 +119,27 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
     "window_s": ("number", "length of the health window"),
 }
 # Optional fields whose value is one of a few words.
-FIELD_ENUMS: dict[str, tuple[str, ...]] = {"yaw_reference": YAW_REFERENCES}
+FIELD_ENUMS: dict[str, tuple[str, ...]] = {
+    "yaw_reference": YAW_REFERENCES,
+    "component": ("gimbal", "dual_sensor"),
+}
 
 
 FEEDBACK_COMMAND = "feedback"  # the ``command`` of findings about the feedback itself
 VERDICT_WORDS = {
-    "obeyed": "obeyed",
-    "partial": "PARTIAL",
-    "not_obeyed": "NOT OBEYED",
-    "unknown": "unknown",
+    OBEYED: "obeyed",
+    PARTIAL: "PARTIAL",
+    NOT_OBEYED: "NOT OBEYED",
+    UNKNOWN: "unknown",
 }
-# Findings about the feedback itself say how healthy the link is, not what was obeyed.
-HEALTH_WORDS = {
-    "obeyed": "healthy",
-    "partial": "DEGRADED",
-    "not_obeyed": "SILENT",
-    "unknown": "unknown",
-}
-GAP_WORD = "LOST"
+# Findings about the feedback itself say how healthy the link is, not what was obeyed:
+# their verdict is the health word, shown in capitals when it is bad.
+HEALTH_WORDS = {HEALTHY: "healthy", DEGRADED: "DEGRADED", LOST: "LOST", UNKNOWN: "unknown"}
 
 
 def verdict_word(fields: dict[str, Any]) -> str:
-    """How the text report names a finding's verdict: in health words for the feedback."""
+    """How the text report names a finding's verdict: the health word for the feedback."""
     verdict = str(fields["verdict"])
-    if fields.get("command") != FEEDBACK_COMMAND:
-        return VERDICT_WORDS.get(verdict, verdict)
-    if fields.get("check") == CHECK_FEEDBACK_GAP:
-        return GAP_WORD
-    return HEALTH_WORDS.get(verdict, verdict)
+    if fields.get("command") == FEEDBACK_COMMAND:
+        return HEALTH_WORDS.get(verdict, verdict)
+    return VERDICT_WORDS.get(verdict, verdict)

@@ -17,7 +17,7 @@ from analyzer.protocol.command_table import COMMAND_NAMES, COMMANDS
 from analyzer.protocol.feedback import ATTITUDE, RANGING
 from analyzer.protocol.fields import Field, label_pattern
 from analyzer.protocol.ids import COMPONENT_NAMES
-from analyzer.protocol.response_fields import CHECKS, FIELD_ENUMS, OPTIONAL_FIELDS, VERDICTS
+from analyzer.protocol.response_fields import ALL_VERDICTS, CHECKS, FIELD_ENUMS, OPTIONAL_FIELDS
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
@@ -152,8 +152,11 @@ def response_schema() -> dict[str, Any]:
             "check": {"type": "string", "enum": list(CHECKS), "description": "what was checked"},
             "verdict": {
                 "type": "string",
-                "enum": list(VERDICTS),
-                "description": "unknown when the feedback does not allow a judgement",
+                "enum": list(ALL_VERDICTS),
+                "description": "of a command: obeyed, partial, not_obeyed, or unknown when the "
+                "feedback does not allow a judgement; of the feedback itself (command "
+                "'feedback'): its health, healthy, degraded, lost, or unknown when the input "
+                "holds no feedback at all",
             },
             "detail": {"type": "string", "description": "the finding in one sentence"},
         }

@@ -9,10 +9,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.analysis.findings import FEEDBACK_COMMAND
-from analyzer.protocol.response_fields import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN
+from analyzer.protocol.response_fields import (
+    DEGRADED,
+    HEALTHY,
+    LOST,
+    NOT_OBEYED,
+    OBEYED,
+    PARTIAL,
+    UNKNOWN,
+)
 
 EXAMPLES = 12  # findings shown per command and check, the worst first
-RANK = {NOT_OBEYED: 3, PARTIAL: 2, UNKNOWN: 1, OBEYED: 0}
+# The commands' verdicts, and the feedback's health words beside the one they rank with.
+RANK = {NOT_OBEYED: 3, LOST: 3, PARTIAL: 2, DEGRADED: 2, UNKNOWN: 1, OBEYED: 0, HEALTHY: 0}
 # How far off a finding is, within one verdict: the larger, the worse.
 MAGNITUDE_FIELDS = ("error_deg", "gap_s", "moved_deg", "overshoot_deg", "lag_s", "response_s")
 
@@ -102,8 +111,8 @@ class FindingGroups:
             self.groups.values(),
             key=lambda g: (
                 -g.worst_rank(),
-                -g.verdicts.get(NOT_OBEYED, 0),
-                -g.verdicts.get(PARTIAL, 0),
+                -g.verdicts.get(NOT_OBEYED, 0) - g.verdicts.get(LOST, 0),
+                -g.verdicts.get(PARTIAL, 0) - g.verdicts.get(DEGRADED, 0),
                 g.command,
                 g.check,
             ),

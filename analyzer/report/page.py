@@ -38,6 +38,8 @@ table.kv td:first-child { width: 200px; color: #555; }
 .v { display: inline-block; padding: 0 6px; border-radius: 3px; color: #fff; font-size: 12px; }
 .v-obeyed { background: #2ca02c; } .v-partial { background: #ff9800; }
 .v-not_obeyed { background: #d62728; } .v-unknown { background: #888; }
+.v-healthy { background: #2ca02c; } .v-degraded { background: #ff9800; }
+.v-lost { background: #d62728; }
 .small { font-size: 12px; color: #666; }
 h3.group { font-size: 15px; margin: 18px 0 2px; }
 .zoom-box { position: absolute; background: rgba(31,119,180,0.15); pointer-events: none; }

@@ -6,7 +6,17 @@ import html
 from typing import Any
 
 from analyzer import timefmt
-from analyzer.analysis.findings import VERDICTS
+from analyzer.analysis.findings import (
+    ALL_VERDICTS,
+    DEGRADED,
+    HEALTHY,
+    LOST,
+    NOT_OBEYED,
+    OBEYED,
+    PARTIAL,
+    UNKNOWN,
+    VERDICTS,
+)
 from analyzer.report.collect import MAX_ROWS, ReportData
 from analyzer.report.finding_groups import Group
 
@@ -48,8 +58,13 @@ def _rows(rows: list[list[str]], head: list[str], numeric: frozenset[int] = froz
     return "\n".join(out)
 
 
+# The summary table's verdict columns: a command's verdict and the feedback's health word
+# that ranks with it share a column.
+COLUMNS = ((OBEYED, HEALTHY), (PARTIAL, DEGRADED), (NOT_OBEYED, LOST), (UNKNOWN,))
+
+
 def _counts(counts: dict[str, int]) -> str:
-    return ", ".join(f"{counts[v]:,} {v.replace('_', ' ')}" for v in VERDICTS if counts.get(v))
+    return ", ".join(f"{counts[v]:,} {v.replace('_', ' ')}" for v in ALL_VERDICTS if counts.get(v))
 
 
 def overview(data: ReportData, settings: str) -> str:
@@ -99,15 +114,62 @@ def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
     return rows
 
 
-def _example(finding: dict[str, Any]) -> list[str]:
+def _number(key: str, form: str) -> Any:
+    def cell(finding: dict[str, Any]) -> str:
+        value = finding.get(key)
+        return _e(format(value, form)) if isinstance(value, (int, float)) else ""
+
+    return cell
+
+
+# The figure columns of a group's examples, by check: (heading, numeric, cell maker).
+_TARGET_COLUMNS = (
+    ("target °", True, _number("target_deg", "g")),
+    ("yaw reference", False, lambda f: _yaw_reference(f)),
+    ("response s", True, _number("response_s", ".2f")),
+    ("error °", True, _number("error_deg", ".2f")),
+    ("sent", True, _number("command_count", ",")),
+)
+_STICK_COLUMNS = (
+    ("pan ratio", True, _number("pan_ratio", ".2f")),
+    ("tilt ratio", True, _number("tilt_ratio", ".2f")),
+    ("lag s", True, _number("lag_s", ".2f")),
+    ("commands", True, _number("command_count", ",")),
+    ("every s", True, _number("interval_mean_s", ".3f")),
+    ("longest pause s", True, _number("interval_max_s", ".2f")),
+)
+_FIGURES = {
+    "rate": _STICK_COLUMNS,
+    "repeat": _STICK_COLUMNS[3:],
+    "stop": (("moved °", True, _number("moved_deg", ".1f")),),
+    "tracking": (
+        ("response s", True, _number("response_s", ".2f")),
+        ("commands", True, _number("command_count", ",")),
+        ("updates/s", True, _number("updates_hz", ".1f")),
+        ("session s", True, _number("duration_s", ".1f")),
+    ),
+    "feedback": (
+        ("messages/s", True, _number("feedback_hz", ".2f")),
+        ("lost", True, _number("lost_messages", ",")),
+        ("damaged", True, _number("crc_errors", ",")),
+    ),
+    "feedback_gap": (
+        ("silence s", True, _number("gap_s", ".2f")),
+        ("lost", True, _number("lost_messages", ",")),
+    ),
+}
+
+
+def _figure_columns(check: str) -> tuple[tuple[str, bool, Any], ...]:
+    return _FIGURES.get(check, _TARGET_COLUMNS)
+
+
+def _example(finding: dict[str, Any], columns: tuple[tuple[str, bool, Any], ...]) -> list[str]:
     return [
         _e(_clock(float(finding["time"]))),
         _verdict(str(finding["verdict"])),
         _e(finding.get("detail", "")),
-        _e(f"{finding['target_deg']:g}") if "target_deg" in finding else "",
-        _yaw_reference(finding),
-        _e(f"{finding['response_s']:.2f}") if "response_s" in finding else "",
-        _e(f"{finding['error_deg']:.2f}") if "error_deg" in finding else "",
+        *(cell(finding) for _, _, cell in columns),
     ]
 
 
@@ -127,8 +189,10 @@ def _group(group: Group) -> str:
         f'<span class="small">({_e(_counts(group.verdicts))}{span})</span></h3>'
         f'<p class="small">{shown}, the worst first:</p>'
     )
-    columns = ["time", "verdict", "detail", "target °", "yaw reference", "response s", "error °"]
-    return head + _rows([_example(f) for f in examples], columns, frozenset({3, 5, 6}))
+    figures = _figure_columns(group.check)
+    heads = ["time", "verdict", "detail", *(h for h, _, _ in figures)]
+    numeric = frozenset(3 + i for i, (_, num, _) in enumerate(figures) if num)
+    return head + _rows([_example(f, figures) for f in examples], heads, numeric)
 
 
 def responses(data: ReportData) -> str:
@@ -142,13 +206,14 @@ def responses(data: ReportData) -> str:
         [
             _e(g.command),
             _e(g.check),
-            *(f"{g.verdicts.get(v, 0):,}" for v in VERDICTS),
+            *(f"{sum(g.verdicts.get(v, 0) for v in column):,}" for column in COLUMNS),
             f"{g.total:,}",
         ]
         for g in groups
     ]
-    head = ["command", "check", *(v.replace("_", " ") for v in VERDICTS), "findings"]
-    table = _rows(rows, head, frozenset(range(2, 3 + len(VERDICTS))))
+    words = [" / ".join(v.replace("_", " ") for v in column) for column in COLUMNS]
+    head = ["command", "check", *words, "findings"]
+    table = _rows(rows, head, frozenset(range(2, 3 + len(COLUMNS))))
     intro = (
         f'<p class="small">{data.findings.total:,} findings, counted per command and check; '
         f"below each, up to {data.findings.keep} examples, the worst first. {EVERY_FINDING}</p>"

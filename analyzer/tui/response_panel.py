@@ -16,8 +16,33 @@ VERDICT_STYLES = {
     "partial": "bold yellow",
     "not_obeyed": "bold red",
     "unknown": "dim",
+    "healthy": "bold green",
+    "degraded": "bold yellow",
+    "lost": "bold red",
 }
 LABEL_WIDTH = 7
+# The figures of a finding shown under its sentence: (field, how it is written).
+FIGURES = (
+    ("pan_ratio", "pan x{:.2f}"),
+    ("tilt_ratio", "tilt x{:.2f}"),
+    ("lag_s", "lag {:.2f} s"),
+    ("command_count", "{:,} commands"),
+    ("interval_mean_s", "every {:.2f} s"),
+    ("updates_hz", "{:.1f} updates/s"),
+    ("response_s", "in {:.2f} s"),
+)
+
+
+def figure_cells(fields: dict[str, object]) -> list[Text]:
+    """A finding's ratios, lag and cadence, each a short cell (none for a plain finding)."""
+    cells = []
+    for key, form in FIGURES:
+        value = fields.get(key)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            if key == "command_count" and value < 2:
+                continue
+            cells.append(Text(form.format(value), style="cyan"))
+    return cells
 
 
 def response_lines(state: MonitorState, width: int) -> list[Text]:
@@ -35,6 +60,9 @@ def response_lines(state: MonitorState, width: int) -> list[Text]:
         Text(short_age(state.age(finding)), style="dim"),
     ]
     lines = pack(cells, width, indent=LABEL_WIDTH)
+    figures = figure_cells(f)
+    if figures:
+        lines += pack([Text(" " * (LABEL_WIDTH - 2)), *figures], width, indent=LABEL_WIDTH)
     detail = Text(str(f.get("detail", "")))
     lines += [Text(" " * LABEL_WIDTH) + piece for piece in fold(detail, width - LABEL_WIDTH)]
     counts = [Text(f"{'so far':<{LABEL_WIDTH - 2}}", style="dim")]
