@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from itertools import islice
 from typing import Any, Protocol, runtime_checkable
 
+from analyzer.capture_clock import CaptureClock
 from analyzer.progress import Progress
 from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 from analyzer.tally import Tally
@@ -141,6 +142,8 @@ class Pipeline:
         self.delivered = 0  # batches handed to the sinks
         self.finished = False
         self.frame_runs = False  # the input may hold FrameRuns (set by ``run_items``)
+        # A file's items dated by its capture (set by ``run_items``): see capture_clock.
+        self.clock = CaptureClock()
 
     # -- input -------------------------------------------------------------------------------
 
@@ -245,7 +248,8 @@ def run_items(
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
     input, so each line shows at once); ``after_batch`` runs after each. When no sink
-    keeps raw items, a reader that can hands its frames on as FrameRuns. Stops
+    keeps raw items, a reader that can hands its frames on as FrameRuns. The items are
+    dated by the capture's own time (``analyzer.capture_clock``) on the way. Stops
     early when a sink fails. ``progress`` (``analyzer.progress.Progress.maybe``) is
     drawn after each batch and cleared at the end, whatever happens. An exception of
     the reader (Ctrl-C, unreadable input) propagates without ``finish``: the caller
@@ -258,6 +262,9 @@ def run_items(
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:
         chunks = _chunks(iter(items), batch_items)
+    # Damage before the first frame, and frames dated far before the capture, take the
+    # capture's time (never 1970).
+    chunks = pipeline.clock.batches(chunks)
     tally = pipeline.tally
     try:
         with fewer_collections():

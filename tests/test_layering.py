@@ -26,6 +26,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "bus_hints",
             "tally",
             "progress",
+            "capture_clock",
             "pipeline",
         ),
     ),

@@ -162,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
         summary.finish(
             input_stats=reader.stats,
             decoder_stats=decoder_stats,
-            first_time=reader.first_time,
+            first_time=pipeline.clock.bounded(reader.first_time),
             last_time=reader.last_time,
             time_base=reader.time_base,
         )
