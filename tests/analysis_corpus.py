@@ -15,7 +15,7 @@ from analyzer.protocol.types import CanFrame
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.faults import FaultConfig
-from analyzer.sim.ground import DEMO_SCRIPT
+from analyzer.sim.ground import DEMO_SCRIPT, pilot_script
 from analyzer.sim.offline import run_offline
 from tests.fault_logs import CANDUMP_NAME, STREAM_NAME, write_fault_logs
 from tests.fleet_flights import FLIGHTS
@@ -52,6 +52,12 @@ SESSIONS: dict[str, SimConfig] = {
     "sim-outage.log": SimConfig(ranging=True, faults=FaultConfig(stop_at=5.0, stop_for=3.0)),
 }
 SESSION_SECONDS = 14.0
+# The demo's script with its gimbal_control played on a pilot's stick (speeds changing in
+# every command), against a gimbal that follows and one that turns at 0.4 of the speed.
+STICK_SESSIONS: dict[str, SimConfig] = {
+    "sim-stick.log": SimConfig(ranging=True, uav=True),
+    "sim-stick-sluggish.log": SimConfig(ranging=True, uav=True, behaviour=Behaviour(speed=0.4)),
+}
 
 
 def candump_text(frames: list[CanFrame]) -> str:
@@ -85,6 +91,11 @@ def write_corpus(folder: Path) -> dict[str, Path]:
         made[path.name] = path
     for name, config in SESSIONS.items():
         frames, _ = run_offline(DEMO_SCRIPT, SESSION_SECONDS, config, start=START)
+        path = folder / name
+        path.write_text(candump_text(frames))
+        made[name] = path
+    for name, config in STICK_SESSIONS.items():
+        frames, _ = run_offline(pilot_script(), SESSION_SECONDS, config, start=START)
         path = folder / name
         path.write_text(candump_text(frames))
         made[name] = path

@@ -79,7 +79,10 @@ def test_the_corpus_has_findings_of_every_verdict(current: dict[str, dict[str, s
     findings = [
         json.loads(line) for case in current.values() for line in case["output"].splitlines()
     ]
-    assert {f["verdict"] for f in findings} == {"obeyed", "partial", "not_obeyed", "unknown"}
+    commands = {f["verdict"] for f in findings if f["command"] != "feedback"}
+    assert commands == {"obeyed", "partial", "not_obeyed", "unknown"}
+    health = {f["verdict"] for f in findings if f["command"] == "feedback"}
+    assert health == {"healthy", "degraded", "lost"}
     assert {f["check"] for f in findings} >= {
         "target", "rate", "stop", "repeat", "tracking", "feedback", "feedback_gap", "limit"
     }  # fmt: skip
