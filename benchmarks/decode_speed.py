@@ -17,8 +17,11 @@ dense-repeat  the dense schedule with the values of earlier versions of this ben
             shows what remembering decoded bytes gives; the goals are not measured on it.
 
 Every value changes as on a real bus: the gimbal's attitude moves in every feedback
-message (a random walk of pitch, yaw and motor yaw), each ``gimbal_control`` carries
-stick speeds drawn at random in +-100 deg/s, GPS positions move, UAV attitude varies.
+message (a random walk of pitch, yaw and motor yaw), the ``gimbal_control`` commands are
+a pilot's stick (movements of 1 to 4 s that rise smoothly to a random peak in +-60 deg/s
+and fall back, an analog stick's jitter of a few 0.01 deg/s, then 0.5 to 3 s centred
+with zeros sent: the speeds change in every command), GPS positions move, UAV attitude
+varies.
 
 and measures in the same run, as CPU time:
 
@@ -61,6 +64,7 @@ from analyzer.protocol.uav import (  # noqa: E402
     encode_text,
     encode_uav_attitude,
 )
+from analyzer.sim.pilot import profile  # noqa: E402
 
 START = 1715680800.0
 PERIOD_S = 0.01  # the schedule below repeats every 10 ms
@@ -69,10 +73,34 @@ FC_IDS = [f"{0x18FF1000 + n:08X}" for n in range(8)]  # flight controller teleme
 OTHER_IDS = ["0CFE6CEE", "18FEF100", "1CEBFF00", "7E8", "100", "321"]  # slower devices
 
 
-def stick(rng: random.Random) -> str:
-    """A ``gimbal_control`` with stick speeds drawn at random in +-100 deg/s."""
-    pan, tilt = rng.randrange(-10000, 10001) / 100, rng.randrange(-10000, 10001) / 100
-    return encode_command("gimbal_control", pan_speed_dps=pan, tilt_speed_dps=tilt).hex().upper()
+ZERO_SPEEDS = encode_command("gimbal_control").hex().upper()
+
+
+class Pilot:
+    """A pilot's stick over time: movements of 1 to 4 s to a random peak, smooth (the
+    simulator's stick profile) with a reading's jitter, then 0.5 to 3 s centred (zeros)."""
+
+    def __init__(self, rng: random.Random) -> None:
+        self.rng = rng
+        self.start = self.until = START
+        self.centred = True
+        self.peak = (0.0, 0.0)
+
+    def command(self, t: float) -> str:
+        """The ``gimbal_control`` the ground station sends at ``t``, as candump hex."""
+        rng = self.rng
+        if t >= self.until:
+            self.centred = not self.centred
+            self.start = t
+            self.until = t + (rng.uniform(0.5, 3.0) if self.centred else rng.uniform(1.0, 4.0))
+            self.peak = (rng.uniform(-60, 60), rng.uniform(-60, 60))
+        if self.centred:
+            return ZERO_SPEEDS
+        shape = profile((t - self.start) / (self.until - self.start))
+        pan, tilt = (round(p * shape + rng.gauss(0.0, 0.03), 2) for p in self.peak)
+        return (
+            encode_command("gimbal_control", pan_speed_dps=pan, tilt_speed_dps=tilt).hex().upper()
+        )
 
 
 class Gimbal:
@@ -95,6 +123,7 @@ def traffic_lines(frames: int, seed: int = 1) -> Iterator[list[str]]:
     """``frames`` candump -L lines of the mix described in the module docstring, in batches."""
     rng = random.Random(seed)
     gimbal = Gimbal(rng)
+    pilot = Pilot(random.Random(seed + 2))
     others = [
         encode_command("specified_angle", yaw_deg=45).hex().upper(),
         encode_command("zoom", action="zoom_in").hex().upper(),
@@ -125,7 +154,7 @@ def traffic_lines(frames: int, seed: int = 1) -> Iterator[list[str]]:
             append(f"{stamp}0000FF15#{gps.hex().upper()}")
             append(f"{stamp}0000FF16#{encode_altitude(100 + tick % 50).hex().upper()}")
         if tick % 5 == 0:  # gimbal control at 20 Hz
-            append(f"{stamp}00000F01#{stick(rng)}")
+            append(f"{stamp}00000F01#{pilot.command(t)}")
         if tick % 100 == 37:
             append(f"{stamp}00000F01#{others[tick // 100 % len(others)]}")
         if tick % 50 == 25:  # gimbal feedback at 2 Hz, four segments
@@ -158,6 +187,7 @@ def dense_lines(
     """The dense (or random-ids, or dense-repeat) mix: 50-frame blocks, one every 25 ms."""
     rng = random.Random(seed)
     gimbal = Gimbal(random.Random(seed + 1))
+    pilot = Pilot(random.Random(seed + 2))
     pans = [
         encode_command("gimbal_control", pan_speed_dps=p / 4, tilt_speed_dps=-p / 8).hex().upper()
         for p in range(-40, 41)
@@ -192,7 +222,7 @@ def dense_lines(
             elif kind == "C" and repeat:
                 append(f"{stamp}00000F01#{pans[(block * 9 + i) % len(pans)]}")
             elif kind == "C":
-                append(f"{stamp}00000F01#{stick(rng)}")
+                append(f"{stamp}00000F01#{pilot.command(t0 + i * 0.0005)}")
             elif kind == "G":
                 gps = encode_gps(31.12 + block * 1e-7, 118.12 + i * 1e-7)
                 append(f"{stamp}0000FF15#{gps.hex().upper()}")

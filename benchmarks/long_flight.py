@@ -4,8 +4,9 @@
 
 Writes two candump -L logs of the dense bus mix of ``decode_speed.py`` (per 50 frames:
 4 feedback segments of a gimbal whose attitude moves in every message, 9
-``gimbal_control`` from a pilot's stick at random speeds, 5 GPS frames of a moving
-aircraft, 32 frames of 80 foreign IDs), of N and 2N frames (1M frames is about 42
+``gimbal_control`` from a pilot's stick (smooth movements, speeds changing in every
+command, zeros while centred), 5 GPS frames of a moving aircraft, 32 frames of 80
+foreign IDs), of N and 2N frames (1M frames is about 42
 minutes of that bus; 2M about an hour and a half), and runs each command on each in a
 fresh process, measuring its CPU time (start-up included) and its peak memory (VmHWM):
 

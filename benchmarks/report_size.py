@@ -3,8 +3,9 @@
     python benchmarks/report_size.py [--frames N] [--keep DIR]
 
 Writes the dense bus mix of ``decode_speed.py`` (per 50 frames: a feedback message,
-9 ``gimbal_control`` from a pilot's stick at random speeds, 5 GPS frames with moving
-positions, 32 foreign frames; every value changing) at ``--frames`` (default 2,000,000)
+9 ``gimbal_control`` from a pilot's stick (smooth movements, speeds changing in every
+command, zeros while centred), 5 GPS frames with moving positions, 32 foreign frames;
+every value changing) at ``--frames`` (default 2,000,000)
 and at a tenth of that, runs ``gimbal-analyzer report`` on each in its own process and
 opens each page in headless Chromium. For each it prints the HTML's size, the report
 process's peak memory, its CPU time, and the milliseconds the page took from the start
