@@ -36,6 +36,9 @@ root_doc = "index"
 exclude_patterns = ["_build", "_ext"]
 templates_path: list[str] = []
 
+# Options and quotes as typed: no en dash for "--force", no curly quotes around '-'.
+smartquotes = False
+
 # Indented blocks are commands and their output (the doc tests run them): no colouring.
 highlight_language = "text"
 

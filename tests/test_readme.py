@@ -114,3 +114,12 @@ def test_update_rewrites_every_stale_block_in_its_place() -> None:
     now = f"    gimbal-analyzer {__version__}"
     assert new == [*lines[:3], now, *lines[5:11], now]
     assert check_blocks(new)[0] == []
+
+
+def test_the_readme_is_a_short_front_door_with_the_two_commands_first() -> None:
+    lines = PAGES[0].read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 200, f"README.md has {len(lines)} lines; the rest goes in docs/"
+    assert lines[2:4] == [
+        "    pip install . && gimbal-analyzer demo",
+        "    pip install '.[test]' && python -m pytest",
+    ]

@@ -1,4 +1,4 @@
-"""Render the monitor's screen as text from a minute of synthetic traffic (README, docs).
+"""Render the monitor's screen as text from a minute of synthetic traffic (the manual).
 
 Run ``python -m analyzer.tui.demo_screen [WIDTH HEIGHT]``; the app runs headless with an
 injected clock, so the output is the same on every run (times are shown in local time).
