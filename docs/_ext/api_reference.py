@@ -11,6 +11,7 @@ import importlib
 import inspect
 from types import ModuleType
 
+from code_dependencies import note_code_dependencies
 from docutils import nodes
 from docutils.statemachine import StringList
 from sphinx.application import Sphinx
@@ -54,6 +55,7 @@ class PublicApi(SphinxDirective):
     has_content = False
 
     def run(self) -> list[nodes.Node]:
+        note_code_dependencies(self.env)
         module = importlib.import_module(self.arguments[0])
         lines, missing = api_rst(module)
         for name in missing:

@@ -14,6 +14,7 @@ import os
 import re
 from collections.abc import Iterator
 
+from code_dependencies import note_code_dependencies
 from docutils import nodes
 from docutils.statemachine import StringList
 from sphinx.application import Sphinx
@@ -122,7 +123,7 @@ class CommandLineReference(SphinxDirective):
     has_content = False
 
     def run(self) -> list[nodes.Node]:
-        self.env.note_dependency(str(__file__))
+        note_code_dependencies(self.env)
         container = nodes.section()
         container.document = self.state.document
         missing: list[str] = []

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from code_dependencies import note_code_dependencies
 from docutils import nodes
 from docutils.statemachine import StringList
 from sphinx.application import Sphinx
@@ -22,7 +23,7 @@ from sphinx.util.docutils import SphinxDirective
 
 
 def cell(text: object) -> str:
-    """Text for a Markdown table cell: one line, ``|`` escaped."""
+    """Text for one line of Markdown (a table cell, a list item): ``|`` escaped."""
     return " ".join(str(text).split()).replace("|", "\\|")
 
 
@@ -41,7 +42,9 @@ def _values(spec: dict[str, Any]) -> str:
     if "const" in spec:
         parts.append(f"always `{spec['const']}`")
     if "enum" in spec:
-        parts.append("one of " + ", ".join(f"`{value}`" for value in spec["enum"]))
+        parts.append(
+            "one of " + ", ".join(f"`{value}`" if value else '`""`' for value in spec["enum"])
+        )
     if "minimum" in spec or "maximum" in spec:
         parts.append(f"{spec.get('minimum', '')}..{spec.get('maximum', '')}")
     if "pattern" in spec:
@@ -50,7 +53,7 @@ def _values(spec: dict[str, Any]) -> str:
 
 
 def topics_markdown() -> str:
-    """A section per topic: what it is, a table of its fields, its JSON Schema."""
+    """A section per topic: what it is, a list of its fields, its JSON Schema."""
     from analyzer.protocol.schema import schema_filename, topic_schemas
 
     lines: list[str] = []
@@ -61,15 +64,11 @@ def topics_markdown() -> str:
             f"Schema: `schemas/{schema_filename(topic)}` (title *{schema.get('title', '')}*); "
             "fields marked **required** are in every event.",
             "",
-            "| field | type | values | meaning |",
-            "|---|---|---|---|",
         ]
         for name, spec in schema.get("properties", {}).items():
-            mark = f"`{name}` **required**" if name in required else f"`{name}`"
-            lines.append(
-                f"| {mark} | {cell(_type_of(spec))} | {cell(_values(spec))} "
-                f"| {cell(spec.get('description', ''))} |"
-            )
+            kind = _type_of(spec) + (", **required**" if name in required else "")
+            words = "; ".join(w for w in (spec.get("description", ""), _values(spec)) if w)
+            lines.append(f"- `{name}` ({kind})" + (f": {cell(words)}" if words else ""))
         lines += ["", "```json", json.dumps(schema, indent=2), "```", ""]
     return "\n".join(lines)
 
@@ -95,6 +94,7 @@ class MarkdownFromCode(SphinxDirective):
     render = staticmethod(protocol_markdown)
 
     def run(self) -> list[nodes.Node]:
+        note_code_dependencies(self.env)
         container = nodes.section()
         container.document = self.state.document
         text = StringList(self.render().splitlines(), f"<{self.name}>")
