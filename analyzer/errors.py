@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-# The exit codes of every command (README "Exit codes" shows the same table).
+# The exit codes of every command (--help and the manual's "Exit codes" page show this table).
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_USAGE = 2

@@ -1,6 +1,7 @@
-"""The README's code blocks as the docs test sees them: markers, command lines and the
-output shown, and whether a command line is quoted right and parses with our parser
-(the marker syntax is described in ``tests/readme_examples.py``)."""
+"""The code blocks of the README and the manual's pages as the docs test sees them:
+markers, command lines and the output shown, and whether a command line is quoted right
+and parses with our parser (the marker syntax is described in
+``tests/readme_examples.py``)."""
 
 from __future__ import annotations
 
@@ -17,8 +18,8 @@ _MARKER = re.compile(r"^<!--\s*check:\s*(.*?)\s*-->\s*$")
 
 @dataclass
 class Block:
-    """An indented code block: its README lines (``start`` is the 0-based index of the
-    first), the check asked for and the command lines it holds."""
+    """An indented code block: its lines in the page (``start`` is the 0-based index of
+    the first), the check asked for and the command lines it holds."""
 
     start: int
     lines: list[str]
@@ -30,7 +31,8 @@ class Block:
         return [line[4:] for line in self.lines]
 
     def commands(self) -> list[tuple[int, str]]:
-        """(README line number, command text) of the command lines, continuations joined."""
+        """(line number in the page, command text) of the command lines, continuations
+        joined."""
         out: list[tuple[int, str]] = []
         pending = ""
         first = 0
@@ -109,8 +111,9 @@ def _command_length(block: Block, index: int) -> int:
     return length
 
 
-def read_blocks(lines: list[str]) -> list[Block]:
-    """The indented code blocks of the README, with the check their marker asks for."""
+def read_blocks(lines: list[str], name: str = "README") -> list[Block]:
+    """The indented code blocks of a page (``name`` in messages), with the check their
+    marker asks for."""
     blocks: list[Block] = []
     marker: tuple[str, list[str]] | None = None
     index = 0
@@ -118,7 +121,7 @@ def read_blocks(lines: list[str]) -> list[Block]:
         line = lines[index]
         found = _MARKER.match(line)
         if found:
-            marker = _parse_marker(found.group(1), index + 1)
+            marker = _parse_marker(found.group(1), f"{name} line {index + 1}")
             index += 1
             continue
         previous_blank = (
@@ -143,16 +146,16 @@ def read_blocks(lines: list[str]) -> list[Block]:
     return blocks
 
 
-def _parse_marker(text: str, number: int) -> tuple[str, list[str]]:
+def _parse_marker(text: str, where: str) -> tuple[str, list[str]]:
     parts = [part.strip() for part in text.split(";")]
     mode = parts[0].split(" ", 1)[0]  # the words after it are a comment: why, for readers
     if mode not in MODES:
-        raise ValueError(f"README line {number}: unknown check {mode!r} (one of {MODES})")
+        raise ValueError(f"{where}: unknown check {mode!r} (one of {MODES})")
     before = []
     for part in parts[1:]:
         key, _, value = part.partition(":")
         if key.strip() != "before" or not value.strip():
-            raise ValueError(f"README line {number}: expected '; before: COMMAND', got {part!r}")
+            raise ValueError(f"{where}: expected '; before: COMMAND', got {part!r}")
         before.append(value.strip())
     return mode, before
 
@@ -204,18 +207,18 @@ def parse_problem(argv: list[str]) -> str | None:
     return None
 
 
-def parse_failures(lines: list[str]) -> list[str]:
-    """Every command line of every code block: shell quoting, then our parser."""
+def parse_failures(lines: list[str], name: str = "README") -> list[str]:
+    """Every command line of every code block of a page: shell quoting, then our parser."""
     failures = []
-    for block in read_blocks(lines):
+    for block in read_blocks(lines, name):
         for number, command in block.commands():
             calls, problems = shell_problems(command)
             for problem in problems:
-                failures.append(f"README line {number}: {command}\n  {problem}")
+                failures.append(f"{name} line {number}: {command}\n  {problem}")
             for argv in calls:
                 if any(word.startswith("[") for word in argv):
                     continue  # a synopsis (options in brackets), not a command line
                 problem = parse_problem(argv)
                 if problem:
-                    failures.append(f"README line {number}: {command}\n  {problem}")
+                    failures.append(f"{name} line {number}: {command}\n  {problem}")
     return failures

@@ -1,6 +1,7 @@
-"""The README's commands and shown outputs, checked against the tool (and refreshed).
+"""The commands and shown outputs of the README and of the manual's Markdown pages
+(``docs/**/*.md``), checked against the tool (and refreshed).
 
-Every ``gimbal-analyzer ...`` line in an indented code block of README.md must be a
+Every ``gimbal-analyzer ...`` line in an indented code block of a page must be a
 command a shell runs as written (``shlex``: quotes closed, no bare ``&`` that would
 cut a URL) and that ``gimbal-analyzer``'s own argument parser accepts. Blocks that run
 and compare say so in an HTML comment before them (blank lines may come between)::
@@ -22,7 +23,9 @@ first N lines.
 
 ``python -m tests.readme_examples --update`` rewrites the shown outputs that no longer
 match from what the commands print now (exact blocks whole, other lines by their
-closest line of output), for the new figures to be reviewed in ``git diff``.
+closest line of output), for the new figures to be reviewed in ``git diff``; page paths
+after it (``docs/howto/decode.md``) check or update only those pages. A marked exact
+block that shows no output yet gets all of it.
 """
 
 from __future__ import annotations
@@ -42,6 +45,20 @@ from tests.readme_blocks import Block, parse_failures, read_blocks, shell_proble
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+
+
+def documents() -> list[Path]:
+    """The README and every Markdown page of the manual, in a steady order."""
+    pages = sorted(p for p in DOCS.rglob("*.md") if "_build" not in p.parts)
+    return [README, *pages]
+
+
+def page_name(path: Path) -> str:
+    """How messages name a page: ``README``, ``docs/howto/decode.md``."""
+    return "README" if path == README else path.relative_to(ROOT).as_posix()
+
+
 _HEAD = re.compile(r"^\|\s*head\s+-(?:n\s*)?(\d+)\s*$")
 
 
@@ -86,7 +103,7 @@ def compare(mode: str, shown: list[str], actual: list[str]) -> list[str]:
     if mode == "exact" and not any("..." in line for line in shown):
         if shown == actual:
             return []
-        return list(difflib.unified_diff(shown, actual, "README", "now", lineterm="", n=1))
+        return list(difflib.unified_diff(shown, actual, "shown", "now", lineterm="", n=1))
     missing = []
     at = 0
     skipping = False
@@ -112,7 +129,7 @@ def compare(mode: str, shown: list[str], actual: list[str]) -> list[str]:
         skipping = False
         if found is None:
             closest = difflib.get_close_matches(line, actual[at:], n=1, cutoff=0.5)
-            missing.append(f"- README: {line}")
+            missing.append(f"- shown:  {line}")
             missing.append(f"+ now:    {closest[0]}" if closest else "+ now:    (no such line)")
             continue
         at = found + 1
@@ -153,19 +170,21 @@ def scratch_folder() -> Iterator[Path]:
             os.chdir(previous)
 
 
-def check_blocks(lines: list[str], *, update: bool = False) -> tuple[list[str], list[str]]:
-    """Run and compare every marked block: (failures in words, README lines, updated
-    when ``update``)."""
+def check_blocks(
+    lines: list[str], *, update: bool = False, name: str = "README"
+) -> tuple[list[str], list[str]]:
+    """Run and compare every marked block of a page: (failures in words, the page's
+    lines, updated when ``update``)."""
     failures: list[str] = []
     lines = list(lines)
-    blocks = read_blocks(lines)
+    blocks = read_blocks(lines, name)
     with scratch_folder():
         outputs: dict[int, list[str]] = {}  # block index -> stdout lines of its commands
         replacements: list[tuple[Block, list[str]]] = []
         for index, block in enumerate(blocks):
             if block.mode in (None, "parse"):
                 continue
-            where = f"README line {block.start + 1} ({block.mode})"
+            where = f"{name} line {block.start + 1} ({block.mode})"
             for command in block.before:
                 code, _, err = run(command)
                 if code:
@@ -184,7 +203,7 @@ def check_blocks(lines: list[str], *, update: bool = False) -> tuple[list[str], 
                     code, out, err = run(command)
                     if code:
                         failures.append(
-                            f"README line {number}: {command} exited {code}: {err.strip()}"
+                            f"{name} line {number}: {command} exited {code}: {err.strip()}"
                         )
                     stdout += out.splitlines()
                 outputs[index] = stdout
@@ -214,15 +233,21 @@ def _replace_output(lines: list[str], block: Block, new: list[str]) -> None:
 
 
 def main(argv: list[str]) -> int:
-    lines = README.read_text(encoding="utf-8").splitlines()
-    failures = parse_failures(lines)
-    compared, new = check_blocks(lines, update="--update" in argv)
-    if "--update" in argv and new != lines:
-        README.write_text("\n".join(new) + "\n", encoding="utf-8")
-        print(f"updated {README} (review it with git diff)")
-    for failure in failures + compared:
-        print(failure, end="\n\n")
-    return 1 if failures or (compared and "--update" not in argv) else 0
+    update = "--update" in argv
+    chosen = [ROOT / arg for arg in argv if not arg.startswith("--")]
+    failed = False
+    for path in chosen or documents():
+        name = page_name(path)
+        lines = path.read_text(encoding="utf-8").splitlines()
+        failures = parse_failures(lines, name)
+        compared, new = check_blocks(lines, update=update, name=name)
+        if update and new != lines:
+            path.write_text("\n".join(new) + "\n", encoding="utf-8")
+            print(f"updated {name} (review it with git diff)")
+        for failure in failures + compared:
+            print(failure, end="\n\n")
+        failed = failed or bool(failures) or (bool(compared) and not update)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -1,31 +1,38 @@
-"""The README's commands parse with our own parser and its shown outputs are what they print."""
+"""The commands shown in the README and in the manual's pages parse with our own parser,
+and the outputs they show are what the commands print."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
 from tests.readme_blocks import parse_failures, read_blocks
-from tests.readme_examples import README, check_blocks, compare, updated
+from tests.readme_examples import check_blocks, compare, documents, page_name, updated
 
 HINT = "\n\nrefresh the shown outputs with: python -m tests.readme_examples --update"
+PAGES = documents()
 
 
-def _readme() -> list[str]:
-    return README.read_text(encoding="utf-8").splitlines()
+def _lines(path: Path) -> list[str]:
+    return path.read_text(encoding="utf-8").splitlines()
 
 
-def test_every_command_line_in_the_readme_is_quoted_right_and_parses() -> None:
-    failures = parse_failures(_readme())
+@pytest.mark.parametrize("page", PAGES, ids=page_name)
+def test_every_command_line_of_the_page_is_quoted_right_and_parses(page: Path) -> None:
+    failures = parse_failures(_lines(page), page_name(page))
     assert not failures, "\n".join(failures)
 
 
-def test_the_outputs_the_readme_shows_are_what_the_commands_print() -> None:
-    failures, _ = check_blocks(_readme())
+@pytest.mark.parametrize("page", PAGES, ids=page_name)
+def test_the_outputs_the_page_shows_are_what_the_commands_print(page: Path) -> None:
+    failures, _ = check_blocks(_lines(page), name=page_name(page))
     assert not failures, "\n\n".join(failures) + HINT
 
 
-def test_the_readme_marks_outputs_of_every_kind() -> None:
-    modes = {block.mode for block in read_blocks(_readme())}
+def test_the_manual_is_checked_page_by_page_and_marks_outputs_of_every_kind() -> None:
+    assert len(PAGES) > 20 and PAGES[0].name == "README.md"
+    modes = {block.mode for page in PAGES for block in read_blocks(_lines(page))}
     assert {"run", "exact", "lines", "parse"} <= modes
 
 
@@ -107,3 +114,12 @@ def test_update_rewrites_every_stale_block_in_its_place() -> None:
     now = f"    gimbal-analyzer {__version__}"
     assert new == [*lines[:3], now, *lines[5:11], now]
     assert check_blocks(new)[0] == []
+
+
+def test_the_readme_is_a_short_front_door_with_the_two_commands_first() -> None:
+    lines = PAGES[0].read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 200, f"README.md has {len(lines)} lines; the rest goes in docs/"
+    assert lines[2:4] == [
+        "    pip install . && gimbal-analyzer demo",
+        "    pip install '.[test]' && python -m pytest",
+    ]

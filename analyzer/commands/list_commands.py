@@ -11,7 +11,8 @@ units, ranges and values), then the gimbal's feedback messages (CAN ID, length
 byte, topic, fields) and the UAV status messages (CAN ID, topic, fields).
 
   gimbal-analyzer commands             plain list
-  gimbal-analyzer commands --markdown  the reference in docs/protocol.md
+  gimbal-analyzer commands --markdown  the same as Markdown (the manual's protocol
+                                       reference is made from the same tables)
 """
 
 

@@ -42,12 +42,22 @@ def describe_field(f: Field, data_offset: int = 0) -> str:
 
 
 def command_reference() -> str:
+    """The whole reference as a Markdown page (``gimbal-analyzer commands --markdown``)."""
+    return "\n".join(
+        [
+            "# Protocol reference",
+            "",
+            "Generated from the protocol tables by `gimbal-analyzer commands --markdown`.",
+            "",
+            reference_body(),
+        ]
+    )
+
+
+def reference_body() -> str:
+    """Every command, feedback message and UAV status message, as Markdown sections
+    (``##`` and ``###``); the manual's protocol page is made of it."""
     lines = [
-        "# Protocol reference",
-        "",
-        "Generated from the protocol tables by `gimbal-analyzer commands --markdown`; "
-        "do not edit by hand.",
-        "",
         "A field with `values:` is decoded to its label, with the number on the wire in a "
         "companion field `<name>_code` (e.g. `palette: iron_red`, `palette_code: 2`); a number "
         "the table does not list gets the label `unknown_0x..` (e.g. `unknown_0x7f`) and a "

@@ -1,7 +1,9 @@
-"""Render the monitor's screen as text from a minute of synthetic traffic (README, docs).
+"""Render the monitor's screen as text from a minute of synthetic traffic (the manual).
 
-Run ``python -m analyzer.tui.demo_screen [WIDTH HEIGHT]``; the app runs headless with an
-injected clock, so the output is the same on every run (times are shown in local time).
+Run ``python -m analyzer.tui.demo_screen [WIDTH HEIGHT] [--svg FILE]``; the app runs
+headless with an injected clock, so the output is the same on every run (times are shown
+in local time). ``--svg`` also writes Textual's own screenshot of the screen (the
+manual's picture of the monitor is made from it).
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ def demo_frames() -> list[CanFrame]:
     return out
 
 
-async def render(width: int = 120, height: int = 40) -> str:
+async def render(width: int = 120, height: int = 40, svg: str | None = None) -> str:
     frames = demo_frames()
     now = [T0]
     bridge = TuiBridge(max_backlog=100_000)
@@ -73,13 +75,21 @@ async def render(width: int = 120, height: int = 40) -> str:
         app.pull()
         app.refresh_view()
         await pilot.pause()
+        if svg:
+            with open(svg, "w", encoding="utf-8") as out:
+                out.write(app.export_screenshot(title="gimbal-analyzer monitor"))
         return screen_text(app)
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
+    args = list(sys.argv[1:] if argv is None else argv)
+    svg = None
+    if "--svg" in args:
+        at = args.index("--svg")
+        svg = args[at + 1]
+        del args[at : at + 2]
     width, height = (int(args[0]), int(args[1])) if len(args) >= 2 else (120, 40)
-    print(asyncio.run(render(width, height)))
+    print(asyncio.run(render(width, height, svg)))
     return 0
 
 
