@@ -4,7 +4,8 @@
 
 gives the same bytes every time: a candump -L flight log, a pcap of a TCP session
 with the IDU and a UART byte dump, each with a few deliberate faults (listed in
-``EXPECTED_DIAGNOSTICS`` and in samples/README.md).
+``EXPECTED_DIAGNOSTICS`` and in samples/README.md), and a candump -L log of a ground
+station driving the simulated gimbal like a pilot (``analyzer.sim.pilot_session``).
 """
 
 from __future__ import annotations
@@ -31,10 +32,12 @@ from analyzer.protocol.ids import (
 )
 from analyzer.protocol.types import BAD_LINE, CRC_MISMATCH, GARBAGE, INCOMPLETE
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
+from analyzer.sim.pilot_session import pilot_log
 
 CANDUMP_NAME = "flight-candump.log"
 PCAP_NAME = "idu-tcp.pcap"
 UART_NAME = "uart-dump.bin"
+PILOT_NAME = "pilot-candump.log"
 
 START = 1715680800.0  # 2024-05-14 10:00:00 UTC
 HOME = (31.1234567, 118.1234567)  # the vendor document's example position
@@ -46,9 +49,10 @@ EXPECTED_DIAGNOSTICS: dict[str, dict[str, int]] = {
     CANDUMP_NAME: {CRC_MISMATCH: 1, INCOMPLETE: 1, BAD_LINE: 1},
     PCAP_NAME: {},
     UART_NAME: {GARBAGE: 4, CRC_MISMATCH: 1},
+    PILOT_NAME: {},
 }
 # Commands with an unknown CMD (decoded as name "unknown" with a warning).
-EXPECTED_UNKNOWN_COMMANDS = {CANDUMP_NAME: 1, PCAP_NAME: 0, UART_NAME: 0}
+EXPECTED_UNKNOWN_COMMANDS = {CANDUMP_NAME: 1, PCAP_NAME: 0, UART_NAME: 0, PILOT_NAME: 0}
 
 # The vendor document's "One key to down" TCP example: one zero byte too many (erratum).
 DOCUMENT_LOOK_DOWN_25 = bytes.fromhex(
@@ -346,6 +350,7 @@ WRITERS: dict[str, Callable[[], bytes]] = {
     CANDUMP_NAME: candump_log,
     PCAP_NAME: idu_pcap,
     UART_NAME: uart_dump,
+    PILOT_NAME: pilot_log,
 }
 
 

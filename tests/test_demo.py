@@ -164,3 +164,43 @@ def test_demo_metadata_repeats_the_fault_and_behaviour_options(
     assert meta["simulator_faults"] == "drop 10%, corrupt 2%, duplicate 2%, delay 2% (seed 3)"
     assert meta["simulator_gimbal"] == "moves at 50% of the asked speed; ignores tracking"
     assert meta["simulator_heading"] == "ahead along the orbit"
+
+
+def test_the_stick_script_changes_the_speeds_in_every_command_and_centres_with_zeros() -> None:
+    from analyzer.protocol.codec import decode_command
+    from analyzer.sim.ground import pilot_script
+
+    script = GroundScript(pilot_script(), period=None)
+    sent = [(t / 100, data) for t in range(0, 500) for data in script.due(t / 100)]
+    speeds = [(t, decode_command(data)[0]) for t, data in sent if data[1] == 0x04]
+    moving = [(t, f["pan_speed_dps"], f["tilt_speed_dps"]) for t, f in speeds]
+    tilting = [v for t, _, v in moving if 0.6 < t < 1.9]
+    assert len(tilting) > 20 and len(set(tilting)) > 0.8 * len(tilting)  # a hand, a reading
+    assert min(tilting) < -20  # the stick's peak above the fixed step's -20
+    # after each movement the stick is centred: zeros for a moment, then nothing
+    assert any(p == 0 and v == 0 for t, p, v in moving if 3.4 <= t <= 3.55)
+    assert not [t for t, _, _ in moving if 3.6 < t < 5.0]
+
+
+@pytest.mark.skipif(
+    not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
+)
+def test_demo_stick_records_the_option_and_each_movement_is_one_finding(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "stick.mcap"
+    args = ["demo", "--no-tui", "--clean", "--stick", "--duration", "4.5", "-o", str(path)]
+    assert main([*args, "--sluggish", "0.4"]) == 0
+    capsys.readouterr()
+    assert main(["info", str(path), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert "--stick" in info["metadata"]["simulator_options"]
+    assert main(["analyze", str(path), "--json"]) == 0
+    found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    rates = [f for f in found if f["command"] == "gimbal_control" and f["check"] == "rate"]
+    # tilt, a moment centred (zeros), then pan: two movements, each judged sluggish
+    assert [r["verdict"] for r in rates] == ["partial", "partial"]
+    assert rates[0]["tilt_ratio"] == pytest.approx(0.4, abs=0.1) and "pan_ratio" not in rates[0]
+    assert rates[1]["pan_ratio"] == pytest.approx(0.4, abs=0.1)
+    assert rates[0]["command_count"] > 20
+    assert not [f for f in found if f["check"] == "repeat"]

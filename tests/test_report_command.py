@@ -176,3 +176,25 @@ def test_output_is_never_overwritten_silently(
     assert main(["report", source, "-o", source, "--force"]) == 2
     assert "input" in capsys.readouterr().err
     assert samples["idu-tcp.pcap"].read_bytes()[:4] == b"\xd4\xc3\xb2\xa1"
+
+
+def test_the_report_shows_each_stick_movement_with_its_figures(
+    samples: dict[str, Path], tmp_path: Path
+) -> None:
+    """A ground station driving like a pilot: each movement, the re-sent target and the
+    tracking session are one finding each, with the figures that judged them."""
+    page = report(tmp_path, samples["pilot-candump.log"])
+    responses = page.read_text().split("<h2>Responses</h2>")[1].split("<h2>")[0]
+    rate = responses.split('data-check="rate"')[1].split("<h3")[0]
+    assert "<th>pan ratio</th><th>tilt ratio</th><th>lag s</th><th>commands</th>" in rate
+    rows = re.findall(r"<tr><td>([^<]+)</td><td><span[^>]*>obeyed</span></td>(.*?)</tr>", rate)
+    assert len(rows) == 3
+    numbers = [re.findall(r'<td class="num">([^<]*)</td>', cells) for _, cells in rows]
+    assert ["1.00", "", "0.30", "49", "0.050", "0.05"] in numbers  # pan, 0.3 s late
+    target = responses.split('data-check="target"')[1].split("<h3")[0]
+    assert "<th>sent</th>" in target and "sent 16 times over 3.0 s" in target
+    tracking = responses.split('data-command="tracking_stop"')[1].split("<h3")[0]
+    assert "<th>updates/s</th>" in tracking and '<td class="num">10.0</td>' in tracking
+    assert '<td class="num">60</td>' in tracking  # the session's box updates
+    # the summary table: a row per command and check, the feedback in its health column
+    assert re.search(r"<td>feedback</td><td>feedback</td><td class=\"num\">1</td>", responses)

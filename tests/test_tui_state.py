@@ -343,3 +343,25 @@ def test_a_feedback_gap_is_lost_feedback_not_a_disobeyed_command() -> None:
     text = "\n".join(line.plain for line in response_lines(state, 100))
     assert "LOST" in text and "NOT OBEYED" not in text
     assert "1 obeyed" in text and "0 not obeyed" in text
+
+
+def test_the_response_panel_shows_a_stick_movements_figures() -> None:
+    from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE
+    from analyzer.tui.response_panel import response_lines
+
+    state = MonitorState()
+    movement = {
+        "command": "gimbal_control",
+        "check": "rate",
+        "verdict": "partial",
+        "detail": "pan turned 15.0 deg for 37.8 commanded (40 %), sluggish",
+        "pan_ratio": 0.397,
+        "lag_s": 0.3,
+        "command_count": 49,
+        "interval_mean_s": 0.05,
+    }
+    state.fold(Batch([], [Event(TOPIC_ANALYSIS_RESPONSE, T0, "analysis", movement)]))
+    text = "\n".join(line.plain for line in response_lines(state, 100))
+    assert "PARTIAL  gimbal_control rate" in text
+    assert "pan x0.40  lag 0.30 s  49 commands  every 0.05 s" in text
+    assert "sluggish" in text and "1 partial" in text
