@@ -16,10 +16,10 @@ from analyzer.analysis.findings import (
     Finding,
 )
 from analyzer.analysis.health import FeedbackHealth
-from analyzer.analysis.rates import judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
-from analyzer.analysis.streams import STREAM_GAP_S, Movement, Streams
+from analyzer.analysis.stick_judge import StickJudge
+from analyzer.analysis.streams import STREAM_GAP_S
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
 from analyzer.analysis.tracking import (
     TrackingCheck,
@@ -49,8 +49,6 @@ DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the doc
 # one is held for its re-sends at most this long after its time allowed.
 RESEND_GAP_S = STREAM_GAP_S
 RESEND_HOLD_S = 30.0
-STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
-STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
 FEEDBACK_WAIT_S = 1.0  # without feedback, a judgement waits this long past its deadline
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
 DAMAGED_KINDS = frozenset({CRC_MISMATCH, INCOMPLETE})  # damaged feedback, in the health
@@ -87,14 +85,6 @@ class Settings:
             raise ValueError("the time allowed for a state flag must be more than 0 s")
 
 
-@dataclass
-class _StopCheck:
-    """After a movement the stick is centred: the gimbal is watched until ``until``."""
-
-    movement: Movement
-    until: float
-
-
 class ResponseAnalyzer:
     """``feed(event)`` and ``close()`` return /analysis/response events as they are decided."""
 
@@ -105,8 +95,7 @@ class ResponseAnalyzer:
         self.samples = SampleWindow()  # only those a pending judgement can still need
         self._targets: list[TargetCheck] = []
         self._tracking: list[TrackingCheck] = []
-        self._streams = Streams()
-        self._stops: list[_StopCheck] = []
+        self._sticks = StickJudge(self.samples, self.settings.tolerance_deg, FEEDBACK_WAIT_S)
         self._fc_attitude: float | None = None
         self._motion: tuple[str, float] | None = None
         self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
@@ -171,13 +160,7 @@ class ResponseAnalyzer:
         for tracking in self._tracking:
             out.append(self._judge_tracking(tracking, None, "the input ended"))
         self._tracking = []
-        self._stopped(self._streams.end())
-        for movement in self._streams.waiting:
-            out += self._judge_movement(movement, None)
-        self._streams.waiting = []
-        for stop in self._stops:
-            out += self._judge_stop(stop)
-        self._stops = []
+        out += self._sticks.close()
         out += self.health.close()
         return self._emit(out)
 
@@ -248,27 +231,15 @@ class ResponseAnalyzer:
     def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[Finding]:
         """One command of a stick stream: targets end at a speed, movements open and close."""
         pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
-        component = str(fields.get("component") or "gimbal")
         out: list[Finding] = []
-        moving = pan != 0 or tilt != 0
-        if moving:
+        if pan != 0 or tilt != 0:
             # A speed takes over both axes; zeros (a centred stick) leave targets alone.
             out += self._end_targets(t, "gimbal_control", BOTH)
-            for stop in self._stops:
-                if stop.movement.component == component:
-                    stop.until = min(stop.until, t)  # the stick moved again
-        self._stopped(self._streams.command(t, component, pan, tilt))
-        stream = self._streams.open.get(component)
-        if moving and stream is not None and stream.movement is not None:
-            self._motion = ("gimbal_control", stream.movement.start)
+        component = str(fields.get("component") or "gimbal")
+        start = self._sticks.command(t, component, pan, tilt)
+        if start is not None:
+            self._motion = ("gimbal_control", start)
         return out
-
-    def _stopped(self, movements: list[Movement]) -> None:
-        """Movements the stick came back from: the gimbal must then hold still."""
-        for movement in movements:
-            if movement.ended_by in ("zeros", "pause"):
-                until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
-                self._stops.append(_StopCheck(movement, until))
 
     def _end_targets(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A new motion command: earlier targets on its axes are judged as they stand."""
@@ -288,26 +259,14 @@ class ResponseAnalyzer:
     def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A motion command other than gimbal_control: earlier targets on its axes, and
         the stick streams, end here; what waits for feedback is judged on what came."""
-        out = self._end_targets(t, name, axes)
-        self._streams.cut(t, f"{name} came")
-        for movement in self._streams.waiting:
-            out += self._judge_movement(movement, None)
-        self._streams.waiting = []
-        for stop in self._stops:
-            stop.until = min(stop.until, t)
-            out += self._judge_stop(stop)
-        self._stops = []
-        return out
+        return self._end_targets(t, name, axes) + self._sticks.interrupt(t, name)
 
     # -- time passing ---------------------------------------------------------------------
 
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
-        if (
-            not (self._targets or self._tracking or self._streams.open or self._streams.waiting)
-            and not self._stops
-        ):
+        if not (self._targets or self._tracking or self._sticks.active):
             return out
         late = FEEDBACK_WAIT_S
         keep: list[TargetCheck] = []
@@ -330,29 +289,8 @@ class ResponseAnalyzer:
             else:
                 still.append(tracking)
         self._tracking = still
-        streams = self._streams
-        if streams.open:
-            self._stopped(streams.end_quiet(t))
-        if streams.waiting:
-            waiting: list[Movement] = []
-            for movement in streams.waiting:
-                end = movement.window_end
-                assert end is not None
-                if sample is not None and t >= end:
-                    out += self._judge_movement(movement, t)
-                elif t > end + late:
-                    out += self._judge_movement(movement, None)
-                else:
-                    waiting.append(movement)
-            streams.waiting = waiting
-        if self._stops:
-            watching: list[_StopCheck] = []
-            for stop in self._stops:
-                if t > stop.until + (0.0 if sample is not None else late):
-                    out += self._judge_stop(stop)
-                else:
-                    watching.append(stop)
-            self._stops = watching
+        if self._sticks.active:
+            out += self._sticks.settle(t, sample)
         return out
 
     def _between(self, start: float, end: float) -> list[Sample]:
@@ -368,8 +306,7 @@ class ResponseAnalyzer:
         times = [now]
         times += [check.time for check in self._targets if check.finding is None]
         times += [tracking.time for tracking in self._tracking]
-        times += self._streams.starts()
-        times += [stop.movement.stopped_at for stop in self._stops]
+        times += self._sticks.pending()
         return min(times)
 
     def earliest_pending(self) -> float | None:
@@ -405,24 +342,6 @@ class ResponseAnalyzer:
     ) -> Finding:
         seen = [] if sample is not None else self._between(check.time, check.deadline)
         return judge_tracking(check, sample, seen, cut_short, self.settings.flag_allowed_s)
-
-    def _judge_movement(self, movement: Movement, upto: float | None) -> list[Finding]:
-        """A stick movement against the feedback up to ``upto`` (a sample's time at or
-        after its window's end; None: up to the window's end), and its stream's cadence."""
-        end = movement.window_end
-        assert end is not None
-        last = end if upto is None or movement.cut_short else max(upto, end)
-        before = self._before(movement.start)
-        inside = self._between(movement.start, last)
-        rate = judge_movement(movement, before, inside, self.settings.tolerance_deg)
-        cadence = judge_cadence(movement, rate.verdict)
-        return [rate] if cadence is None else [rate, cadence]
-
-    def _judge_stop(self, stop: _StopCheck) -> list[Finding]:
-        end = stop.movement.stopped_at
-        after = self._between(end + STOP_GRACE_S, stop.until)
-        found = judge_stop("gimbal_control", end, after, self.settings.tolerance_deg)
-        return [] if found is None else [found]
 
     def _limits(self, sample: Sample) -> list[Finding]:
         out: list[Finding] = []

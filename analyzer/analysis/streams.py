@@ -97,27 +97,12 @@ class Movement:
 
 @dataclass(eq=False)
 class StickStream:
-    """The open stream of one component: its cadence and its movement now under way."""
+    """The open stream of one component: its last command and its movement under way."""
 
     component: str
-    start: float
     last: float
-    count: int = 1
-    interval_sum: float = 0.0
-    interval_max: float = 0.0
     movement: Movement | None = None
     cadence_said: bool = False  # a stream's cadence is judged once
-
-    def add(self, t: float) -> None:
-        interval = t - self.last
-        self.interval_sum += interval
-        self.interval_max = max(self.interval_max, interval)
-        self.count += 1
-        self.last = t
-
-    @property
-    def interval_mean(self) -> float | None:
-        return self.interval_sum / (self.count - 1) if self.count > 1 else None
 
 
 class Streams:
@@ -130,7 +115,6 @@ class Streams:
     def __init__(self) -> None:
         self.open: dict[str, StickStream] = {}
         self.waiting: list[Movement] = []  # closed, their window still open
-        self.closed_streams: list[StickStream] = []  # ended while movements still wait
 
     def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
         """One gimbal_control; returns the movements it closed (their stop checks start)."""
@@ -141,9 +125,9 @@ class Streams:
             if waiting.component == component:
                 waiting.add(command)
         if stream is None:
-            stream = self.open[component] = StickStream(component, t, t)
+            stream = self.open[component] = StickStream(component, t)
         else:
-            stream.add(t)
+            stream.last = t
         movement = stream.movement
         centred = pan == 0 and tilt == 0
         if movement is not None:
