@@ -53,7 +53,9 @@ class AxisResult:
 
 
 def _fmt(value: float) -> str:
-    return f"{value:.1f}"
+    """An angle as the sentence says it: from the value the finding's JSON carries
+    (rounded to 3 decimals), so the two never round apart (4.6499 is '4.7' in both)."""
+    return f"{round(value, 3):.1f}"
 
 
 def judge_axis(
