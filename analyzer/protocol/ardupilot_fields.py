@@ -1,4 +1,4 @@
-"""The /ardupilot/mount and /ardupilot/targets event contract: what an ArduPilot mount driver saw."""
+"""The /ardupilot/mount and /ardupilot/targets event contract: what a mount driver saw."""
 
 from __future__ import annotations
 

@@ -21,9 +21,9 @@ from analyzer.protocol.ids import COMPONENT_NAMES
 from analyzer.protocol.response_fields import CHECKS, FIELD_ENUMS, OPTIONAL_FIELDS, VERDICTS
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
+    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_ARDUPILOT_MOUNT,
     TOPIC_ARDUPILOT_TARGETS,
-    TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CAN_BUS_STATE,
     TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
