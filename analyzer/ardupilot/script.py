@@ -156,3 +156,13 @@ def _is_integer(value: Any) -> bool:
     if isinstance(value, bool):
         return False
     return isinstance(value, int) or (isinstance(value, float) and value.is_integer())
+
+
+def compile_check(source: str, name: str) -> None:
+    """Raise ScriptFailed (``Lua: <file>:<line>: <why>``) when ``source`` does not compile."""
+    import lupa.lua53 as lua53
+
+    lua = lua53.LuaRuntime(register_eval=False, register_builtins=False)
+    loaded = lua.globals().load(source, "@" + name, "t")
+    if isinstance(loaded, tuple):
+        raise ScriptFailed(f"Lua: {loaded[1]}")
