@@ -234,9 +234,12 @@ class Location(Binding):
     def alt(self, value: Any = None) -> int | None:
         return self._field("alt", value, INT32_MAX)
 
-    @method()
-    def relative_alt(self) -> bool:
-        return self.frame == ABOVE_HOME
+    @method("value", optional=1)
+    def relative_alt(self, value: Any = None) -> bool | None:
+        if value is None:
+            return self.frame == ABOVE_HOME
+        self.frame = ABOVE_HOME if value else ABSOLUTE  # the flag alone, as ArduPilot's
+        return None
 
     @method()
     def copy(self) -> Location:
