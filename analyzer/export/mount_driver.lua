@@ -551,7 +551,8 @@ local function update_camera()
       end
       send_command("zoom", {action = action})
     elseif cam_zoom_type == 2 then        -- percentage of the zoom range, 0 = 1x
-      local ratio = 1 + (VSH_ZOOM_MAX:get() - 1) * cam_zoom_value / 100
+      local percent = math.max(0, math.min(100, cam_zoom_value))
+      local ratio = 1 + (VSH_ZOOM_MAX:get() - 1) * percent / 100
       send_command("specified_angle", {axis = COMMANDS.specified_angle.fields.axis.labels.zoom, zoom = ratio})
     end
   end
