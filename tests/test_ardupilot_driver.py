@@ -4,6 +4,7 @@ camera action asks for, the attitude it reports is the feedback's, damage is dro
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import Counter
 from typing import Any
@@ -66,7 +67,7 @@ def test_rate_targets_become_gimbal_control_every_50_ms_and_one_stop() -> None:
     first = named(commands(session, 0.5, 2.0), "gimbal_control")
     assert {(c["pan_speed_dps"], c["tilt_speed_dps"]) for c in first} == {(10.0, -20.0)}
     times = [e.time for e in commands(session, 0.5, 2.0)]
-    gaps = {round(b - a, 3) for a, b in zip(times, times[1:], strict=False)}
+    gaps = {round(b - a, 3) for a, b in itertools.pairwise(times)}
     assert gaps == {0.05} and len(times) == 30
     stop = named(commands(session, 2.0, 3.0), "gimbal_control")
     assert stop == [stop[0]] and (stop[0]["pan_speed_dps"], stop[0]["tilt_speed_dps"]) == (0, 0)
@@ -235,7 +236,7 @@ def test_only_the_scripting_can_driver_it_is_given() -> None:
     # asked for the second driver where only the first is a scripting one: silence
     missing = run((), 4.0, parameters={"VSH_CAN_DRV": 2})
     assert missing.sent == [] and missing.vehicle.devices == {}
-    assert ("VSH: no scripting CAN driver 2" in t for _, _, t in missing.vehicle.texts)
+    assert "VSH: no scripting CAN driver 2" in [t for _, _, t in missing.vehicle.texts]
 
 
 def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
