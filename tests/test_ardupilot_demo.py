@@ -54,6 +54,7 @@ def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_ob
     assert {"rate", "angle"} <= targets
     metadata = Recording(path).metadata()["gimbal-analyzer"]
     assert metadata["ardupilot_driver"] == DRIVER_NAME
+    _valid_against_their_schemas(path, {"/ardupilot/mount", "/ardupilot/targets"})
 
     assert main(["analyze", str(path), "--json"]) == 0
     found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
@@ -61,6 +62,22 @@ def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_ob
     assert len(angles) >= 2
     assert {f["verdict"] for f in angles} == {"obeyed"}, [f["detail"] for f in angles]
     assert not [f for f in found if f["verdict"] == "not_obeyed"]
+
+
+def _valid_against_their_schemas(path: Path, topics: set[str]) -> None:
+    import jsonschema
+    from mcap.reader import make_reader
+
+    from analyzer.protocol.schema import topic_schemas
+
+    schemas = topic_schemas()
+    seen: Counter[str] = Counter()
+    with path.open("rb") as stream:
+        for schema, channel, message in make_reader(stream).iter_messages(topics=list(topics)):
+            assert schema is not None and json.loads(schema.data) == schemas[channel.topic]
+            jsonschema.validate(json.loads(message.data), schemas[channel.topic])
+            seen[channel.topic] += 1
+    assert set(seen) == topics
 
 
 def test_demo_ardupilot_refuses_a_driver_that_does_not_compile_and_stops_on_a_script_error(
