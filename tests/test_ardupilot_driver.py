@@ -5,8 +5,10 @@ camera action asks for, the attitude it reports is the feedback's, damage is dro
 from __future__ import annotations
 
 import itertools
+import json
 import math
 from collections import Counter
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -256,3 +258,22 @@ def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
     assert not [f for f in findings if f["verdict"] == "not_obeyed"]
     targets = [e for e in session.events if e.topic == TOPIC_ARDUPILOT_TARGETS]
     assert {e.fields["target"] for e in targets} == {"rate", "none", "angle", "location", "camera"}
+
+
+def test_a_dataflash_log_of_the_flight_is_judged_the_same(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from analyzer.cli import main
+    from tests.log_makers import ardupilot_log
+
+    boot = 1_795_834_800.0
+    session = run_session(lua_text(), DRIVER_NAME, 12.0, start=boot + 40.0)
+    log, _ = ardupilot_log(session.frames, boot)  # CANF records, as LogAllFrames writes
+    path = tmp_path / "00000042.BIN"
+    path.write_bytes(log)
+    assert main(["analyze", str(path), "--json"]) == 0
+    found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    angles = [f for f in found if f["command"] == "specified_angle" and f["check"] == "target"]
+    settled = [f for f in angles if f["time"] < boot + 40.0 + 9.0]  # not cut by the log's end
+    assert len(settled) >= 4 and {f["verdict"] for f in settled} == {"obeyed"}
+    assert not [f for f in found if f["verdict"] == "not_obeyed"]
