@@ -8,11 +8,12 @@ from collections.abc import Callable
 from typing import Any
 
 from analyzer.ardupilot.plan import MountLibrary
-from analyzer.ardupilot.script import LuaScript, ScriptFailed
+from analyzer.ardupilot.script import LuaScript
 from analyzer.ardupilot.vehicle import Vehicle
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.runner import SimulatorRunner
+from analyzer.sim.scene import Scene
 from analyzer.sim.transports import CanLink, LinkSpec, open_gimbal_link
 from analyzer.sim.uav import FlightPath
 from analyzer.sources.base import Source, SourceItem
@@ -61,10 +62,11 @@ class NotedSource:
         return getattr(self.source, name)
 
 
-class ArduPilotScene:
-    """The simulated gimbal and an autopilot running ``driver`` on ``spec``; start() /
-    stop(), like the demo's Scene. The autopilot's events go to ``note``; what the script
-    says to the GCS goes to ``log``; a script error ends the autopilot (``errors``)."""
+class ArduPilotScene(Scene):
+    """The simulated gimbal and an autopilot running a driver on ``spec``: the demo's Scene
+    with the autopilot in the ground station's place (start() / stop() / ``errors`` as
+    there). The autopilot's events go to ``note``, what the script says to the GCS to
+    ``log``; a script error ends the autopilot (in ``errors``)."""
 
     def __init__(
         self,
@@ -78,66 +80,73 @@ class ArduPilotScene:
         library: MountLibrary | None = None,
         log: Callable[[str], None] | None = None,
     ) -> None:
-        self.errors: list[BaseException] = []
-        self.note = note
-        self.log = log
-        self._stop = threading.Event()
         gimbal_link = open_gimbal_link(spec)
         try:
-            self.link = AutopilotCanLink(spec)
+            link = AutopilotCanLink(spec)
         except BaseException:
             gimbal_link.close()
             raise
-        self.links: list[Any] = [gimbal_link, self.link]
-        self.start_time = time.time()
+        self.links: list[Any] = [gimbal_link, link]
         self.gimbal = SimulatedGimbal(time.monotonic(), config)
         self.runner = SimulatorRunner(self.gimbal, gimbal_link, status_every=None)
-        self.vehicle = Vehicle(
-            self.link.send_frame,
+        vehicle = Vehicle(
+            link.send_frame,
             library=library or MountLibrary(),
             path=path or FlightPath(),
-            start=self.start_time,
+            start=time.time(),
             boot_ms=BOOT_MS,
         )
-        self.script = LuaScript(script_source, script_name, self.vehicle)
-        self._texts = 0
+        script = LuaScript(script_source, script_name, vehicle)
+        self.ground: Any = Autopilot(link, script, note, log)
         self._threads = [
             threading.Thread(target=self._guard(self.runner.run), name="sim-gimbal", daemon=True),
-            threading.Thread(target=self._guard(self._fly), name="autopilot", daemon=True),
+            threading.Thread(target=self._guard(self.ground.run), name="autopilot", daemon=True),
         ]
+        self.errors: list[BaseException] = []
         self._stopping = threading.Lock()
 
-    def _guard(self, body: Callable[[], None]) -> Callable[[], None]:
-        def run() -> None:
-            try:
-                body()
-            except Exception as exc:  # a link failed or the script stopped
-                self.errors.append(exc)
 
-        return run
+class Autopilot:
+    """Runs the script in real time on the autopilot's CAN port until stopped."""
 
-    def _fly(self) -> None:
+    def __init__(
+        self,
+        link: AutopilotCanLink,
+        script: LuaScript,
+        note: Callable[[list[Event]], None],
+        log: Callable[[str], None] | None,
+    ) -> None:
+        self.link = link
+        self.script = script
+        self.vehicle = script.vehicle
+        self.note = note
+        self.log = log
+        self._stop = threading.Event()
+        self._texts = 0
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def run(self) -> None:
         began = time.monotonic()
 
         def now_ms() -> int:
             return BOOT_MS + int((time.monotonic() - began) * 1000)
 
-        self.start_time = time.time()
-        self.vehicle.start = self.start_time
+        self.vehicle.start = time.time()
+        script = self.script
         try:
-            self.script.start(now_ms())
-            while not self._stop.is_set() and self.script.due_ms is not None:
-                wait = max(0.0, min(MAX_WAIT_S, (self.script.due_ms - now_ms()) / 1000))
+            script.start(now_ms())
+            while not self._stop.is_set() and script.due_ms is not None:
+                wait = max(0.0, min(MAX_WAIT_S, (script.due_ms - now_ms()) / 1000))
                 for item in self.link.receive(wait):
                     if isinstance(item, CanFrame):
                         self.vehicle.deliver(item.can_id, item.data, item.extended)
-                if self.script.due_ms is not None and now_ms() >= self.script.due_ms:
-                    self.script.run(now_ms())
+                if script.due_ms is not None and now_ms() >= script.due_ms:
+                    script.run(now_ms())
                 self._hand_on()
-        except ScriptFailed:
+        finally:
             self._hand_on()
-            raise
-        self._hand_on()
 
     def _hand_on(self) -> None:
         events = self.vehicle.take_events()
@@ -149,19 +158,3 @@ class ArduPilotScene:
             self._texts += 1
             if self.log is not None:
                 self.log(f"ardupilot: {text}")
-
-    def start(self) -> None:
-        for thread in self._threads:
-            thread.start()
-
-    def stop(self, timeout: float = 2.0) -> None:
-        """Stop both threads and close the links; safe to call twice, from any thread."""
-        self.runner.stop()
-        self._stop.set()
-        with self._stopping:
-            for thread in self._threads:
-                if thread.is_alive() and thread is not threading.current_thread():
-                    thread.join(timeout)
-            links, self.links = self.links, []
-        for link in links:
-            link.close()

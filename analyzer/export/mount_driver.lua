@@ -511,6 +511,16 @@ local function send_tracking(track_type, x1, y1, x2, y2)
   end
 end
 
+-- a rate of the camera library (-1, 0, 1) as one of three actions
+local function rate_action(value, labels, up, down)
+  if value > 0 then
+    return labels[up]
+  elseif value < 0 then
+    return labels[down]
+  end
+  return labels.stop
+end
+
 -- camera library: what changed in camera:get_state becomes the gimbal's camera commands
 local function update_camera()
   local state = camera:get_state(CAMERA_INSTANCE)
@@ -543,13 +553,7 @@ local function update_camera()
     cam_zoom_type, cam_zoom_value = state:zoom_type(), state:zoom_value()
     labels = COMMANDS.zoom.fields.action.labels
     if cam_zoom_type == 1 then            -- rate: zoom out = -1, hold = 0, zoom in = 1
-      local action = labels.stop
-      if cam_zoom_value > 0 then
-        action = labels.zoom_in
-      elseif cam_zoom_value < 0 then
-        action = labels.zoom_out
-      end
-      send_command("zoom", {action = action})
+      send_command("zoom", {action = rate_action(cam_zoom_value, labels, "zoom_in", "zoom_out")})
     elseif cam_zoom_type == 2 then        -- percentage of the zoom range, 0 = 1x
       local percent = math.max(0, math.min(100, cam_zoom_value))
       local ratio = 1 + (VSH_ZOOM_MAX:get() - 1) * percent / 100
@@ -560,13 +564,7 @@ local function update_camera()
     cam_focus_type, cam_focus_value = state:focus_type(), state:focus_value()
     labels = COMMANDS.focus.fields.action.labels
     if cam_focus_type == 1 then           -- rate: focus in = -1, hold = 0, focus out = 1
-      local action = labels.stop
-      if cam_focus_value > 0 then
-        action = labels.focus_plus
-      elseif cam_focus_value < 0 then
-        action = labels.focus_minus
-      end
-      send_command("focus", {action = action})
+      send_command("focus", {action = rate_action(cam_focus_value, labels, "focus_plus", "focus_minus")})
     elseif cam_focus_type == 4 then
       send_command("focus", {action = labels.auto_focus})
     elseif VSH_DEBUG:get() > 0 then
