@@ -46,7 +46,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         ),
     ),
     ("analysis", ("analysis",)),
-    ("engines", ("capture", "live", "sim", "samplegen")),
+    ("engines", ("capture", "live", "sim", "samplegen", "ardupilot")),
     ("user interfaces", ("report", "tui", "fleet", "check")),
     ("commands", ("commands", "cli", "__main__")),
 )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import IO, Any
 
@@ -54,6 +54,16 @@ app.foxglove.dev): map, log, plots. The recording's metadata keeps the
 simulator options that made it (faults, disobedience, --heading).
 
 With --foxglove the stream is also served live to Foxglove (ws://127.0.0.1:8765).
+
+With --ardupilot DRIVER.lua an ArduPilot autopilot takes the ground station's
+place: the Lua mount driver (made by `gimbal-analyzer export ardupilot`, or an
+edited copy) runs in Lua 5.3 with ArduPilot's scripting bindings emulated, on
+the same virtual CAN bus. ArduPilot's mount and camera libraries ask it for a
+pilot's rates, angles in body and earth frame, a point to look at and camera
+actions; its UAV status frames are the only ones (the simulator does not play
+the UAV). The recording adds /ardupilot/mount (the attitude the driver reported)
+and /ardupilot/targets (what the mount library asked); a script error stops the
+demo (exit 1) with ArduPilot's message.
 """
 
 CHANNEL = "gimbal-demo"
@@ -91,6 +101,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--all", action="store_true", help="plain output: print every event (UAV status too)"
     )
     parser.add_argument("--clean", action="store_true", help="inject no faults")
+    parser.add_argument(
+        "--ardupilot",
+        metavar="DRIVER.lua",
+        help="run this ArduPilot Lua mount driver as the ground station, in Lua 5.3 with "
+        "ArduPilot's scripting bindings emulated (see: gimbal-analyzer export ardupilot)",
+    )
     add_compression_argument(parser)
     add_foxglove_options(parser)
     add_video_options(parser)  # a camera on the bench recorded next to the simulated gimbal
@@ -211,6 +227,49 @@ def _plain(event: Event) -> str:
     return f"{stamp} {event.topic:<17} {text}{warnings}"
 
 
+def _read_driver(name: str) -> tuple[str, str]:
+    """(text, file name) of the Lua driver, or a one-line usage error."""
+    path = Path(name)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"--ardupilot {name}: cannot read it: {exc}") from None
+    from analyzer.ardupilot.script import ScriptFailed, compile_check
+
+    try:
+        compile_check(text, path.name)
+    except ScriptFailed as exc:
+        raise UsageError(f"--ardupilot {name}: {exc}") from None
+    return text, path.name
+
+
+def _autopilot(
+    args: argparse.Namespace,
+    spec: Any,
+    config: Any,
+    driver: tuple[str, str],
+    source: Any,
+    tui: bool,
+) -> Any:
+    """The scene of `--ardupilot`: the simulated gimbal and the autopilot running the driver."""
+    from analyzer.ardupilot.live import ArduPilotScene
+    from analyzer.sim.uav import FlightPath
+
+    def say(text: str) -> None:
+        if not tui:
+            print(text, flush=True)
+
+    return ArduPilotScene(
+        spec,
+        config,
+        driver[0],
+        driver[1],
+        note=source.note,
+        path=FlightPath(heading_deg=args.heading),
+        log=say,
+    )
+
+
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
@@ -261,7 +320,19 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
 
-    source = open_source(str(spec))
+    if args.stick and args.ardupilot:
+        raise UsageError(
+            "--stick drives the demo's ground station, and with --ardupilot the driver is "
+            "the ground station: give one of them"
+        )
+    driver = _read_driver(args.ardupilot) if args.ardupilot else None
+    if driver is not None:
+        config = replace(config, uav=False)  # the driver's status frames are the only ones
+    source: Any = open_source(str(spec))
+    if driver is not None:
+        from analyzer.ardupilot.live import NotedSource
+
+        source = NotedSource(source)
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
     recording = open_live_recording(
         args,
@@ -272,6 +343,7 @@ def run(args: argparse.Namespace) -> int:
             command="demo",
             **simulator_metadata(args, config),
             **video_metadata(args),
+            **({"ardupilot_driver": driver[1]} if driver is not None else {}),
         ),
         hold_back=hold_back,
         sinks_after=lambda sink, video: [printer],
@@ -280,7 +352,11 @@ def run(args: argparse.Namespace) -> int:
     capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
     try:
         script = GroundScript(pilot_script()) if args.stick else None
-        scene = Scene(spec, config, script=script)
+        scene: Any = (
+            Scene(spec, config, script=script)
+            if driver is None
+            else _autopilot(args, spec, config, driver, source, tui)
+        )
     except BaseException:
         source.close()
         sink.close()
@@ -290,9 +366,13 @@ def run(args: argparse.Namespace) -> int:
     recording.companions.append(Companion(scene.start, scene.stop))
 
     def first_line() -> None:
+        who = (
+            "simulated gimbal + UAV and a scripted ground station"
+            if driver is None
+            else f"simulated gimbal and ArduPilot running {driver[1]}"
+        )
         print(
-            f"demo: simulated gimbal + UAV and a scripted ground station on {spec}; "
-            f"recording {path}; faults: {faults.describe()}; {duration:g} s",
+            f"demo: {who} on {spec}; recording {path}; faults: {faults.describe()}; {duration:g} s",
             flush=True,
         )
 

@@ -9,7 +9,10 @@ from pathlib import Path
 
 from analyzer.errors import UsageError
 
-HELP = "export the protocol as a DBC file (cantools, SavvyCAN) or a Wireshark Lua dissector"
+HELP = (
+    "export the protocol as a DBC file (cantools, SavvyCAN), a Wireshark Lua dissector or "
+    "an ArduPilot Lua mount driver"
+)
 DESCRIPTION = """\
 Write the protocol tables in the form another tool reads, generated from the
 same command table that drives decoding:
@@ -24,10 +27,17 @@ same command table that drives decoding:
              Edit > Preferences > Protocols > GIMBAL): frame types 0x0A, 0x0B,
              0x0C and 0x10, commands and feedback with units and labels,
              CRC checked, frames split over or glued in TCP segments joined.
+  ardupilot  an ArduPilot Lua mount driver for the gimbal on CAN (MNT1_TYPE 9,
+             a scripting CAN driver): mount targets to gimbal_control /
+             specified_angle, the camera library to the camera commands, the
+             feedback to the mount's attitude, the UAV status to the gimbal.
+             With -o it writes FILE.md beside it: its parameters and set-up.
+             Try it first: gimbal-analyzer demo --ardupilot FILE.
 
 examples:
   gimbal-analyzer export dbc -o gimbal.dbc
   gimbal-analyzer export wireshark -o gimbal.lua
+  gimbal-analyzer export ardupilot -o mount-viewsheen-driver.lua
   gimbal-analyzer export dbc                     # to standard output
   gimbal-analyzer export dbc -o gimbal.dbc --check      # is my copy stale?
 
@@ -39,6 +49,11 @@ exits 1 when FILE differs from what the table gives (a stale export).
 FORMATS: dict[str, tuple[str, str, str]] = {
     "dbc": ("analyzer.export.dbc", "dbc_text", "DBC file"),
     "wireshark": ("analyzer.export.wireshark", "lua_text", "Wireshark Lua dissector"),
+    "ardupilot": ("analyzer.export.ardupilot", "lua_text", "ArduPilot Lua mount driver"),
+}
+# format -> (module, function, suffix, what) of the file written beside FILE with -o
+COMPANIONS: dict[str, tuple[str, str, str, str]] = {
+    "ardupilot": ("analyzer.export.ardupilot", "markdown_text", ".md", "its parameters page"),
 }
 
 
@@ -62,26 +77,47 @@ def rendered(name: str) -> str:
     return text
 
 
+def companion(name: str, output: str) -> tuple[Path, str, str] | None:
+    """(path, text, what) of the file an export writes beside ``output``, if any."""
+    if name not in COMPANIONS:
+        return None
+    module, function, suffix, what = COMPANIONS[name]
+    text: str = getattr(importlib.import_module(module), function)()
+    return Path(output).with_suffix(suffix), text, what
+
+
 def run(args: argparse.Namespace) -> int:
     text = rendered(args.format)
     what = FORMATS[args.format][2]
     if args.check:
         if not args.output:
             raise UsageError("--check needs -o FILE")
-        path = Path(args.output)
-        if not path.is_file() or path.read_text(encoding="utf-8") != text:
+        files = [(Path(args.output), text)]
+        beside = companion(args.format, args.output)
+        if beside is not None:
+            files.append(beside[:2])
+        stale = [p for p, t in files if not p.is_file() or p.read_text(encoding="utf-8") != t]
+        if stale:
+            names = ", ".join(str(p) for p in stale)
             print(
-                f"{path} is out of date (run: gimbal-analyzer export {args.format} "
-                f"-o {path} --force)"
+                f"{names} out of date (run: gimbal-analyzer export {args.format} "
+                f"-o {args.output} --force)"
             )
             return 1
-        print(f"{path} matches the protocol table")
+        print(f"{' and '.join(str(p) for p, _ in files)} match the protocol table")
         return 0
     if not args.output or args.output == "-":
         sys.stdout.write(text)
         return 0
-    from analyzer.output_file import write_output
+    from analyzer.output_file import check_output, write_output
 
+    beside = companion(args.format, args.output)
+    if beside is not None:  # refuse before writing anything
+        check_output(str(beside[0]), force=args.force)
     write_output(args.output, text, force=args.force)
     print(f"wrote {what} {args.output}", file=sys.stderr)
+    if beside is not None:
+        path, page, page_what = beside
+        write_output(str(path), page, force=args.force)
+        print(f"wrote {page_what} {path}", file=sys.stderr)
     return 0

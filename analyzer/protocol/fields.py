@@ -111,6 +111,13 @@ class Field:
     def decimals(self) -> int:
         return 0 if self.div == 1 else math.ceil(math.log10(self.div))
 
+    def raw_limits(self) -> tuple[int, int]:
+        """Lowest and highest raw number to send: the document's range, else the kind's."""
+        _, _, kind_lo, kind_hi = _KINDS[self.kind]
+        lo = kind_lo if self.minimum is None else self.minimum
+        hi = kind_hi if self.maximum is None else self.maximum
+        return lo, hi
+
     def value_limits(self) -> tuple[float | None, float | None]:
         """Minimum and maximum in physical units."""
         lo = None if self.minimum is None else self.scale(self.minimum)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from analyzer.protocol.ardupilot_fields import MOUNT_FIELDS, TARGET_ENUMS, TARGET_FIELDS
 from analyzer.protocol.bus_state import BUS_STATES, count_key
 from analyzer.protocol.can_error import CLASS_NAMES, UNKNOWN_CLASS, UNSPECIFIED
 from analyzer.protocol.check_fields import (
@@ -21,6 +22,8 @@ from analyzer.protocol.response_fields import ALL_VERDICTS, CHECKS, FIELD_ENUMS,
 from analyzer.protocol.types import (
     DIAGNOSTIC_KINDS,
     TOPIC_ANALYSIS_RESPONSE,
+    TOPIC_ARDUPILOT_MOUNT,
+    TOPIC_ARDUPILOT_TARGETS,
     TOPIC_CAN_BUS_STATE,
     TOPIC_CHECK_STEPS,
     TOPIC_COMMAND,
@@ -259,6 +262,30 @@ def bus_state_schema() -> dict[str, Any]:
     return schema
 
 
+def ardupilot_schemas() -> dict[str, dict[str, Any]]:
+    """What an ArduPilot mount driver saw in `demo --ardupilot`: the attitude it reported
+    and the targets ArduPilot's mount and camera libraries asked of it."""
+    mount = _envelope(
+        TOPIC_ARDUPILOT_MOUNT,
+        "ArduPilot mount attitude",
+        "The attitude the mount driver reported to ArduPilot (mount:set_attitude_euler).",
+    )
+    targets = _envelope(
+        TOPIC_ARDUPILOT_TARGETS,
+        "ArduPilot mount target",
+        "What ArduPilot's mount library (mount:get_rate_target, get_angle_target, "
+        "get_location_target) or camera library (camera:get_state) asks, at each change.",
+    )
+    for schema, fields in ((mount, MOUNT_FIELDS), (targets, TARGET_FIELDS)):
+        for name, (kind, description) in fields.items():
+            schema["properties"][name] = {"type": kind, "description": description}
+            if name in TARGET_ENUMS and schema is targets:
+                schema["properties"][name]["enum"] = list(TARGET_ENUMS[name])
+    mount["required"] += list(MOUNT_FIELDS)
+    targets["required"].append("target")
+    return {TOPIC_ARDUPILOT_MOUNT: mount, TOPIC_ARDUPILOT_TARGETS: targets}
+
+
 def topic_schemas() -> dict[str, dict[str, Any]]:
     """Topic -> JSON Schema of its events."""
     out: dict[str, dict[str, Any]] = {TOPIC_COMMAND: command_schema()}
@@ -327,6 +354,7 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
     out[TOPIC_ANALYSIS_RESPONSE] = response_schema()
     out[TOPIC_CHECK_STEPS] = check_steps_schema()
     out[TOPIC_CAN_BUS_STATE] = bus_state_schema()
+    out.update(ardupilot_schemas())
     assert set(out) == set(TOPICS)
     return out
 

@@ -18,6 +18,8 @@ TOPIC_CAN_OTHER = "/can/other"
 TOPIC_CAN_BUS_STATE = "/can/bus_state"  # a CAN controller's error state, from error frames
 TOPIC_ANALYSIS_RESPONSE = "/analysis/response"  # findings of the response analysis
 TOPIC_CHECK_STEPS = "/check/steps"  # verdicts of the bench check's steps
+TOPIC_ARDUPILOT_MOUNT = "/ardupilot/mount"  # attitude an ArduPilot mount driver reported
+TOPIC_ARDUPILOT_TARGETS = "/ardupilot/targets"  # what ArduPilot's mount library asked
 
 TOPICS = (
     TOPIC_COMMAND,
@@ -31,6 +33,8 @@ TOPICS = (
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_CHECK_STEPS,
     TOPIC_CAN_BUS_STATE,
+    TOPIC_ARDUPILOT_MOUNT,
+    TOPIC_ARDUPILOT_TARGETS,
 )
 
 # Diagnostic kinds (the ``kind`` field of /diagnostics events).

@@ -1,0 +1,1 @@
+"""ArduPilot's scripting side, emulated: a Lua mount driver run against the simulated gimbal."""
