@@ -242,15 +242,41 @@ def run_items(
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
+    ``delivered_batches`` does the work (see there: batches, FrameRuns, an early stop
+    when a sink fails, exceptions of the reader); ``after_batch`` runs after each batch
+    but the last, the one ``finish`` delivers. ``progress``
+    (``analyzer.progress.Progress.maybe``) is drawn after each batch and cleared at the
+    end, whatever happens.
+    """
+    tally = pipeline.tally
+    try:
+        with fewer_collections():
+            for batch in delivered_batches(items, pipeline, batch_items=batch_items):
+                if pipeline.failed or pipeline.finished:
+                    continue
+                if after_batch is not None:
+                    after_batch(batch)
+                if progress is not None:
+                    progress.update(tally.frames + tally.chunks)
+    finally:
+        if progress is not None:
+            progress.clear()
+
+
+def delivered_batches(
+    items: Iterable[Any], pipeline: Pipeline, *, batch_items: int = BATCH_ITEMS
+) -> Iterator[Batch]:
+    """Feed ``pipeline`` everything ``items`` yields, yielding each batch once delivered;
+    the last is the one ``finish`` delivers (the pipeline is then finished).
+
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
-    input, so each line shows at once); ``after_batch`` runs after each. When no sink
-    keeps raw items, a reader that can hands its frames on as FrameRuns. Stops
-    early when a sink fails. ``progress`` (``analyzer.progress.Progress.maybe``) is
-    drawn after each batch and cleared at the end, whatever happens. An exception of
-    the reader (Ctrl-C, unreadable input) propagates without ``finish``: the caller
-    decides whether what was read counts (``decode`` of live input finishes,
-    ``convert`` throws its output away).
+    input, so each line shows at once). When no sink keeps raw items, a reader that can
+    hands its frames on as FrameRuns. Stops early (then finishes) when a sink fails. An
+    exception of the reader (Ctrl-C, unreadable input) propagates without ``finish``:
+    the caller decides whether what was read counts (``decode`` of live input finishes,
+    ``convert`` throws its output away). ``run_items`` (the commands) and the Python
+    API's ``read`` and ``analyze`` are this one loop.
     """
     if not pipeline.keeps_items and hasattr(items, "frame_runs"):
         items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
@@ -258,22 +284,12 @@ def run_items(
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:
         chunks = _chunks(iter(items), batch_items)
-    tally = pipeline.tally
-    try:
-        with fewer_collections():
-            for chunk in chunks:
-                pipeline.feed(chunk)
-                batch = pipeline.deliver()
-                if pipeline.failed:
-                    break
-                if after_batch is not None:
-                    after_batch(batch)
-                if progress is not None:
-                    progress.update(tally.frames + tally.chunks)
-            pipeline.finish()
-    finally:
-        if progress is not None:
-            progress.clear()
+    for chunk in chunks:
+        pipeline.feed(chunk)
+        yield pipeline.deliver()
+        if pipeline.failed:
+            break
+    yield pipeline.finish()
 
 
 @contextlib.contextmanager
