@@ -170,8 +170,11 @@ class Pipeline:
 
     # -- output ------------------------------------------------------------------------------
 
-    def deliver(self, wall_time: float = 0.0) -> Batch:
-        """Hand the open batch (possibly empty) to stages, counters and sinks; open a new one."""
+    def deliver(self, wall_time: float = 0.0, *, closing: bool = False) -> Batch:
+        """Hand the open batch (possibly empty) to stages, counters and sinks; open a new one.
+
+        ``closing`` (``finish``): each stage closes once it has seen the batch, so that
+        what the decoder said at the end of the input reaches it before it closes."""
         batch = self.batch
         self.batch = Batch()
         batch.wall_time = wall_time
@@ -182,6 +185,8 @@ class Pipeline:
             extra = stage.process(events)
             if extra:
                 events.extend(extra)
+            if closing:
+                events.extend(stage.close())
         with self.lock:
             self.tally.add_items(batch.items)
             self.tally.add_runs(batch.runs)
@@ -197,7 +202,8 @@ class Pipeline:
         return batch
 
     def finish(self, wall_time: float = 0.0, extra: Iterable[Event] = ()) -> Batch:
-        """End of input: flush decoder and stages, deliver the last batch, close every sink.
+        """End of input: flush the decoder, deliver the last batch (the stages see what the
+        decoder flushed, then close), close every sink.
 
         Safe to call twice (the second call does nothing). ``extra`` events (a note on
         why the input ended) go into the last batch.
@@ -208,18 +214,18 @@ class Pipeline:
         events = self.batch.events
         try:
             events.extend(self.decoder.close())
-            for stage in self.stages:
-                events.extend(stage.close())
         finally:
             events.extend(extra)
-            batch = self.deliver(wall_time)
-            failed = {id(f.sink) for f in self.failures}
-            for sink in self.sinks:
-                try:
-                    sink.close()
-                except Exception as exc:
-                    if id(sink) not in failed:
-                        self.failures.append(SinkFailure(sink, exc, closing=True))
+            try:
+                batch = self.deliver(wall_time, closing=True)
+            finally:
+                failed = {id(f.sink) for f in self.failures}
+                for sink in self.sinks:
+                    try:
+                        sink.close()
+                    except Exception as exc:
+                        if id(sink) not in failed:
+                            self.failures.append(SinkFailure(sink, exc, closing=True))
         return batch
 
     @property
