@@ -4,38 +4,22 @@ other end: commands sent with ``can_message``, its feedback decoded in the notif
 from __future__ import annotations
 
 import threading
-import time
 import uuid
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 
 import can
 import pytest
 
 from analyzer import Event, Listener, can_message, status_message
-from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.runner import SimulatorRunner
-from analyzer.sim.transports import open_gimbal_link, parse_link
+from analyzer.sim.transports import parse_link
+from tests.test_sim_e2e import simulator, wait_for
 
-TIMEOUT = 8.0  # generous: the tests wait for a condition, they never assert on timing
 
-
-@contextmanager
-def gimbal_on(channel: str) -> Iterator[SimulatorRunner]:
+def gimbal_on(channel: str) -> AbstractContextManager[SimulatorRunner]:
     """The simulated gimbal in real time on the virtual bus ``channel``."""
-    link = open_gimbal_link(parse_link(f"can:virtual:{channel}"))
-    runner = SimulatorRunner(
-        SimulatedGimbal(time.monotonic(), SimConfig()), link, status_every=None
-    )
-    runner.keep_received = True
-    thread = threading.Thread(target=runner.run, daemon=True)
-    thread.start()
-    try:
-        yield runner
-    finally:
-        runner.stop()
-        thread.join(5)
-        link.close()
+    return simulator(parse_link(f"can:virtual:{channel}"))
 
 
 class Seen:
@@ -55,15 +39,6 @@ class Seen:
                 e.fields for e in self.events if e.topic == "/gimbal/attitude" and test(e.fields)
             ]
         return found[-1] if found else None
-
-
-def wait_for(condition: Callable[[], object]) -> object:
-    end = time.monotonic() + TIMEOUT
-    while time.monotonic() < end:
-        if result := condition():
-            return result
-        time.sleep(0.05)
-    return condition()
 
 
 def test_the_listener_decodes_the_simulated_gimbals_feedback_in_the_notifier() -> None:
