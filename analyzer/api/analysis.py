@@ -35,10 +35,10 @@ class Finding(Event):
 
     >>> from analyzer import analyze
     >>> finding = next(analyze("samples/flight-candump.log"))
-    >>> finding.topic, finding.command == finding.to_dict()["command"]
-    ('/analysis/response', True)
-    >>> sorted(finding.to_dict())[:4]
-    ['check', 'command', 'crc_errors', 'detail']
+    >>> finding.topic, finding.source
+    ('/analysis/response', 'analysis')
+    >>> finding.verdict == finding.to_dict()["verdict"] and finding.detail != ""
+    True
     """
 
     @property
