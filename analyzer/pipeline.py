@@ -173,8 +173,11 @@ class Pipeline:
 
     # -- output ------------------------------------------------------------------------------
 
-    def deliver(self, wall_time: float = 0.0) -> Batch:
-        """Hand the open batch (possibly empty) to stages, counters and sinks; open a new one."""
+    def deliver(self, wall_time: float = 0.0, *, closing: bool = False) -> Batch:
+        """Hand the open batch (possibly empty) to stages, counters and sinks; open a new one.
+
+        ``closing`` (``finish``): each stage closes once it has seen the batch, so that
+        what the decoder said at the end of the input reaches it before it closes."""
         batch = self.batch
         self.batch = Batch()
         batch.wall_time = wall_time
@@ -185,6 +188,8 @@ class Pipeline:
             extra = stage.process(events)
             if extra:
                 events.extend(extra)
+            if closing:
+                events.extend(stage.close())
         with self.lock:
             self.tally.add_items(batch.items)
             self.tally.add_runs(batch.runs)
@@ -200,7 +205,8 @@ class Pipeline:
         return batch
 
     def finish(self, wall_time: float = 0.0, extra: Iterable[Event] = ()) -> Batch:
-        """End of input: flush decoder and stages, deliver the last batch, close every sink.
+        """End of input: flush the decoder, deliver the last batch (the stages see what the
+        decoder flushed, then close), close every sink.
 
         Safe to call twice (the second call does nothing). ``extra`` events (a note on
         why the input ended) go into the last batch.
@@ -211,18 +217,18 @@ class Pipeline:
         events = self.batch.events
         try:
             events.extend(self.decoder.close())
-            for stage in self.stages:
-                events.extend(stage.close())
         finally:
             events.extend(extra)
-            batch = self.deliver(wall_time)
-            failed = {id(f.sink) for f in self.failures}
-            for sink in self.sinks:
-                try:
-                    sink.close()
-                except Exception as exc:
-                    if id(sink) not in failed:
-                        self.failures.append(SinkFailure(sink, exc, closing=True))
+            try:
+                batch = self.deliver(wall_time, closing=True)
+            finally:
+                failed = {id(f.sink) for f in self.failures}
+                for sink in self.sinks:
+                    try:
+                        sink.close()
+                    except Exception as exc:
+                        if id(sink) not in failed:
+                            self.failures.append(SinkFailure(sink, exc, closing=True))
         return batch
 
     @property
@@ -245,16 +251,42 @@ def run_items(
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
+    ``delivered_batches`` does the work (see there: batches, FrameRuns, an early stop
+    when a sink fails, exceptions of the reader); ``after_batch`` runs after each batch
+    but the last, the one ``finish`` delivers. ``progress``
+    (``analyzer.progress.Progress.maybe``) is drawn after each batch and cleared at the
+    end, whatever happens.
+    """
+    tally = pipeline.tally
+    try:
+        with fewer_collections():
+            for batch in delivered_batches(items, pipeline, batch_items=batch_items):
+                if pipeline.failed or pipeline.finished:
+                    continue
+                if after_batch is not None:
+                    after_batch(batch)
+                if progress is not None:
+                    progress.update(tally.frames + tally.chunks)
+    finally:
+        if progress is not None:
+            progress.clear()
+
+
+def delivered_batches(
+    items: Iterable[Any], pipeline: Pipeline, *, batch_items: int = BATCH_ITEMS
+) -> Iterator[Batch]:
+    """Feed ``pipeline`` everything ``items`` yields, yielding each batch once delivered;
+    the last is the one ``finish`` delivers (the pipeline is then finished).
+
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
-    input, so each line shows at once); ``after_batch`` runs after each. When no sink
-    keeps raw items, a reader that can hands its frames on as FrameRuns. The items are
-    dated by the capture's own time (``analyzer.capture_clock``) on the way. Stops
-    early when a sink fails. ``progress`` (``analyzer.progress.Progress.maybe``) is
-    drawn after each batch and cleared at the end, whatever happens. An exception of
-    the reader (Ctrl-C, unreadable input) propagates without ``finish``: the caller
-    decides whether what was read counts (``decode`` of live input finishes,
-    ``convert`` throws its output away).
+    input, so each line shows at once). When no sink keeps raw items, a reader that can
+    hands its frames on as FrameRuns. The items are dated by the capture's own time
+    (``analyzer.capture_clock``) on the way. Stops early (then finishes) when a sink fails. An
+    exception of the reader (Ctrl-C, unreadable input) propagates without ``finish``:
+    the caller decides whether what was read counts (``decode`` of live input finishes,
+    ``convert`` throws its output away). ``run_items`` (the commands) and the Python
+    API's ``read`` and ``analyze`` are this one loop.
     """
     if not pipeline.keeps_items and hasattr(items, "frame_runs"):
         items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
@@ -264,23 +296,12 @@ def run_items(
         chunks = _chunks(iter(items), batch_items)
     # Damage before the first frame, and frames dated far before the capture, take the
     # capture's time (never 1970).
-    chunks = pipeline.clock.batches(chunks)
-    tally = pipeline.tally
-    try:
-        with fewer_collections():
-            for chunk in chunks:
-                pipeline.feed(chunk)
-                batch = pipeline.deliver()
-                if pipeline.failed:
-                    break
-                if after_batch is not None:
-                    after_batch(batch)
-                if progress is not None:
-                    progress.update(tally.frames + tally.chunks)
-            pipeline.finish()
-    finally:
-        if progress is not None:
-            progress.clear()
+    for chunk in pipeline.clock.batches(chunks):
+        pipeline.feed(chunk)
+        yield pipeline.deliver()
+        if pipeline.failed:
+            break
+    yield pipeline.finish()
 
 
 @contextlib.contextmanager

@@ -48,8 +48,14 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analysis", ("analysis",)),
     ("engines", ("capture", "live", "sim", "samplegen", "ardupilot")),
     ("user interfaces", ("report", "tui", "fleet", "check")),
+    ("the Python API", ("api",)),  # what `import analyzer` gives integrators
     ("commands", ("commands", "cli", "__main__")),
 )
+# The package root holds the version and re-exports the Python API: each public name is
+# imported when first used (PEP 562) or by a type checker, never by `import analyzer`,
+# which runs before any module of the package. Those imports are no edge of the graph;
+# test_the_package_root_imports_nothing_of_the_analyzer_when_imported holds it to that.
+PACKAGE_ROOT = "analyzer"
 ORDER = [package for _, packages in LAYERS for package in packages]
 
 
@@ -79,6 +85,8 @@ def analyzer_graph() -> dict[str, set[str]]:
     paths = {module_name(path): path for path in PACKAGE.rglob("*.py")}
     return {
         name: {other for other in imported_modules(path) if other in paths and other != name}
+        if name != PACKAGE_ROOT
+        else set()
         for name, path in paths.items()
     }
 
@@ -156,6 +164,28 @@ def test_the_protocol_core_imports_only_itself_from_the_analyzer() -> None:
         if name.startswith("analyzer") and not name.startswith("analyzer.protocol")
     }
     assert not upward, f"analyzer.protocol imports from layers above it: {sorted(upward)}"
+
+
+def test_the_package_root_imports_nothing_of_the_analyzer_when_imported() -> None:
+    """Its re-exports sit in a function or under TYPE_CHECKING: nothing at import time."""
+    tree = ast.parse((PACKAGE / "__init__.py").read_text())
+    at_import: list[str] = []
+    for node in tree.body:
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING":
+            nodes: list[ast.stmt] = list(node.orelse)  # what runs when not type checking
+        else:
+            nodes = [node]
+        for statement in nodes:
+            if isinstance(statement, ast.Import | ast.ImportFrom):
+                names = imported_modules_of(statement)
+                at_import += sorted(n for n in names if n.startswith(PACKAGE_ROOT))
+    assert not at_import, f"analyzer/__init__.py imports at import time: {at_import}"
+
+
+def imported_modules_of(node: ast.Import | ast.ImportFrom) -> set[str]:
+    if isinstance(node, ast.Import):
+        return {alias.name for alias in node.names}
+    return {node.module or ""}
 
 
 def test_the_checks_see_imports_inside_functions_and_for_type_checking(tmp_path: Path) -> None:

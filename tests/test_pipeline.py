@@ -146,3 +146,38 @@ def test_the_response_analyzer_is_a_stage_and_analyze_runs_it_in_the_pipeline(
     assert main(["analyze", sample, "--json"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == len(found)
+
+
+class Watch:
+    """A stage noting what it saw, and whether it had closed when it saw it."""
+
+    def __init__(self) -> None:
+        self.closed = False
+        self.after_close: list[str] = []
+        self.kinds: list[str] = []
+
+    def process(self, events: list[Event]) -> list[Event]:
+        kinds = [str(e.fields["kind"]) for e in events if e.topic == "/diagnostics"]
+        self.kinds += kinds
+        if self.closed:
+            self.after_close += kinds
+        return []
+
+    def close(self) -> list[Event]:
+        self.closed = True
+        return []
+
+
+def test_the_stages_see_what_the_decoder_says_at_the_end_before_they_close() -> None:
+    from analyzer.protocol.feedback import encode_attitude, segments
+    from analyzer.protocol.ids import FEEDBACK_ID
+    from analyzer.protocol.types import CanFrame
+
+    cut = [CanFrame(1.0, FEEDBACK_ID, part, channel="can0") for part in segments(
+        encode_attitude(pitch_deg=1, yaw_deg=2))[:3]]  # fmt: skip
+    watch = Watch()
+    pipeline = Pipeline(stages=[watch])
+    run_items(cut, pipeline)
+    # the message the input cut short is reported by the decoder's close(): the stage
+    # (the response analysis counts damaged feedback) hears of it while still open
+    assert watch.kinds == ["incomplete"] and watch.after_close == [] and watch.closed

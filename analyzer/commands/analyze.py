@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from analyzer.errors import UsageError
 from analyzer.input_options import add_input_arguments
 from analyzer.terminal_text import printable
+
+if TYPE_CHECKING:
+    from analyzer.api.reading import Decoding
 
 HELP = "did the gimbal obey? compare each command with the attitude feedback that followed"
 
@@ -120,13 +123,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def open_reader(args: argparse.Namespace) -> Any:
-    from analyzer.inputs import open_input
-    from analyzer.protocol.ids import PROTOCOL_IDS
+def open_decoding_of(args: argparse.Namespace) -> Decoding:
+    """The input of ``analyze`` and ``report``: read and decoded as ``decode`` and the
+    Python API's ``read`` and ``analyze`` read and decode it."""
+    from analyzer.api.reading import open_decoding
 
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1..65535, not {args.port}")
-    return open_input(args.file, args.format, args.port, wanted_ids=PROTOCOL_IDS)
+    return open_decoding(args.file, args.format, port=args.port)
+
+
+def open_reader(args: argparse.Namespace) -> Any:
+    return open_decoding_of(args).reader
 
 
 def settings_from(args: argparse.Namespace) -> Any:
@@ -142,13 +150,13 @@ def settings_from(args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze_output import FindingsOutput
-    from analyzer.pipeline import Pipeline, run_items
+    from analyzer.pipeline import run_items
     from analyzer.progress import Progress
 
     settings = settings_from(args)
-    reader = open_reader(args)
+    decoding = open_decoding_of(args)
+    reader, pipeline = decoding.reader, decoding.pipeline
     analyzer = ResponseAnalyzer(settings)
-    pipeline = Pipeline()  # the same decoding and counting as every command
     out = sys.stdout
     output = FindingsOutput(
         analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
@@ -158,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     # The text report is written at the end: the terminal is free for a progress line.
     progress = Progress.maybe(reader, sys.stderr, out, not args.json, quiet=args.quiet)
     try:
-        run_items(reader, pipeline, progress=progress)
+        run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
     finally:
         reader.close()
     for failure in pipeline.failures:

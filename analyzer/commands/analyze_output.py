@@ -6,11 +6,11 @@ import json
 import shutil
 import tempfile
 from collections.abc import Callable
-from typing import IO, Any, Protocol
+from typing import IO, Any
 
 from analyzer import timefmt
-from analyzer.analysis.time_order import TimeOrder
 from analyzer.analysis.verdict_counts import VerdictCounts
+from analyzer.api.analysis import FindingsInOrder, Judging
 from analyzer.pipeline import Batch
 from analyzer.protocol.response_fields import verdict_word
 from analyzer.protocol.types import Event
@@ -32,94 +32,58 @@ _NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 )
 
 
-class Judging(Protocol):
-    """What the output needs of the analysis (``ResponseAnalyzer``)."""
-
-    def process(self, events: list[Event]) -> list[Event]: ...
-
-    def close(self) -> list[Event]: ...
-
-    def earliest_pending(self) -> float | None: ...
-
-
-class _Judged:
-    """The analysis as the pipeline's stage, its findings (only those) handed to the output."""
-
-    def __init__(self, analysis: Judging, output: FindingsOutput) -> None:
-        self.analysis = analysis
-        self.output = output
-
-    def process(self, events: list[Event]) -> list[Event]:
-        found = self.analysis.process(events)
-        self.output.take(found)
-        return found
-
-    def close(self) -> list[Event]:
-        found = self.analysis.close()
-        self.output.take(found)
-        return found
-
-
 class FindingsOutput:
     """The sink of ``analyze``: each finding written in time order once no earlier one can
-    come (held meanwhile as its line of text, so memory follows the pending judgements,
-    not the length of the flight).
+    come (``FindingsInOrder``, which the Python API's ``analyze`` runs too).
 
     ``stage`` is the analysis as the pipeline's stage: the findings it makes, and no
     finding the input may already hold, are written. An input without a clock (see
-    ``untimed``) gets no findings: nothing is written until its times are seen to differ,
-    and at the end ``untimed`` says whether they never did. The text report's lines go to
-    a temporary file first (``finish`` writes the header, which needs the whole input's
-    figures, then them).
+    ``untimed``) gets no findings. The text report's lines go to a temporary file first
+    (``finish`` writes the header, which needs the whole input's figures, then them).
     """
 
     keeps_items = False
 
     def __init__(self, analysis: Judging, tally: Tally, *, json_lines: bool, problems: bool):
-        self.analysis = analysis
-        self.tally = tally
         self.json_lines = json_lines
         self.problems = problems
-        self.order: TimeOrder[str] = TimeOrder()
         self.spool: IO[str] | None = (
             # closed by finish (the text report), or with the process
             None if json_lines else tempfile.TemporaryFile("w+", encoding="utf-8")  # noqa: SIM115
         )
         self.out: IO[str] | None = None
-        self.found = 0
         self.written = 0
         self.first_time: float | None = None  # of the first finding shown
-        self.untimed = False
         self.counts = VerdictCounts()  # commands' verdicts apart from the feedback's health
-        self.stage = _Judged(analysis, self)
+        self.stage = FindingsInOrder(analysis, tally)
+
+    @property
+    def untimed(self) -> bool:
+        """The input had no clock: its findings were not written."""
+        return self.stage.untimed
 
     def to(self, out: IO[str]) -> FindingsOutput:
         self.out = out
         return self
 
-    def take(self, findings: list[Event]) -> None:
-        """Findings of the stage: counted, and held (as text) until their turn."""
+    def handle(self, batch: Batch) -> None:
+        """After the counters took the batch: write what no finding to come can precede."""
+        self._show(self.stage.ready())
+
+    def close(self) -> None:
+        self._show(self.stage.rest())
+
+    def _show(self, findings: list[Event]) -> None:
+        """Findings in their turn: counted, and written unless --problems leaves them out."""
+        lines: list[str] = []
         for event in findings:
-            self.found += 1
             self.counts.add(event.fields)
             if self.problems and event.fields.get("verdict") == "obeyed":
                 continue
             if self.first_time is None or event.time < self.first_time:
                 self.first_time = event.time
-            self.order.push(event.time, self._line(event))
-
-    def handle(self, batch: Batch) -> None:
-        """After the counters took the batch: write what no finding to come can precede."""
-        if self._timed():
-            self._write(self.order.release(self.analysis.earliest_pending()))
-
-    def close(self) -> None:
-        self.untimed = self.found > 0 and not self._timed()
-        if self.untimed:
-            self.order.clear()
-            self.first_time = None
-            self.counts.clear()
-        self._write(self.order.drain())
+            lines.append(self._line(event))
+        self._write(lines)
 
     def finish(self, header: str) -> None:
         """The text report: header, the findings written so far, the verdict counts and
@@ -143,10 +107,6 @@ class FindingsOutput:
         if self.json_lines:
             return json.dumps(event.to_dict())
         return printable_lines(finding_line(event))  # names may come from the input
-
-    def _timed(self) -> bool:
-        first = self.tally.first_time
-        return first is not None and first != self.tally.last_time
 
     def _write(self, lines: list[str]) -> None:
         target = self.spool if self.spool is not None else self.out

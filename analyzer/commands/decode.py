@@ -113,9 +113,8 @@ class LinePrinter:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.inputs import open_input
-    from analyzer.pipeline import Pipeline, default_decoder, run_items
-    from analyzer.protocol.ids import PROTOCOL_IDS
+    from analyzer.api.reading import open_decoding
+    from analyzer.pipeline import run_items
     from analyzer.summary import Summary
 
     if not 0 < args.port < 65536:
@@ -123,25 +122,21 @@ def run(args: argparse.Namespace) -> int:
     wanted = event_filter(args.topic, args.name)
     out = sys.stdout
     color = use_color(args.color, out)
-    reader = open_input(
-        args.file,
-        args.format,
-        args.port,
-        wanted_ids=None if args.raw else PROTOCOL_IDS,
-        stored=args.stored,
+    # The reader and pipeline of the Python API's read(): the same events.
+    decoding = open_decoding(
+        args.file, args.format, port=args.port, other_frames=args.raw, stored=args.stored
     )
+    reader, pipeline = decoding.reader, decoding.pipeline
     live = args.file == "-"
     # With --summary only the summary is printed (as one JSON object with --json).
-    sinks = []
     if not args.summary:
         printer = make_printer(args.json, color)
-        sinks.append(LinePrinter(out, printer, wanted, flush_each=live))
-    pipeline = Pipeline(sinks, decoder=default_decoder(emit_other=args.raw))
+        pipeline.sinks.append(LinePrinter(out, printer, wanted, flush_each=live))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
     interrupted = False
     try:
         try:
-            run_items(reader, pipeline, batch_items=1 if live else 2048, progress=progress)
+            run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
         except KeyboardInterrupt:
             if not live:
                 raise

@@ -74,11 +74,12 @@ def find_command(name: str, s_id: int | str | None = None) -> Command:
     rows = BY_NAME.get(name)
     if not rows:
         raise EncodeError(f"unknown command {name!r}; valid: {', '.join(BY_NAME)}")
-    if isinstance(s_id, str):
-        wanted = [k for k, v in COMPONENT_NAMES.items() if v == s_id]
+    component = s_id if isinstance(s_id, str) else None
+    if component is not None:
+        wanted = [k for k, v in COMPONENT_NAMES.items() if v == component]
         if not wanted:
             raise EncodeError(
-                f"unknown component {s_id!r}; valid: {', '.join(COMPONENT_NAMES.values())}"
+                f"unknown component {component!r}; valid: {', '.join(COMPONENT_NAMES.values())}"
             )
         s_id = wanted[0]
     if s_id is None:
@@ -86,6 +87,11 @@ def find_command(name: str, s_id: int | str | None = None) -> Command:
     for row in rows:
         if row.s_id == s_id:
             return row
+    if component is not None:
+        valid = ", ".join(f"{COMPONENT_NAMES[r.s_id]} (S_ID 0x{r.s_id:02X})" for r in rows)
+        raise EncodeError(
+            f"{name} does not exist for component {component} (S_ID 0x{s_id:02X}); valid: {valid}"
+        )
     valid = ", ".join(f"0x{r.s_id:02X}" for r in rows)
     raise EncodeError(f"{name} does not exist for S_ID 0x{s_id:02X}; valid: {valid}")
 
@@ -95,12 +101,15 @@ def encode_command(
     *,
     s_id: int | str | None = None,
     check_range: bool = True,
+    require_all: bool = False,
     **params: Any,
 ) -> bytes:
     """Command name and physical values -> the 8 CAN data bytes.
 
     Raises EncodeError (a ValueError) naming the valid values or range.
     ``check_range=False`` lets out-of-range values through (for fault injection).
+    A number left out is 0 unless ``require_all`` (the Python API's ``encode``): then
+    every parameter without a default must be given.
     """
     params = dict(params)
     component = params.pop("component", None)
@@ -137,8 +146,8 @@ def encode_command(
             value = params[f.name]
         elif f.default is not None:
             value = f.default
-        elif f.labels is not None or row.selector is not None:
-            raise EncodeError(f"{name}: missing parameter {f.name}")
+        elif f.labels is not None or row.selector is not None or require_all:
+            raise EncodeError(f"{name}: missing parameter {f.name} ({f.accepts()})")
         else:
             value = 0
         f.write(buffer, value, check_range=check_range)

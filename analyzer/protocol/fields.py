@@ -124,6 +124,24 @@ class Field:
         hi = None if self.maximum is None else self.scale(self.maximum)
         return lo, hi
 
+    def encodable_limits(self, *, check_range: bool = True) -> tuple[int, int]:
+        """The lowest and highest raw number ``encode`` writes: the document's range (with
+        ``check_range``), else what the field's bytes hold."""
+        _, _, kind_lo, kind_hi = _KINDS[self.kind]
+        lo = self.minimum if check_range and self.minimum is not None else kind_lo
+        hi = self.maximum if check_range and self.maximum is not None else kind_hi
+        return lo, hi
+
+    def accepts(self) -> str:
+        """What ``encode`` takes for this field, for messages: its labels or its range."""
+        if self.labels is not None:
+            labels = [*self.labels.values(), *([self.other_label] if self.other_label else [])]
+            return f"one of {', '.join(labels)}"
+        lo, hi = self.encodable_limits()
+        unit = f" {self.unit}" if self.unit else ""
+        low, high = self.format_value(self.scale(lo)), self.format_value(self.scale(hi))
+        return f"range [{low}, {high}]{unit}"
+
     def scale(self, raw: int) -> float | int:
         if self.div == 1:
             return raw * self.mul
@@ -224,9 +242,7 @@ class Field:
             if not math.isfinite(number):
                 raise EncodeError(f"{self.name}: {value!r} is not a finite number")
             raw = round(number * self.div / self.mul)
-        _, _, kind_lo, kind_hi = _KINDS[self.kind]
-        lo = self.minimum if check_range and self.minimum is not None else kind_lo
-        hi = self.maximum if check_range and self.maximum is not None else kind_hi
+        lo, hi = self.encodable_limits(check_range=check_range)
         unlabelled = self.labels is not None and raw not in self.labels
         if check_range and unlabelled and self.other_label is None:
             valid = ", ".join(f"{v} ({k})" for k, v in (self.labels or {}).items())

@@ -128,7 +128,22 @@ class StreamChunk:
 
 @dataclass(slots=True)
 class Event:
-    """A decoded message or a diagnostic; becomes one JSON object."""
+    """A decoded message or a diagnostic; becomes one JSON object.
+
+    ``topic`` says what it is (``/gimbal/command``, ``/gimbal/attitude``, ``/uav/gps``,
+    ``/diagnostics``, ...), ``time`` when (seconds), ``source`` where from (a CAN
+    channel, a stream), ``fields`` the decoded values in the units of their names
+    (``pan_speed_dps``, ``yaw_deg``; a labelled value with its number in ``<name>_code``)
+    and ``warnings`` what looked wrong. ``to_dict()`` is the JSON line ``decode --json``
+    prints (``schemas/`` holds each topic's JSON Schema).
+
+    >>> from analyzer import Decoder, encode
+    >>> [event] = Decoder().feed_can(0x00000F01, encode("zoom", action="stop"), 3.0, "can0")
+    >>> event.to_dict()  # doctest: +NORMALIZE_WHITESPACE
+    {'topic': '/gimbal/command', 'time': 3.0, 'source': 'can0', 'warnings': [], 's_id': 15,
+     'cmd': 18, 'name': 'zoom', 'component': 'gimbal', 'raw': '0F 12 03 00 00 00 00 00',
+     'action': 'stop', 'action_code': 3}
+    """
 
     topic: str
     time: float
@@ -137,6 +152,7 @@ class Event:
     warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
+        """The event as one JSON object: topic, time, source, warnings, then the fields."""
         out: dict[str, Any] = {
             "topic": self.topic,
             "time": self.time,
@@ -148,6 +164,7 @@ class Event:
 
     @classmethod
     def from_dict(cls, obj: dict[str, Any]) -> Event:
+        """The event of a JSON object ``to_dict`` made (a line of ``decode --json``)."""
         rest = {k: v for k, v in obj.items() if k not in ("topic", "time", "source", "warnings")}
         return cls(
             topic=str(obj["topic"]),

@@ -313,12 +313,15 @@ class Recording:
         for damage in self.verify():
             yield self._damage_event(damage, last)
 
-    def events(self) -> Iterator[Event]:
-        """The decoded events as recorded, with an ``incomplete`` diagnostic for a lost part."""
+    def events(self, topics: set[str] | None = None) -> Iterator[Event]:
+        """The decoded events as recorded, with an ``incomplete`` diagnostic for a lost part;
+        with ``topics``, only the channels of those (a lost part only with /diagnostics)."""
         last = 0
-        for entry in self.entries(roles={ROLE_EVENT}):
+        damage = topics is None or TOPIC_DIAGNOSTICS in topics
+        for entry in self.entries(topics, roles={ROLE_EVENT}):
             if isinstance(entry, Damage):
-                yield self._damage_event(entry, last)
+                if damage:
+                    yield self._damage_event(entry, last)
                 continue
             last = entry.log_time
             try:
@@ -327,7 +330,8 @@ class Recording:
                     yield _stored_event(entry, obj)
             except (ValueError, KeyError, TypeError):
                 continue
-        yield from self._unread_damage(last)
+        if damage:
+            yield from self._unread_damage(last)
 
     def _damage_event(self, damage: Damage, last: int) -> Event:
         when = (damage.log_time or last) / 1e9
