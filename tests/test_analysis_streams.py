@@ -261,3 +261,18 @@ def test_a_tracker_the_gimbal_ignores_is_one_not_obeyed() -> None:
     found = session((*updates, Step(7.5, "tracking_stop")), 12.0, behaviour=ignored)
     verdicts = [(f["command"], f["verdict"]) for f in found if f["check"] == "tracking"]
     assert verdicts == [("tracking", "not_obeyed"), ("tracking_stop", "unknown")]
+
+
+def test_feedback_that_comes_late_or_not_at_all_does_not_bend_the_ratio() -> None:
+    """Late segments date a message after the gimbal measured it (left out of the fit);
+    lost messages leave fewer intervals (with fewer than three, no lag is claimed)."""
+    from analyzer.sim.faults import FaultConfig
+
+    faults = FaultConfig(delay=0.2, drop=0.1, seed=4)
+    found = session(pilot(), MINUTE, faults=faults)
+    for rate in rates(found):
+        assert rate["verdict"] == "obeyed", rate
+        assert rate["rate_ratio"] == pytest.approx(1, abs=0.1)
+    short = (Step(1.0, "gimbal_control", {"pan_speed_dps": 25}, until=1.6),)
+    (rate,) = rates(session(short, 7.0, faults=FaultConfig(stop_at=1.7, stop_for=3.0)))
+    assert "lag_s" not in rate and rate["verdict"] == "obeyed"

@@ -23,6 +23,9 @@ LAG_STEP_S = 0.05  # the lag search grid: 0, 50 ms, ... LAG_MAX_S
 LAG_MAX_S = 1.0
 LAGS = tuple(round(i * LAG_STEP_S, 3) for i in range(round(LAG_MAX_S / LAG_STEP_S) + 1))
 _TIE = 1e-9  # residuals this close are a tie: the shorter lag wins
+# Fewer feedback intervals than this cannot tell a lag from a ratio: the lag is not
+# searched (taken as 0), and the fit says it was not measured.
+MIN_INTERVALS_FOR_LAG = 3
 
 Floats = npt.NDArray[np.float64]
 
@@ -97,10 +100,12 @@ class AxisFit:
 
 @dataclass(frozen=True, slots=True)
 class Fit:
-    """The lag that fits every fitted axis best, and each axis' fit at that lag."""
+    """The lag that fits every fitted axis best, and each axis' fit at that lag;
+    ``lag_measured`` is False when too few intervals allowed no search (lag 0)."""
 
     lag_s: float
     axes: dict[int, AxisFit]  # 0 = pan, 1 = tilt
+    lag_measured: bool = True
 
 
 def fit(
@@ -111,8 +116,10 @@ def fit(
     """The least-squares fit of the measured angles ``samples`` (axis -> (time, angle),
     oldest first; 0 = pan, 1 = tilt) to ``motion`` over the lags of ``lags``.
 
-    None when no axis has two samples with commanded motion between them (at every lag)."""
-    grid = np.array(lags, dtype=np.float64)
+    None when no axis has two samples with commanded motion between them (at every lag).
+    With fewer than MIN_INTERVALS_FOR_LAG intervals on every axis only lag 0 is tried."""
+    searched = max((len(p) - 1 for p in samples.values()), default=0) >= MIN_INTERVALS_FOR_LAG
+    grid = np.array(lags if searched else (0.0,), dtype=np.float64)
     residual = np.zeros(len(grid))
     usable = np.ones(len(grid), dtype=bool)
     sums: dict[int, tuple[Floats, Floats, Floats]] = {}
@@ -144,4 +151,4 @@ def fit(
         )
         for axis, (ratio, commanded, measured) in sums.items()
     }
-    return Fit(float(grid[best]), axes)
+    return Fit(float(grid[best]), axes, searched)

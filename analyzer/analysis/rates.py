@@ -52,7 +52,8 @@ def judge_movement(
         "interval_mean_s": movement.interval_mean,
         "interval_max_s": movement.interval_max if movement.count > 1 else None,
     }
-    points = ([before] if before is not None else []) + inside
+    # A message whose segments came late is dated after it measured: left out of the fit.
+    points = [s for s in ([before] if before is not None else []) + inside if not s.late]
     series: dict[int, list[tuple[float, float]]] = {}
     limits: dict[int, float | None] = {}
     commanded: list[tuple[str, str, int, str]] = []
@@ -97,7 +98,7 @@ def judge_movement(
         texts.append(said)
     if ratios:
         extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
-    if found is not None and any(abs(r) >= RATE_NONE for r in ratios):
+    if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
         extra["lag_s"] = found.lag_s
         if found.lag_s >= LATE_S:
             texts.append(f"it followed about {found.lag_s:.1f} s late")

@@ -109,7 +109,7 @@ class ResponseAnalyzer:
         out: list[Finding] = []
         if topic == TOPIC_GIMBAL_ATTITUDE:
             out += self.health.feedback(t, feedback_stream(event))
-            sample = sample_from(t, event.fields)
+            sample = sample_from(t, event.fields, event.warnings)
             if sample is not None:
                 self.samples.append(sample)
                 self._tracking_seen = self._tracking_seen or sample.tracking

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analyzer.protocol.feedback import MOTOR_YAW_LIMIT, WIDE_MOTOR_YAW_TYPES
+from analyzer.protocol.reassembly import LATE_SEGMENT
 
 PITCH = "pitch"
 YAW = "yaw"  # geomagnetic yaw psi: referenced to north
@@ -27,6 +28,7 @@ class Sample:
     motor_yaw: float
     tracking: bool
     gimbal_type: int
+    late: bool = False  # its segments came far apart: its time is later than it measured
 
     def value(self, axis: str) -> float:
         if axis == PITCH:
@@ -64,8 +66,11 @@ def _number(fields: dict[str, Any], name: str) -> float | None:
     return float(value)
 
 
-def sample_from(time: float, fields: dict[str, Any]) -> Sample | None:
-    """A /gimbal/attitude event's fields as a Sample; None when an angle is missing."""
+def sample_from(
+    time: float, fields: dict[str, Any], warnings: list[str] | None = None
+) -> Sample | None:
+    """A /gimbal/attitude event's fields as a Sample; None when an angle is missing.
+    ``warnings``: the event's, which say whether its segments came late."""
     pitch, yaw, motor = (_number(fields, n) for n in ("pitch_deg", "yaw_deg", "motor_yaw_deg"))
     if pitch is None or yaw is None or motor is None:
         return None
@@ -78,4 +83,5 @@ def sample_from(time: float, fields: dict[str, Any]) -> Sample | None:
         motor,
         bool(fields.get("tracking", False)),
         code if isinstance(code, int) and not isinstance(code, bool) else 0,
+        bool(warnings) and any(w.startswith(LATE_SEGMENT) for w in warnings or ()),
     )

@@ -11,6 +11,10 @@ from analyzer.protocol.feedback import FRAME_SIZES
 from analyzer.protocol.ids import HEADER
 from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, diagnostic
 
+# The warning of a feedback message whose segments came far apart: its time (the last
+# segment's) is later than when the gimbal measured what it says.
+LATE_SEGMENT = "late segment"
+
 SEGMENTS_PER_MESSAGE = 4
 
 
@@ -155,7 +159,7 @@ class FeedbackReassembler:
         warnings = list(extra)
         gap = max(b.time - a.time, c.time - b.time, d.time - c.time)
         if gap > self.late_after:
-            warnings.append(f"late segment: {gap * 1000:.0f} ms between segments")
+            warnings.append(f"{LATE_SEGMENT}: {gap * 1000:.0f} ms between segments")
         if not len(a.data) == len(b.data) == len(c.data) == len(d.data) == 8:
             warnings.append(f"segment lengths {[len(s.data) for s in segs]}, expected 8 each")
         self.bytes_framed += len(data)
