@@ -140,6 +140,7 @@ def settings_from(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.analysis.camera.hook import camera_judge, with_camera
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import Pipeline, run_items
@@ -148,10 +149,11 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     reader = open_reader(args)
     analyzer = ResponseAnalyzer(settings)
+    judging = with_camera(analyzer, camera_judge(args.file, settings.time_allowed_s))
     pipeline = Pipeline()  # the same decoding and counting as every command
     out = sys.stdout
     output = FindingsOutput(
-        analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
+        judging, pipeline.tally, json_lines=args.json, problems=args.problems
     ).to(out)
     pipeline.stages.append(output.stage)  # the analysis, whose findings it writes
     pipeline.sinks.append(output)

@@ -17,8 +17,11 @@ ANALYSIS_WIDTH = 640  # pictures are looked at this wide at most
 class AccessUnit(Protocol):
     """A frame as stored: capture time and Annex B bytes."""
 
-    time: float
-    data: bytes
+    @property
+    def time(self) -> float: ...
+
+    @property
+    def data(self) -> bytes: ...
 
 
 @dataclass(frozen=True, slots=True)

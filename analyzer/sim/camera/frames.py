@@ -46,19 +46,48 @@ class Shot:
         return View(self.east_m, self.north_m, self.up_m, self.yaw_deg, self.pitch_deg, hfov)
 
 
-def picture(world: World, shot: Shot, kind: str, width: int, height: int) -> np.ndarray:
-    """The RGB picture (uint8, height x width x 3) a stream of ``kind`` shows."""
+class Gain:
+    """A thermal camera's automatic gain: the scene's coldest to hottest (1st to 99th
+    percentile) spread over the whole palette, following the scene in about a second (a
+    gain that jumped with every frame would flicker)."""
+
+    def __init__(self, follow: float = 0.1) -> None:
+        self.follow = follow  # the share of the way to the new range taken each frame
+        self.range: tuple[float, float] | None = None
+
+    def __call__(self, temperature: np.ndarray) -> np.ndarray:
+        low, high = (float(v) for v in np.percentile(temperature[::4, ::4], (1.0, 99.0)))
+        if self.range is not None:
+            old_low, old_high = self.range
+            low = old_low + self.follow * (low - old_low)
+            high = old_high + self.follow * (high - old_high)
+        self.range = (low, high)
+        return (temperature - low) / max(high - low, 0.05)
+
+
+def picture(
+    world: World, shot: Shot, kind: str, width: int, height: int, gain: Gain | None = None
+) -> np.ndarray:
+    """The RGB picture (uint8, height x width x 3) a stream of ``kind`` shows; ``gain``
+    is the stream's thermal gain (a fresh one, for a single picture, when None)."""
+    gain = gain or Gain()
     if kind == THERMAL:
-        image = _thermal(world, shot, width, height)
+        image = _sensor(world, shot, width, height, True, gain)
     else:
-        image = _composed(world, shot, width, height)
+        image = _composed(world, shot, width, height, gain)
         _crosshair(image)
     _tracking_box(image, shot.tracking_box)
     return image
 
 
 def _sensor(
-    world: World, shot: Shot, width: int, height: int, thermal: bool, crop: float = 1.0
+    world: World,
+    shot: Shot,
+    width: int,
+    height: int,
+    thermal: bool,
+    gain: Gain,
+    crop: float = 1.0,
 ) -> np.ndarray:
     """One sensor's picture; digital zoom renders fewer pixels and scales them up, as a
     camera crops its sensor (``crop`` narrows the view further, for side by side)."""
@@ -69,7 +98,7 @@ def _sensor(
     h = max(9, round(height / digital))
     view = shot.view(narrowed)
     if thermal:
-        image = colourize(_blurred(render_thermal(world, view, w, h)), shot.palette)
+        image = colourize(gain(_blurred(render_thermal(world, view, w, h))), shot.palette)
     else:
         image = render_visible(world, view, w, h)
     if (w, h) != (width, height):
@@ -82,25 +111,21 @@ def _blurred(temperature: np.ndarray) -> np.ndarray:
     return cv2.GaussianBlur(temperature, (0, 0), 0.8)
 
 
-def _thermal(world: World, shot: Shot, width: int, height: int) -> np.ndarray:
-    return _sensor(world, shot, width, height, thermal=True)
-
-
-def _composed(world: World, shot: Shot, width: int, height: int) -> np.ndarray:
+def _composed(world: World, shot: Shot, width: int, height: int, gain: Gain) -> np.ndarray:
     mode = shot.pip_mode % len(PIP_LAYOUTS)
     if mode == 3:
         half = width // 2
         # each half shows the middle of its sensor's view, in its own field of view
-        left = _sensor(world, shot, half, height, thermal=False, crop=0.5)
-        right = _sensor(world, shot, width - half, height, thermal=True, crop=0.5)
+        left = _sensor(world, shot, half, height, False, gain, crop=0.5)
+        right = _sensor(world, shot, width - half, height, True, gain, crop=0.5)
         image = np.concatenate([left, right], axis=1)
         image[:, half - 1 : half + 1] = 255
         return image
-    image = _sensor(world, shot, width, height, thermal=mode == 2)
+    image = _sensor(world, shot, width, height, mode == 2, gain)
     if mode in (1, 2):
         w = int(width * INSET) // 2 * 2
         h = int(height * INSET) // 2 * 2
-        inset = _sensor(world, shot, w, h, thermal=mode == 1)
+        inset = _sensor(world, shot, w, h, mode == 1, gain)
         x, y = width - w - 8, 8
         image[y - 2 : y + h + 2, x - 2 : x + w + 2] = 255
         image[y : y + h, x : x + w] = inset

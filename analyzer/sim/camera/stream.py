@@ -8,7 +8,7 @@ import numpy as np
 
 from analyzer.sim.camera.encoder import H264Encoder
 from analyzer.sim.camera.eye import GimbalEye
-from analyzer.sim.camera.frames import MAIN, SUB, THERMAL, picture
+from analyzer.sim.camera.frames import MAIN, SUB, THERMAL, Gain, picture
 from analyzer.sim.camera.world import make_world
 from analyzer.video.annexb import H264, ParameterSets, annex_b, split_nals
 from analyzer.video.rtsp_stream import VideoStream
@@ -62,6 +62,7 @@ class SimulatedStream(VideoStream):
             f"connected to {self.spec.shown} (h264 {width}x{height}, {self.fps} fps)", "connected"
         )
         self._need_key = True
+        gain = Gain()
         interval = 1.0 / self.fps
         next_at = time.monotonic()
         got = False
@@ -72,7 +73,7 @@ class SimulatedStream(VideoStream):
             now, wall = time.monotonic(), time.time()
             shot = self.eye.shot(now)
             image = (
-                picture(world, shot, self.kind, width, height)
+                picture(world, shot, self.kind, width, height, gain)
                 if shot is not None
                 else np.zeros((height, width, 3), np.uint8)
             )

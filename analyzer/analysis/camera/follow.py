@@ -1,0 +1,108 @@
+"""The picture followed across a run of frames: its change of scale from the first to the last.
+
+Two frames far apart may share too little to be matched (a zoom of 30x, a gimbal that
+turned a whole field of view), so the run is bridged by the fewest frames in between that
+can be: from each frame reached, the furthest frame that still matches is taken next
+(trying the last first, then halving the step). Scales multiply along the way, and so do
+the homographies, which say where a point of the first frame ends up in the last.
+
+Each link's scale is also divided by what the aircraft's motion explains over it
+(``explained``: how much nearer the ground at the picture's centre came), so that a
+climbing or approaching aircraft is not taken for a zoom; the links are short, so the
+telemetry between them is read where it was sampled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from analyzer.analysis.camera.motion import MIN_FEATURES, Features, features, motion
+
+
+@dataclass(frozen=True)
+class Followed:
+    """The picture followed from frame 0 to frame ``reached``: the homography from the
+    first to that frame, the change of scale with what the aircraft's motion explains
+    taken out (``scale``) and as the picture shows it (``raw_scale``), how many links it
+    took and the fewest inliers one of them had; ``problem`` says why it stopped short
+    (empty when it reached the last frame)."""
+
+    homography: np.ndarray
+    scale: float
+    raw_scale: float
+    links: int
+    inliers: int
+    reached: int
+    problem: str = ""
+
+    @property
+    def complete(self) -> bool:
+        return not self.problem
+
+
+TOO_LITTLE_TEXTURE = "too little texture"
+LOST = "lost"
+
+
+class FeatureCache:
+    """Each frame's features, computed once however often it is tried."""
+
+    def __init__(self, pictures: Sequence[np.ndarray]) -> None:
+        self.pictures = pictures
+        self._found: dict[int, Features] = {}
+
+    def __getitem__(self, index: int) -> Features:
+        found = self._found.get(index)
+        if found is None:
+            found = self._found[index] = features(self.pictures[index])
+        return found
+
+    @property
+    def computed(self) -> int:
+        return len(self._found)
+
+
+# explained(first index, second index): the change of scale the aircraft's motion causes
+# between two frames (1.0 when it is not known)
+Explained = Callable[[int, int], float]
+
+
+def follow(
+    pictures: Sequence[np.ndarray],
+    cache: FeatureCache | None = None,
+    explained: Explained | None = None,
+) -> Followed:
+    """Follow the picture from the first of ``pictures`` to the last."""
+    cache = cache or FeatureCache(pictures)
+    last = len(pictures) - 1
+    total = np.eye(3)
+    scale = raw = 1.0
+    links = 0
+    weakest = 0
+    anchor = 0
+    if last < 1:
+        return Followed(total, scale, raw, 0, 0, 0, "" if last == 0 else LOST)
+    if cache[0].count < MIN_FEATURES:
+        return Followed(total, scale, raw, 0, 0, 0, TOO_LITTLE_TEXTURE)
+    while anchor < last:
+        step = last - anchor
+        found = None
+        while step >= 1:
+            found = motion(cache[anchor], cache[anchor + step])
+            if found is not None:
+                break
+            step //= 2
+        if found is None:
+            problem = TOO_LITTLE_TEXTURE if cache[anchor + 1].count < MIN_FEATURES else LOST
+            return Followed(total, scale, raw, links, weakest, anchor, problem)
+        total = found.homography @ total
+        total /= total[2, 2] if total[2, 2] else 1.0
+        raw *= found.scale
+        scale *= found.scale / (explained(anchor, anchor + step) if explained else 1.0)
+        weakest = found.inliers if not links else min(weakest, found.inliers)
+        links += 1
+        anchor += step
+    return Followed(total, scale, raw, links, weakest, last)
