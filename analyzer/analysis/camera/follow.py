@@ -37,6 +37,8 @@ class Followed:
     inliers: int
     reached: int
     problem: str = ""
+    # the frames the links went through, with the homography from the first one to each
+    path: tuple[tuple[int, np.ndarray], ...] = ()
 
     @property
     def complete(self) -> bool:
@@ -70,12 +72,18 @@ class FeatureCache:
 Explained = Callable[[int, int], float]
 
 
+MAX_LINK_S = 1.0  # frames further apart are not matched directly: the scene moved too much
+
+
 def follow(
     pictures: Sequence[np.ndarray],
     cache: FeatureCache | None = None,
     explained: Explained | None = None,
+    times: Sequence[float] | None = None,
 ) -> Followed:
-    """Follow the picture from the first of ``pictures`` to the last."""
+    """Follow the picture from the first of ``pictures`` to the last (taken at ``times``:
+    no link spans more than MAX_LINK_S, so a repeating texture far on is not taken for
+    the one at hand)."""
     cache = cache or FeatureCache(pictures)
     last = len(pictures) - 1
     total = np.eye(3)
@@ -83,12 +91,16 @@ def follow(
     links = 0
     weakest = 0
     anchor = 0
+    path: list[tuple[int, np.ndarray]] = [(0, total)]
     if last < 1:
         return Followed(total, scale, raw, 0, 0, 0, "" if last == 0 else LOST)
     if cache[0].count < MIN_FEATURES:
         return Followed(total, scale, raw, 0, 0, 0, TOO_LITTLE_TEXTURE)
     while anchor < last:
         step = last - anchor
+        if times is not None:
+            while step > 1 and times[anchor + step] - times[anchor] > MAX_LINK_S:
+                step //= 2
         found = None
         while step >= 1:
             found = motion(cache[anchor], cache[anchor + step])
@@ -97,7 +109,7 @@ def follow(
             step //= 2
         if found is None:
             problem = TOO_LITTLE_TEXTURE if cache[anchor + 1].count < MIN_FEATURES else LOST
-            return Followed(total, scale, raw, links, weakest, anchor, problem)
+            return Followed(total, scale, raw, links, weakest, anchor, problem, tuple(path))
         total = found.homography @ total
         total /= total[2, 2] if total[2, 2] else 1.0
         raw *= found.scale
@@ -105,4 +117,5 @@ def follow(
         weakest = found.inliers if not links else min(weakest, found.inliers)
         links += 1
         anchor += step
-    return Followed(total, scale, raw, links, weakest, last)
+        path.append((anchor, total))
+    return Followed(total, scale, raw, links, weakest, last, path=tuple(path))

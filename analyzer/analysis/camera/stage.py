@@ -31,7 +31,7 @@ from analyzer.analysis.camera.commands import (
 )
 from analyzer.analysis.camera.follow import LOST, TOO_LITTLE_TEXTURE, FeatureCache, follow
 from analyzer.analysis.camera.layout import layout_change
-from analyzer.analysis.camera.motion import where
+from analyzer.analysis.camera.motion import features, motion, where
 from analyzer.analysis.camera.palette import palette_change
 from analyzer.analysis.camera.source import VideoSource
 from analyzer.analysis.camera.telemetry import Telemetry
@@ -47,6 +47,8 @@ MAX_FRAME_AGE_S = 0.5  # a frame further than this from the moment it stands for
 GAP_S = 1.0  # frames further apart than this inside a window: a gap in the video
 WAIT_S = 0.5  # the telemetry after a window's end that is waited for before judging
 THERMAL_NAMES = ("thermal", "sub2")  # the document's thermal stream (subtype 2)
+TAP_TURN_S = 1.0  # tap_zoom: the gimbal has turned to the tapped point by then
+DRIFT_S = 0.3  # the view's drift before a tap_zoom is measured over this
 PICTURE_WIDTH = 240  # the JPEGs kept for the report
 MAX_PICTURES = 200
 
@@ -184,7 +186,7 @@ class CameraJudge:
         t, end = pending.time, pending.end
         pictures = self.video.pictures(stream, t - BEFORE_S, end)
         shown.update((p.time, p) for p in pictures)
-        before = [p for p in pictures if p.time <= t]
+        before = [p for p in pictures if p.time < t]
         topic = f"/camera/{stream}"
         if not before or t - before[-1].time > MAX_FRAME_AGE_S:
             why = (
@@ -212,15 +214,23 @@ class CameraJudge:
         if pending.asked.kind == LAYOUT:
             seen_now.changed = layout_change(images) is not None
             return seen_now
-        return self._scale(pending, run, seen_now, topic)
+        return self._scale(pending, run, seen_now, topic, before[:-1])
 
-    def _scale(self, pending: _Pending, run: list[Picture], seen: Seen, topic: str) -> Seen:
+    def _scale(
+        self,
+        pending: _Pending,
+        run: list[Picture],
+        seen: Seen,
+        topic: str,
+        shown_before: list[Picture],
+    ) -> Seen:
         times = [p.time for p in run]
         telemetry = self.telemetry
         followed = follow(
             [p.rgb for p in run],
             FeatureCache([p.rgb for p in run]),
             lambda a, b: telemetry.explained(times[a], times[b]),
+            times,
         )
         if not followed.complete:
             gap = max((b - a for a, b in itertools.pairwise(times)), default=0.0)
@@ -234,11 +244,9 @@ class CameraJudge:
         seen.scale, seen.raw_scale = followed.scale, followed.raw_scale
         tap = pending.asked.tap
         if tap is not None:
-            h, w = run[0].rgb.shape[:2]
-            cx, cy = (w - 1) / 2, (h - 1) / 2
-            landed = where(followed.homography, cx + tap[0] * w / 2, cy + tap[1] * h / 2)
-            if landed is not None:
-                seen.tap_offset = math.hypot((landed[0] - cx) / (w / 2), (landed[1] - cy) / (h / 2))
+            earlier = [p for p in shown_before if run[0].time - p.time >= DRIFT_S]
+            drift = _drift(earlier[-1] if earlier else None, run[0])
+            seen.tap_offset = _nearest(followed.path[1:], times, run[0].rgb.shape, tap, drift)
         return seen
 
     def _keep(self, seen: Seen, shown: dict[float, Picture]) -> None:
@@ -252,3 +260,51 @@ class CameraJudge:
             ok, jpeg = cv2.imencode(".jpg", np.ascontiguousarray(small[:, :, ::-1]))
             if ok:
                 self.pictures[(seen.stream, moment)] = jpeg.tobytes()
+
+
+def _nearest(
+    path: tuple[tuple[int, np.ndarray], ...],
+    times: list[float],
+    shape: tuple[int, ...],
+    tap: tuple[float, float],
+    drift: tuple[float, float],
+) -> float | None:
+    """How near the tapped point the lens came to point, in the picture before the
+    command (fractions of its half width / height): each frame's centre is mapped back
+    into that picture over the first TAP_TURN_S, less the drift the view had before the
+    command (the aircraft flying on carries the view along: pixels per second)."""
+    h, w = shape[:2]
+    cx, cy = (w - 1) / 2, (h - 1) / 2
+    tapped = (cx + tap[0] * w / 2, cy + tap[1] * h / 2)
+    offsets = []
+    for index, homography in path:
+        elapsed = times[index] - times[0]
+        if elapsed > TAP_TURN_S:
+            break
+        try:
+            back = np.linalg.solve(homography, np.array([cx, cy, 1.0]))
+        except np.linalg.LinAlgError:
+            continue
+        if back[2] <= 0:
+            continue
+        x = back[0] / back[2] - drift[0] * elapsed
+        y = back[1] / back[2] - drift[1] * elapsed
+        offsets.append(math.hypot((x - tapped[0]) / (w / 2), (y - tapped[1]) / (h / 2)))
+    return min(offsets) if offsets else None
+
+
+def _drift(earlier: Picture | None, first: Picture) -> tuple[float, float]:
+    """How fast the view moved over the scene before the command, in pixels of ``first``
+    per second (the centre's scene point, from ``earlier`` to ``first``)."""
+    if earlier is None or first.time <= earlier.time:
+        return 0.0, 0.0
+    found = motion(features(earlier.rgb), features(first.rgb))
+    if found is None:
+        return 0.0, 0.0
+    h, w = first.rgb.shape[:2]
+    cx, cy = (w - 1) / 2, (h - 1) / 2
+    landed = where(found.homography, cx, cy)
+    if landed is None:
+        return 0.0, 0.0
+    span = first.time - earlier.time
+    return (cx - landed[0]) / span, (cy - landed[1]) / span

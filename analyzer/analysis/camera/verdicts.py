@@ -18,7 +18,7 @@ from analyzer.protocol.response_fields import CHECK_PICTURE
 
 STILL = 1.03  # the picture kept its scale within 3 % (the measurement's noise is below 1 %)
 TOLERANCE = 0.10  # a zoom ratio reached within 10 %
-TAP_CENTRE = 0.15  # a tapped point this near the centre (of the half picture) came there
+TAP_CENTRE = 0.15  # the lens pointing this near a tapped point (of the half picture): there
 
 
 @dataclass
@@ -148,10 +148,13 @@ def _ratio(
     words = f"the picture {_way(scale)} x{scale:.3g} of the x{expected:g} asked"
     within = abs(math.log(scale / expected)) <= math.log(1 + TOLERANCE)
     if tap_offset is not None:
-        where = f"the tapped point ended {tap_offset * 100:.0f} % of the way from the centre"
-        words += (
-            f"; {where}" if tap_offset > TAP_CENTRE else "; the tapped point came to the centre"
-        )
+        if tap_offset > TAP_CENTRE:
+            words += (
+                f"; the lens turned no nearer the tapped point than {tap_offset * 100:.0f} % "
+                "of the way to the edge"
+            )
+        else:
+            words += "; the lens turned to the tapped point"
         within = within and tap_offset <= TAP_CENTRE
     return (OBEYED if within else PARTIAL), words
 

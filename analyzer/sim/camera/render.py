@@ -140,15 +140,22 @@ def _ground(
         w = (weight[part] if not channels else weight[part][..., None]) * scale
         out[part] += sampled * w
     texture = np.ones(east.shape, np.float32)
-    for texel, amount, detail in zip(DETAIL_M_PER_PX, contrast, world.detail, strict=True):
+    octaves = zip(DETAIL_M_PER_PX, contrast, world.detail, strict=True)
+    for octave, (texel, amount, detail) in enumerate(octaves):
         # an octave fades in while its texels grow from half a pixel to a pixel wide
         weight = np.clip(np.log2(texel / np.maximum(footprint, 1e-9)) + 1, 0.0, 1.0) * amount
         part = _rows(weight)
         if part.stop <= part.start:
             continue
+        # each octave repeats along its own axes: no grid shared by all of them, where a
+        # picture moved by one period would look the same again
+        c, s = math.cos(0.5 + 0.7 * octave), math.sin(0.5 + 0.7 * octave)
+        u = east[part] * np.float32(c) + north[part] * np.float32(s)
+        v = north[part] * np.float32(c) - east[part] * np.float32(s)
         period = texel * DETAIL_PX
-        shifted = (origin[0] % period, origin[1] % period)
-        sampled = _sample(detail, east[part], north[part], texel, shifted)
+        turned = (origin[0] * c + origin[1] * s, origin[1] * c - origin[0] * s)
+        shifted = (turned[0] % period, turned[1] % period)
+        sampled = _sample(detail, u, v, texel, shifted)
         texture[part] += sampled * weight[part]
     out *= texture if not channels else texture[..., None]
     return out, rows

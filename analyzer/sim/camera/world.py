@@ -11,7 +11,7 @@ import numpy as np
 LAND_PX = 2048  # the map's side in pixels
 LAND_M_PER_PX = 1.0  # so it covers 2,048 m square around home, repeated beyond
 MIP_LEVELS = 5  # the map at 1, 2, 4, 8 and 16 m per pixel: no shimmer far away
-DETAIL_PX = 256
+DETAIL_PX = 512
 # Finer and finer texture on top of the map (metres per texel, contrast): the ground keeps
 # detail however far the lens zooms in (an octave is at most 4 times magnified before the
 # next one shows), and no two octaves repeat at the same scale.
