@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import copy
+import functools
 import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from analyzer.sim.camera.encoder import H264Encoder
 from analyzer.sim.camera.eye import shot_of
@@ -19,6 +21,9 @@ from analyzer.video.annexb import H264, ParameterSets, annex_b, split_nals
 from analyzer.video.rtsp_stream import VideoFrame
 from analyzer.video.spec import DEFAULT_THUMBNAIL_S
 from analyzer.video.thumbnail import jpeg_thumbnail
+
+if TYPE_CHECKING:
+    from analyzer.mcapio.write.channel_registry import ChannelRegistry
 
 BATCH_S = 0.5  # the recording is written half a second of flight at a time
 
@@ -58,7 +63,7 @@ def record_offline(
     video frames written."""
     from analyzer.analysis.stage import analysis_stages
     from analyzer.mcapio.write.sink import McapSink, recording_metadata
-    from analyzer.mcapio.write.video import VIDEO_METADATA_KEY, annotations_topic, write_frames
+    from analyzer.mcapio.write.video import VIDEO_METADATA_KEY, annotations_topic
     from analyzer.pipeline import Pipeline
     from analyzer.sim.offline import run_offline
 
@@ -122,8 +127,14 @@ def record_offline(
             item_at += 1
         batch = frames[first_frame:frame_at]
         if batch:
-            sink.write_with(lambda channels, batch=batch: write_frames(channels, batch))
+            sink.write_with(functools.partial(_write, batch=batch))
         pipeline.feed(items[first_item:item_at])
         pipeline.deliver()
     pipeline.finish()
     return frames
+
+
+def _write(channels: ChannelRegistry, batch: list[VideoFrame]) -> None:
+    from analyzer.mcapio.write.video import write_frames
+
+    write_frames(channels, batch)
