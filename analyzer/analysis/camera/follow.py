@@ -39,6 +39,16 @@ class Followed:
     problem: str = ""
     # the frames the links went through, with the homography from the first one to each
     path: tuple[tuple[int, np.ndarray], ...] = ()
+    scales: tuple[float, ...] = ()  # ``scale`` from the first frame to each of ``path``
+
+    def settled(self, times: Sequence[float], seconds: float, within: float) -> bool:
+        """Whether the scale stayed within ``within`` (a fraction) over the last
+        ``seconds`` of the frames followed."""
+        end = times[self.reached]
+        for (index, _), scale in zip(reversed(self.path), reversed(self.scales), strict=True):
+            if end - times[index] >= seconds:
+                return abs(self.scale / scale - 1) <= within
+        return False
 
     @property
     def complete(self) -> bool:
@@ -92,6 +102,7 @@ def follow(
     weakest = 0
     anchor = 0
     path: list[tuple[int, np.ndarray]] = [(0, total)]
+    scales = [1.0]
     if last < 1:
         return Followed(total, scale, raw, 0, 0, 0, "" if last == 0 else LOST)
     if cache[0].count < MIN_FEATURES:
@@ -109,7 +120,9 @@ def follow(
             step //= 2
         if found is None:
             problem = TOO_LITTLE_TEXTURE if cache[anchor + 1].count < MIN_FEATURES else LOST
-            return Followed(total, scale, raw, links, weakest, anchor, problem, tuple(path))
+            return Followed(
+                total, scale, raw, links, weakest, anchor, problem, tuple(path), tuple(scales)
+            )
         total = found.homography @ total
         total /= total[2, 2] if total[2, 2] else 1.0
         raw *= found.scale
@@ -118,4 +131,5 @@ def follow(
         links += 1
         anchor += step
         path.append((anchor, total))
-    return Followed(total, scale, raw, links, weakest, last, path=tuple(path))
+        scales.append(scale)
+    return Followed(total, scale, raw, links, weakest, last, "", tuple(path), tuple(scales))

@@ -22,7 +22,8 @@ MIN_FEATURES = 60  # fewer than this in a picture: too little texture to measure
 MIN_INLIERS = 25  # matches that agree on one motion before it is believed
 RATIO_TEST = 0.8  # Lowe's ratio: a match must be clearly better than the second best
 REPROJECTION_PX = 2.5
-MAX_LINK_SCALE = 3.0  # one measurement spans at most this change of scale either way
+MAX_LINK_SCALE = 1.8  # one measurement spans at most this change of scale either way (more is
+# measured, by fewer points, less well)
 
 _CLAHE = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8))
 _ORB = cv2.ORB_create(  # type: ignore[attr-defined]

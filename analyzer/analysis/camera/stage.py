@@ -46,6 +46,9 @@ BEFORE_S = 1.0  # pictures from this long before the command are decoded
 MAX_FRAME_AGE_S = 0.5  # a frame further than this from the moment it stands for: a gap
 GAP_S = 1.0  # frames further apart than this inside a window: a gap in the video
 WAIT_S = 0.5  # the telemetry after a window's end that is waited for before judging
+# A zoom whose video ends before its window did is judged if the picture kept its scale
+# (within 3 %) over its last second.
+SETTLED_S, SETTLED_WITHIN = 1.0, 0.03
 THERMAL_NAMES = ("thermal", "sub2")  # the document's thermal stream (subtype 2)
 TAP_TURN_S = 1.0  # tap_zoom: the gimbal has turned to the tapped point by then
 DRIFT_S = 0.3  # the view's drift before a tap_zoom is measured over this
@@ -85,6 +88,7 @@ class CameraJudge:
         self._zoom: ZoomRange | None = None
         self._palette = ""  # the palette the camera was last seen to take
         self._now = -math.inf
+        self._settled = False  # the last zoom followed kept its scale over its last second
 
     # -- the stage -----------------------------------------------------------------------
 
@@ -196,9 +200,10 @@ class CameraJudge:
                 stream, problem=f"no video at that moment: the last frame of {topic} is {why}"
             )
         first = before[-1]
-        run = [first] + [p for p in pictures if t < p.time <= end]
+        run = [first] + [p for p in pictures if first.time < p.time <= end]
         after = run[-1]
-        if after is first or end - after.time > MAX_FRAME_AGE_S:
+        cut = after is first or end - after.time > MAX_FRAME_AGE_S
+        if cut and not (pending.asked.zoom and after.time - t >= SETTLED_S + 0.5):
             seen = f"{after.time - t:.1f} s" if after is not first else "no time"
             return Seen(
                 stream,
@@ -214,7 +219,13 @@ class CameraJudge:
         if pending.asked.kind == LAYOUT:
             seen_now.changed = layout_change(images) is not None
             return seen_now
-        return self._scale(pending, run, seen_now, topic, before[:-1])
+        found = self._scale(pending, run, seen_now, topic, before[:-1])
+        if cut and not found.problem and not self._settled:
+            found.problem = (
+                f"the video of {topic} stops {after.time - t:.1f} s after the command, while "
+                "the picture still zoomed"
+            )
+        return found
 
     def _scale(
         self,
@@ -242,6 +253,7 @@ class CameraJudge:
                 seen.problem += f" across a {gap:.1f} s gap in the video of {topic}"
             return seen
         seen.scale, seen.raw_scale = followed.scale, followed.raw_scale
+        self._settled = followed.settled(times, SETTLED_S, SETTLED_WITHIN)
         tap = pending.asked.tap
         if tap is not None:
             earlier = [p for p in shown_before if run[0].time - p.time >= DRIFT_S]

@@ -51,25 +51,28 @@ class _Series:
 
     def at(self, t: float, angles: tuple[bool, ...] = ()) -> tuple[float, ...] | None:
         """The value at ``t``, interpolated between the samples around it (angles the short
-        way round); None when no sample is within MAX_AGE_S."""
+        way round), or carried on from the last two when ``t`` is after them; None when no
+        sample is within MAX_AGE_S."""
         times = self.times
         index = bisect.bisect_left(times, t)
-        before = index - 1 if index > 0 else None
-        after = index if index < len(times) else None
-        if before is not None and after is not None and times[after] > times[before]:
-            a, b = self.values[before], self.values[after]
-            if times[after] - times[before] > 2 * MAX_AGE_S:
+        if 0 < index < len(times):
+            a, b = index - 1, index
+        elif index == len(times) and index >= 2:
+            a, b = index - 2, index - 1  # past the last sample: carried on
+        else:
+            near = min(index, len(times) - 1)
+            if not times or abs(times[near] - t) > MAX_AGE_S:
                 return None
-            f = (t - times[before]) / (times[after] - times[before])
-            return tuple(
-                x
-                + f * ((y - x + 180.0) % 360.0 - 180.0 if i < len(angles) and angles[i] else y - x)
-                for i, (x, y) in enumerate(zip(a, b, strict=True))
-            )
-        near = before if before is not None else after
-        if near is None or abs(times[near] - t) > MAX_AGE_S:
+            return self.values[near]
+        span = times[b] - times[a]
+        if span <= 0 or span > 2 * MAX_AGE_S or t - times[b] > MAX_AGE_S:
             return None
-        return self.values[near]
+        f = (t - times[a]) / span
+        first, second = self.values[a], self.values[b]
+        return tuple(
+            x + f * ((y - x + 180.0) % 360.0 - 180.0 if i < len(angles) and angles[i] else y - x)
+            for i, (x, y) in enumerate(zip(first, second, strict=True))
+        )
 
     def forget_before(self, t: float) -> None:
         index = bisect.bisect_left(self.times, t - MAX_AGE_S) - 1
