@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -196,3 +197,28 @@ def test_no_camera_findings_without_video(tmp_path: Path) -> None:
     steps = (LOOK_DOWN, Step(1.5, "zoom", {"action": "zoom_in_2x"}))
     path = record(tmp_path / "plain.mcap", steps, 3.0, streams=())
     assert camera_findings(path) == []
+
+
+def test_the_report_shows_each_camera_finding_with_its_two_frames(tmp_path: Path) -> None:
+    from tests.test_report_command import browser
+
+    steps = (
+        LOOK_DOWN,
+        Step(1.5, "zoom", {"action": "zoom_in_2x"}),
+        Step(4.0, "palette", {"palette": "lava"}),
+    )
+    path = record(tmp_path / "seen.mcap", steps, 7.0, streams=("main", "thermal"))
+    page = tmp_path / "seen.html"
+    cli_output("report", str(path), "-o", str(page), "-q")
+    text = page.read_text()
+    section = text.split('<h2 id="camera-judged">')[1].split("<h2>")[0]
+    rows = section.split('<div class="judged">')[1]
+    assert rows.count("<img") == 4  # before and after, for each of the two commands
+    assert "zoom</b> on /camera/main" in rows and "palette</b> on /camera/thermal" in rows
+    assert "before: " in rows and "after: " in rows
+    done = browser(page, tmp_path, "--dump-dom")
+    assert done.returncode == 0, done.stderr[-2000:]
+    judged = done.stdout.split('id="camera-judged"')[1].split("<h2>")[0]
+    shown = [tuple(map(int, s.split("x"))) for s in re.findall(r'data-shown="(\d+x\d+)"', judged)]
+    assert len(shown) == 4
+    assert all(width == 240 and height > 100 for width, height in shown)

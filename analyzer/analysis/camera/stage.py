@@ -72,7 +72,8 @@ class CameraJudge:
 
     ``time_allowed_s`` is the time a zoom to a ratio or by a factor has to settle (the
     analysis' time allowed). With ``keep_pictures`` the two frames of each finding are
-    kept as small JPEGs in ``pictures`` ({(stream, time): jpeg}) for the report."""
+    kept as small JPEGs in ``pictures`` ({(stream, time): jpeg}) for the report, and the
+    findings (as dicts) in ``judged``."""
 
     def __init__(
         self, video: VideoSource, time_allowed_s: float = 5.0, *, keep_pictures: bool = False
@@ -81,6 +82,7 @@ class CameraJudge:
         self.time_allowed_s = time_allowed_s
         self.keep_pictures = keep_pictures
         self.pictures: dict[tuple[str, float], bytes] = {}
+        self.judged: list[dict[str, object]] = []  # with ``keep_pictures``: the findings
         self.telemetry = Telemetry()
         self.verdicts: Counter[str] = Counter()
         self.streams = video.streams()
@@ -171,8 +173,9 @@ class CameraJudge:
         finding = judge(pending.command, pending.time, wanted, seen, zoom, already)
         if wanted.kind == PALETTE and finding.verdict == "obeyed":
             self._palette = wanted.palette
-        if self.keep_pictures and len(self.pictures) < MAX_PICTURES:
+        if self.keep_pictures and len(self.judged) < MAX_PICTURES // 2:
             self._keep(seen, shown)
+            self.judged.append(finding.to_event().to_dict())
         return finding
 
     def _stream(self, group: str) -> str | None:
