@@ -246,7 +246,15 @@ class CameraJudge:
             lambda a, b: telemetry.explained(times[a], times[b]),
             times,
         )
-        if not followed.complete:
+        settled_early = (
+            not followed.complete
+            and pending.asked.kind != DIRECTION
+            and times[followed.reached] - pending.time >= SETTLED_S + 0.5
+            and followed.settled(times, SETTLED_S, SETTLED_WITHIN)
+        )
+        if settled_early:  # lost after the zoom had settled (the gimbal turned away): judged
+            seen.after = times[followed.reached]
+        elif not followed.complete:
             gap = max((b - a for a, b in itertools.pairwise(times)), default=0.0)
             if followed.problem == TOO_LITTLE_TEXTURE:
                 seen.problem = "too little texture in the picture to measure its scale"
