@@ -222,3 +222,24 @@ def test_the_report_shows_each_camera_finding_with_its_two_frames(tmp_path: Path
     shown = [tuple(map(int, s.split("x"))) for s in re.findall(r'data-shown="(\d+x\d+)"', judged)]
     assert len(shown) == 4
     assert all(width == 240 and height > 100 for width, height in shown)
+
+
+@pytest.mark.parametrize("ignore", [[], ["--ignore", "zoom"]])
+def test_the_demo_records_the_simulated_camera_and_its_zoom_is_judged(
+    tmp_path: Path, ignore: list[str]
+) -> None:
+    """`demo --video main` with no --camera films the simulated gimbal in real time; the
+    demo script's zoom in (5.5 s) and stop (6.5 s) are judged from that video."""
+    path = tmp_path / "demo.mcap"
+    args = ["demo", "--no-tui", "--clean", "--duration", "8.5", "--video", "main", *ignore]
+    cli_output(*args, "-o", str(path))
+    info = cli_output("info", str(path))
+    found = re.search(r"/camera/main\s+h264 640x360\s+([\d.]+) fps", info)
+    assert found and float(found.group(1)) >= 10.0, info
+    assert "the simulated camera's main stream" in cli_output("info", "--json", str(path))
+    zooms = [f for f in camera_findings(path) if f["command"] == "zoom"]
+    assert zooms, "the demo's zoom in was judged"
+    verdict = "not_obeyed" if ignore else "obeyed"
+    assert zooms[0]["verdict"] == verdict, zooms[0]
+    if not ignore:  # a second at 6x per second
+        assert zooms[0]["scale"] == pytest.approx(7.0, rel=0.15)
