@@ -10,6 +10,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+import cv2
+
 from analyzer.sim.camera.encoder import H264Encoder
 from analyzer.sim.camera.eye import shot_of
 from analyzer.sim.camera.frames import Gain, picture
@@ -54,13 +56,16 @@ def record_offline(
     start: float = 1_700_000_000.0,
     gaps: Sequence[tuple[float, float]] = (),
     thumbnail_interval: float = DEFAULT_THUMBNAIL_S,
+    encoded: tuple[int, int] | None = None,
+    gop_s: float = GOP_S,
 ) -> list[VideoFrame]:
     """Play ``steps`` against the simulated gimbal (and UAV, as ``config`` says) for
     ``duration`` seconds of virtual time and write the recording ``demo --video`` would:
     the CAN traffic, the decoded events and findings, and the simulated camera's
     ``streams`` (``size`` instead of each stream's own). ``gaps`` are (from, to) seconds
-    after the start when the camera delivered nothing (the stream was lost). Returns the
-    video frames written."""
+    after the start when the camera delivered nothing (the stream was lost). ``encoded``:
+    the pictures are scaled to that size before encoding (a 1080p stream without rendering
+    1080p), a keyframe every ``gop_s``. Returns the video frames written."""
     from analyzer.analysis.stage import analysis_stages
     from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.mcapio.write.video import VIDEO_METADATA_KEY, annotations_topic
@@ -71,8 +76,10 @@ def record_offline(
     cameras = []
     for name in streams:
         width, height = size or SIZES[stream_kind(name)]
-        gop = max(1, round(fps * GOP_S))
-        cameras.append(_Camera(name, (width, height), fps, H264Encoder(width, height, fps, gop)))
+        out_w, out_h = encoded or (width, height)
+        gop = max(1, round(fps * gop_s))
+        encoder = H264Encoder(out_w, out_h, fps, gop)
+        cameras.append(_Camera(name, (width, height), fps, encoder))
     frames: list[VideoFrame] = []
 
     def watch(now: float, gimbal: SimulatedGimbal) -> None:
@@ -88,6 +95,9 @@ def record_offline(
             shot = shot_of(model, pose)
             width, height = camera.size
             image = picture(world, shot, stream_kind(camera.name), width, height, camera.gain)
+            out_w, out_h = camera.encoder.width, camera.encoder.height
+            if (out_w, out_h) != (width, height):
+                image = cv2.resize(image, (out_w, out_h), interpolation=cv2.INTER_LINEAR)
             for data in camera.encoder.encode(image):
                 unit, key = annex_b(H264, split_nals(data), camera.params)
                 thumbnail = None
@@ -112,7 +122,9 @@ def record_offline(
     )
     for camera in cameras:
         sink.add_camera(camera.name)
-        sink.add_overlay(annotations_topic(camera.name), *camera.size)
+        sink.add_overlay(
+            annotations_topic(camera.name), camera.encoder.width, camera.encoder.height
+        )
     pipeline = Pipeline([sink], stages=analysis_stages())
     items.sort(key=lambda item: item.time)
     frames.sort(key=lambda frame: frame.time)
