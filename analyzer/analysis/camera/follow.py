@@ -8,8 +8,8 @@ the homographies, which say where a point of the first frame ends up in the last
 
 Each link's scale is also divided by what the aircraft's motion explains over it
 (``explained``: how much nearer the ground at the picture's centre came), so that a
-climbing or approaching aircraft is not taken for a zoom; the links are short, so the
-telemetry between them is read where it was sampled.
+climbing or approaching aircraft is not taken for a zoom, and what that may be off by
+is summed.
 """
 
 from __future__ import annotations
@@ -40,6 +40,9 @@ class Followed:
     # the frames the links went through, with the homography from the first one to each
     path: tuple[tuple[int, np.ndarray], ...] = ()
     scales: tuple[float, ...] = ()  # ``scale`` from the first frame to each of ``path``
+    # how far (log of the scale) what the telemetry explains may be off, summed over the
+    # links (its attitude is sampled twice a second while the gimbal may turn 60 deg/s)
+    uncertainty: float = 0.0
 
     def settled(self, times: Sequence[float], seconds: float, within: float) -> bool:
         """Whether the scale stayed within ``within`` (a fraction) over the last
@@ -78,8 +81,8 @@ class FeatureCache:
 
 
 # explained(first index, second index): the change of scale the aircraft's motion causes
-# between two frames (1.0 when it is not known)
-Explained = Callable[[int, int], float]
+# between two frames (1.0 when it is not known) and how far (log) that may be off
+Explained = Callable[[int, int], tuple[float, float]]
 
 
 MAX_LINK_S = 1.0  # frames further apart are not matched directly: the scene moved too much
@@ -103,6 +106,7 @@ def follow(
     anchor = 0
     path: list[tuple[int, np.ndarray]] = [(0, total)]
     scales = [1.0]
+    doubt = 0.0
     if last < 1:
         return Followed(total, scale, raw, 0, 0, 0, "" if last == 0 else LOST)
     if cache[0].count < MIN_FEATURES:
@@ -121,15 +125,26 @@ def follow(
         if found is None:
             problem = TOO_LITTLE_TEXTURE if cache[anchor + 1].count < MIN_FEATURES else LOST
             return Followed(
-                total, scale, raw, links, weakest, anchor, problem, tuple(path), tuple(scales)
+                total,
+                scale,
+                raw,
+                links,
+                weakest,
+                anchor,
+                problem,
+                tuple(path),
+                tuple(scales),
+                doubt,
             )
         total = found.homography @ total
         total /= total[2, 2] if total[2, 2] else 1.0
         raw *= found.scale
-        scale *= found.scale / (explained(anchor, anchor + step) if explained else 1.0)
+        motion_part, unsure = explained(anchor, anchor + step) if explained else (1.0, 0.0)
+        scale *= found.scale / motion_part
+        doubt += unsure
         weakest = found.inliers if not links else min(weakest, found.inliers)
         links += 1
         anchor += step
         path.append((anchor, total))
         scales.append(scale)
-    return Followed(total, scale, raw, links, weakest, last, "", tuple(path), tuple(scales))
+    return Followed(total, scale, raw, links, weakest, last, "", tuple(path), tuple(scales), doubt)

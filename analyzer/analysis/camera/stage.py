@@ -243,7 +243,7 @@ class CameraJudge:
         followed = follow(
             [p.rgb for p in run],
             FeatureCache([p.rgb for p in run]),
-            lambda a, b: telemetry.explained(times[a], times[b]),
+            lambda a, b: telemetry.explained_and_doubt(times[a], times[b]),
             times,
         )
         settled_early = (
@@ -264,6 +264,7 @@ class CameraJudge:
                 seen.problem += f" across a {gap:.1f} s gap in the video of {topic}"
             return seen
         seen.scale, seen.raw_scale = followed.scale, followed.raw_scale
+        seen.uncertainty = followed.uncertainty
         self._settled = followed.settled(times, SETTLED_S, SETTLED_WITHIN)
         tap = pending.asked.tap
         if tap is not None:

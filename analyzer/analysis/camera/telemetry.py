@@ -74,6 +74,15 @@ class _Series:
             for i, (x, y) in enumerate(zip(first, second, strict=True))
         )
 
+    def spread(self, t: float) -> tuple[float, ...]:
+        """Half of how much each value changed between the samples around ``t`` (angles
+        the short way round): how far off an interpolated value may be."""
+        index = bisect.bisect_left(self.times, t)
+        if not 0 < index < len(self.times):
+            return tuple(0.0 for _ in (self.values[0] if self.values else ()))
+        a, b = self.values[index - 1], self.values[index]
+        return tuple(abs((y - x + 180.0) % 360.0 - 180.0) / 2 for x, y in zip(a, b, strict=True))
+
     def forget_before(self, t: float) -> None:
         index = bisect.bisect_left(self.times, t - MAX_AGE_S) - 1
         if index > 0:
@@ -127,17 +136,35 @@ class Telemetry:
         scale the picture would show with the lens unchanged, measured as the picture's is
         (between the two centres), on flat ground seen from the two positions with the
         gimbal's attitude at each."""
-        one = self._pose(first)
-        two = self._pose(second)
+        return self.explained_and_doubt(first, second)[0]
+
+    def explained_and_doubt(self, first: float, second: float) -> tuple[float, float]:
+        """``explained`` and how far (log of the scale) it may be off because the attitude
+        is sampled only twice a second: a gimbal that turned between two samples may have
+        pointed anywhere between them at a moment in between, so the change is worked out
+        again with each end's attitude moved by half the turn around it, either way."""
+        one, two = self._pose(first), self._pose(second)
         if one is None or two is None:
-            return 1.0
-        centre = (0.0, 0.0)
-        at_first = _local_scale(one, two, centre)
-        back = _project(one, _ground(two, centre))  # the first picture's point seen centred
-        at_second = _local_scale(one, two, back) if back is not None else None
-        if at_first is None or at_second is None:
-            return 1.0
-        return math.sqrt(at_first * at_second)
+            return 1.0, 0.0
+        factor = _motion_scale(one, two)
+        if factor is None:
+            return 1.0, 0.0
+        doubt = 0.0
+        spread = (self.attitude.spread(first), self.attitude.spread(second))
+        for sign in (-1.0, 1.0):
+            for end in (0, 1):
+                yaw, pitch = spread[end]
+                if not yaw and not pitch:
+                    continue
+                moved = [one, two]
+                pose = moved[end]
+                moved[end] = _Pose(
+                    pose.where, pose.yaw_deg + sign * yaw, pose.pitch_deg + sign * pitch
+                )
+                other = _motion_scale(moved[0], moved[1])
+                if other is not None:
+                    doubt = max(doubt, abs(math.log(other / factor)))
+        return factor, doubt
 
     def _pose(self, t: float) -> _Pose | None:
         where = self._position(t)
@@ -156,6 +183,17 @@ class Telemetry:
         if where is None:
             return None
         return where[0], where[1], altitude[0]
+
+
+def _motion_scale(one: _Pose, two: _Pose) -> float | None:
+    """The change of scale flat ground shows between two poses of one same lens."""
+    centre = (0.0, 0.0)
+    at_first = _local_scale(one, two, centre)
+    back = _project(one, _ground(two, centre))  # the first picture's point seen centred
+    at_second = _local_scale(one, two, back) if back is not None else None
+    if at_first is None or at_second is None:
+        return None
+    return math.sqrt(at_first * at_second)
 
 
 @dataclass(frozen=True)

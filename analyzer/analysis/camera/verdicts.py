@@ -36,6 +36,7 @@ class Seen:
     tap_offset: float | None = None
     changed: bool | None = None
     problem: str = ""
+    uncertainty: float = 0.0  # log of the scale: how far the motion taken out may be off
 
 
 class ZoomRange:
@@ -70,8 +71,30 @@ class ZoomRange:
         self.low, self.high = 1.0, self.longest
 
 
-def _kept(scale: float) -> bool:
-    return abs(math.log(scale)) <= math.log(STILL)
+def _kept(scale: float, doubt: float) -> bool:
+    return abs(math.log(scale)) <= math.log(STILL) + doubt
+
+
+def _unsure(scale: float, doubt: float) -> str:
+    """Why a change of scale cannot be told apart from none ('' when it can)."""
+    if not _kept(scale, doubt) or doubt <= math.log(STILL):
+        return ""
+    return (
+        f"cannot tell whether the picture changed scale (x{scale:.3g}): the gimbal turned "
+        "faster than the twice-a-second attitude feedback shows, so what the aircraft's "
+        f"motion did to the picture is known to {(math.exp(doubt) - 1) * 100:.0f} % only"
+    )
+
+
+def _kept_words(scale: float, doubt: float) -> str:
+    """'the picture kept its scale (x1.01)', saying so when only the motion's doubt lets
+    the change pass for none."""
+    if abs(math.log(scale)) <= math.log(STILL):
+        return f"the picture kept its scale (x{scale:.3g})"
+    return (
+        f"the picture kept its scale as far as can be told (x{scale:.3g}: the aircraft's "
+        f"motion leaves {(math.exp(doubt) - 1) * 100:.0f} % unsure)"
+    )
 
 
 def _way(scale: float) -> str:
@@ -101,12 +124,18 @@ def judge(
     extra["scale"] = scale
     if seen.raw_scale is not None and abs(seen.raw_scale / scale - 1) > 0.005:
         extra["raw_scale"] = seen.raw_scale
+    doubt = seen.uncertainty
+    unsure = _unsure(scale, doubt)
+    if unsure:
+        if zoom is not None:
+            zoom.forget()
+        return Finding(command, t, CHECK_PICTURE, UNKNOWN, unsure, extra)
     if asked.kind == DIRECTION:
-        verdict, detail = _direction(asked, scale, zoom)
+        verdict, detail = _direction(asked, scale, zoom, doubt)
     elif asked.kind == RATIO:
-        verdict, detail = _ratio(asked, scale, seen.tap_offset, extra)
+        verdict, detail = _ratio(asked, scale, seen.tap_offset, extra, doubt)
     else:
-        verdict, detail = _absolute(asked, scale, zoom, extra)
+        verdict, detail = _absolute(asked, scale, zoom, extra, doubt)
     if asked.kind != ABSOLUTE and zoom is not None:
         zoom.moved(scale)
     raw = extra.get("raw_scale")
@@ -118,35 +147,35 @@ def judge(
     return Finding(command, t, CHECK_PICTURE, verdict, detail, extra)
 
 
-def _direction(asked: Asked, scale: float, zoom: ZoomRange | None) -> tuple[str, str]:
+def _direction(asked: Asked, scale: float, zoom: ZoomRange | None, doubt: float) -> tuple[str, str]:
     inward = asked.value > 0
-    if _kept(scale):
+    if _kept(scale, doubt):
         end = None
         if zoom is not None and inward and zoom.low >= zoom.longest / STILL:
             end = f"its longest, {zoom.longest:g}x"
         elif zoom is not None and not inward and zoom.high <= STILL:
             end = "1x"
         if end is not None:
-            return UNKNOWN, f"the picture kept its scale (x{scale:.3g}): the lens was at {end}"
-        return NOT_OBEYED, f"the picture kept its scale (x{scale:.3g}): it did not {asked.words()}"
+            return UNKNOWN, f"{_kept_words(scale, doubt)}: the lens was at {end}"
+        return NOT_OBEYED, f"{_kept_words(scale, doubt)}: it did not {asked.words()}"
     if (scale > 1) == inward:
         return OBEYED, f"the picture {_way(scale)} x{scale:.3g}"
     return NOT_OBEYED, f"the picture {_way(scale)} (x{scale:.3g}) instead"
 
 
 def _ratio(
-    asked: Asked, scale: float, tap_offset: float | None, extra: dict[str, Any]
+    asked: Asked, scale: float, tap_offset: float | None, extra: dict[str, Any], doubt: float
 ) -> tuple[str, str]:
     expected = asked.value
     extra["expected_scale"] = expected
     if tap_offset is not None:
         extra["centre_offset"] = tap_offset
-    if _kept(scale):
-        return NOT_OBEYED, f"the picture kept its scale (x{scale:.3g}), x{expected:g} asked"
+    if _kept(scale, doubt):
+        return NOT_OBEYED, f"{_kept_words(scale, doubt)}, x{expected:g} asked"
     if (scale > 1) != (expected > 1):
         return NOT_OBEYED, f"the picture {_way(scale)} (x{scale:.3g}), x{expected:g} asked"
     words = f"the picture {_way(scale)} x{scale:.3g} of the x{expected:g} asked"
-    within = abs(math.log(scale / expected)) <= math.log(1 + TOLERANCE)
+    within = abs(math.log(scale / expected)) <= math.log(1 + TOLERANCE) + doubt
     if tap_offset is not None:
         if tap_offset > TAP_CENTRE:
             words += (
@@ -160,7 +189,7 @@ def _ratio(
 
 
 def _absolute(
-    asked: Asked, scale: float, zoom: ZoomRange | None, extra: dict[str, Any]
+    asked: Asked, scale: float, zoom: ZoomRange | None, extra: dict[str, Any], doubt: float
 ) -> tuple[str, str]:
     ratio = asked.value
     zoom = zoom or ZoomRange(max(ratio, 35.0))
@@ -169,19 +198,16 @@ def _absolute(
     if zoom.pinned:
         extra["expected_scale"] = ratio / math.sqrt(low * high)
     may_stay = low / (1 + TOLERANCE) <= ratio <= high * (1 + TOLERANCE)
-    if _kept(scale):
+    if _kept(scale, doubt):
         if may_stay and zoom.pinned:
             zoom.reached(ratio)
-            return OBEYED, f"the picture kept its scale (x{scale:.3g}): the lens was at {before}"
+            return OBEYED, f"{_kept_words(scale, doubt)}: the lens was at {before}"
         if may_stay:
             return UNKNOWN, (
-                f"the picture kept its scale (x{scale:.3g}): the lens was at {ratio:g}x "
-                f"already, or ignored the command (the zoom before lay {before})"
+                f"{_kept_words(scale, doubt)}: the lens was at {ratio:g}x already, or "
+                f"ignored the command (the zoom before lay {before})"
             )
-        return (
-            NOT_OBEYED,
-            f"the picture kept its scale (x{scale:.3g}) at {before}, {ratio:g}x asked",
-        )
+        return NOT_OBEYED, f"{_kept_words(scale, doubt)} at {before}, {ratio:g}x asked"
     inward = ratio > high * (1 + TOLERANCE)
     outward = ratio < low / (1 + TOLERANCE)
     if (inward and scale < 1) or (outward and scale > 1):
@@ -189,7 +215,8 @@ def _absolute(
             NOT_OBEYED,
             f"the picture {_way(scale)} (x{scale:.3g}) from {before}, {ratio:g}x asked",
         )
-    after_low, after_high = max(1.0, low * scale / STILL), high * scale * STILL
+    slack = STILL * math.exp(doubt)
+    after_low, after_high = max(1.0, low * scale / slack), high * scale * slack
     if after_low / (1 + TOLERANCE) <= ratio <= after_high * (1 + TOLERANCE):
         pinned = zoom.pinned
         zoom.reached(ratio)
