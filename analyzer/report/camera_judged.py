@@ -55,8 +55,9 @@ def judged_section(
         stream = str(finding.get("stream", ""))
         before, after = finding.get("frame_before"), finding.get("frame_after")
         verdict = str(finding["verdict"])
-        out.append(_frame(pictures.get((stream, before)) if before else None, "before", before, t))
-        out.append(_frame(pictures.get((stream, after)) if after else None, "after", after, t))
+        for what, moment in (("before", before), ("after", after)):
+            jpeg = pictures.get((stream, round(float(moment), 3))) if moment else None
+            out.append(_frame(jpeg, what, moment, t))
         scale = finding.get("scale")
         numbers = f" scale x{scale:.3g}" if isinstance(scale, (int, float)) else ""
         where = f" on /camera/{stream}" if stream else ""

@@ -282,8 +282,8 @@ class CameraJudge:
             height = max(2, round(rgb.shape[0] * PICTURE_WIDTH / rgb.shape[1]))
             small = cv2.resize(rgb, (PICTURE_WIDTH, height), interpolation=cv2.INTER_AREA)
             ok, jpeg = cv2.imencode(".jpg", np.ascontiguousarray(small[:, :, ::-1]))
-            if ok:
-                self.pictures[(seen.stream, moment)] = jpeg.tobytes()
+            if ok:  # by the time as the finding carries it (to the millisecond)
+                self.pictures[(seen.stream, round(moment, 3))] = jpeg.tobytes()
 
 
 def _nearest(
