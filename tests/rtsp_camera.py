@@ -4,9 +4,8 @@ Runs under the system Python (``/usr/bin/python3``, which has GObject introspect
 subprocess of the tests and benchmarks. It serves the document's URLs
 ``/cam/realmonitor?channel=1&subtype=0|1|2`` with digest authentication (admin/admin by
 default) on 127.0.0.1, on a free port unless ``--port`` says otherwise, and prints
-``READY <port>`` once it listens. gst-rtsp-server matches mounts on the path alone, so a
-``RTSPMountPoints`` subclass turns the query into path segments
-(``/cam/realmonitor/channel=1/subtype=0``); each subtype is its own stream.
+``READY <port>`` once it listens; the mounts and the authentication are those of the
+simulated camera's RTSP server (analyzer/sim/camera/rtsp_serve.py), a videotestsrc each.
 
     /usr/bin/python3 tests/rtsp_camera.py --size 640x360 --fps 30
 """
@@ -15,31 +14,20 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-import gi
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the analyzer's own server
 
-gi.require_version("Gst", "1.0")
-gi.require_version("GstRtsp", "1.0")
-gi.require_version("GstRtspServer", "1.0")
-from gi.repository import GLib, Gst, GstRtsp, GstRtspServer  # noqa: E402
+from analyzer.sim.camera.rtsp_serve import (
+    SUBTYPES,
+    GLib,
+    Gst,
+    factory,
+    mount_path,
+    server_with_digest,
+)
 
-PATH = "/cam/realmonitor"
-SUBTYPES = ("0", "1", "2")
 PATTERNS = {"0": "ball", "1": "smpte", "2": "pinwheel"}
-
-
-class QueryMounts(GstRtspServer.RTSPMountPoints):
-    """Mount points whose paths include the URL's query, one segment per parameter."""
-
-    def do_make_path(self, url: GstRtspServer.RTSPUrl) -> str:
-        path = url.abspath
-        if url.query:
-            path += "/" + "/".join(sorted(url.query.split("&")))
-        return path
-
-
-def mount_path(subtype: str) -> str:
-    return f"{PATH}/channel=1/subtype={subtype}"
 
 
 def launch_line(args: argparse.Namespace, subtype: str) -> str:
@@ -91,29 +79,9 @@ def main() -> int:
     args = parser.parse_args()
 
     Gst.init(None)
-    server = GstRtspServer.RTSPServer()
-    server.set_address("127.0.0.1")
-    server.set_service(args.port)
-    mounts = QueryMounts()
-    server.set_mount_points(mounts)
-
-    auth = GstRtspServer.RTSPAuth()
-    auth.set_supported_methods(GstRtsp.RTSPAuthMethod.DIGEST)
-    token = GstRtspServer.RTSPToken.new()
-    token.set_string(GstRtspServer.RTSP_TOKEN_MEDIA_FACTORY_ROLE, "user")
-    auth.add_digest(args.user, args.password, token)
-    server.set_auth(auth)
-
+    server, mounts = server_with_digest("127.0.0.1", args.port, args.user, args.password)
     for subtype in SUBTYPES:
-        factory = GstRtspServer.RTSPMediaFactory()
-        factory.set_launch(launch_line(args, subtype))
-        factory.set_shared(True)
-        factory.add_role_from_structure(
-            Gst.Structure.new_from_string(
-                "user, media.factory.access=(boolean)true, media.factory.construct=(boolean)true"
-            )
-        )
-        mounts.add_factory(mount_path(subtype), factory)
+        mounts.add_factory(mount_path(subtype), factory(launch_line(args, subtype)))
 
     if server.attach(None) == 0:
         print(f"cannot listen on 127.0.0.1:{args.port}", file=sys.stderr)

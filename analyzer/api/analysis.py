@@ -7,6 +7,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
+from analyzer.analysis.camera.hook import camera_judge, with_camera
 from analyzer.analysis.findings import Timed, untimed
 from analyzer.analysis.response import (
     DEFAULT_FLAG_ALLOWED_S,
@@ -155,24 +156,26 @@ def analyze(
         with input_errors(source):
             decoding = open_decoding(source, format, port=port)
         return _read_findings(decoding, settings, source)
-    return _findings(source, Pipeline(), settings, BATCH_ITEMS)
+    return _findings(source, Pipeline(), ResponseAnalyzer(settings), BATCH_ITEMS)
 
 
 def _read_findings(decoding: Decoding, settings: Settings, path: Path) -> Iterator[Finding]:
     """The findings of an opened input; its reader is closed at the end (or when the
     caller stops early)."""
+    # A recording with video: the camera commands are judged from its picture too.
+    judging = with_camera(ResponseAnalyzer(settings), camera_judge(path, settings.time_allowed_s))
     try:
         with input_errors(path):
-            yield from _findings(decoding.reader, decoding.pipeline, settings, decoding.batch_items)
+            yield from _findings(decoding.reader, decoding.pipeline, judging, decoding.batch_items)
     finally:
         decoding.reader.close()
 
 
 def _findings(
-    items: Iterable[object], pipeline: Pipeline, settings: Settings, batch_items: int
+    items: Iterable[object], pipeline: Pipeline, judging: Judging, batch_items: int
 ) -> Iterator[Finding]:
     """The pipeline of ``analyze`` run over ``items``, its findings as they are released."""
-    findings = FindingsInOrder(ResponseAnalyzer(settings), pipeline.tally)
+    findings = FindingsInOrder(judging, pipeline.tally)
     pipeline.stages.append(findings)
     for _ in delivered_batches(items, pipeline, batch_items=batch_items):
         yield from map(Finding.of, findings.ready())

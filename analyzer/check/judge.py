@@ -27,11 +27,13 @@ from analyzer.check.figures import (
 )
 from analyzer.check.steps import Hold, Listen, Plan, Send
 from analyzer.protocol.check_fields import FAIL, PASS, SKIPPED
-from analyzer.protocol.response_fields import REFERENCE_AIRFRAME
+from analyzer.protocol.response_fields import CHECK_PICTURE, REFERENCE_AIRFRAME
 from analyzer.tally import EXPECTED_FEEDBACK_HZ, FEEDBACK_TOLERANCE, GAP_THRESHOLD_S
 from analyzer.timefmt import format_clock
 
-JUDGED_CHECKS = frozenset({CHECK_TARGET, CHECK_RATE, CHECK_STOP, CHECK_REPEAT, CHECK_TRACKING})
+JUDGED_CHECKS = frozenset(
+    {CHECK_TARGET, CHECK_RATE, CHECK_STOP, CHECK_REPEAT, CHECK_TRACKING, CHECK_PICTURE}
+)
 PERIOD_S = 1.0 / EXPECTED_FEEDBACK_HZ
 
 
@@ -160,6 +162,11 @@ def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[st
                         f"({rate / asked * 100:.0f} %, more than "
                         f"{limits.speed_tolerance * 100:g} % off)"
                     )
+        elif isinstance(action, Send) and action.check == CHECK_PICTURE:
+            for f in found:  # the zoom in's scale, and the zoom back's
+                scale = f.get("scale")
+                if f.get("check") == CHECK_PICTURE and isinstance(scale, (int, float)):
+                    figures["scale" if "scale" not in figures else "scale_back"] = scale
         elif plan.axis and plan.target is not None and isinstance(action, Send) and action.goals:
             axis = _move_axis(plan, found)
             move = move_figures(axis, plan.target, first, before, during, tolerance)

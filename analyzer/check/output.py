@@ -23,6 +23,8 @@ FIGURE_TEXT: tuple[tuple[str, str, str], ...] = (
     ("settle_s", "settle", "{:.2f} s"),
     ("overshoot_deg", "overshoot", "{:.1f} deg"),
     ("error_deg", "error", "{:.2f} deg"),
+    ("scale", "scale", "x{:.3g}"),
+    ("scale_back", "back", "x{:.3g}"),
 )
 WIDTH = {"step": 13, "verdict": 8}
 

@@ -15,12 +15,16 @@ from analyzer.check.link import CheckLink
 from analyzer.check.observer import Observer
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Plan, Send, Step
 from analyzer.protocol.codec import encode_command
+from analyzer.protocol.response_fields import CHECK_PICTURE
 from analyzer.protocol.types import TOPIC_CHECK_STEPS, Event
 
 FIRST_FEEDBACK_WAIT_S = 2.0  # before the first step: wait this long for the gimbal to speak
 MIN_SETTLE_WAIT_S = 1.5  # a move is not judged still before this much time has passed
 AFTER_DEADLINE_S = 0.8  # a verdict comes with the first feedback after the time allowed
 CENTRE_NAME = "forward"
+# A verdict from the picture comes later: the camera's frames reach the recorder after the
+# telemetry, and a zoom is judged once it could have settled.
+PICTURE_WAIT_S = 3.0
 
 
 @dataclass
@@ -91,6 +95,8 @@ class CheckRunner:
             self._flush(force=False)
         self.centre(wait=True)
         deadline = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
+        if any(required_check(a) == CHECK_PICTURE for r in self._pending for a, _, _ in r.judged):
+            deadline += PICTURE_WAIT_S
         self.observer.wait(self._all_decided, deadline)
         self._flush(force=True)
         return self.results
@@ -136,8 +142,10 @@ class CheckRunner:
                 return decided or self._reached(action.goals, sent) or self._still(action, sent)
 
             self.observer.wait(over, until)
-        elif action.check:
+        elif action.check and action.check != CHECK_PICTURE:
             self.observer.wait(lambda: self._decided(running, number), until)
+        # a verdict from the picture needs what comes after (the zoom's stop): the step is
+        # reported once it comes
         if action.pause:
             self._sleep(action.pause)
 

@@ -8,10 +8,13 @@ from typing import Any
 
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW
 from analyzer.protocol.check_fields import STEP_NAMES
+from analyzer.protocol.response_fields import CHECK_PICTURE
 
 REPEAT_S = 0.05  # gimbal_control every 50 ms, as the document recommends (chapter 2.1, 0x04)
 IMAGE_CENTRE = 4096  # tracking box centre: the middle of the 0..8191 image coordinates
 ZOOM_IN_S = 1.0
+ZOOM_BACK_S = 2.5  # zoom_1x: back to 1x and still a while before the gimbal moves on
+ZOOM_PITCH = -45.0  # the zoom step looks this far down
 
 
 @dataclass(frozen=True)
@@ -31,6 +34,7 @@ class Options:
     speed_dps: float = 20.0
     speed_for_s: float = 2.0
     listen_s: float = 3.0
+    video: bool = False  # the camera's video is recorded: the zoom is judged from the picture
 
 
 @dataclass(frozen=True)
@@ -167,12 +171,30 @@ def _look_down(start: Attitude, options: Options) -> Plan:
 
 
 def _zoom(start: Attitude, options: Options) -> Plan:
+    if options.video:  # judged from the picture: zoomed in, then back to 1x
+        judged = (
+            # the ground (or the bench) in view: texture for the picture's scale, not the sky
+            Send(
+                "specified_angle",
+                {"axis": "pitch", "pitch_deg": ZOOM_PITCH},
+                ((PITCH, ZOOM_PITCH),),
+            ),
+            Send("zoom", {"action": "zoom_in"}, judged=True, check=CHECK_PICTURE, pause=ZOOM_IN_S),
+            Send("zoom", {"action": "stop"}, pause=0.2),
+            Send(
+                "zoom", {"action": "zoom_1x"}, judged=True, check=CHECK_PICTURE, pause=ZOOM_BACK_S
+            ),
+        )
+        return Plan(judged, Attitude(ZOOM_PITCH, start.motor_yaw, start.heading))
     actions = (
         Send("zoom", {"action": "zoom_in"}, pause=ZOOM_IN_S),
         Send("zoom", {"action": "stop"}, pause=0.2),
         Send("zoom", {"action": "zoom_1x"}, pause=0.5),
     )
-    why = "the attitude feedback does not report the zoom ratio: look at the camera image"
+    why = (
+        "the attitude feedback does not report the zoom ratio: record the camera's video "
+        "(--video) to judge it from the picture"
+    )
     return Plan(actions, start, skipped=why)
 
 
@@ -198,7 +220,7 @@ STEPS: tuple[Step, ...] = (
     Step("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
     Step("tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed),
     Step("look_down", "look_down: pitch to -90", _look_down),
-    Step("zoom", "zoom in, stop, zoom 1x (not in the feedback: skipped)", _zoom),
+    Step("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
     Step("tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking),
 )
 BY_NAME = {step.name: step for step in STEPS}

@@ -148,6 +148,7 @@ def settings_from(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.analysis.camera.hook import camera_judge, with_camera
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import run_items
@@ -157,9 +158,10 @@ def run(args: argparse.Namespace) -> int:
     decoding = open_decoding_of(args)
     reader, pipeline = decoding.reader, decoding.pipeline
     analyzer = ResponseAnalyzer(settings)
+    judging = with_camera(analyzer, camera_judge(args.file, settings.time_allowed_s))
     out = sys.stdout
     output = FindingsOutput(
-        analyzer, pipeline.tally, json_lines=args.json, problems=args.problems
+        judging, pipeline.tally, json_lines=args.json, problems=args.problems
     ).to(out)
     pipeline.stages.append(output.stage)  # the analysis, whose findings it writes
     pipeline.sinks.append(output)

@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from analyzer.check.judge import Limits, StepResult
     from analyzer.check.observer import Observer
     from analyzer.check.steps import Options, Step
+    from analyzer.mcapio.write.video import VideoRecorder
     from analyzer.sim.transports import LinkSpec
 
 HELP = "bench acceptance check: drive the gimbal through built-in steps and judge each one"
@@ -42,7 +43,8 @@ The steps, in this order (--steps a,b,c runs a subset, in this order):
   tilt_speed    the same on tilt
   look_down     look_down: pitch to -90
   zoom          zoom in, stop, zoom 1x: the feedback does not report the zoom, so
-                the step is 'skipped' (look at the image)
+                with --video the step is judged from the camera's picture (the scale
+                measured, see docs/explanation/camera.md), without it 'skipped'
   tracking      tracking at the image centre (flag on), tracking_stop (flag off)
 A move passes when the analysis finds it obeyed and its measured slew rate is at
 least --min-slew; a speed step when the rate is within --speed-tolerance of the
@@ -112,6 +114,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "-f", "--force", action="store_true", help="replace an existing -o / --report file"
     )
     parser.add_argument("--report", metavar="FILE", help="also write the flight report (HTML)")
+    from analyzer.video.spec import add_video_options
+
+    add_video_options(parser)  # the zoom step is judged from the camera's picture
     limits = parser.add_argument_group("pass limits (with --tolerance and --time-allowed)")
     add_settings_arguments(cast(argparse.ArgumentParser, limits))  # a group takes the same
     limits.add_argument(
@@ -162,7 +167,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--steps: {exc}") from None
     if args.speed > 100:
         raise UsageError("--speed: gimbal_control speeds go up to 100 deg/s")
-    options = Options(args.speed, args.speed_for, args.listen)
+    from analyzer.video.spec import video_specs
+
+    options = Options(args.speed, args.speed_for, args.listen, bool(video_specs(args)))
     limits = Limits(settings_from(args), args.min_slew, args.speed_tolerance)
     if args.dry_run:
         from analyzer.check.dry_run import dry_run_lines
@@ -192,16 +199,20 @@ def run(args: argparse.Namespace) -> int:
 def _run_check(
     args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
 ) -> int:
+    from analyzer.analysis.camera.live import LiveVideo
+    from analyzer.analysis.camera.stage import CameraJudge
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
     from analyzer.check.output import JsonPrinter, TablePrinter, summary
     from analyzer.check.runner import CheckRunner
+    from analyzer.commands.video_options import video_metadata, video_recorder
     from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.output_file import check_output
     from analyzer.protocol.check_fields import FAIL
     from analyzer.sim.transports import parse_link
+    from analyzer.video.spec import VIDEO_HOLD_BACK_S
 
     spec = parse_link(args.to)
     if args.output is not None:
@@ -215,21 +226,35 @@ def _run_check(
     try:
         sink = McapSink(
             path,
-            metadata=recording_metadata(f"check: bench check over {spec}", command="check"),
+            metadata=recording_metadata(
+                f"check: bench check over {spec}", command="check", **video_metadata(args)
+            ),
             force=args.force,
+            hold_back=VIDEO_HOLD_BACK_S if options.video else 0.0,
         )
     except BaseException:
         link.close()
         raise
     observer = Observer(keep_events=args.report is not None)
-    capture = Capture(link, [sink, observer], stages=analysis_stages(limits.settings))
+    stages = analysis_stages(limits.settings)
+    video = video_recorder(args, sink)
+    if video is not None:  # the zoom judged from the picture, as the frames come in
+        pictures = LiveVideo([s.spec.name for s in video.streams])
+        video.taps.append(pictures.add)
+        stages += [video.stage, CameraJudge(pictures, limits.settings.time_allowed_s)]
+    sinks = [s for s in (video, sink, observer) if s is not None]
+    capture = Capture(link, sinks, stages=stages)
     printer = JsonPrinter(sys.stdout) if args.json else TablePrinter(sys.stdout)
     runner = CheckRunner(
         link, observer, limits, options, printer, lambda text: print(f"warning: {text}", file=say)
     )
     names = ", ".join(step.name for step in steps)
     print(f"check over {link.description}: {names}; recording {path}", file=say, flush=True)
+    if video is not None:
+        video.start()
     capture.start()
+    if video is not None:  # the zoom step needs pictures from before its first command
+        _wait_for_video(video, lambda text: print(f"warning: {text}", file=say))
     completed = False
     try:
         runner.run(steps)
@@ -268,6 +293,21 @@ def _run_check(
     if capture.error is not None:
         raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
     return 1 if any(r.verdict == FAIL for r in results) else 0
+
+
+VIDEO_WAIT_S = 10.0  # the camera's streams have this long to deliver their first frames
+
+
+def _wait_for_video(video: VideoRecorder, notice: Callable[[str], None]) -> None:
+    """Until every stream delivered a frame (at most VIDEO_WAIT_S); a notice if not."""
+    deadline = time.monotonic() + VIDEO_WAIT_S
+    while time.monotonic() < deadline:
+        if all(stream.frames for stream in video.streams):
+            time.sleep(0.5)  # a little picture before the first command
+            return
+        time.sleep(0.1)
+    silent = ", ".join(f"/camera/{s.spec.name}" for s in video.streams if not s.frames)
+    notice(f"no picture from {silent} in {VIDEO_WAIT_S:g} s: the zoom step may be unknown")
 
 
 def _write_report(

@@ -67,10 +67,12 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
+    from analyzer.analysis.camera.hook import camera_stages
     from analyzer.analysis.stage import analysis_stages
 
-    # Made before the output exists: the decoder's import takes a while.
-    pipeline = Pipeline(stages=analysis_stages())
+    # Made before the output exists: the decoder's import takes a while. A recording with
+    # video has its camera commands judged from it too.
+    pipeline = Pipeline(stages=[*analysis_stages(), *camera_stages(args.input)])
     progress = Progress.maybe(source, sys.stderr, quiet=args.quiet, label="converting ")
     started = time.perf_counter()
     sink: McapSink | None = None

@@ -110,6 +110,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_compression_argument(parser)
     add_foxglove_options(parser)
     add_video_options(parser)  # a camera on the bench recorded next to the simulated gimbal
+    simulated_camera_default(parser)
     first = len(parser._actions)
     parser.add_argument(
         "--stick",
@@ -129,6 +130,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         for n, a in enumerate(parser._actions[first:], first)
     )
     parser.set_defaults(**DEMO_FAULTS, simulator_options=simulator)
+
+
+def simulated_camera_default(parser: argparse.ArgumentParser) -> None:
+    """Without --camera, demo's --video streams come from the simulated camera."""
+    from analyzer.video.spec import SIMULATED_CAMERA
+
+    for action in parser._actions:
+        if action.dest == "camera":
+            action.default = SIMULATED_CAMERA
+            action.help = (
+                "default sim: the simulated camera, which renders the simulated gimbal's view "
+                "(zoom, thermal palette, picture-in-picture, tracking box); HOST[:PORT]: record "
+                "a real camera's main/sub1/sub2/thermal next to the simulated gimbal"
+            )
+    parser.set_defaults(simulated_camera=True)
 
 
 def simulator_metadata(args: argparse.Namespace, config: Any) -> dict[str, str]:
@@ -270,6 +286,22 @@ def _autopilot(
     )
 
 
+def simulated_camera() -> tuple[Any, Any]:
+    """The simulated gimbal's eye (attached once the scene exists) and the maker of the
+    simulated camera's streams; neither renders anything before a stream starts."""
+    from analyzer.sim.camera.eye import GimbalEye
+    from analyzer.video.spec import VideoSpec
+
+    eye = GimbalEye()
+
+    def stream(spec: VideoSpec, thumbnail_interval: float) -> Any:
+        from analyzer.sim.camera.stream import SimulatedStream  # PyAV, OpenCV: when asked
+
+        return SimulatedStream(spec, eye, thumbnail_interval=thumbnail_interval)
+
+    return eye, stream
+
+
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
@@ -334,6 +366,7 @@ def run(args: argparse.Namespace) -> int:
 
         source = NotedSource(source)
     printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
+    eye, camera = simulated_camera()
     recording = open_live_recording(
         args,
         source,
@@ -347,6 +380,7 @@ def run(args: argparse.Namespace) -> int:
         ),
         hold_back=hold_back,
         sinks_after=lambda sink, video: [printer],
+        simulated_camera=camera,
         replaceable=written_by_demo,
     )
     capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
@@ -364,6 +398,7 @@ def run(args: argparse.Namespace) -> int:
             live.close()
         raise
     recording.companions.append(Companion(scene.start, scene.stop))
+    eye.attach(scene.gimbal)
 
     def first_line() -> None:
         who = (

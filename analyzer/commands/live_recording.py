@@ -13,6 +13,7 @@ from analyzer.errors import SourceError
 
 if TYPE_CHECKING:
     from analyzer.capture import Capture
+    from analyzer.commands.video_options import SimulatedStreams
     from analyzer.live.server import FoxgloveLive
     from analyzer.mcapio.write.sink import McapSink
     from analyzer.mcapio.write.video import VideoRecorder
@@ -117,11 +118,13 @@ def open_live_recording(
     metadata: dict[str, Any],
     hold_back: float,
     sinks_after: Callable[[McapSink, Any], Sequence[Any]] = lambda sink, video: (),
+    simulated_camera: SimulatedStreams | None = None,
     **sink_options: Any,
 ) -> LiveRecording:
     """The MCAP sink of ``path``, the ``--video`` recorder and the ``--foxglove`` server
     around a capture of ``source`` with the analysis stages; ``sinks_after`` gives the
-    command's own sinks (printers, status line). On a failure the source and the live
+    command's own sinks (printers, status line); ``simulated_camera`` makes the streams of
+    ``--camera sim`` (demo's). On a failure the source and the live
     server are closed before the error goes on."""
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
@@ -146,7 +149,7 @@ def open_live_recording(
         if live is not None:
             live.close()
         raise
-    video = video_recorder(args, sink)
+    video = video_recorder(args, sink, simulated_camera)
     own = sinks_after(sink, video)
     sinks: list[Any] = [s for s in (video, sink, *own, live) if s is not None]
     stages = [*analysis_stages(), *([video.stage] if video is not None else [])]

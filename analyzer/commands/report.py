@@ -57,6 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
+    from analyzer.analysis.camera.hook import camera_judge, with_camera
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.output_file import OutputFile, check_output
@@ -73,7 +74,10 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     reader = open_reader(args)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    stage = FindingsInto(ResponseAnalyzer(settings), data)
+    camera_stage = None
+    if reader.format_name == "mcap":  # a recording with video: camera commands judged by it
+        camera_stage = camera_judge(args.file, settings.time_allowed_s, keep_pictures=True)
+    stage = FindingsInto(with_camera(ResponseAnalyzer(settings), camera_stage), data)
     sinks = [EventsInto(data.add)]
     overlays = None
     if reader.format_name == "mcap":  # only a recording has camera pictures to draw over
@@ -114,11 +118,17 @@ def run(args: argparse.Namespace) -> int:
         if not pictures.count:
             pictures = None
         lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
+    judged = ""
+    if camera_stage is not None and not data.untimed:
+        from analyzer.report.camera_judged import judged_section
+
+        judged = judged_section(camera_stage.judged, camera_stage.pictures)
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
         pictures,
         lead,
+        judged,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:

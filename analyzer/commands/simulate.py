@@ -7,8 +7,9 @@ import ipaddress
 import math
 import sys
 import time
+from typing import Any
 
-from analyzer.errors import UsageError
+from analyzer.errors import SourceError, UsageError
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.faults import FaultConfig
 
@@ -202,6 +203,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration", type=seconds_value, metavar="S", help="stop after S seconds (default: Ctrl-C)"
     )
     parser.add_argument(
+        "--camera-port",
+        type=int,
+        metavar="PORT",
+        help="also serve the simulated camera (the gimbal's view: zoom, thermal palette, "
+        "picture-in-picture) over RTSP on 127.0.0.1:PORT at the document's paths "
+        "(/cam/realmonitor?channel=1&subtype=0|1|2, user admin, password admin; 0: a free "
+        "port); needs GStreamer's RTSP server (Debian: python3-gi gir1.2-gst-rtsp-server-1.0 "
+        "gstreamer1.0-rtsp)",
+    )
+    parser.add_argument(
         "-q",
         "--quiet",
         action="store_true",
@@ -234,6 +245,25 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
+def _camera(args: argparse.Namespace, gimbal: Any, link: Any) -> Any:
+    """The simulated camera served over RTSP (--camera-port), started; None without."""
+    if args.camera_port is None:
+        return None
+    if not 0 <= args.camera_port < 65536:
+        link.close()
+        raise UsageError(f"--camera-port must be 0..65535, not {args.camera_port}")
+    from analyzer.sim.camera.eye import GimbalEye
+    from analyzer.sim.camera.rtsp import CameraServerError, RtspCamera
+
+    eye = GimbalEye()
+    eye.attach(gimbal)
+    try:
+        return RtspCamera(eye, args.camera_port)
+    except CameraServerError as exc:
+        link.close()
+        raise SourceError(f"--camera-port: {exc}") from None
+
+
 def run(args: argparse.Namespace) -> int:
     from analyzer.protocol.feedback import GIMBAL_TYPES
     from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
@@ -260,6 +290,7 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
     gimbal = SimulatedGimbal(start, config)
+    camera = _camera(args, gimbal, link)
     kind = GIMBAL_TYPES[args.gimbal_type]
     say(f"simulated gimbal, type {args.gimbal_type} ({kind}), on {link.name}")
     if spec.kind == "can":
@@ -293,6 +324,13 @@ def run(args: argparse.Namespace) -> int:
         say(f"  aircraft heading: {args.heading:g} deg (psi = heading + yaw motor angle)")
     say(f"  faults: {config.faults.describe()}")
     say(f"  behaviour: {config.behaviour.describe()}")
+    if camera is not None:
+        say(
+            f"  camera: rtsp://admin:admin@127.0.0.1:{camera.port}/cam/realmonitor?channel=1&"
+            "subtype=0 (main), 1 (sub1), 2 (thermal); `record --video main --camera "
+            f"127.0.0.1:{camera.port}` records it"
+        )
+        camera.start()
     say(f"  stops after {args.duration:g} s" if args.duration is not None else "  Ctrl-C to stop")
     runner = SimulatorRunner(gimbal, link, log=None if args.quiet else say)
     try:
@@ -300,6 +338,8 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print(file=sys.stderr)
     finally:
+        if camera is not None:
+            camera.stop()
         link.close()
     model = gimbal.model
     say(f"done: {model.commands} command(s) acted on, {model.ignored} ignored")

@@ -4,14 +4,19 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from analyzer.mcapio.write.video import VIDEO_METADATA_KEY
-from analyzer.video.spec import DEFAULT_THUMBNAIL_S, video_specs
+from analyzer.video.spec import DEFAULT_THUMBNAIL_S, VideoSpec, is_simulated, video_specs
 
 if TYPE_CHECKING:
     from analyzer.mcapio.write.sink import McapSink
     from analyzer.mcapio.write.video import VideoRecorder
+    from analyzer.video.rtsp_stream import VideoStream
+
+# A stream of the simulated camera (given its spec and thumbnail interval): demo's.
+SimulatedStreams = Callable[[VideoSpec, float], "VideoStream"]
 
 
 def video_metadata(args: argparse.Namespace) -> dict[str, str]:
@@ -22,8 +27,11 @@ def video_metadata(args: argparse.Namespace) -> dict[str, str]:
     return {VIDEO_METADATA_KEY: json.dumps({spec.name: spec.shown for spec in specs})}
 
 
-def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | None:
-    """The recorder of the ``--video`` streams into ``mcap`` (None without ``--video``).
+def video_recorder(
+    args: argparse.Namespace, mcap: McapSink, simulated: SimulatedStreams | None = None
+) -> VideoRecorder | None:
+    """The recorder of the ``--video`` streams into ``mcap`` (None without ``--video``);
+    ``simulated`` makes the streams of ``--camera sim``.
 
     Put ``recorder`` first among the capture's sinks and ``recorder.stage`` among its
     stages; ``recorder.start()`` when the capture starts, ``recorder.stop()`` at the end."""
@@ -34,7 +42,12 @@ def video_recorder(args: argparse.Namespace, mcap: McapSink) -> VideoRecorder | 
     from analyzer.video.rtsp_stream import VideoStream
 
     interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
-    streams = [VideoStream(spec, thumbnail_interval=interval or 0.0) for spec in specs]
+    streams = [
+        simulated(spec, interval or 0.0)
+        if simulated is not None and is_simulated(spec)
+        else VideoStream(spec, thumbnail_interval=interval or 0.0)
+        for spec in specs
+    ]
     return VideoRecorder(mcap, streams)
 
 

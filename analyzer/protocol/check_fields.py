@@ -48,6 +48,15 @@ FIGURES: dict[str, tuple[str, str]] = {
     "lost": ("integer", "feedback step: feedback messages missing from the 500 ms rhythm"),
     "crc_errors": ("integer", "feedback step: CRC errors and incomplete feedback messages"),
     "messages": ("integer", "feedback step: feedback messages received"),
+    "scale": (
+        "number",
+        "zoom step: the picture's scale after the zoom in over before it (> 1: zoomed in), "
+        "measured in the recorded video",
+    ),
+    "scale_back": (
+        "number",
+        "zoom step: the picture's scale after zoom_1x over before it, measured in the video",
+    ),
 }
 
 # The other fields of a /check/steps event: name -> (JSON type, description).

@@ -27,6 +27,7 @@ CHECK_TRACKING = "tracking"  # a tracking session's start, or its stop, against 
 CHECK_LIMIT = "limit"  # a mechanical limit reached
 CHECK_FEEDBACK = "feedback"  # feedback health over a minute
 CHECK_FEEDBACK_GAP = "feedback_gap"  # a silence in the feedback
+CHECK_PICTURE = "picture"  # camera commands (zoom, palette, PiP) judged from the video
 CHECKS = (
     CHECK_TARGET,
     CHECK_RATE,
@@ -36,6 +37,7 @@ CHECKS = (
     CHECK_LIMIT,
     CHECK_FEEDBACK,
     CHECK_FEEDBACK_GAP,
+    CHECK_PICTURE,
 )
 
 # The two references a yaw target is judged in (the ``yaw_reference`` field).
@@ -117,6 +119,36 @@ OPTIONAL_FIELDS: dict[str, tuple[str, str]] = {
     ),
     "crc_errors": ("integer", "CRC errors and incomplete feedback messages in the window"),
     "window_s": ("number", "length of the health window"),
+    # camera commands judged from the video (check "picture")
+    "stream": ("string", "the camera stream judged: main for /camera/main"),
+    "frame_before": ("number", "capture time (Unix seconds) of the frame before the command"),
+    "frame_after": (
+        "number",
+        "capture time (Unix seconds) of the frame the command is judged by: after the zoom "
+        "settled or was stopped, or after the palette / layout had its time to change",
+    ),
+    "scale": (
+        "number",
+        "the picture's scale after over before (> 1: zoomed in), with what the aircraft's "
+        "motion explains (the ground coming nearer or going away) taken out",
+    ),
+    "raw_scale": (
+        "number",
+        "the picture's scale after over before as the picture shows it, when the aircraft's "
+        "motion changed it",
+    ),
+    "expected_scale": (
+        "number",
+        "the scale an obedient camera shows: 2 for zoom_in_2x and tap_zoom, the ratio asked "
+        "over the zoom before for an absolute zoom when that zoom is known",
+    ),
+    "centre_offset": (
+        "number",
+        "tap_zoom: how far from the picture's centre the tapped point ended, as a fraction "
+        "of half the picture (0 in the centre, 1 at the edge)",
+    ),
+    "palette_changed": ("boolean", "palette: whether the thermal picture's colours changed"),
+    "layout_changed": ("boolean", "pip_cycle: whether the picture-in-picture layout changed"),
 }
 # Optional fields whose value is one of a few words.
 FIELD_ENUMS: dict[str, tuple[str, ...]] = {

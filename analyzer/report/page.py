@@ -10,7 +10,7 @@ from typing import Any
 from analyzer import __version__, timefmt
 from analyzer.protocol.types import Event
 from analyzer.render import describe_event
-from analyzer.report import camera, tables
+from analyzer.report import camera, camera_judged, tables
 from analyzer.report.collect import ReportData
 from analyzer.report.decimate import Row
 from analyzer.report.tables import _e, _rows
@@ -113,9 +113,11 @@ def render(
     settings: str,
     pictures: camera.PictureChoice | None = None,
     lead: str = "",
+    judged: str = "",
 ) -> str:
     """The whole page: ``pictures`` are the camera pictures chosen for it, if any; ``lead``
-    is HTML of a command's own shown first (the check's steps)."""
+    is HTML of a command's own shown first (the check's steps); ``judged`` the section of
+    the camera commands judged from the video."""
     plots = _plot_data(data)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
@@ -164,6 +166,7 @@ def render(
         camera.camera_section(pictures, camera.shown_findings(data.findings.worst_first()))
         if pictures is not None
         else "",
+        judged,
         "<h2>Diagnostics</h2>",
         tables.diagnostics(data),
     ]
@@ -173,7 +176,8 @@ def render(
             '<html lang="en"><head><meta charset="utf-8">',
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
             f"<title>{_e(title)}</title>",
-            f"<style>{CSS}{camera.CSS if pictures is not None else ''}</style>",
+            f"<style>{CSS}{camera.CSS if pictures is not None else ''}"
+            f"{camera_judged.CSS if judged else ''}</style>",
             "</head><body>",
             *sections,
             f'<script id="report-data" type="application/json">{payload}</script>',

@@ -1,6 +1,7 @@
 // Runs after a page's plots are drawn (the report's and the fleet report's), for checks:
 // how many painted pixels and data points each plot has (a blank canvas has none), and its
-// x and y axes: range, plot-area size in pixels, and the ticks as [value, label].
+// x and y axes: range, plot-area size in pixels, and the ticks as [value, label]; and the
+// size each picture decoded to.
 (function () {
   "use strict";
   Array.prototype.forEach.call(document.querySelectorAll("canvas"), function (canvas) {
@@ -32,6 +33,10 @@
       if (axes.points.length > 5000) { axes.points = []; }  // only small plots list theirs
       canvas.setAttribute("data-axes", JSON.stringify(axes));
     }
+  });
+  // each picture's decoded size ("0x0" for one that did not decode)
+  Array.prototype.forEach.call(document.querySelectorAll("img"), function (img) {
+    img.setAttribute("data-shown", img.naturalWidth + "x" + img.naturalHeight);
   });
   document.body.setAttribute("data-plots-ready", "yes");
   // milliseconds from the start of loading the page to its plots drawn

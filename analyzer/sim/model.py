@@ -25,6 +25,13 @@ HOLD_S = 0.3  # gimbal_control keeps turning this long after the last command
 SLEW_DPS = 60.0  # speed of moves to an angle (specified_angle, look_down, forward, tap_zoom)
 ZOOM_RATE = 6.0  # zoom ratio change per second (continuous zoom and moves to a ratio)
 MAX_ZOOM = 30.0
+# The optical zoom range of the 3.5x models (Note 1's gimbal types 3 and 4).
+SHORT_ZOOM_TYPES = frozenset({3, 4})
+SHORT_ZOOM = 3.5
+DIGITAL_ZOOM_RATE = 4.0  # digital zoom ratio change per second
+MAX_DIGITAL_ZOOM = 8.0
+PIP_MODES = 4  # picture-in-picture layouts the dual-sensor camera cycles through
+DEFAULT_PALETTE = "white_hot"
 HFOV_1X = 60.0  # horizontal / vertical field of view at 1x, degrees
 VFOV_1X = 34.0
 LOOK_DOWN_DEG = -90.0
@@ -67,12 +74,12 @@ class GimbalModel:
         now: float = 0.0,
         *,
         gimbal_type: int = 1,
-        max_zoom: float = MAX_ZOOM,
+        max_zoom: float | None = None,
         behaviour: Behaviour | None = None,
     ):
         self.behaviour = behaviour or Behaviour()
         self.gimbal_type = gimbal_type
-        self.max_zoom = max_zoom
+        self.max_zoom = optical_zoom_range(gimbal_type) if max_zoom is None else max_zoom
         self.motor_yaw_limit = (
             MOTOR_YAW_WIDE if gimbal_type in WIDE_MOTOR_YAW_TYPES else MOTOR_YAW_LIMIT / 100
         )
@@ -80,6 +87,10 @@ class GimbalModel:
         self.motor_yaw_deg = 0.0
         self.zoom = 1.0
         self.tracking = False
+        self.tracking_box = (0.0, 0.0)  # width, height of the tracked box (fractions of the image)
+        self.digital_zoom = 1.0
+        self.palette = DEFAULT_PALETTE  # the thermal image's colour palette
+        self.pip_mode = 0  # the picture-in-picture layout, one of PIP_MODES
         self.control_mode = LOCKING
         self.recording = False
         self.uav = UavPose()
@@ -95,6 +106,7 @@ class GimbalModel:
         self._yaw_geodetic: float | None = None  # geodetic yaw to hold while the UAV turns
         self._zoom_target: float | None = None
         self._zoom_dir = 0.0
+        self._digital_dir = 0.0
 
     # -- what the feedback reports -----------------------------------------------------------
 
@@ -172,6 +184,9 @@ class GimbalModel:
                 self._zoom_target = None
         elif self._zoom_dir:
             self.zoom = min(self.max_zoom, max(1.0, self.zoom + self._zoom_dir * ZOOM_RATE * dt))
+        if self._digital_dir:
+            digital = self.digital_zoom + self._digital_dir * DIGITAL_ZOOM_RATE * dt
+            self.digital_zoom = min(MAX_DIGITAL_ZOOM, max(1.0, digital))
         self._time = now
 
     def _set_pitch(self, value: float) -> None:
@@ -258,6 +273,10 @@ class GimbalModel:
         elif action == "zoom_out_2x":
             self._zoom_to(self.zoom / 2)
 
+    def _digital_zoom(self, f: dict[str, Any], now: float) -> None:
+        action = f.get("action")
+        self._digital_dir = {"zoom_in": 1.0, "zoom_out": -1.0}.get(str(action), 0.0)
+
     def _tap_zoom(self, f: dict[str, Any], now: float) -> None:
         self._look_at(float(f.get("x_pct", 0.0)) / 100, float(f.get("y_pct", 0.0)) / 100)
         self._zoom_to(self.zoom * 2)
@@ -269,6 +288,7 @@ class GimbalModel:
             (float(f.get("y", centre)) - centre) / centre,
         )
         self.tracking = True
+        self.tracking_box = (float(f.get("width", 0)) / 8191, float(f.get("height", 0)) / 8191)
 
     def _tracking_stop(self, f: dict[str, Any], now: float) -> None:
         self.tracking = False
@@ -286,6 +306,14 @@ class GimbalModel:
         self.recording = f.get("action") == "start"
         self.last_action = f"recording {f.get('action')}"
 
+    def _palette(self, f: dict[str, Any], now: float) -> None:
+        self.palette = str(f.get("palette", self.palette))
+        self._other(f, now)
+
+    def _pip_cycle(self, f: dict[str, Any], now: float) -> None:
+        self.pip_mode = (self.pip_mode + 1) % PIP_MODES
+        self._other(f, now)
+
     def _other(self, f: dict[str, Any], now: float) -> None:
         details = [str(v) for k, v in f.items() if k in _ACTION_KEYS]
         self.last_action = " ".join([str(f.get("name")), *details])
@@ -297,7 +325,7 @@ _HANDLERS = {
     "gimbal_control": GimbalModel._gimbal_control,
     "specified_angle": GimbalModel._specified_angle,
     "zoom": GimbalModel._zoom,
-    "digital_zoom": GimbalModel._zoom,
+    "digital_zoom": GimbalModel._digital_zoom,
     "tap_zoom": GimbalModel._tap_zoom,
     "tracking": GimbalModel._tracking,
     "tracking_stop": GimbalModel._tracking_stop,
@@ -309,9 +337,15 @@ _HANDLERS = {
     "snapshot": GimbalModel._other,
     "focus": GimbalModel._other,
     "tap_focus": GimbalModel._other,
-    "palette": GimbalModel._other,
-    "pip_cycle": GimbalModel._other,
+    "palette": GimbalModel._palette,
+    "pip_cycle": GimbalModel._pip_cycle,
 }
+
+
+def optical_zoom_range(gimbal_type: int) -> float:
+    """The largest optical zoom ratio of a gimbal type of Note 1."""
+    return SHORT_ZOOM if gimbal_type in SHORT_ZOOM_TYPES else MAX_ZOOM
+
 
 EARTH_M_PER_DEG = 111_320.0
 

@@ -15,6 +15,8 @@ TICK_S = 0.01  # the virtual clock's step
 
 # (time, CAN ID, data, sent by the ground station) -> what a capture of the link holds.
 Wire = Callable[[float, int, bytes, bool], CanFrame | StreamChunk]
+# Called at every tick with the time and the gimbal (the simulated camera looks at it).
+Watch = Callable[[float, SimulatedGimbal], None]
 
 
 def _play(
@@ -23,6 +25,7 @@ def _play(
     config: SimConfig | None,
     start: float,
     wire: Wire,
+    watch: Watch | None = None,
 ) -> tuple[list[CanFrame | StreamChunk], list[Event]]:
     script = GroundScript(steps, period=None)
     gimbal = SimulatedGimbal(start, config)
@@ -41,6 +44,8 @@ def _play(
             item = wire(now, can_id, data, False)
             items.append(item)
             events.extend(decoder.feed(item))
+        if watch is not None:
+            watch(now, gimbal)
     events.extend(decoder.close(start + duration))
     return items, events
 
@@ -52,17 +57,19 @@ def run_offline(
     *,
     start: float = 0.0,
     channel: str = "sim",
+    watch: Watch | None = None,
 ) -> tuple[list[CanFrame], list[Event]]:
     """Play ``steps`` against a simulated gimbal on a CAN bus for ``duration`` seconds.
 
     Returns the CAN frames on the bus (commands and everything the gimbal sent) and the
-    events the decoder made of them, as a capture of that bus would give them.
+    events the decoder made of them, as a capture of that bus would give them. ``watch``
+    is called at every tick after the gimbal moved (the simulated camera).
     """
 
     def on_bus(now: float, can_id: int, data: bytes, _: bool) -> CanFrame:
         return CanFrame(now, can_id, data, channel=channel)
 
-    items, events = _play(steps, duration, config, start, on_bus)
+    items, events = _play(steps, duration, config, start, on_bus, watch)
     return [i for i in items if isinstance(i, CanFrame)], events
 
 

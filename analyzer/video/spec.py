@@ -20,6 +20,9 @@ PASSWORD_ENV = "GIMBAL_CAMERA_PASSWORD"  # the password without showing it in ps
 DOCUMENT_PATH = "/cam/realmonitor?channel=1&subtype={subtype}"
 STREAMS = {"main": 0, "sub1": 1, "sub2": 2, "thermal": 2}
 DEFAULT_THUMBNAIL_S = 2.0
+# --camera sim: the simulated camera of `demo`, which shows the simulated gimbal's view.
+SIMULATED_CAMERA = "sim"
+SIMULATED_SCHEME = "sim:"
 # A recording with video holds this much (seconds of log time) back from each flush, so a
 # frame that reaches the writer after the telemetry of its moment still takes its own
 # capture time as log time. Measured on the test camera: in steady state frames come up
@@ -107,6 +110,11 @@ def video_specs(args: argparse.Namespace) -> list[VideoSpec]:
     if interval is not None and interval < 0:
         raise UsageError("--thumbnail-interval must be 0 (none) or a positive number of seconds")
     texts = getattr(args, "video", [])
+    if args.camera == SIMULATED_CAMERA and not getattr(args, "simulated_camera", False):
+        raise UsageError(
+            "--camera sim: only `gimbal-analyzer demo` has the simulated camera (it shows "
+            "the simulated gimbal's view); give the camera's HOST[:PORT]"
+        )
     password = camera_password(args) if texts else None
     specs = [
         parse_video_spec(text, camera=args.camera, user=args.camera_user, password=password)
@@ -164,9 +172,16 @@ def parse_video_spec(
         raise UsageError(
             f"--video {text}: expected main, sub1, sub2, thermal or NAME=rtsp://... (see --help)"
         )
+    if camera == SIMULATED_CAMERA:
+        return VideoSpec(text, SIMULATED_SCHEME + text, f"the simulated camera's {text} stream")
     host, port = _camera_address(camera)
     url = f"rtsp://{host}:{port}{DOCUMENT_PATH.format(subtype=subtype)}"
     return _spec(text, url, user or DEFAULT_USER, password or DEFAULT_PASSWORD)
+
+
+def is_simulated(spec: VideoSpec) -> bool:
+    """A stream of the simulated camera (``--camera sim``), not an RTSP camera's."""
+    return spec.url.startswith(SIMULATED_SCHEME)
 
 
 def _camera_address(camera: str) -> tuple[str, int]:

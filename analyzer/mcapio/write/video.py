@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import base64
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from analyzer.mcapio.channels import (
@@ -166,9 +166,15 @@ class VideoRecorder:
     ``close`` at the end of the capture).
     """
 
-    def __init__(self, mcap: McapSink, streams: Sequence[VideoStream]) -> None:
+    def __init__(
+        self,
+        mcap: McapSink,
+        streams: Sequence[VideoStream],
+        taps: Sequence[Callable[[list[VideoFrame]], None]] = (),
+    ) -> None:
         self.mcap = mcap
         self.streams = list(streams)
+        self.taps = list(taps)  # each gets the frames taken (a live judgement's pictures)
         self.stage = _LinkStage(self)
         self.frames_written = 0
         self._frames: list[VideoFrame] = []
@@ -195,6 +201,8 @@ class VideoRecorder:
         for stream in self.streams:
             frames, news = stream.take()
             self._frames.extend(frames)
+            for tap in self.taps:
+                tap(frames)
             events.extend(news)
         return events
 
