@@ -7,7 +7,6 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
-from analyzer.analysis.camera.hook import camera_judge, with_camera
 from analyzer.analysis.findings import Timed, untimed
 from analyzer.analysis.response import (
     DEFAULT_FLAG_ALLOWED_S,
@@ -162,7 +161,10 @@ def analyze(
 def _read_findings(decoding: Decoding, settings: Settings, path: Path) -> Iterator[Finding]:
     """The findings of an opened input; its reader is closed at the end (or when the
     caller stops early)."""
-    # A recording with video: the camera commands are judged from its picture too.
+    # A recording with video: the camera commands are judged from its picture too (the
+    # camera judgement, with PyAV and OpenCV, is imported only when a file is read).
+    from analyzer.analysis.camera.hook import camera_judge, with_camera
+
     judging = with_camera(ResponseAnalyzer(settings), camera_judge(path, settings.time_allowed_s))
     try:
         with input_errors(path):
