@@ -59,8 +59,11 @@ def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_ob
     assert main(["analyze", str(path), "--json"]) == 0
     found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     angles = [f for f in found if f["command"] == "specified_angle" and f["check"] == "target"]
-    assert len(angles) >= 2
-    assert {f["verdict"] for f in angles} == {"obeyed"}, [f["detail"] for f in angles]
+    # A target the plan sends in the demo's last moments meets the end of the input
+    # (unknown, "before the input ended"); every one the gimbal had time for is obeyed.
+    decided = [f for f in angles if "the input ended" not in f["detail"]]
+    assert len(decided) >= 2
+    assert {f["verdict"] for f in decided} == {"obeyed"}, [f["detail"] for f in angles]
     assert not [f for f in found if f["verdict"] == "not_obeyed"]
 
 
