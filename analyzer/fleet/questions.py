@@ -219,63 +219,80 @@ def _link(name: str, title: str, keys: tuple[Key, ...]) -> GroupQuestion:
     )
 
 
-def _obedience(tag: str, key: Column | Constant) -> GroupQuestion:
+def _judged(
+    name: str,
+    title: str,
+    by: str,
+    tag: str,
+    key: Column | Constant,
+    where: tuple[Where, ...],
+    figures: tuple[tuple[Aggregate, Output], ...],
+    counted: str = "findings",
+) -> GroupQuestion:
+    """Findings (``where``) counted per ``by`` and tag: how many (``counted``), by
+    verdict, then the ``figures`` (an aggregate and its output each)."""
     findings = Column
     verdicts = ("obeyed", "partial", "not_obeyed", "unknown")
     return GroupQuestion(
-        name=f"obedience_by_{tag}",
-        title=f"Obedience per command and {tag}",
+        name=name,
+        title=title,
         table="findings",
         join=Join(RECORDINGS, "content_hash", (key.name,)) if isinstance(key, Column) else None,
-        where=(Where(findings("command"), "not_equal", "feedback"),),
-        keys=(Key("command", findings("command")), Key(tag, key)),
+        where=where,
+        keys=(Key(by, findings(by)), Key(tag, key)),
         aggregates=(
-            Aggregate("findings", "count"),
+            Aggregate(counted, "count"),
             *(Aggregate(v, "count_equal", findings("verdict"), value=v) for v in verdicts),
-            Aggregate("median_response_s", "median", findings("response_s")),
+            *(aggregate for aggregate, _ in figures),
         ),
         outputs=(
-            Output("command", "command"),
+            Output(by, by),
             Output(tag, tag),
-            Output("findings", "findings"),
+            Output(counted, counted),
             *(Output(v, v) for v in verdicts),
-            Output("median_response_s", "median_response_s", digits=3),
+            *(output for _, output in figures),
         ),
-        order=(Order("command"), Order(tag)),
+        order=(Order(by), Order(tag)),
+    )
+
+
+def _median(field: str) -> tuple[Aggregate, Output]:
+    name = f"median_{field}"
+    return Aggregate(name, "median", Column(field)), Output(name, name, digits=3)
+
+
+def _obedience(tag: str, key: Column | Constant) -> GroupQuestion:
+    return _judged(
+        f"obedience_by_{tag}",
+        f"Obedience per command and {tag}",
+        "command",
+        tag,
+        key,
+        (Where(Column("command"), "not_equal", "feedback"),),
+        (_median("response_s"),),
     )
 
 
 def _sticks(tag: str, key: Column | Constant) -> GroupQuestion:
-    """The stick movements (gimbal_control streams) per component and tag: how many, how
-    they were judged, the measured over commanded motion, the lag and the cadence."""
-    findings = Column
-    verdicts = ("obeyed", "partial", "not_obeyed", "unknown")
-    medians = ("pan_ratio", "tilt_ratio", "lag_s", "interval_mean_s")
-    return GroupQuestion(
-        name=f"sticks_by_{tag}",
-        title=f"Stick movements per component and {tag}",
-        table="findings",
-        join=Join(RECORDINGS, "content_hash", (key.name,)) if isinstance(key, Column) else None,
-        where=(
-            Where(findings("command"), "equal", "gimbal_control"),
-            Where(findings("check"), "equal", "rate"),
+    """The stick movements (gimbal_control streams) per component and tag: how many (one
+    finding each), how they were judged, the measured over commanded motion, the lag and
+    the cadence."""
+    longest = (
+        Aggregate("longest_interval_s", "max", Column("interval_max_s")),
+        Output("longest_interval_s", "longest_interval_s", digits=3),
+    )
+    return _judged(
+        f"sticks_by_{tag}",
+        f"Stick movements per component and {tag}",
+        "component",
+        tag,
+        key,
+        (
+            Where(Column("command"), "equal", "gimbal_control"),
+            Where(Column("check"), "equal", "rate"),
         ),
-        keys=(Key("component", findings("component")), Key(tag, key)),
-        aggregates=(
-            Aggregate("movements", "count"),
-            *(Aggregate(v, "count_equal", findings("verdict"), value=v) for v in verdicts),
-            *(Aggregate(f"median_{m}", "median", findings(m)) for m in medians),
-            Aggregate("longest_interval_s", "max", findings("interval_max_s")),
-        ),
-        outputs=(
-            Output("component", "component"),
-            Output(tag, tag),
-            Output("movements", "movements"),
-            *(Output(v, v) for v in verdicts),
-            *(Output(f"median_{m}", f"median_{m}", digits=3) for m in medians),
-            Output("longest_interval_s", "longest_interval_s", digits=3),
-        ),
-        order=(Order("component"), Order(tag)),
+        (*(_median(m) for m in ("pan_ratio", "tilt_ratio", "lag_s", "interval_mean_s")), longest),
+        "movements",
     )
 
 
