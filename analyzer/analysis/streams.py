@@ -106,11 +106,12 @@ class StickStream:
 
 
 class Streams:
-    """The open streams by component and the movements awaiting their judgement.
+    """The open streams by component and the movements awaiting their judgement
+    (``waiting``, which ``analyzer.analysis.stick_judge`` judges once their feedback
+    window is over).
 
-    ``command`` takes a gimbal_control; ``due`` hands on the movements whose feedback
-    window is over; ``cut`` and ``end`` close what another command or the input's end
-    interrupts."""
+    ``command`` takes a gimbal_control; ``end_quiet`` ends the streams that paused;
+    ``cut`` and ``end`` close what another command or the input's end interrupts."""
 
     def __init__(self) -> None:
         self.open: dict[str, StickStream] = {}
