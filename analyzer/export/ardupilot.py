@@ -102,41 +102,46 @@ def _field(f: Field, *, labels: bool = False) -> str:
     return "{" + ", ".join(items) + "}" + f",  -- {note}"
 
 
-def _commands() -> list[str]:
-    lines = ["local COMMANDS = {"]
-    for name in SENT_COMMANDS:
-        row = find_command(name, s_id="gimbal")
-        lines.append(f"  {name} = {{s_id=0x{row.s_id:02X}, cmd=0x{row.cmd:02X}, fields={{")
-        for f in row.all_fields():
-            lines.append(f"    {f.name} = {_field(f, labels=True)}")
+def _table(name: str, entries: list[tuple[str, list[str]]]) -> list[str]:
+    """``local NAME = {...}``: each entry's head (``key = {...,``) and its fields."""
+    lines = [f"local {name} = {{"]
+    for head, fields in entries:
+        lines.append(f"  {head}fields={{")
+        lines += [f"    {field}" for field in fields]
         lines.append("  }},")
     lines.append("}")
     return lines
+
+
+def _commands() -> list[str]:
+    entries = []
+    for name in SENT_COMMANDS:
+        row = find_command(name, s_id="gimbal")
+        head = f"{name} = {{s_id=0x{row.s_id:02X}, cmd=0x{row.cmd:02X}, "
+        entries.append((head, [f"{f.name} = {_field(f, labels=True)}" for f in row.all_fields()]))
+    return _table("COMMANDS", entries)
 
 
 def _feedback() -> list[str]:
-    lines = ["local FEEDBACK = {"]
-    for length, layout in LAYOUTS.items():
-        lines.append(
-            f"  [0x{length:02X}] = {{name={_lua_str(layout.name)}, "
-            f"crc_off={layout.crc_offset}, fields={{"
+    entries = [
+        (
+            f"[0x{length:02X}] = {{name={_lua_str(layout.name)}, crc_off={layout.crc_offset}, ",
+            [f"{f.name} = {_field(f)}" for f in layout.layout.fields],
         )
-        for f in layout.layout.fields:
-            lines.append(f"    {f.name} = {_field(f)}")
-        lines.append("  }},")
-    lines.append("}")
-    return lines
+        for length, layout in LAYOUTS.items()
+    ]
+    return _table("FEEDBACK", entries)
 
 
 def _status() -> list[str]:
-    lines = ["local STATUS = {"]
-    for can_id, status in STATUS_FRAMES.items():
-        lines.append(f"  {status.name} = {{id=0x{can_id:08X}, fields={{")
-        for f in status.layout.fields:
-            lines.append(f"    {f.name} = {_field(f)}")
-        lines.append("  }},")
-    lines.append("}")
-    return lines
+    entries = [
+        (
+            f"{status.name} = {{id=0x{can_id:08X}, ",
+            [f"{f.name} = {_field(f)}" for f in status.layout.fields],
+        )
+        for can_id, status in STATUS_FRAMES.items()
+    ]
+    return _table("STATUS", entries)
 
 
 def _crc_table() -> list[str]:
