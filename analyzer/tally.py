@@ -120,8 +120,8 @@ class FeedbackTrack:
         self.last = self._arrival = t
 
     def damaged(self, t: float) -> None:
-        """A damaged message (CRC error, incomplete) came at ``t``: the silence before it
-        ends there, and what it ends is counted; the message itself is damaged, not lost."""
+        """A message with a bad CRC came at ``t``: the silence before it ends there, and
+        what it ends is counted; the message itself is damaged, not lost."""
         arrival = self._arrival if self._arrival is not None else self.last
         if arrival is None or t <= arrival:
             return
