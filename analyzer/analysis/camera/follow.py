@@ -158,6 +158,7 @@ def _link(cache: FeatureCache, anchor: int, step: int) -> tuple[int, Motion] | N
     of half as far and so on, that matches; when only a weak link is found that way, the
     longest strong one to any nearer frame instead (the chain then goes through other
     frames), else that weak one."""
+    found: Motion | None = None
     while step >= 1:
         found = motion(cache[anchor], cache[anchor + step])
         if found is not None:
