@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -61,10 +62,14 @@ class OneLineParser(argparse.ArgumentParser):
     unknown option is reported by the command it was given to."""
 
     commands: dict[str, argparse.ArgumentParser]
+    given: Sequence[str] = ()  # the command line, for hints
 
     def parse_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> argparse.Namespace:
+        for command in getattr(self, "commands", {}).values():
+            if isinstance(command, OneLineParser):
+                command.given = list(sys.argv[1:] if args is None else args)
         parsed, extra = self.parse_known_args(args, namespace)
         if extra:
             named = getattr(self, "commands", {}).get(getattr(parsed, "command", None) or "")
@@ -75,7 +80,18 @@ class OneLineParser(argparse.ArgumentParser):
         hint = f"see: {self.prog} --help"
         if re.search(r"(^|\s)-f\b", message) and "--format" in self.format_help():
             hint = f"-f is --force wherever it exists; the format is --format FORMAT; {hint}"
+        if re.search(r"required: .*--source\b", message):
+            hint = f"{source_hint(self.given)}; {hint}"
         self.exit(EXIT_USAGE, f"{self.prog}: error: {printable(message)} ({hint})\n")
+
+
+def source_hint(given: Sequence[str]) -> str:
+    """What to say when --source is missing: a file given without it is replayed as
+    ``--source file:PATH``."""
+    paths = [a for a in given[1:] if not a.startswith("-") and os.path.isfile(a)]
+    if paths:
+        return f"a file is replayed with --source file:{paths[0]}"
+    return "a file is replayed with --source file:PATH"
 
 
 def _load(name: str) -> ModuleType | None:

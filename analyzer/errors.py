@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 # The exit codes of every command (--help and the manual's "Exit codes" page show this table).
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -29,9 +31,13 @@ EXIT_CODES: tuple[tuple[int, str], ...] = (
 )
 
 
-def exit_code_table() -> str:
-    """The table as plain text, for ``--help``."""
-    return "\n".join(f"  {code:<4} {words}" for code, words in EXIT_CODES)
+def exit_code_table(width: int = 80) -> str:
+    """The table as plain text, for ``--help``: each code's words wrapped to ``width``
+    under one another."""
+    return "\n".join(
+        textwrap.fill(words, width, initial_indent=f"  {code:<4} ", subsequent_indent=" " * 7)
+        for code, words in EXIT_CODES
+    )
 
 
 class UsageError(Exception):

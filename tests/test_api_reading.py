@@ -69,6 +69,20 @@ def test_read_errors(tmp_path: Path) -> None:
         read(SAMPLES / "flight-candump.log", format="xls")
 
 
+def test_read_errors_name_the_library_s_arguments_not_the_command_line_s_options(
+    tmp_path: Path,
+) -> None:
+    """The README is no capture: the library says format=, the argument it takes."""
+    with pytest.raises(ValueError) as raised:
+        read(Path(__file__).resolve().parent.parent / "README.md")
+    assert "give format= (candump, " in str(raised.value)
+    assert "--format" not in str(raised.value)
+    binary = tmp_path / "flight.log"
+    binary.write_bytes(b"(1.0) can0 0F01#\0\0\n")
+    with pytest.raises(ValueError, match=r"\(it holds binary data\); give format=$"):
+        read(binary)
+
+
 CASES = [(name, {}) for name in NAMES] + [
     ("flight-candump.log", {"tolerance_deg": 2.0, "time_allowed_s": 3.0, "flag_allowed_s": 0.4}),
 ]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import signal
 import socket
 import subprocess
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from analyzer.cli import main
+from analyzer.cli import COMMANDS, build_parser, main
 from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE, UsageError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -202,3 +203,46 @@ def test_a_signal_during_a_critical_step_takes_effect_after_it() -> None:
         os.kill(os.getpid(), signal.SIGTERM)
         done.append("the step finished")
     assert done == ["the step finished"]
+
+
+def help_examples() -> list[tuple[str, str]]:
+    """(command, example line) of every ``gimbal-analyzer ...`` line in a --help text."""
+    parser = build_parser()
+    found = []
+    for name, command in getattr(parser, "commands", {}).items():
+        text = f"{command.description or ''}\n{command.epilog or ''}".replace("\\\n", " ")
+        for line in text.splitlines():
+            at = line.find("gimbal-analyzer ")
+            if at >= 0 and line[:at].strip() in ("", "$"):
+                # what follows two spaces is the example's explanation
+                found.append((name, re.split(r"\s{2,}", line[at:].strip())[0]))
+    return found
+
+
+def test_every_help_example_pastes_into_a_shell_as_written() -> None:
+    """An example pasted into bash runs the command it shows: no unquoted > or < that
+    makes a file of an address and cuts the argument there, no bare &."""
+    examples = help_examples()
+    assert len(examples) > 30
+    for name, example in examples:
+        lexer = shlex.shlex(example, posix=True, punctuation_chars=True)
+        lexer.whitespace_split = True
+        tokens = list(lexer)
+        bad = [t for t in tokens if t and set(t) <= set("<>&;") and t not in (";",)]
+        assert not bad, f"gimbal-analyzer {name} --help: {example!r} holds {bad}"
+
+
+MAX_HELP_COLUMNS = 100  # the manual's CLI reference shows --help laid out for 88 columns
+
+
+@pytest.mark.parametrize("command", ["", *COMMANDS])
+def test_no_help_line_runs_off_the_page(
+    command: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The exit-code table and an option group's words (--video's camera video) are
+    wrapped as argparse wraps the rest, for the terminal and the manual's reference."""
+    monkeypatch.setenv("COLUMNS", "88")
+    with pytest.raises(SystemExit):
+        main([command, "--help"] if command else ["--help"])
+    long = [line for line in capsys.readouterr().out.splitlines() if len(line) > MAX_HELP_COLUMNS]
+    assert long == []

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from collections import defaultdict
+from pathlib import Path
 
 import pytest
 
@@ -87,6 +88,23 @@ def test_usage_errors_are_one_line_with_a_hint(
     assert exit_info.value.code == EXIT_USAGE
     captured = capsys.readouterr()
     assert captured.err == message + "\n" and captured.out == ""
+
+
+def test_a_file_given_to_monitor_without_source_points_to_file_source(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "flight-candump.log").write_text("(1.0) can0 0F01#0F04\n")
+    for argv, spec in (
+        (["monitor", "flight-candump.log"], "file:flight-candump.log"),
+        (["record", "-o", "x.mcap"], "file:PATH"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv)
+        assert exit_info.value.code == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert "required: --source" in err
+        assert f"(a file is replayed with --source {spec}; see: gimbal-analyzer" in err
 
 
 def test_report_takes_f_for_force(tmp_path: pytest.TempPathFactory) -> None:

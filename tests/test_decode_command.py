@@ -107,6 +107,9 @@ def test_summary_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     [
         (["--topic", "/gimbal/command"], ["/gimbal/command"] * 2),
         (["--topic", "/gimbal"], ["/gimbal/command"] * 2 + ["/gimbal/attitude"]),
+        (["--topic", "gimbal"], ["/gimbal/command"] * 2 + ["/gimbal/attitude"]),
+        (["--topic", "gimbal/command"], ["/gimbal/command"] * 2),
+        (["--topic", "uav"], []),
         (["--topic", "diagnostics"], ["/diagnostics"]),
         (["--topic", "attitude,diagnostics"], ["/diagnostics", "/gimbal/attitude"]),
         (["--name", "look_down"], ["/gimbal/command"]),
@@ -120,6 +123,16 @@ def test_filters(
     code, out, _ = run(capsys, str(log_file(tmp_path)), "--json", *args)
     assert code == 0
     assert [json.loads(line)["topic"] for line in out.splitlines()] == topics
+
+
+def test_an_unknown_topic_lists_the_topics_and_their_prefix_forms(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, _, err = run(capsys, str(log_file(tmp_path)), "--topic", "gimbals")
+    assert code == 2
+    assert "unknown topic 'gimbals'" in err
+    assert "/gimbal/attitude" in err
+    assert "a prefix (" in err and "/uav" in err and "without the /: gimbal, uav" in err
 
 
 def test_raw_shows_other_frames(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "tally",
             "progress",
             "capture_clock",
+            "library_log",
             "pipeline",
         ),
     ),

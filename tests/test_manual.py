@@ -164,6 +164,21 @@ def test_help_texts_are_shown_as_written(built: Path) -> None:
             assert words in " ".join(text.split()), words
 
 
+def test_the_reference_shows_option_groups_and_no_line_runs_off_the_page(built: Path) -> None:
+    """The exit-code table and camera video's words, wrapped (a literal block of the
+    page does not wrap: a line of 394 characters runs off it)."""
+    source = page(built, "reference/cli.html")
+    blocks = [
+        html.unescape(re.sub(r"<[^>]+>", "", b))
+        for b in re.findall(r"<pre>(.*?)</pre>", source, re.S)
+    ]
+    assert blocks
+    assert [line for b in blocks for line in b.splitlines() if len(line) > 100] == []
+    text = " ".join(html.unescape(re.sub(r"<[^>]+>", "", source)).split())
+    assert "camera video: Record the camera's RTSP streams into the same file" in text
+    assert "0 success; also a record / monitor / demo ended by Ctrl-C" in text
+
+
 # -- the protocol, topics, exit codes --------------------------------------------------------
 
 
@@ -210,10 +225,21 @@ def test_every_public_name_has_its_entry(built: Path) -> None:
     text = page(built, "reference/python-api.html")
     for name in getattr(analyzer, "__all__", ()):
         assert f'id="analyzer.{name}"' in text, f"analyzer.{name} has no entry"
+    # COMMANDS, a tuple, has its own docstring, not the one of Python's tuple
+    entry = text[text.index('id="analyzer.COMMANDS"') :]
+    entry = entry[: entry.index("</dl>")]
+    assert "Every command of the protocol document" in entry
+    assert "immutable sequence" not in entry
 
 
-def test_the_api_page_documents_classes_functions_and_tables_by_their_kind() -> None:
+def test_the_api_page_documents_classes_functions_and_tables_by_their_kind(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     api_reference = _docs_extension("api_reference")
+    (tmp_path / "package_defs.py").write_text(
+        'COMMANDS: tuple[int, ...] = (1, 2)\n"""The table,\n  of two."""\nUNDOCUMENTED = 3\n'
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
     package = types.ModuleType("package")
 
     class Decoder:
@@ -226,13 +252,15 @@ def test_the_api_page_documents_classes_functions_and_tables_by_their_kind() -> 
     package.Decoder = Decoder  # type: ignore[attr-defined]
     package.decode = decode  # type: ignore[attr-defined]
     package.COMMANDS = (1, 2)  # type: ignore[attr-defined]
-    package.__all__ = ["Decoder", "decode", "COMMANDS", "gone"]  # type: ignore[attr-defined]
+    package.UNDOCUMENTED = 3  # type: ignore[attr-defined]
+    package._PUBLIC = {"COMMANDS": "package_defs", "UNDOCUMENTED": "package_defs"}  # type: ignore[attr-defined]
+    package.__all__ = ["Decoder", "decode", "COMMANDS", "UNDOCUMENTED", "gone"]  # type: ignore[attr-defined]
     lines, missing = api_reference.api_rst(package)
     assert ".. autoclass:: package.Decoder" in lines
     assert ".. autofunction:: package.decode" in lines
-    at = lines.index(".. autodata:: package.COMMANDS")
-    assert lines[at + 1] == "   :no-value:"
-    assert missing == ["gone"]
+    at = lines.index(".. py:data:: package.COMMANDS")
+    assert lines[at + 1 : at + 5] == ["", "   The table,", "   of two.", ""]
+    assert missing == ["UNDOCUMENTED", "gone"]
 
 
 # -- in a browser ----------------------------------------------------------------------------

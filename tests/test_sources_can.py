@@ -260,3 +260,68 @@ def test_error_frames_are_kept(channel: str, sender: can.BusABC) -> None:
     finally:
         source.close()
     assert frames[0].is_error
+
+
+def test_socketcan_that_is_not_there_points_to_interfaces() -> None:
+    """python-can's own socketcan interface, on a computer without SocketCAN (the OS says
+    'Address family not supported') or without can0 ('No such device')."""
+    try:
+        source = open_source("can:socketcan:can0")
+    except SourceError as exc:
+        words = str(exc)
+    else:
+        source.close()
+        pytest.skip("this computer has a SocketCAN can0")
+    assert words.startswith("cannot open can:socketcan:can0: ")
+    assert "`gimbal-analyzer interfaces` lists the adapters this computer has" in words
+    if "Address family not supported" in words:
+        assert "this computer has no SocketCAN" in words
+
+
+def test_what_python_can_logs_while_opening_a_bus_is_no_line_on_stderr(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """python-can's pcan module logs 'uptime library not available' when imported: that is
+    no line printed before everything else; an opened bus's link event keeps it."""
+    import subprocess
+    import sys
+
+    record = ["record", "--source", "can:pcan:PCAN_USBBUS1", "-o", "never.mcap", "--duration", "1"]
+    done = subprocess.run(
+        [sys.executable, "-m", "analyzer", *record],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        cwd=tmp_path,
+    )
+    assert done.returncode != 0 and done.stdout == ""
+    assert "uptime" not in done.stderr
+    assert done.stderr.startswith("gimbal-analyzer record: error: cannot open can:pcan:")
+    assert len(done.stderr.splitlines()) == 1
+    assert not (tmp_path / "never.mcap").exists()
+
+    class Bus:
+        def recv(self, timeout: float | None = None) -> None:
+            time.sleep(0.01)
+
+        def shutdown(self) -> None:
+            pass
+
+    def open_bus(spec: CanSpec) -> Bus:
+        import logging
+
+        logging.getLogger("can.pcan").warning("uptime library not available, timestamps ...")
+        return Bus()
+
+    source = CanSource(CanSpec("pcan", "PCAN_USBBUS1", None), open_bus=open_bus)
+    try:
+        opened = read_until_state(source, "open", 1)
+    finally:
+        source.close()
+    link = next(i for i in opened if isinstance(i, Event) and i.fields.get("state") == "open")
+    assert link.fields["detail"] == (
+        "opened can:pcan:PCAN_USBBUS1 (listen-only); can: uptime library not available, "
+        "timestamps ..."
+    )
+    assert "uptime" not in capsys.readouterr().err

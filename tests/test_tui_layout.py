@@ -2,12 +2,14 @@
 
 The sample flight log is replayed into the app headless at 80x24, 100x30, 120x40 and
 160x45. Each value a field engineer needs must appear in full, on one line, on the main
-screen or on the page one number key away, and nothing on any page may end in an ellipsis.
+screen or on the page one number key away; only a log line too long for its panel is cut,
+and it ends in an ellipsis (Enter shows it whole).
 """
 
 from __future__ import annotations
 
 import asyncio
+import re
 from collections import Counter
 from pathlib import Path
 
@@ -37,6 +39,8 @@ from analyzer.tui.screen_text import screen_text
 SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "flight-candump.log"
 SIZES = [(80, 24), (100, 30), (120, 40), (160, 45)]
 SOURCE = "file:samples/flight-candump.log"
+LOG_ROW = re.compile(r"^[│|]?\d\d:\d\d:\d\d\.\d{3}")
+CUT = re.compile(r"…[^│]{0,2}│")  # the ellipsis, the scrollbar's gutter, the log's border
 RECORDING = "flight.mcap"
 
 
@@ -159,7 +163,9 @@ def test_every_value_is_readable_in_full(width: int, height: int) -> None:
             for name, text in shown.items():
                 lines = text.splitlines()
                 assert len(lines) == height and max(map(len, lines)) <= width, name
-                assert "…" not in text, f"{name}:\n{text}"
+                # only a log line is cut (ending in … at its border; Enter shows it whole)
+                cut = [line for line in lines if "…" in line]
+                assert all(LOG_ROW.match(line) and CUT.search(line) for line in cut), text
             assert missing_values(values, shown) == [], "\n\n".join(shown.values())
             if app.paged:
                 # the footer names the page keys; everything else is still on ? help
@@ -217,7 +223,7 @@ def test_resizing_re_lays_out_and_keeps_the_state() -> None:
             assert app.paged and app.size == (80, 24)
             text = screen_text(app)
             assert len(text.splitlines()) == 24 and "…" not in text
-            assert "1 Gimbal+UAV" in text.splitlines()[-1]
+            assert "1 Gimbal" in text.splitlines()[-1]
             await pilot.press("2")
             await redraw(app, pilot)
             assert log.cursor_seq == cursor
@@ -241,7 +247,7 @@ def test_resizing_re_lays_out_and_keeps_the_state() -> None:
             assert "0x18FF0001" in text  # the frame that came while small is shown
             assert f"{len(batch.items) + 1:,} frames" in text
             assert log.cursor_seq == cursor
-            assert "1 Gimbal+UAV" not in text  # no page keys when everything is on screen
+            assert "5 Obey?" not in text  # no page keys when everything is on screen
 
     asyncio.run(body())
 

@@ -25,7 +25,9 @@ from analyzer.tui.bridge import TuiBridge
 from analyzer.tui.demo_traffic import FOREIGN_BASE_ID, session
 from analyzer.tui.event_filter import EventFilter
 from analyzer.tui.formatting import compass, describe_params, event_text, format_age, value_bar
-from analyzer.tui.state import MonitorState, frame_bits
+from analyzer.tui.id_rows import frame_bits
+from analyzer.tui.rates import RATE_WINDOW_S
+from analyzer.tui.state import MonitorState
 
 T0 = 1_700_000_000.0
 
@@ -99,18 +101,65 @@ def test_replay_time_axis_follows_the_frames_not_the_wall_clock() -> None:
 def test_rates_bus_load_and_sparkline_history() -> None:
     state = MonitorState()
     frames: list[RawItem] = [CanFrame(T0 + i / 100, 0x123, bytes(8)) for i in range(100)]
-    frames.append(CanFrame(T0 + 1.0, 0x123, bytes(8)))  # closes the first 1 s window
+    frames.append(CanFrame(T0 + 1.0, 0x123, bytes(8)))  # closes the first second's sample
     state.fold(Batch(frames, [], T0 + 1.0))
     assert state.frames_per_s == pytest.approx(100.0)
-    assert state.rows[0x123].rate_hz == pytest.approx(100.0)
+    assert state.row_rate(state.rows[0x123]) == pytest.approx(100.0)
     assert state.bus_load == pytest.approx(100 * 131 / 1_000_000)
     assert state.frames_history[-1] == pytest.approx(100.0)
-    # silence: rates fall to zero, the history gets zero samples
+    # silence: rates fall, and are 0 once the silence is longer than the window
+    state.advance(T0 + 3.0)
+    assert 0 < state.frames_per_s < 50
     state.advance(T0 + 5.0)
-    assert state.frames_per_s == 0.0
-    assert state.rows[0x123].rate_hz == 0.0
     assert list(state.frames_history)[-3:] == [0.0, 0.0, 0.0]
+    state.advance(T0 + 1.0 + RATE_WINDOW_S + 0.1)
+    assert state.frames_per_s == 0.0 and state.bus_load == 0.0
+    assert state.row_rate(state.rows[0x123]) == 0.0
     assert frame_bits(CanFrame(0, 1, bytes(8), extended=False)) == 111
+
+
+def feedback_every(period: float, seconds: float, jitter: float = 0.02) -> list[CanFrame]:
+    """Attitude feedback every ``period`` s (each message a little early or late)."""
+    frames: list[CanFrame] = []
+    for n in range(int(seconds / period)):
+        late = jitter * ((n * 7919) % 11 - 5) / 5
+        frames += attitude_frames(T0 + n * period + late, pitch_deg=1.0, yaw_deg=2.0)
+    return frames
+
+
+def test_the_feedback_rate_is_steady_while_feedback_comes() -> None:
+    """The issue's case: sampled every 5 s, a 2 Hz feedback read 1.8, 1.0, 0.0, 0.9, 1.8 /s
+    from one-second counts; from the messages' own times it reads 2.0 at any moment."""
+    state = MonitorState()
+    frames = feedback_every(0.5, 30.0)
+    decoder = Decoder()
+    readings = []
+    for start in range(0, len(frames), 4):  # a batch per message, as a capture makes them
+        chunk = frames[start : start + 4]
+        state.fold(
+            Batch(list[RawItem](chunk), [e for f in chunk for e in decoder.feed(f)], chunk[-1].time)
+        )
+        for moment in (chunk[-1].time + 0.1, chunk[-1].time + 0.24, chunk[-1].time + 0.45):
+            state.advance(moment)
+            if moment > T0 + 5:
+                readings.append(state.topic_rates["/gimbal/attitude"])
+                row = state.rows[FEEDBACK_ID]
+                assert state.row_rate(row) == pytest.approx(8.0, rel=0.1)
+    assert min(readings) == pytest.approx(2.0, rel=0.1)
+    assert max(readings) == pytest.approx(2.0, rel=0.1)
+
+
+def test_a_slow_message_keeps_its_rate_between_two_and_stops_when_it_stops() -> None:
+    state = MonitorState()
+    frames = feedback_every(1.5, 12.0, jitter=0.0)
+    state.fold(decoded(frames))
+    for moment in (0.2, 0.7, 1.2, 1.4, 2.2):
+        state.advance(frames[-1].time + moment)
+        assert state.topic_rates["/gimbal/attitude"] == pytest.approx(1 / 1.5, rel=0.01)
+    state.advance(frames[-1].time + 2.9)  # almost twice its interval: it has stopped
+    assert 0 < state.topic_rates["/gimbal/attitude"] < 1 / 1.5
+    state.advance(frames[-1].time + RATE_WINDOW_S + 0.1)
+    assert state.topic_rates["/gimbal/attitude"] == 0.0
 
 
 def test_counters_only_reset_on_request_and_totals_never() -> None:

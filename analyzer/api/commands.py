@@ -128,6 +128,9 @@ class Command:
         )
 
 
-# Every command of the document, gimbal (S_ID 0x0F) first, then the dual-sensor camera
-# (S_ID 0x1F): made from the one command table that decoding and ``encode`` use.
 COMMANDS: tuple[Command, ...] = tuple(Command.of(row) for row in command_table.COMMANDS)
+"""Every command of the protocol document, each a ``Command`` with its ``Parameter``s in
+physical units and the ranges ``encode`` accepts: the gimbal's (S_ID 0x0F) first, then the
+dual-sensor camera's (S_ID 0x1F). Made from the one command table that decoding and
+``encode`` use, so it names exactly what they know (the module's example lists the
+dual-sensor camera's)."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -107,4 +108,20 @@ def input_errors(path: Path) -> Iterator[None]:
         name = os.fspath(path)
         if name != "-" and "://" not in name and not os.path.lexists(name):
             raise FileNotFoundError(errno.ENOENT, "no such file", name) from None
-        raise ValueError(str(exc)) from None
+        raise ValueError(library_words(str(exc))) from None
+
+
+# The command line's options as the library's arguments, in the words of its errors.
+_AS_ARGUMENTS = (
+    (re.compile(r"--format (\w+)"), r'format="\1"'),
+    (re.compile(r"--format\b"), "format="),
+    (re.compile(r"--port\b"), "port="),
+    (re.compile(r"--raw\b"), "other_frames=True"),
+)
+
+
+def library_words(message: str) -> str:
+    """An input error as the library says it: ``format="pcap"``, not ``--format pcap``."""
+    for option, argument in _AS_ARGUMENTS:
+        message = option.sub(argument, message)
+    return message

@@ -39,8 +39,8 @@ examples:
   candump -L can0 | gimbal-analyzer decode -       # live from a CAN interface
   gimbal-analyzer decode flight_0.mcap --summary   # ros2 bag record of /from_can_bus
 
---topic takes a topic (/gimbal/command), a prefix (/uav) or a last part
-(attitude, diagnostics); --name a command name (gimbal_control) or a
+--topic takes a topic (/gimbal/command), a prefix (/uav, or uav) or a last
+part (attitude, diagnostics); --name a command name (gimbal_control) or a
 diagnostic kind (crc_mismatch); both may be repeated. --summary counts every
 event, whatever the filters.
 """
@@ -240,7 +240,12 @@ def event_filter(topics: list[str], names: list[str]) -> Callable[[Any], bool] |
     for value in _split(topics):
         matched = [t for t in known_topics if _topic_matches(t, value)]
         if not matched:
-            raise UsageError(f"unknown topic {value!r}; valid: {', '.join(known_topics)}")
+            prefixes = sorted({"/" + t.strip("/").split("/")[0] for t in known_topics})
+            raise UsageError(
+                f"unknown topic {value!r}; valid: a topic ({', '.join(known_topics)}), a "
+                f"prefix ({', '.join(prefixes)}; or without the /: gimbal, uav) or a last "
+                "part (attitude, diagnostics)"
+            )
         topic_set.update(matched)
     known_names = {row.name for row in COMMANDS} | {"unknown", *DIAGNOSTIC_KINDS}
     name_set: set[str] = set()
@@ -275,4 +280,5 @@ def _topic_matches(topic: str, value: str) -> bool:
         return False
     if value.startswith("/"):
         return topic == value or topic.startswith(value + "/")
-    return topic.endswith("/" + value) or topic.lstrip("/") == value
+    # without the leading /: a prefix (gimbal, uav/gps) or a last part (attitude)
+    return _topic_matches(topic, "/" + value) or topic.endswith("/" + value)

@@ -38,7 +38,8 @@ Sources (gimbal-analyzer interfaces lists the adapters of this machine):
   tcp:192.168.42.200:2000       the IDU's TCP port (reconnects when the link drops)
   tcp:2000                      a port alone is on this machine, 127.0.0.1:2000 (simulate)
   proxy:2000->192.168.42.200:2000   between ground station and IDU, both directions
-                                (listens on all interfaces; proxy:127.0.0.1:2000->... does not)
+                                (listens on all interfaces; proxy:127.0.0.1:2000->...
+                                does not; quoted in a shell, which takes > to redirect)
   serial:/dev/ttyUSB0@115200    the UART pins
   file:flight.log               replay a capture file (--speed 1 = recorded speed)
 
@@ -49,7 +50,7 @@ opened again when it is back, with the same backoff as tcp: (0.5 s doubling to
 Examples:
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap
   gimbal-analyzer record --source tcp:192.168.42.200:2000 -o bench.mcap --duration 600
-  gimbal-analyzer record --source proxy:2000->192.168.42.200:2000 -o gs.mcap --tui
+  gimbal-analyzer record --source 'proxy:2000->192.168.42.200:2000' -o gs.mcap --tui
   gimbal-analyzer record --source can:socketcan:can0 -o flight.mcap --foxglove
                                 watch it live in Foxglove too (ws://127.0.0.1:8765)
   gimbal-analyzer record --source tcp:192.168.42.200:2000 -o flight.mcap --video main

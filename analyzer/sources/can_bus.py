@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from analyzer.errors import UsageError
+from analyzer.library_log import LibraryLog, library_log
 from analyzer.protocol.can_message import SOCKETCAN_ERROR_INTERFACES, frame_from_message
 from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
 from analyzer.sources.socketcan_links import bring_up, socketcan_down
@@ -94,9 +95,13 @@ class CanLink(DeviceLink):
         self.listen_only = bool(LISTEN_ONLY_OPTIONS.get(spec.interface))
         self._bus: ReceivingBus | None = None
         self._lock = threading.Lock()
+        self.library_notes: list[str] = []  # what python-can logged while opening the bus
 
     def open(self) -> None:
-        bus = self.opener(self.spec)
+        notes = LibraryLog()
+        with library_log(notes):  # python-can logs while it imports a driver's module
+            bus = self.opener(self.spec)
+        self.library_notes = notes.take()
         channel = self.spec.channel
         if self.spec.interface == "socketcan" and socketcan_down(channel):
             # bound to a down interface, the socket would wait in silence
@@ -133,7 +138,25 @@ class CanLink(DeviceLink):
 
     def opened_words(self) -> str:
         mode = "listen-only" if self.listen_only else "receive-only"
-        return f"opened {self.description} ({mode})"
+        notes = "".join(f"; {note}" for note in self.library_notes)
+        return f"opened {self.description} ({mode}){notes}"
+
+    def cannot_open_words(self, reason: str) -> str:
+        return f"cannot open {self.description}: {reason}{open_hint(self.spec, reason)}"
+
+
+INTERFACES_HINT = "`gimbal-analyzer interfaces` lists the adapters this computer has"
+
+
+def open_hint(spec: CanSpec, reason: str) -> str:
+    """What to do when a bus cannot be opened because it is not there ('' otherwise)."""
+    if spec.interface == "socketcan" and "Address family not supported" in reason:
+        return f" (this computer has no SocketCAN, Linux's CAN sockets; {INTERFACES_HINT})"
+    if "No such device" in reason:
+        return f" (there is no {spec.channel}; {INTERFACES_HINT})"
+    if "library not found" in reason or "not installed" in reason:
+        return f" (the adapter's driver is missing; {INTERFACES_HINT})"
+    return ""
 
 
 class CanSource(ReconnectingSource):

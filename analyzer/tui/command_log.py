@@ -19,7 +19,7 @@ from textual.strip import Strip
 
 from analyzer.protocol.types import LINK, TOPIC_COMMAND, TOPIC_DIAGNOSTICS
 from analyzer.tui.event_log import LogEntry
-from analyzer.tui.formatting import event_raw, event_text, format_time
+from analyzer.tui.formatting import event_raw, event_text, folded_text, format_time
 
 RAW_WIDTH = 24  # "0F 04 0C FE 00 00 00 00" + a space
 TEXT_CACHE_LIMIT = 10_000
@@ -65,7 +65,7 @@ class CommandLog(ScrollView, can_focus=True):
         self.cursor_seq: int | None = None
         self.raw = False
         self.search = ""
-        self._texts: dict[int, str] = {}
+        self._texts: dict[tuple[int, int], str] = {}
 
     # -- content -------------------------------------------------------------------------------
 
@@ -81,17 +81,23 @@ class CommandLog(ScrollView, can_focus=True):
         self.refresh()
 
     def text_of(self, entry: LogEntry) -> str:
-        """The plain words of an entry (cached: events do not change)."""
-        text = self._texts.get(entry.seq)
+        """The plain words of an entry (cached: events do not change; a folded line of
+        repeated commands is worded again when it grows)."""
+        key = (entry.seq, entry.count)
+        text = self._texts.get(key)
         if text is None:
-            text = self._texts[entry.seq] = event_text(entry.event)
+            text = event_text(entry.event)
+            if entry.count > 1:
+                name = str(entry.event.fields.get("name", ""))
+                text = folded_text(text, name, entry.count, entry.event.time - entry.start)
+            self._texts[key] = text
         return text
 
     def line_of(self, entry: LogEntry) -> Text:
         """One log line: time, raw bytes when the raw view is on, words; styled by kind."""
         event = entry.event
         line = Text(no_wrap=True, end="")
-        line.append(format_time(event.time), _TIME)
+        line.append(format_time(entry.start), _TIME)
         line.append("  ")
         if self.raw:
             raw = event_raw(event)
@@ -111,7 +117,7 @@ class CommandLog(ScrollView, can_focus=True):
         return line
 
     def visible_lines(self) -> list[str]:
-        """Plain text of the rows on screen (for tests and text snapshots)."""
+        """Plain text of the rows on screen, in full (for tests and text snapshots)."""
         top = self.scroll_offset.y
         return [self.line_of(e).plain for e in self.entries[top : top + self.size.height]]
 
@@ -126,6 +132,9 @@ class CommandLog(ScrollView, can_focus=True):
             return Strip.blank(width, rich_style)
         entry = self.entries[index]
         text = self.line_of(entry)
+        shown = self.scrollable_content_region.width  # the scrollbar takes the rest
+        if text.cell_len > shown:  # cut: it says so, and Enter shows the whole of it
+            text.truncate(shown, overflow="ellipsis")
         if entry.seq == self.cursor_seq:
             text.stylize(_CURSOR)
         strip = Strip(text.render(self.app.console), text.cell_len)

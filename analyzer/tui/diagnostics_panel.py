@@ -34,10 +34,12 @@ def counter_lines(state: MonitorState, width: int) -> list[Text]:
         )
     lines = grid(cells, width, gap=3)
     t = state.total
-    totals = [
-        Text("since start", "dim"),
-        Text(f"{t.frames:,} frames"),
-        Text(f"{t.chunks:,} chunks"),
+    totals = [Text("since start", "dim")]
+    if t.frames or not t.chunks:  # a TCP or UART stream has no CAN frames to count
+        totals.append(Text(f"{t.frames:,} frames"))
+    if t.chunks:
+        totals.append(Text(f"{t.chunks:,} chunks"))
+    totals += [
         Text(f"{t.events:,} events"),
         Text(f"{t.errors:,} errors", "bold red" if t.errors else ""),
     ]
@@ -104,7 +106,7 @@ class DiagnosticsPanel(Horizontal):
         n = len(frames)
         self._frames_label.update(
             Text.assemble(
-                ("frames/s ", "dim"),
+                (f"{'chunks' if state.items_counted == 'chunks' else 'frames'}/s ", "dim"),
                 f"{state.frames_per_s:,.0f}",
                 (f"  max {max(frames):,.0f}", "dim"),
             )

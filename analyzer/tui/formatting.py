@@ -69,6 +69,17 @@ def event_text(event: Event) -> str:
     return text
 
 
+def folded_text(text: str, name: str, count: int, span: float) -> str:
+    """The words of ``count`` commands folded into one line (``text``: the last one's):
+    'gimbal_control x20 in 1.0 s, last pan 12.00 deg/s tilt 0.00 deg/s'."""
+    at = text.find(name) if name else -1
+    if at < 0:
+        return f"x{count} in {span:.1f} s, last {text}"
+    end = at + len(name)
+    rest = text[end:].strip()
+    return f"{text[:end]} x{count} in {span:.1f} s" + (f", last {rest}" if rest else "")
+
+
 def event_raw(event: Event) -> str:
     """The raw bytes of an event as hex, or '' when the event carries none."""
     raw = event.fields.get("raw")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rich.text import Text
 
-from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE, Event
+from analyzer.protocol.types import Event
 from analyzer.tui.fit import grid, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import (
@@ -103,7 +103,7 @@ def gimbal_lines(state: MonitorState, width: int) -> list[Text]:
         f"{format_age(age)} ago" if age is not None else "none yet",
         style="bold white on red" if stale else "bold green",
     )
-    rate = state.topic_rates.get(TOPIC_GIMBAL_ATTITUDE, 0.0)
+    rate = state.feedback_rate
     cells = [
         feedback,
         Text(f"{rate:.1f}/s", style="bold"),

@@ -13,7 +13,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Static
 
 KEYS: tuple[tuple[str, str], ...] = (
-    ("1 2 3 4", "small terminals: show gimbal + UAV, log, CAN IDs or diagnostics"),
+    ("1 2 3 4 5", "small terminals: gimbal + UAV, log, CAN IDs, diagnostics, did it obey?"),
     ("q", "quit: stop the capture, finalise the recording"),
     ("p / space", "pause the display (capture and recording go on); again: resume and catch up"),
     ("f", "filter the log and the ID table (see below); empty: show all"),
@@ -23,7 +23,11 @@ KEYS: tuple[tuple[str, str], ...] = (
     ("v", "log view: commands + diagnostics + text, or every decoded topic"),
     ("up / down, pgup / pgdn, home", "move the cursor in the log (stops following)"),
     ("end / escape", "follow the newest entry again"),
-    ("enter", "details of the selected event: every field and the raw bytes"),
+    (
+        "enter",
+        "details of the selected event: its whole line (one cut short ends in …),"
+        " every field and the raw bytes",
+    ),
     ("tab", "switch between the log and the ID table"),
     ("enter on an ID row", "filter by that ID (enter again: show all)"),
     ("? / f1", "this help"),

@@ -14,6 +14,7 @@ from analyzer.protocol.ids import (
     UAV_ATTITUDE_ID,
 )
 from analyzer.protocol.types import FROM_IDU, TO_IDU, CanFrame, StreamChunk
+from analyzer.tui.rates import Meter
 
 HIGHLIGHT_S = 1.0  # a changed data byte stays highlighted this long
 MAX_ROWS = 2048  # distinct IDs with a row of their own; the rest share one row
@@ -54,9 +55,8 @@ class IdRow:
         "key",
         "label",
         "last_time",
+        "meter",
         "protocol",
-        "rate_hz",
-        "window_count",
     )
 
     def __init__(self, key: str, can_id: int | None, label: str, protocol: bool) -> None:
@@ -66,8 +66,7 @@ class IdRow:
         self.protocol = protocol
         self.extended = True
         self.count = 0
-        self.window_count = 0
-        self.rate_hz = 0.0
+        self.meter = Meter()  # frames per second, from their times
         self.last_time = 0.0
         self.data = b""
         self.changed_at: list[float] = []

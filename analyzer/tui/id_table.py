@@ -1,4 +1,4 @@
-"""Bus sniffer table: one keyed row per CAN ID (or stream), updated in place."""
+"""Bus sniffer table: one keyed row per CAN ID (or stream and direction), updated in place."""
 
 from __future__ import annotations
 
@@ -12,6 +12,13 @@ from analyzer.tui.state import MonitorState
 MAX_DATA_BYTES = 8
 COLUMNS = (("ID", "id", 11), ("Name", "name", 9), ("Count", "count", 9), ("Hz", "hz", 8))
 DATA_WIDTH = 3 * MAX_DATA_BYTES - 1
+# The panel's title by what the source delivers (MonitorState.items_counted): a TCP or
+# UART source has a row per stream and direction, counting its chunks.
+TITLES = {
+    "frames": "CAN IDs",
+    "chunks": "Streams: chunks by direction",
+    "frames and chunks": "CAN IDs and streams (chunks)",
+}
 
 _CHANGED = "bold black on yellow"
 
@@ -36,13 +43,13 @@ def row_cells(row: IdRow, now: float) -> tuple[object, ...]:
         Text(row.key, style="" if row.protocol else "dim"),
         Text(row.label, style="bold" if row.protocol else "dim"),
         Text(f"{row.count:>8} "),
-        Text(f"{row.rate_hz:7.1f} "),
+        Text(f"{row.meter.rate(now):7.1f} "),
         data_cell(row, now),
     )
 
 
 def _row_signature(row: IdRow, now: float) -> tuple[object, ...]:
-    return (row.count, round(row.rate_hz, 1), row.data, row.changed_mask(now))
+    return (row.count, round(row.meter.rate(now), 1), row.data, row.changed_mask(now))
 
 
 class IdTable(DataTable[object]):
@@ -61,7 +68,7 @@ class IdTable(DataTable[object]):
         self.updates = 0  # cells rewritten (tests and the benchmark look at this)
 
     def on_mount(self) -> None:
-        self.border_title = "CAN IDs"
+        self.border_title = TITLES["frames"]
         for label, key, width in COLUMNS:
             self.add_column(label, key=key, width=width)
         self.add_column("Data", key="data", width=DATA_WIDTH)
@@ -103,4 +110,5 @@ class IdTable(DataTable[object]):
                 self.update_cell(key, column, value)
             self.update_cell(key, "data", cells[4])
             self.updates += 1
+        self.border_title = TITLES[state.items_counted]
         self.border_subtitle = f"{len(self._shown)} of {len(state.rows)}"

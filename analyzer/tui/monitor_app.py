@@ -169,9 +169,12 @@ class MonitorApp(App[int]):
         """All-in-one or one page at a time, for the terminal's size."""
         width, height = size or self.size
         screen = self.main_screen
-        screen.set_class(is_paged(width, height), "-paged")
+        paged = is_paged(width, height)
+        screen.set_class(paged, "-paged")
         for page, _ in PAGES.values():
             screen.set_class(page == self.page, f"-page-{page}")
+        # its own page lists the findings before the latest too
+        self._response.earlier = paged and self.page == "response"
         self.refresh_bindings()
 
     def on_resize(self, event: events.Resize) -> None:
@@ -351,7 +354,7 @@ class MonitorApp(App[int]):
         self.show_detail(message.entry)
 
     def show_detail(self, entry: LogEntry) -> None:
-        self.push_screen(DetailScreen(entry.event))
+        self.push_screen(DetailScreen(entry.event, entry))
 
     def on_data_table_row_selected(self, message: DataTable.RowSelected) -> None:
         """Enter on an ID row: filter the log by that ID (a second Enter clears it)."""

@@ -26,10 +26,11 @@ ROOMY_HEIGHT = 30  # the first page also shows the log
 
 # number key -> (page, name in the footer)
 PAGES: dict[str, tuple[str, str]] = {
-    "1": ("state", "Gimbal+UAV"),
+    "1": ("state", "Gimbal"),
     "2": ("log", "Log"),
     "3": ("ids", "IDs"),
     "4": ("diagnostics", "Diag"),
+    "5": ("response", "Obey?"),
 }
 # keys left out of the footer when it has to make room for the page keys (they still work)
 PAGED_FOOTER_HIDES = frozenset(
@@ -56,7 +57,8 @@ MONITOR_CSS = """
 #middle CommandLog { width: 1fr; }
 #middle IdTable { width: 62; }
 
-/* one page at a time: 1 gimbal + UAV (+ log when there is room), 2 log, 3 IDs, 4 diagnostics */
+/* one page at a time: 1 gimbal + UAV (+ log when there is room), 2 log, 3 IDs, 4 diagnostics,
+   5 did it obey? (the latest findings) */
 Screen.-paged #diagnostics { display: none; layout: vertical; height: 1fr; }
 Screen.-paged #diagnostics #diag-graphs { width: 1fr; }
 Screen.-paged #ids { display: none; width: 1fr; }
@@ -71,6 +73,9 @@ Screen.-paged.-page-ids #ids { display: block; }
 Screen.-paged.-page-diagnostics #top { display: none; }
 Screen.-paged.-page-diagnostics #middle { display: none; }
 Screen.-paged.-page-diagnostics #diagnostics { display: block; }
+Screen.-paged.-page-response #top { display: none; }
+Screen.-paged.-page-response #middle { display: none; }
+Screen.-paged.-page-response #response { display: block; height: 1fr; }
 """
 
 

@@ -6,9 +6,10 @@ from rich.text import Text
 
 from analyzer.analysis.findings import VERDICTS
 from analyzer.protocol.response_fields import verdict_word
+from analyzer.protocol.types import Event
 from analyzer.tui.fit import fold, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
-from analyzer.tui.formatting import short_age
+from analyzer.tui.formatting import format_time, short_age
 from analyzer.tui.state import MonitorState
 
 VERDICT_STYLES = {
@@ -45,8 +46,9 @@ def figure_cells(fields: dict[str, object]) -> list[Text]:
     return cells
 
 
-def response_lines(state: MonitorState, width: int) -> list[Text]:
-    """The panel's lines at ``width`` cells: the latest finding, its sentence, the counts."""
+def response_lines(state: MonitorState, width: int, earlier: bool = False) -> list[Text]:
+    """The panel's lines at ``width`` cells: the latest finding, its sentence, the counts;
+    with ``earlier`` the findings before it, newest first, each in full."""
     finding = state.finding
     head = Text(f"{'last':<{LABEL_WIDTH}}", style="dim")
     if finding is None:
@@ -74,17 +76,40 @@ def response_lines(state: MonitorState, width: int) -> list[Text]:
             )
         )
     lines += pack(counts, width, indent=LABEL_WIDTH)
+    if earlier:
+        before = list(state.findings)[-2::-1]
+        if before:
+            lines.append(Text("earlier", style="dim"))
+        for event in before:
+            lines += earlier_lines(event, width)
     return lines
 
 
+def earlier_lines(event: Event, width: int) -> list[Text]:
+    """One earlier finding: its time, verdict and command, then its sentence, in full."""
+    f = event.fields
+    verdict = str(f.get("verdict", "unknown"))
+    head = Text.assemble(
+        (format_time(event.time).strip() + "  ", "dim"),
+        (verdict_word(f).upper(), VERDICT_STYLES.get(verdict, "bold")),
+        (f"  {f.get('command', '?')} {f.get('check', '')}", "bold"),
+    )
+    lines = fold(head, width)
+    detail = Text(str(f.get("detail", "")))
+    return lines + [Text("  ") + piece for piece in fold(detail, width - 2)]
+
+
 class ResponsePanel(FittedPanel):
-    """Redrawn from the state at the app's refresh rate."""
+    """Redrawn from the state at the app's refresh rate; ``earlier`` (its own page) lists
+    the findings before the latest too."""
+
+    earlier = False
 
     def on_mount(self) -> None:
         self.border_title = "Did it obey?"
 
     def lines(self, state: MonitorState, width: int) -> list[Text]:
-        return response_lines(state, width)
+        return response_lines(state, width, self.earlier)
 
 
 def render_response(state: MonitorState, width: int = 76) -> Text:

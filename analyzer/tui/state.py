@@ -31,43 +31,30 @@ from analyzer.protocol.types import (
     CanFrame,
     Event,
 )
-from analyzer.tui.command_groups import COMMAND_GROUPS, command_group
+from analyzer.tui.command_groups import command_group
 from analyzer.tui.counters import Counters, count_items
-from analyzer.tui.event_log import COMMAND_VIEW_TOPICS, LOG_LIMIT, LogEntry, insert_in_time_order
+from analyzer.tui.event_log import (
+    COMMAND_VIEW_TOPICS,
+    LOG_LIMIT,
+    CommandRuns,
+    LogEntry,
+    insert_in_time_order,
+)
 from analyzer.tui.id_rows import (
-    HIGHLIGHT_S,
-    ID_LABELS,
     MAX_ROWS,
-    OVERFLOW_KEY,
     IdRow,
     add_row,
-    frame_bits,
     stream_key,
 )
+from analyzer.tui.rates import Meter
 from analyzer.video.spec import is_camera_event
 
-# The names importers know from here; most are defined in the modules above.
-__all__ = [
-    "COMMAND_GROUPS",
-    "COMMAND_VIEW_TOPICS",
-    "FEEDBACK_STALE_S",
-    "HIGHLIGHT_S",
-    "HISTORY",
-    "ID_LABELS",
-    "LOG_LIMIT",
-    "MAX_ROWS",
-    "OVERFLOW_KEY",
-    "RATE_WINDOW_S",
-    "Counters",
-    "IdRow",
-    "LogEntry",
-    "MonitorState",
-    "frame_bits",
-]
+__all__ = ["FEEDBACK_STALE_S", "HISTORY", "HISTORY_STEP_S", "MonitorState"]
 
 HISTORY = 60  # seconds of frames/s and errors/s kept for the sparklines
 FEEDBACK_STALE_S = 1.0  # the gimbal answers about every 500 ms
-RATE_WINDOW_S = 1.0
+HISTORY_STEP_S = 1.0  # the sparklines have a sample per second
+FINDINGS_KEPT = 50  # the latest findings listed on the "Did it obey?" page
 
 
 class MonitorState:
@@ -91,6 +78,7 @@ class MonitorState:
         self.last_commands: dict[str, Event] = {}
         # response analysis: the latest finding and the verdicts so far
         self.finding: Event | None = None
+        self.findings: deque[Event] = deque(maxlen=FINDINGS_KEPT)  # the latest, for page 5
         self.counts = VerdictCounts()  # as analyze counts: commands apart from the feedback
         self.verdicts: Counter[str] = self.counts.verdicts  # the commands' findings
         # UAV
@@ -102,6 +90,7 @@ class MonitorState:
         self.seq = 0
         self.command_log: deque[LogEntry] = deque(maxlen=log_limit)
         self.all_log: deque[LogEntry] = deque(maxlen=log_limit)
+        self._runs = CommandRuns()  # repeated commands folded in the command view
         # bus sniffer
         self.rows: dict[int | str, IdRow] = {}
         self.rows_added = 0  # bumps when a row appears, so views know to add it
@@ -117,12 +106,12 @@ class MonitorState:
         self.link = LinkStatus()
         self.source_ended = False
         self.bus = BusFigures()  # the CAN controllers' error frames: state, worst, classes
-        # rates over windows of bus time
-        self.frames_per_s = 0.0
-        self.bits_per_s = 0.0
-        self.errors_per_s = 0.0
-        self.topic_rates: dict[str, float] = {}  # events/s per topic in the last window
-        self._window_topics: Counter[str] = Counter()
+        # rates from the messages' own times (rates.Meter), a sample a second for the graphs
+        self._frames_meter = Meter()  # frames and stream chunks
+        self._bits_meter = Meter()
+        self._errors_meter = Meter()
+        self._feedback_meter = Meter()  # attitude and ranging: the gimbal's answers
+        self._topic_meters: dict[str, Meter] = {}
         self.frames_history: deque[float] = deque([0.0] * history, maxlen=history)
         self.errors_history: deque[float] = deque([0.0] * history, maxlen=history)
         self._window_start: float | None = None
@@ -152,10 +141,11 @@ class MonitorState:
         self.advance(wall)
 
     def advance(self, wall_now: float) -> None:
-        """Let time pass: ages grow; after a second without frames, rates fall to zero.
+        """Let time pass: ages grow, rates fall in a silence (``rates.Meter``).
 
-        While frames flow, rate windows are closed by the frames' own times (so the
-        capture's batching delay does not skew them); the clock closes them only in silence.
+        While frames flow, the sparklines' seconds are closed by the frames' own times (so
+        the capture's batching delay does not skew them); the clock closes them only in
+        silence.
         """
         now = wall_now + self._offset
         last = self.last_item_time
@@ -163,7 +153,7 @@ class MonitorState:
             now = last
         if now > self.now:
             self.now = now
-        if last is None or now - last >= RATE_WINDOW_S:
+        if last is None or now - last >= HISTORY_STEP_S:
             self._advance_to(now)
 
     def mark_dropped(self, batches: int) -> None:
@@ -180,7 +170,7 @@ class MonitorState:
         self.counters = Counters()
         for row in self.rows.values():
             row.count = 0
-            row.window_count = 0
+            row.meter.clear()
         self.cleared_at = self.now
         self.clear_count += 1
         self.version += 1
@@ -203,6 +193,42 @@ class MonitorState:
         """Share of a 1 Mbit/s CAN bus used, 0..1+ (stuff bits not counted)."""
         return self.bits_per_s / CAN_BITRATE
 
+    @property
+    def items_counted(self) -> str:
+        """What the source delivers: CAN "frames", "chunks" of a stream (TCP, UART), or
+        "frames and chunks" (a proxy next to a bus); "frames" before anything came."""
+        frames, chunks = self.total.frames, self.total.chunks
+        if chunks and not frames:
+            return "chunks"
+        return "frames and chunks" if chunks else "frames"
+
+    @property
+    def frames_per_s(self) -> float:
+        """CAN frames and stream chunks per second."""
+        return self._frames_meter.rate(self.now)
+
+    @property
+    def bits_per_s(self) -> float:
+        return self._bits_meter.rate(self.now)
+
+    @property
+    def errors_per_s(self) -> float:
+        return self._errors_meter.rate(self.now)
+
+    @property
+    def feedback_rate(self) -> float:
+        """Feedback messages (attitude and ranging) per second."""
+        return self._feedback_meter.rate(self.now)
+
+    @property
+    def topic_rates(self) -> dict[str, float]:
+        """Events per second of each topic seen."""
+        return {topic: meter.rate(self.now) for topic, meter in self._topic_meters.items()}
+
+    def row_rate(self, row: IdRow) -> float:
+        """Frames (or chunks) per second of one row of the ID table."""
+        return row.meter.rate(self.now)
+
     def age(self, event: Event | None) -> float | None:
         return None if event is None else max(self.now - event.time, 0.0)
 
@@ -214,25 +240,21 @@ class MonitorState:
         n_events = len(events)
         next_event = 0
         rows = self.rows
-        total = self.total
-        counters = self.counters
-        window_end = None if self._window_start is None else self._window_start + RATE_WINDOW_S
+        window_end = None if self._window_start is None else self._window_start + HISTORY_STEP_S
         frames = chunks = nbytes = bits = 0
         last_time = self.last_item_time
         for item in batch.items:
             t = item.time
-            if window_end is None or t >= window_end or t < window_end - 2 * RATE_WINDOW_S:
+            if window_end is None or t >= window_end or t < window_end - 2 * HISTORY_STEP_S:
                 first = next_event
                 while next_event < n_events and events[next_event].time < t:
                     next_event += 1
                 if next_event > first:
                     self._fold_events(events[first:next_event])
-                self._window_frames += frames + chunks
-                self._window_bits += bits
-                count_items(total, counters, frames, chunks, nbytes)
+                self._count(last_time, frames, chunks, nbytes, bits)
                 frames = chunks = nbytes = bits = 0
                 self._advance_to(t)
-                window_end = (self._window_start or t) + RATE_WINDOW_S
+                window_end = (self._window_start or t) + HISTORY_STEP_S
             data = item.data
             if isinstance(item, CanFrame):
                 frames += 1
@@ -249,16 +271,25 @@ class MonitorState:
                     row = self._new_row(key, None)
             nbytes += len(data)
             row.count += 1
+            row.meter.add(t)
             if data != row.data:
                 row.note_data(data, t)
             row.last_time = t
             last_time = t
-        self._window_frames += frames + chunks
-        self._window_bits += bits
-        count_items(total, counters, frames, chunks, nbytes)
+        self._count(last_time, frames, chunks, nbytes, bits)
         self.last_item_time = last_time
         if next_event < n_events:
             self._fold_events(events[next_event:])
+
+    def _count(self, t: float | None, frames: int, chunks: int, nbytes: int, bits: int) -> None:
+        """Items read up to ``t``: into the counters, the rates and the second's sample."""
+        if frames or chunks:
+            self._window_frames += frames + chunks
+            self._window_bits += bits
+            count_items(self.total, self.counters, frames, chunks, nbytes)
+            if t is not None:
+                self._frames_meter.add(t, frames + chunks)
+                self._bits_meter.add(t, bits)
 
     def _new_row(self, key: int | str, frame: CanFrame | None) -> IdRow:
         row, added = add_row(self.rows, key, frame, self.max_rows)
@@ -275,15 +306,19 @@ class MonitorState:
                 continue
             total.events += 1
             counters.events += 1
-            self._window_topics[topic] += 1
+            meter = self._topic_meters.get(topic)
+            if meter is None:
+                meter = self._topic_meters[topic] = Meter()
+            meter.add(event.time)
             if event.warnings:
                 total.warnings += 1
                 counters.warnings += 1
             self.seq += 1
-            entry = LogEntry(self.seq, event)
-            insert_in_time_order(self.all_log, entry)
+            insert_in_time_order(self.all_log, LogEntry(self.seq, event))
             if topic in COMMAND_VIEW_TOPICS:
-                insert_in_time_order(self.command_log, entry)
+                entry = LogEntry(self.seq, event)  # its own: a folded line changes
+                if topic != TOPIC_COMMAND or not self._runs.fold(entry):
+                    insert_in_time_order(self.command_log, entry)
             if topic == TOPIC_GIMBAL_ATTITUDE:
                 self.attitude = event
                 self._note_feedback(event)
@@ -300,6 +335,7 @@ class MonitorState:
                         self.link_detail = self.link.detail
                 else:
                     self._window_errors += 1
+                    self._errors_meter.add(event.time)
                     if kind == BUS_ERROR:
                         self.bus.add_events((event,))
             elif topic == TOPIC_UAV_GPS:
@@ -315,17 +351,19 @@ class MonitorState:
                 self._note_feedback(event)
             elif topic == TOPIC_ANALYSIS_RESPONSE:
                 self.finding = event
+                self.findings.append(event)
                 self.counts.add(event.fields)
 
     def _note_feedback(self, event: Event) -> None:
         self.feedback_count += 1
+        self._feedback_meter.add(event.time)
         if self.last_feedback_time is None or event.time >= self.last_feedback_time:
             self.last_feedback_time = event.time
 
     # -- time --------------------------------------------------------------------------------
 
     def _advance_to(self, now: float) -> None:
-        """Move bus time to ``now``, closing rate windows that ended on the way."""
+        """Move bus time to ``now``, closing the sparklines' seconds that ended on the way."""
         start = self._window_start
         if start is None or now < start:
             # first data, or time went backwards (a new log): restart the windows
@@ -335,32 +373,16 @@ class MonitorState:
         if now > self.now:
             self.now = now
         elapsed = now - start
-        if elapsed < RATE_WINDOW_S:
+        if elapsed < HISTORY_STEP_S:
             return
-        self._close_window(elapsed)
+        # after a long silence the window's frames are taken to fill its first second
+        span = max(elapsed if elapsed < 2 * HISTORY_STEP_S else HISTORY_STEP_S, 1e-9)
+        self.frames_history.append(self._window_frames / span)
+        self.errors_history.append(self._window_errors / span)
+        self._window_frames = self._window_bits = self._window_errors = 0
         # whole seconds of silence after the window: zero samples (bounded by the history)
-        silent = int(elapsed // RATE_WINDOW_S) - 1
+        silent = int(elapsed // HISTORY_STEP_S) - 1
         for _ in range(min(silent, self.frames_history.maxlen or 0)):
             self.frames_history.append(0.0)
             self.errors_history.append(0.0)
-        if silent > 0:
-            self.frames_per_s = self.bits_per_s = self.errors_per_s = 0.0
-            self.topic_rates = {}
-            for row in self.rows.values():
-                row.rate_hz = 0.0
         self._window_start = now
-
-    def _close_window(self, elapsed: float) -> None:
-        # after a long silence the window's frames are taken to fill its first second
-        span = max(elapsed if elapsed < 2 * RATE_WINDOW_S else RATE_WINDOW_S, 1e-9)
-        self.frames_per_s = self._window_frames / span
-        self.bits_per_s = self._window_bits / span
-        self.errors_per_s = self._window_errors / span
-        self.frames_history.append(self.frames_per_s)
-        self.errors_history.append(self.errors_per_s)
-        for row in self.rows.values():
-            row.rate_hz = max(row.count - row.window_count, 0) / span
-            row.window_count = row.count
-        self.topic_rates = {topic: n / span for topic, n in self._window_topics.items()}
-        self._window_topics = Counter()
-        self._window_frames = self._window_bits = self._window_errors = 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import textwrap
 from dataclasses import dataclass
 from urllib.parse import quote, unquote, urlsplit, urlunsplit
 
@@ -43,14 +44,18 @@ class VideoSpec:
 
 def add_video_options(parser: argparse.ArgumentParser) -> None:
     """The video options of ``record`` (and any command that records)."""
-    group = parser.add_argument_group(
-        "camera video",
+    about = (
         "Record the camera's RTSP streams into the same file, time-aligned with the "
         "telemetry (copied as sent, never re-encoded). Frames reach the recorder later than "
         f"the telemetry of their moment, so with --video the last {VIDEO_HOLD_BACK_S:g} s "
         "are held back from each flush (every frame keeps its capture time as log time): "
         f"a killed recorder keeps everything older than about {VIDEO_HOLD_BACK_S + 0.5:g} s "
-        "instead of about a second. Examples:\n"
+        "instead of about a second. Examples:"
+    )
+    group = parser.add_argument_group(
+        "camera video",
+        # the commands lay out their own text (RawDescriptionHelpFormatter): wrapped here
+        textwrap.fill(about, 76) + "\n"
         "  --video main                      the main stream at 192.168.42.108:554\n"
         "  --video main --video thermal      two streams\n"
         "  --video main --camera 10.0.0.5    another camera address\n"

@@ -2,13 +2,17 @@
 
 The list is read when the manual is built, so a name added to ``__all__`` gets its entry
 (from its docstring) without touching the manual; a name that is not importable, or a
-docstring autodoc cannot read, is a warning, which ``-W`` makes a failed build.
+docstring autodoc cannot read, is a warning, which ``-W`` makes a failed build. A table
+or a constant (``COMMANDS``) has the docstring written under its assignment, not the one
+of its value's type (a tuple's).
 """
 
 from __future__ import annotations
 
+import ast
 import importlib
 import inspect
+import itertools
 from types import ModuleType
 
 from code_dependencies import note_code_dependencies
@@ -43,9 +47,37 @@ def api_rst(module: ModuleType) -> tuple[list[str], list[str]]:
             lines += [f".. autofunction:: {target}", ""]
         elif inspect.ismodule(value):
             lines += [f".. automodule:: {value.__name__}", "   :members:", ""]
-        else:  # a table or a constant: its docstring, not its (long) value
-            lines += [f".. autodata:: {target}", "   :no-value:", ""]
+        else:  # a table or a constant: its own docstring, not its (long) value's type's
+            doc = attribute_doc(_defining_module(module, name), name)
+            if doc is None:
+                missing.append(name)
+                continue
+            lines += [f".. py:data:: {target}", ""]
+            lines += [f"   {line}".rstrip() for line in doc.splitlines()] + [""]
     return lines, missing
+
+
+def _defining_module(module: ModuleType, name: str) -> ModuleType:
+    """The module that defines a public name (a package's lazy table says which)."""
+    lazy: dict[str, str] = getattr(module, "_PUBLIC", {})
+    return importlib.import_module(lazy[name]) if name in lazy else module
+
+
+def attribute_doc(module: ModuleType, name: str) -> str | None:
+    """The docstring written under ``name = ...`` (or ``name: T = ...``) at the top level
+    of ``module``'s source; None when there is none."""
+    try:
+        source = inspect.getsource(module)
+    except (OSError, TypeError):
+        return None
+    body = ast.parse(source).body
+    for node, after in itertools.pairwise(body):
+        targets = node.targets if isinstance(node, ast.Assign) else [getattr(node, "target", None)]
+        named = any(isinstance(t, ast.Name) and t.id == name for t in targets)
+        if named and isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant):
+            text = after.value.value
+            return inspect.cleandoc(text) if isinstance(text, str) else None
+    return None
 
 
 class PublicApi(SphinxDirective):
@@ -60,7 +92,8 @@ class PublicApi(SphinxDirective):
         lines, missing = api_rst(module)
         for name in missing:
             logger.warning(
-                "%s.__all__ names %s, which the package does not have",
+                "%s.__all__ names %s, which the package does not have (or a table or "
+                "constant without a docstring under it)",
                 module.__name__,
                 name,
                 location=self.get_location(),

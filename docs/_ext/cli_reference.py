@@ -2,7 +2,8 @@
 
 The reference is made from ``analyzer.cli.build_parser()`` at build time, so it says
 what ``--help`` says and cannot go stale: per command its one-line help, usage, the
-description and examples exactly as ``--help`` prints them, and every argument as a
+description and examples exactly as ``--help`` prints them (and the words of an option
+group, such as camera video), and every argument as a
 Sphinx ``option`` (so ``{option}`gimbal-analyzer decode --format``` links to it). An
 argument without a help text is a warning, which ``-W`` makes a failed build.
 """
@@ -90,6 +91,10 @@ def command_rst(
     for text in (parser.description, parser.epilog):
         if text and text.strip():
             out += _literal(formatter._format_text(text))
+    for group in parser._action_groups:  # an option group's own words (camera video)
+        if group.description and group.description.strip():
+            out += [f"{rst_text(group.title or '')}:", ""]
+            out += _literal(formatter._format_text(group.description))
     for action in documented_actions(parser):
         words = help_text(parser, action)
         if not words:

@@ -9,7 +9,8 @@ the homographies, which say where a point of the first frame ends up in the last
 Each link's scale is also divided by what the aircraft's motion explains over it
 (``explained``: how much nearer the ground at the picture's centre came), so that a
 climbing or approaching aircraft is not taken for a zoom, and what that may be off by
-is summed.
+is summed. A link that only a few matches agree on is believed only when the links
+around it vouch for it (``weak_links``).
 """
 
 from __future__ import annotations
@@ -19,7 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analyzer.analysis.camera.motion import MIN_FEATURES, Features, features, motion
+from analyzer.analysis.camera.motion import MIN_FEATURES, Features, Motion, features, motion
+from analyzer.analysis.camera.weak_links import (
+    WEAK_INLIERS,
+    Link,
+    first_doubted,
+    neighbours,
+)
 
 
 @dataclass(frozen=True)
@@ -43,6 +50,8 @@ class Followed:
     # how far (log of the scale) what the telemetry explains may be off, summed over the
     # links (its attitude is sampled twice a second while the gimbal may turn 60 deg/s)
     uncertainty: float = 0.0
+    # with a WEAK_LINK problem: the link not believed, and the strong links next to it
+    doubted: tuple[Link, tuple[Link, ...]] | None = None
 
     def settled(self, times: Sequence[float], seconds: float, within: float) -> bool:
         """Whether the scale stayed within ``within`` (a fraction) over the last
@@ -60,6 +69,7 @@ class Followed:
 
 TOO_LITTLE_TEXTURE = "too little texture"
 LOST = "lost"
+WEAK_LINK = "weak link"  # a link that too few matches agree on, and its neighbours do not vouch for
 
 
 class FeatureCache:
@@ -96,55 +106,106 @@ def follow(
 ) -> Followed:
     """Follow the picture from the first of ``pictures`` to the last (taken at ``times``:
     no link spans more than MAX_LINK_S, so a repeating texture far on is not taken for
-    the one at hand)."""
+    the one at hand). A weak link (too few matches agree: ``weak_links``) is taken only
+    when no strong one leaves its frame, and believed only when the links around it
+    vouch for it; otherwise the picture is followed no further than its first frame."""
     cache = cache or FeatureCache(pictures)
     last = len(pictures) - 1
-    total = np.eye(3)
-    scale = raw = 1.0
-    links = 0
-    weakest = 0
-    anchor = 0
-    path: list[tuple[int, np.ndarray]] = [(0, total)]
-    scales = [1.0]
-    doubt = 0.0
+    clock = times if times is not None else [float(i) for i in range(len(pictures))]
     if last < 1:
-        return Followed(total, scale, raw, 0, 0, 0, "" if last == 0 else LOST)
+        return Followed(np.eye(3), 1.0, 1.0, 0, 0, 0, "" if last == 0 else LOST)
     if cache[0].count < MIN_FEATURES:
-        return Followed(total, scale, raw, 0, 0, 0, TOO_LITTLE_TEXTURE)
+        return Followed(np.eye(3), 1.0, 1.0, 0, 0, 0, TOO_LITTLE_TEXTURE)
+    links: list[tuple[Link, np.ndarray]] = []
+    anchor = 0
+    problem = ""
     while anchor < last:
         step = last - anchor
         if times is not None:
             while step > 1 and times[anchor + step] - times[anchor] > MAX_LINK_S:
                 step //= 2
-        found = None
-        while step >= 1:
-            found = motion(cache[anchor], cache[anchor + step])
-            if found is not None:
-                break
-            step //= 2
+        found = _link(cache, anchor, step)
         if found is None:
             problem = TOO_LITTLE_TEXTURE if cache[anchor + 1].count < MIN_FEATURES else LOST
-            return Followed(
-                total,
-                scale,
-                raw,
-                links,
-                weakest,
-                anchor,
-                problem,
-                tuple(path),
-                tuple(scales),
-                doubt,
-            )
-        total = found.homography @ total
-        total /= total[2, 2] if total[2, 2] else 1.0
-        raw *= found.scale
+            break
+        step, measured = found
         motion_part, unsure = explained(anchor, anchor + step) if explained else (1.0, 0.0)
-        scale *= found.scale / motion_part
-        doubt += unsure
-        weakest = found.inliers if not links else min(weakest, found.inliers)
-        links += 1
+        link = Link(
+            anchor,
+            anchor + step,
+            clock[anchor],
+            clock[anchor + step],
+            measured.inliers,
+            measured.matches,
+            measured.scale,
+            motion_part,
+            unsure,
+        )
+        links.append((link, measured.homography))
         anchor += step
-        path.append((anchor, total))
+    chain = [link for link, _ in links]
+    index = first_doubted(chain)
+    doubted = None
+    if index is not None:
+        doubted = chain[index], tuple(neighbours(chain, index))
+        problem = WEAK_LINK
+        del links[index:]
+    return _followed(links, problem, doubted)
+
+
+def _link(cache: FeatureCache, anchor: int, step: int) -> tuple[int, Motion] | None:
+    """The link from frame ``anchor``: to the furthest frame of ``anchor + step``, then
+    of half as far and so on, that matches; when only a weak link is found that way, the
+    longest strong one to any nearer frame instead (the chain then goes through other
+    frames), else that weak one."""
+    found: Motion | None = None
+    while step >= 1:
+        found = motion(cache[anchor], cache[anchor + step])
+        if found is not None:
+            break
+        step //= 2
+    if found is None:
+        return None
+    if found.inliers >= WEAK_INLIERS:
+        return step, found
+    for nearer in range(step - 1, 0, -1):
+        other = motion(cache[anchor], cache[anchor + nearer])
+        if other is not None and other.inliers >= WEAK_INLIERS:
+            return nearer, other
+    return step, found
+
+
+def _followed(
+    links: list[tuple[Link, np.ndarray]],
+    problem: str,
+    doubted: tuple[Link, tuple[Link, ...]] | None,
+) -> Followed:
+    """The Followed of a chain of links (``problem``: why it stopped where it did)."""
+    total = np.eye(3)
+    scale = raw = 1.0
+    doubt = 0.0
+    path: list[tuple[int, np.ndarray]] = [(0, total)]
+    scales = [1.0]
+    for link, homography in links:
+        total = homography @ total
+        total /= total[2, 2] if total[2, 2] else 1.0
+        raw *= link.raw_scale
+        scale *= link.lens
+        doubt += link.doubt
+        path.append((link.second, total))
         scales.append(scale)
-    return Followed(total, scale, raw, links, weakest, last, "", tuple(path), tuple(scales), doubt)
+    weakest = min((link.inliers for link, _ in links), default=0)
+    reached = links[-1][0].second if links else 0
+    return Followed(
+        total,
+        scale,
+        raw,
+        len(links),
+        weakest,
+        reached,
+        problem,
+        tuple(path),
+        tuple(scales),
+        doubt,
+        doubted,
+    )

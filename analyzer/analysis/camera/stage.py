@@ -29,13 +29,19 @@ from analyzer.analysis.camera.commands import (
     Asked,
     asked,
 )
-from analyzer.analysis.camera.follow import LOST, TOO_LITTLE_TEXTURE, FeatureCache, follow
+from analyzer.analysis.camera.follow import (
+    LOST,
+    TOO_LITTLE_TEXTURE,
+    FeatureCache,
+    follow,
+)
 from analyzer.analysis.camera.layout import layout_change
 from analyzer.analysis.camera.motion import features, motion, where
 from analyzer.analysis.camera.palette import palette_change
 from analyzer.analysis.camera.source import VideoSource
 from analyzer.analysis.camera.telemetry import Telemetry
 from analyzer.analysis.camera.verdicts import Seen, ZoomRange, judge
+from analyzer.analysis.camera.weak_links import doubt_words
 from analyzer.analysis.findings import Finding
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, TOPIC_COMMAND, Event
 from analyzer.video.decode import Picture
@@ -260,6 +266,8 @@ class CameraJudge:
                 seen.problem = "too little texture in the picture to measure its scale"
             elif followed.problem == LOST:
                 seen.problem = "the picture could not be followed from one frame to the next"
+            elif followed.doubted is not None:
+                seen.problem = f"cannot tell: {doubt_words(*followed.doubted, pending.time)}"
             if gap > GAP_S:
                 seen.problem += f" across a {gap:.1f} s gap in the video of {topic}"
             return seen

@@ -1,4 +1,4 @@
-"""What python-can and asammdf log while reading a file, kept as words instead of printed."""
+"""What python-can and asammdf log while reading a file or opening a bus, kept as words."""
 
 from __future__ import annotations
 
