@@ -63,7 +63,9 @@ pilot's rates, angles in body and earth frame, a point to look at and camera
 actions; its UAV status frames are the only ones (the simulator does not play
 the UAV). The recording adds /ardupilot/mount (the attitude the driver reported)
 and /ardupilot/targets (what the mount library asked); a script error stops the
-demo (exit 1) with ArduPilot's message.
+demo (exit 1) with ArduPilot's message. --lua ardupilot runs the driver in Lua
+built as ArduPilot builds it (32-bit integers and floats, at most 100 locals per
+function), compiled once from lupa's sources.
 """
 
 CHANNEL = "gimbal-demo"
