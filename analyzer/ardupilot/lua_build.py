@@ -67,7 +67,7 @@ LIMITS = (
         "the C buffer that string building uses (not a limit a script meets)",
     ),
 )
-MAX_LOCALS = 100  # MAXVARS above: ArduPilot refuses a script with more
+MAX_LOCALS = int(LIMITS[0].ardupilot.split()[-1])  # MAXVARS: more in one function is refused
 RECIPE = "1"  # bump when the build below changes: cached builds are then made again
 
 SdistFetcher = Callable[[str, Path], Path]
