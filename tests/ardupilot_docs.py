@@ -1,19 +1,19 @@
 """ArduPilot's scripting API as its docs.lua declares it: the facts the emulation is held to.
 
-Source: ArduPilot's libraries/AP_Scripting/docs/docs.lua, master, in its annotated revision
-(the one declaring ``CAN:get_device2``, ``CANFrame_ud:id_signed``, ``camera:get_state`` and
-``mount:get_rate_target``); the same signatures are in the file docs.lua is generated from,
-libraries/AP_Scripting/generator/description/bindings.desc at ArduPilot commit
-002c901c0fd26cdeed6e8a32dd52988b8489ceed, and ``ScriptingCANBuffer_ud:write_frame(frame,
-timeout_us)`` already in docs.lua at commit 85503302031cfab761551f4da5180b6b3c524ad6.
+Source: ArduPilot's libraries/AP_Scripting/docs/docs.lua at commit
+2a929aeaf47cc8eec8ed4e9af2c57a3b0d5ffb0d (master, 2025-10-26): every signature below is
+there as written, and ``DEPRECATED`` are its ``---@deprecated`` functions (bindings.desc
+gives them a ``deprecate`` text: ArduPilot warns at the first call, and that warning is the
+scripting error the pre-arm check reports). The same signatures were already in docs.lua at
+commit 85503302031cfab761551f4da5180b6b3c524ad6 and in bindings.desc at commit
+002c901c0fd26cdeed6e8a32dd52988b8489ceed.
 """
 
 from __future__ import annotations
 
-DOCS_VERSION = (
-    "docs.lua (ArduPilot master, annotated revision) / bindings.desc @ 002c901c0fd2 / "
-    "docs.lua @ 85503302031c"
-)
+from analyzer.ardupilot.lua_build import ARDUPILOT_COMMIT
+
+DOCS_VERSION = f"docs.lua @ {ARDUPILOT_COMMIT[:12]}"
 
 # (class, name) -> parameter names; a trailing '?' marks an optional one (a field's getter
 # and setter share one name: ``frame:id()`` reads, ``frame:id(value)`` writes). The class is
@@ -88,6 +88,9 @@ SIGNATURES: dict[tuple[str, str], tuple[str, ...]] = {
     ("ahrs", "get_roll"): (),
     ("ahrs", "get_pitch"): (),
     ("ahrs", "get_yaw"): (),
+    ("ahrs", "get_roll_rad"): (),
+    ("ahrs", "get_pitch_rad"): (),
+    ("ahrs", "get_yaw_rad"): (),
     ("ahrs", "get_location"): (),
     ("ahrs", "get_home"): (),
     ("ahrs", "get_relative_position_D_home"): (),
@@ -97,6 +100,20 @@ SIGNATURES: dict[tuple[str, str], tuple[str, ...]] = {
     ("gps", "location"): ("instance",),
     # GCS
     ("gcs", "send_text"): ("severity", "text"),
+}
+
+# (class, name) -> what to use instead: docs.lua's ---@deprecated (bindings.desc's text)
+DEPRECATED: dict[tuple[str, str], str] = {
+    ("Location_ud", "get_vector_from_origin_NEU"): (
+        "Use get_vector_from_origin_NEU_cm or get_vector_from_origin_NEU_m"
+    ),
+    ("rangefinder", "ground_clearance_cm_orient"): "Use ground_clearance_orient (in metres)",
+    ("rangefinder", "min_distance_cm_orient"): "Use min_distance_orient (in metres)",
+    ("rangefinder", "max_distance_cm_orient"): "Use max_distance_orient (in metres)",
+    ("rangefinder", "distance_cm_orient"): "Use distance_orient (in metres)",
+    ("ahrs", "get_yaw"): "Use get_yaw_rad",
+    ("ahrs", "get_pitch"): "Use get_pitch_rad",
+    ("ahrs", "get_roll"): "Use get_roll_rad",
 }
 
 # The enum docs.lua gives gps (gps.GPS_OK_FIX_3D = 3, ...).

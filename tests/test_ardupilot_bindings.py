@@ -8,6 +8,7 @@ from functools import cache
 
 import pytest
 
+from analyzer.ardupilot.autopilot import BOOT_MS, Autopilot
 from analyzer.ardupilot.binding import Binding
 from analyzer.ardupilot.script import LuaScript, ScriptFailed, compile_check
 from analyzer.ardupilot.session import Session, run_session
@@ -22,6 +23,7 @@ from analyzer.ardupilot.userdata import (
 )
 from analyzer.ardupilot.vehicle import Vehicle
 from analyzer.export.ardupilot import DRIVER_NAME, lua_text
+from analyzer.protocol.types import CanFrame
 from tests.ardupilot_docs import (
     BUFFER_LEN,
     EXTENDED_FLAG,
@@ -219,3 +221,36 @@ def test_a_run_over_the_instruction_limit_stops_the_script_and_the_driver_is_far
         _script("function update() while true do end end\nreturn update()").start(0)
     used = demo_session().script.max_instructions
     assert used <= 10_000 // 2, used  # SCR_VM_I_COUNT's default is 10000
+
+
+def test_the_autopilot_is_one_sans_io_loop_of_steps() -> None:
+    """step(now_ms, received): the first step loads the script, frames reach its CAN buffer
+    before it runs, it runs only when due; what it did comes back as values."""
+    sent: list[tuple[int, bytes, bool]] = []
+    source = (
+        "local bus = CAN:get_device(5)\n"
+        "function update()\n"
+        "  local f = bus:read_frame()\n"
+        "  if f then\n"
+        "    gcs:send_text(6, string.format('got %d', f:data(0)))\n"
+        "    mount:set_attitude_euler(0, 0, f:data(0), 0)\n"
+        "    bus:write_frame(f, 10000)\n"
+        "  end\n"
+        "  if millis() > uint32_t(1200) then error('done') end\n"
+        "  return update, 50\n"
+        "end\n"
+        "return update()\n"
+    )
+    autopilot = Autopilot(source, "loop.lua", lambda *frame: sent.append(frame) or True)
+    first = autopilot.step(BOOT_MS, [CanFrame(0.0, 0x030F0001, b"\x07", True, "can0")])
+    assert (first.due_ms, first.texts, first.error) == (BOOT_MS + 50, [], None)
+    frame = CanFrame(0.0, 0x030F0001, b"\x2a", True, "can0")
+    early = autopilot.step(BOOT_MS + 20, [frame])  # not due: the frame waits in the buffer
+    assert (early.due_ms, early.texts, early.events) == (BOOT_MS + 50, [], [])
+    due = autopilot.step(BOOT_MS + 50)
+    assert due.texts == ["got 7"] and sent == [(0x030F0001, b"\x07", True)]
+    assert [e.fields["pitch_deg"] for e in due.events] == [7.0]
+    assert autopilot.step(BOOT_MS + 100).texts == ["got 42"]
+    failed = autopilot.step(BOOT_MS + 250)
+    assert failed.due_ms is None and failed.error is not None
+    assert failed.error.startswith("Lua: loop.lua:9: done")

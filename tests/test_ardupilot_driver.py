@@ -1,6 +1,8 @@
 """The generated ArduPilot mount driver, run on the emulated autopilot against the simulated
 gimbal in virtual time: its frames decoded by our decoder are the commands each target and
-camera action asks for, the attitude it reports is the feedback's, damage is dropped."""
+camera action asks for, the attitude it reports is the feedback's, damage is dropped. Each
+test runs twice: in lupa's Lua 5.3 and in Lua built as ArduPilot builds it (32-bit numbers,
+its limits), and across millis()'s wraps."""
 
 from __future__ import annotations
 
@@ -8,7 +10,9 @@ import itertools
 import json
 import math
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import pytest
@@ -31,12 +35,25 @@ from analyzer.protocol.types import (
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.faults import FaultConfig
 from analyzer.sim.uav import FlightPath
+from tests.ardupilot_lua import ardupilot_lua
+
+__all__ = ["ardupilot_lua"]  # the fixture
 
 CLEAN = SimConfig(ranging=True)
+LUA: ModuleType | None = None  # the interpreter of the test that runs
+
+
+@pytest.fixture(autouse=True, params=["lupa", "ardupilot"])
+def interpreter(request: pytest.FixtureRequest) -> Iterator[None]:
+    global LUA
+    LUA = None if request.param == "lupa" else request.getfixturevalue("ardupilot_lua")
+    yield
+    LUA = None
 
 
 def run(plan: tuple[Any, ...], duration: float, **options: Any) -> Session:
     options.setdefault("config", CLEAN)
+    options.setdefault("lua", LUA)
     session = run_session(lua_text(), DRIVER_NAME, duration, plan=plan, period=None, **options)
     assert session.error is None, session.error
     return session
@@ -242,7 +259,7 @@ def test_only_the_scripting_can_driver_it_is_given() -> None:
 
 
 def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
-    session = run_session(lua_text(), DRIVER_NAME, 40.0)  # two rounds of the demo plan
+    session = run_session(lua_text(), DRIVER_NAME, 40.0, lua=LUA)  # two rounds of the plan
     assert session.error is None
     analyzer = ResponseAnalyzer()
     events = [e for e in session.events if not e.topic.startswith("/ardupilot")]
@@ -267,7 +284,7 @@ def test_a_dataflash_log_of_the_flight_is_judged_the_same(
     from tests.log_makers import ardupilot_log
 
     boot = 1_795_834_800.0
-    session = run_session(lua_text(), DRIVER_NAME, 12.0, start=boot + 40.0)
+    session = run_session(lua_text(), DRIVER_NAME, 12.0, start=boot + 40.0, lua=LUA)
     log, _ = ardupilot_log(session.frames, boot)  # CANF records, as LogAllFrames writes
     path = tmp_path / "00000042.BIN"
     path.write_bytes(log)
@@ -277,3 +294,22 @@ def test_a_dataflash_log_of_the_flight_is_judged_the_same(
     settled = [f for f in angles if f["time"] < boot + 40.0 + 9.0]  # not cut by the log's end
     assert len(settled) >= 4 and {f["verdict"] for f in settled} == {"obeyed"}
     assert not [f for f in found if f["verdict"] == "not_obeyed"]
+
+
+@pytest.mark.parametrize("boot_ms", [2**31 - 3000, 2**32 - 3000, 2**31 + 1000, 2**32 + 500])
+def test_the_schedule_and_the_feedback_hold_across_the_wraps_of_millis(boot_ms: int) -> None:
+    """millis() passes 2^31 (toint() turns negative) or wraps at 2^32 three seconds in, or
+    the script starts past either: the status keeps its schedule, feedback keeps coming."""
+    session = run((MountStep(0.5, "angle", pitch=-20.0),), 8.0, boot_ms=boot_ms)
+    for topic, period in ((TOPIC_UAV_ATTITUDE, 0.1), (TOPIC_UAV_GPS, 0.2)):
+        times = [e.time for e in session.events if e.topic == topic]
+        assert {round(b - a, 3) for a, b in itertools.pairwise(times)} == {period}, topic
+        assert times[0] == 0.0 and times[-1] >= 7.8
+    feedback = [e for e in session.events if e.topic == TOPIC_GIMBAL_ATTITUDE]
+    reports = [e for e in session.events if e.topic == TOPIC_ARDUPILOT_MOUNT]
+    assert len(reports) == len(feedback) >= 12
+    texts = [text for _, _, text in session.vehicle.texts]
+    assert texts == ["VSH: mount driver started"]
+    silent = run((), 6.0, boot_ms=boot_ms, gimbal=False)
+    lost = [(t, text) for t, _, text in silent.vehicle.texts if "no feedback" in text]
+    assert lost == [(pytest.approx(2.01), "VSH: no feedback from the gimbal")]

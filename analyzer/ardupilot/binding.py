@@ -15,28 +15,35 @@ F = TypeVar("F", bound=Callable[..., Any])
 @dataclass(frozen=True)
 class Signature:
     """A binding as docs.lua declares it: its parameter names, the trailing optional ones,
-    and whether it may also be called with '.' (ArduPilot's CAN:get_device allows both)."""
+    whether it may also be called with '.' (ArduPilot's CAN:get_device allows both), and
+    the warning of a deprecated one (bindings.desc's ``deprecate``)."""
 
     params: tuple[str, ...]
     optional: int = 0
     dot_ok: bool = False
+    deprecated: str = ""
 
 
-def method(*params: str, optional: int = 0, dot_ok: bool = False) -> Callable[[F], F]:
+def method(
+    *params: str, optional: int = 0, dot_ok: bool = False, deprecated: str = ""
+) -> Callable[[F], F]:
     """Mark a Python method as a binding with docs.lua's parameter names."""
 
     def mark(fn: F) -> F:
-        fn.lua_signature = Signature(params, optional, dot_ok)  # type: ignore[attr-defined]
+        signature = Signature(params, optional, dot_ok, deprecated)
+        fn.lua_signature = signature  # type: ignore[attr-defined]
         return fn
 
     return mark
 
 
 class CallLog:
-    """Every binding the script called: (class, name, arguments without self) -> count."""
+    """Every binding the script called: (class, name, arguments without self) -> count;
+    ``warnings``: ArduPilot's warning for the first call of each deprecated binding."""
 
     def __init__(self) -> None:
         self.calls: Counter[tuple[str, str, int]] = Counter()
+        self.warnings: list[str] = []
 
 
 class Binding:
@@ -91,6 +98,10 @@ class LuaCall:
             raise ScriptError(f"{self.where}: got {len(args)} arguments, expected {wanted}")
         for arg in args:
             check_int32(arg, self.where)
+        if signature.deprecated:
+            warning = f"{self.where} {signature.deprecated}"  # once, as ArduPilot warns
+            if warning not in self.log.warnings:
+                self.log.warnings.append(warning)
         self.log.calls[(self.owner.lua_class if self.owner else "", self.name, len(args))] += 1
         return _to_lua(self.fn(*args))
 

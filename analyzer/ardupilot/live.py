@@ -5,21 +5,55 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
+from analyzer.ardupilot import lua_build
+from analyzer.ardupilot.autopilot import BOOT_MS, Autopilot
 from analyzer.ardupilot.plan import MountLibrary
-from analyzer.ardupilot.script import LuaScript
-from analyzer.ardupilot.vehicle import Vehicle
+from analyzer.ardupilot.script import ScriptFailed, compile_check
+from analyzer.errors import UsageError
 from analyzer.protocol.types import CanFrame, Event
-from analyzer.sim.engine import SimConfig, SimulatedGimbal
-from analyzer.sim.runner import SimulatorRunner
+from analyzer.sim.engine import SimConfig
 from analyzer.sim.scene import Scene
-from analyzer.sim.transports import CanLink, LinkSpec, open_gimbal_link
+from analyzer.sim.transports import CanLink, Link, LinkSpec
 from analyzer.sim.uav import FlightPath
 from analyzer.sources.base import Source, SourceItem
 
 MAX_WAIT_S = 0.02  # longest wait for the bus between two looks at the script's schedule
-BOOT_MS = 1000  # millis() when the script starts
+
+
+@dataclass(frozen=True)
+class DriverFile:
+    """A driver the demo runs: its text, its file name, and the Lua to run it in (None:
+    lupa's own)."""
+
+    text: str
+    name: str
+    lua: ModuleType | None = None
+
+
+def load_driver(path: str, interpreter: str, say: Callable[[str], None]) -> DriverFile:
+    """The driver at ``path``, compiled in ``interpreter`` (demo --lua: "lupa" or "ardupilot",
+    built once, saying so): a UsageError, in one line, when it cannot be."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"--ardupilot {path}: cannot read it: {exc}") from None
+    lua = None
+    if interpreter == "ardupilot":
+        try:
+            lua = lua_build.load(lua_build.build(say=say))
+        except (lua_build.BuildError, OSError, ImportError) as exc:
+            raise UsageError(f"--lua ardupilot: cannot build ArduPilot's Lua: {exc}") from None
+    name = Path(path).name
+    try:
+        compile_check(text, name, lua=lua)
+    except ScriptFailed as exc:
+        raise UsageError(f"--ardupilot {path}: {exc}") from None
+    return DriverFile(text, name, lua)
 
 
 class AutopilotCanLink(CanLink):
@@ -66,7 +100,8 @@ class ArduPilotScene(Scene):
     """The simulated gimbal and an autopilot running a driver on ``spec``: the demo's Scene
     with the autopilot in the ground station's place (start() / stop() / ``errors`` as
     there). The autopilot's events go to ``note``, what the script says to the GCS to
-    ``log``; a script error ends the autopilot (in ``errors``)."""
+    ``log``; a script error ends the autopilot (in ``errors``). ``lua`` is the interpreter
+    (lupa's Lua 5.3 unless given)."""
 
     def __init__(
         self,
@@ -79,50 +114,39 @@ class ArduPilotScene(Scene):
         path: FlightPath | None = None,
         library: MountLibrary | None = None,
         log: Callable[[str], None] | None = None,
+        lua: ModuleType | None = None,
     ) -> None:
-        gimbal_link = open_gimbal_link(spec)
-        try:
-            link = AutopilotCanLink(spec)
-        except BaseException:
-            gimbal_link.close()
-            raise
-        self.links: list[Any] = [gimbal_link, link]
-        self.gimbal = SimulatedGimbal(time.monotonic(), config)
-        self.runner = SimulatorRunner(self.gimbal, gimbal_link, status_every=None)
-        vehicle = Vehicle(
-            link.send_frame,
-            library=library or MountLibrary(),
-            path=path or FlightPath(),
-            start=time.time(),
-            boot_ms=BOOT_MS,
-        )
-        script = LuaScript(script_source, script_name, vehicle)
-        self.ground: Any = Autopilot(link, script, note, log)
-        self._threads = [
-            threading.Thread(target=self._guard(self.runner.run), name="sim-gimbal", daemon=True),
-            threading.Thread(target=self._guard(self.ground.run), name="autopilot", daemon=True),
-        ]
-        self.errors: list[BaseException] = []
-        self._stopping = threading.Lock()
+        def autopilot(link: Link) -> AutopilotRunner:
+            assert isinstance(link, AutopilotCanLink)
+            machine = Autopilot(
+                script_source,
+                script_name,
+                link.send_frame,
+                library=library or MountLibrary(),
+                path=path or FlightPath(),
+                lua=lua,
+            )
+            return AutopilotRunner(link, machine, note, log)
+
+        super().__init__(spec, config, ground=autopilot, open_ground=AutopilotCanLink)
 
 
-class Autopilot:
-    """Runs the script in real time on the autopilot's CAN port until stopped."""
+class AutopilotRunner:
+    """The wall-clock driver of an Autopilot: runs it in real time on the autopilot's CAN
+    port until stopped (millis() counts from BOOT_MS; events are timed by the wall clock)."""
 
     def __init__(
         self,
         link: AutopilotCanLink,
-        script: LuaScript,
+        autopilot: Autopilot,
         note: Callable[[list[Event]], None],
         log: Callable[[str], None] | None,
     ) -> None:
         self.link = link
-        self.script = script
-        self.vehicle = script.vehicle
+        self.autopilot = autopilot
         self.note = note
         self.log = log
         self._stop = threading.Event()
-        self._texts = 0
 
     def stop(self) -> None:
         self._stop.set()
@@ -133,28 +157,27 @@ class Autopilot:
         def now_ms() -> int:
             return BOOT_MS + int((time.monotonic() - began) * 1000)
 
-        self.vehicle.start = time.time()
-        script = self.script
-        try:
-            script.start(now_ms())
-            while not self._stop.is_set() and script.due_ms is not None:
-                wait = max(0.0, min(MAX_WAIT_S, (script.due_ms - now_ms()) / 1000))
-                for item in self.link.receive(wait):
-                    if isinstance(item, CanFrame):
-                        self.vehicle.deliver(item.can_id, item.data, item.extended)
-                if script.due_ms is not None and now_ms() >= script.due_ms:
-                    script.run(now_ms())
-                self._hand_on()
-        finally:
-            self._hand_on()
+        vehicle = self.autopilot.vehicle
+        vehicle.start = time.time()
+        vehicle.wall_clock = time.time
+        due: int | None = now_ms()
+        while not self._stop.is_set() and due is not None:
+            wait = max(0.0, min(MAX_WAIT_S, (due - now_ms()) / 1000))
+            received = [item for item in self.link.receive(wait) if isinstance(item, CanFrame)]
+            stepped = self.autopilot.step(now_ms(), received)
+            if stepped.events:
+                self.note(stepped.events)
+            self._say(*stepped.texts)
+            if stepped.error is not None:
+                raise ScriptFailed(stepped.error)
+            due = stepped.due_ms
+        script = self.autopilot.script
+        self._say(
+            f"Lua heap {script.heap_loaded / 1024:.0f} kB once loaded, "
+            f"{script.heap_peak / 1024:.0f} kB at most after a run"
+        )
 
-    def _hand_on(self) -> None:
-        events = self.vehicle.take_events()
-        if events:
-            self.note(events)
-        texts = self.vehicle.texts
-        while self._texts < len(texts):
-            _, _, text = texts[self._texts]
-            self._texts += 1
-            if self.log is not None:
+    def _say(self, *texts: str) -> None:
+        if self.log is not None:
+            for text in texts:
                 self.log(f"ardupilot: {text}")

@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import ModuleType
 
+from analyzer.ardupilot.autopilot import BOOT_MS, Autopilot
 from analyzer.ardupilot.plan import DEMO_PERIOD, DEMO_PLAN, MountLibrary, Step
-from analyzer.ardupilot.script import LuaScript, ScriptFailed
+from analyzer.ardupilot.script import LuaScript
 from analyzer.ardupilot.vehicle import Vehicle
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.uav import FlightPath
-
-BOOT_MS = 1000  # the script starts this long after the autopilot boots
 
 
 @dataclass
@@ -43,8 +43,11 @@ def run_session(
     gimbal: bool = True,
     start: float = 0.0,
     channel: str = "sim",
+    boot_ms: int = BOOT_MS,
+    lua: ModuleType | None = None,
 ) -> Session:
-    """Run the driver ``source`` for ``duration`` seconds of the autopilot's time.
+    """Run the driver ``source`` for ``duration`` seconds of the autopilot's time, its
+    millis() starting at ``boot_ms``, in ``lua`` (lupa's Lua 5.3 unless given).
 
     The simulated gimbal (``config``; it does not play the UAV: the driver's status
     frames are the only ones) shares the bus with the driver; without ``gimbal`` the
@@ -66,45 +69,40 @@ def run_session(
                 sim.handle(event, clock["now"])
         return True
 
-    vehicle = Vehicle(
+    autopilot = Autopilot(
+        source,
+        name,
         on_bus,
         library=MountLibrary(plan, period),
-        path=path or FlightPath(),
+        path=path,
         parameters=parameters,
         start=start,
-        boot_ms=BOOT_MS,
+        boot_ms=boot_ms,
+        lua=lua,
     )
-    script = LuaScript(source, name, vehicle)
     error = None
-    end_ms = BOOT_MS + round(duration * 1000)
-    now_ms = BOOT_MS
-    try:
-        script.start(now_ms)
-        while now_ms <= end_ms:
-            clock["now"] = start + (now_ms - BOOT_MS) / 1000
-            vehicle.advance(now_ms)
-            if sim is not None:
-                for can_id, data in sim.poll(clock["now"]):
-                    frame = CanFrame(clock["now"], can_id, data, True, channel)
-                    frames.append(frame)
-                    events.extend(decoder.feed(frame))
-                    vehicle.deliver(can_id, data)
-            if script.due_ms is not None and now_ms >= script.due_ms:
-                script.run(now_ms)
-            events.extend(vehicle.take_events())
-            now_ms = _next_ms(now_ms, script, sim, start)
-    except ScriptFailed as exc:
-        error = str(exc)
-    events.extend(vehicle.take_events())
+    end_ms = boot_ms + round(duration * 1000)
+    now_ms = boot_ms
+    while now_ms <= end_ms:
+        clock["now"] = start + (now_ms - boot_ms) / 1000
+        received = []
+        if sim is not None:
+            for can_id, data in sim.poll(clock["now"]):
+                frame = CanFrame(clock["now"], can_id, data, True, channel)
+                frames.append(frame)
+                events.extend(decoder.feed(frame))
+                received.append(frame)
+        stepped = autopilot.step(now_ms, received)
+        events.extend(stepped.events)
+        if stepped.error is not None:
+            error = stepped.error
+            break
+        times = [now_ms + 1000]
+        if stepped.due_ms is not None:
+            times.append(stepped.due_ms)
+        if sim is not None:
+            times.append(boot_ms + math.ceil((sim.next_time() - start) * 1000 - 1e-6))
+        now_ms = max(now_ms + 1, min(times))
     events.extend(decoder.close(start + duration))
     events.sort(key=lambda e: e.time)
-    return Session(frames, events, vehicle, script, error, sim, sent)
-
-
-def _next_ms(now_ms: int, script: LuaScript, sim: SimulatedGimbal | None, start: float) -> int:
-    times = [now_ms + 1000]
-    if script.due_ms is not None:
-        times.append(script.due_ms)
-    if sim is not None:
-        times.append(BOOT_MS + math.ceil((sim.next_time() - start) * 1000 - 1e-6))
-    return max(now_ms + 1, min(times))
+    return Session(frames, events, autopilot.vehicle, autopilot.script, error, sim, sent)

@@ -111,14 +111,26 @@ class AhrsSingleton(Binding):
         self.vehicle = vehicle
 
     @method()
-    def get_roll(self) -> float:
+    def get_roll_rad(self) -> float:
         return self.vehicle.attitude_rad()[0]
 
     @method()
-    def get_pitch(self) -> float:
+    def get_pitch_rad(self) -> float:
         return self.vehicle.attitude_rad()[1]
 
     @method()
+    def get_yaw_rad(self) -> float:
+        return self.vehicle.attitude_rad()[2]
+
+    @method(deprecated="Use get_roll_rad")
+    def get_roll(self) -> float:
+        return self.vehicle.attitude_rad()[0]
+
+    @method(deprecated="Use get_pitch_rad")
+    def get_pitch(self) -> float:
+        return self.vehicle.attitude_rad()[1]
+
+    @method(deprecated="Use get_yaw_rad")
     def get_yaw(self) -> float:
         return self.vehicle.attitude_rad()[2]
 

@@ -3,29 +3,26 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from analyzer.ardupilot.plan import MountLibrary, step_fields
 from analyzer.ardupilot.userdata import ABSOLUTE, Location, ScriptingCANBuffer, Transmit
+from analyzer.export.ardupilot_params import AUTOPILOT_PARAMETERS
 from analyzer.protocol.types import TOPIC_ARDUPILOT_MOUNT, TOPIC_ARDUPILOT_TARGETS, Event
 from analyzer.sim.uav import FlightPath
 
 HOME_ALTITUDE_M = 50.0  # home's altitude above sea level
 SOURCE = "ardupilot"
 
-# The parameters a correctly set-up autopilot has (the driver's own are added by it).
+# The parameters an autopilot set up as the driver's page says has (the driver's own are
+# added by it), and ArduPilot's defaults of the others the emulation reads.
 SETUP_PARAMETERS: dict[str, float] = {
-    "SCR_ENABLE": 1,
-    "SCR_HEAP_SIZE": 120000,
+    **{p.name: p.value for p in AUTOPILOT_PARAMETERS},
     "SCR_VM_I_COUNT": 10000,
-    "CAN_P1_DRIVER": 1,
-    "CAN_P1_BITRATE": 1000000,
-    "CAN_D1_PROTOCOL": 10,
     "CAN_P2_DRIVER": 0,
     "CAN_D2_PROTOCOL": 0,
-    "MNT1_TYPE": 9,
-    "CAM1_TYPE": 7,
 }
 SCRIPTING_PROTOCOLS = {1: 10, 2: 12}  # get_device: CAN_Dx_PROTOCOL 10, get_device2: 12
 
@@ -42,7 +39,8 @@ class Vehicle:
     """What a script on an autopilot talks to: time since boot, the aircraft flying
     ``path``, the mount library's plan, parameters, two scripting CAN drivers (frames
     written go to ``transmit``) and the GCS. ``events`` collects /ardupilot/mount and
-    /ardupilot/targets events, timed ``start`` + time since the script started."""
+    /ardupilot/targets events, timed ``start`` + time since the script started, or by
+    ``wall_clock`` when set (a live run: the moment the script reports, not its millis())."""
 
     def __init__(
         self,
@@ -64,6 +62,7 @@ class Vehicle:
         self.boot_ms = boot_ms
         self.gps_fix = gps_fix
         self.now_ms = boot_ms
+        self.wall_clock: Callable[[], float] | None = None
         self.tables: dict[int, ParamTable] = {}
         self.devices: dict[int, ScriptingCANBuffer] = {}
         self.texts: list[tuple[float, int, str]] = []  # (time, severity, text) to the GCS
@@ -80,6 +79,8 @@ class Vehicle:
         return (self.now_ms - self.boot_ms) / 1000.0
 
     def event_time(self) -> float:
+        if self.wall_clock is not None:
+            return self.wall_clock()
         return self.start + self.seconds
 
     def advance(self, now_ms: int) -> None:

@@ -63,7 +63,9 @@ pilot's rates, angles in body and earth frame, a point to look at and camera
 actions; its UAV status frames are the only ones (the simulator does not play
 the UAV). The recording adds /ardupilot/mount (the attitude the driver reported)
 and /ardupilot/targets (what the mount library asked); a script error stops the
-demo (exit 1) with ArduPilot's message.
+demo (exit 1) with ArduPilot's message. --lua ardupilot runs the driver in Lua
+built as ArduPilot builds it (32-bit integers and floats, at most 100 locals per
+function), compiled once from lupa's sources.
 """
 
 CHANNEL = "gimbal-demo"
@@ -106,6 +108,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DRIVER.lua",
         help="run this ArduPilot Lua mount driver as the ground station, in Lua 5.3 with "
         "ArduPilot's scripting bindings emulated (see: gimbal-analyzer export ardupilot)",
+    )
+    parser.add_argument(
+        "--lua",
+        choices=("lupa", "ardupilot"),
+        default="lupa",
+        help="the Lua 5.3 --ardupilot runs the driver in: lupa (lupa's own: 64-bit numbers, "
+        "200 locals per function; the default) or ardupilot (built as ArduPilot builds it: "
+        "32-bit integers and floats, at most 100 locals per function; compiled once from "
+        "lupa's sources, which needs pip to reach PyPI and a C compiler, and kept in "
+        "~/.cache/gimbal-analyzer)",
     )
     add_compression_argument(parser)
     add_foxglove_options(parser)
@@ -243,27 +255,21 @@ def _plain(event: Event) -> str:
     return f"{stamp} {event.topic:<17} {text}{warnings}"
 
 
-def _read_driver(name: str) -> tuple[str, str]:
-    """(text, file name) of the Lua driver, or a one-line usage error."""
-    path = Path(name)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"--ardupilot {name}: cannot read it: {exc}") from None
-    from analyzer.ardupilot.script import ScriptFailed, compile_check
+def _driver(args: argparse.Namespace) -> Any:
+    """The --ardupilot driver, read and compiled in the --lua interpreter."""
+    from analyzer.ardupilot.live import load_driver
 
-    try:
-        compile_check(text, path.name)
-    except ScriptFailed as exc:
-        raise UsageError(f"--ardupilot {name}: {exc}") from None
-    return text, path.name
+    def say(text: str) -> None:
+        print(f"demo: {text}", file=sys.stderr, flush=True)
+
+    return load_driver(args.ardupilot, args.lua, say)
 
 
 def _autopilot(
     args: argparse.Namespace,
     spec: Any,
     config: Any,
-    driver: tuple[str, str],
+    driver: Any,
     source: Any,
     tui: bool,
 ) -> Any:
@@ -278,11 +284,12 @@ def _autopilot(
     return ArduPilotScene(
         spec,
         config,
-        driver[0],
-        driver[1],
+        driver.text,
+        driver.name,
         note=source.note,
         path=FlightPath(heading_deg=args.heading),
         log=say,
+        lua=driver.lua,
     )
 
 
@@ -352,12 +359,14 @@ def run(args: argparse.Namespace) -> int:
         heading_deg=args.heading,
     )
 
+    if args.lua != "lupa" and not args.ardupilot:
+        raise UsageError("--lua chooses the Lua of an --ardupilot driver: give --ardupilot")
     if args.stick and args.ardupilot:
         raise UsageError(
             "--stick drives the demo's ground station, and with --ardupilot the driver is "
             "the ground station: give one of them"
         )
-    driver = _read_driver(args.ardupilot) if args.ardupilot else None
+    driver = _driver(args) if args.ardupilot else None
     if driver is not None:
         config = replace(config, uav=False)  # the driver's status frames are the only ones
     source: Any = open_source(str(spec))
@@ -376,7 +385,7 @@ def run(args: argparse.Namespace) -> int:
             command="demo",
             **simulator_metadata(args, config),
             **video_metadata(args),
-            **({"ardupilot_driver": driver[1]} if driver is not None else {}),
+            **({"ardupilot_driver": driver.name} if driver is not None else {}),
         ),
         hold_back=hold_back,
         sinks_after=lambda sink, video: [printer],
@@ -404,7 +413,7 @@ def run(args: argparse.Namespace) -> int:
         who = (
             "simulated gimbal + UAV and a scripted ground station"
             if driver is None
-            else f"simulated gimbal and ArduPilot running {driver[1]}"
+            else f"simulated gimbal and ArduPilot running {driver.name}"
         )
         print(
             f"demo: {who} on {spec}; recording {path}; faults: {faults.describe()}; {duration:g} s",

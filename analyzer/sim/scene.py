@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from typing import Protocol
 
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.ground import GroundScript, GroundStation
@@ -12,10 +13,20 @@ from analyzer.sim.runner import SimulatorRunner
 from analyzer.sim.transports import Link, LinkSpec, open_gimbal_link, open_ground_link
 
 
+class Ground(Protocol):
+    """What plays the ground station's part in its own thread: run() until stop()."""
+
+    def run(self) -> None: ...
+
+    def stop(self) -> None: ...
+
+
 class Scene:
     """Gimbal + ground station on ``spec`` (a virtual CAN bus in the demo); start() / stop().
 
     The gimbal's link is opened first, so with TCP the ground station connects to it.
+    ``ground`` makes another party on the ground station's link (``open_ground`` opens
+    that link), in the scripted ground station's place.
     """
 
     def __init__(
@@ -25,6 +36,8 @@ class Scene:
         *,
         script: GroundScript | None = None,
         log: Callable[[str], None] | None = None,
+        ground: Callable[[Link], Ground] | None = None,
+        open_ground: Callable[[LinkSpec], Link] = open_ground_link,
     ) -> None:
         self.links: list[Link] = []
         gimbal_link = open_gimbal_link(spec)
@@ -34,14 +47,17 @@ class Scene:
             address = getattr(gimbal_link, "address", None)
             if address is not None:  # a TCP server on port 0: connect to the port it got
                 ground_spec = LinkSpec("tcp", host=address[0], port=address[1])
-            ground_link = open_ground_link(ground_spec)
+            ground_link = open_ground(ground_spec)
             self.links.append(ground_link)
+            self.ground: Ground = (
+                GroundStation(ground_link, script) if ground is None else ground(ground_link)
+            )
         except BaseException:
-            gimbal_link.close()
+            for link in self.links:
+                link.close()
             raise
         self.gimbal = SimulatedGimbal(time.monotonic(), config)
         self.runner = SimulatorRunner(self.gimbal, gimbal_link, log=log, status_every=None)
-        self.ground = GroundStation(ground_link, script)
         self._threads = [
             threading.Thread(target=self._guard(self.runner.run), name="sim-gimbal", daemon=True),
             threading.Thread(target=self._guard(self.ground.run), name="sim-ground", daemon=True),
