@@ -245,6 +245,9 @@ def _plain(event: Event) -> str:
 
 def _read_driver(name: str) -> tuple[str, str]:
     """(text, file name) of the Lua driver, or a one-line usage error."""
+    from analyzer.extras import ARDUPILOT, require
+
+    require(ARDUPILOT, "--ardupilot")  # the driver runs in lupa's Lua
     path = Path(name)
     try:
         text = path.read_text(encoding="utf-8")
