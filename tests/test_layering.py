@@ -18,6 +18,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "shared plumbing",
         (
             "errors",
+            "extras",
+            "portable",
+            "wall_clock",
             "timefmt",
             "terminal_text",
             "stdio",
