@@ -43,9 +43,9 @@ def set_permissions(fd: int, path: str | os.PathLike[str], mode: int) -> None:
         os.chmod(path, mode)
 
 
-def is_closed_pipe(exc: BaseException, platform: str = sys.platform) -> bool:
+def is_closed_pipe(exc: BaseException) -> bool:
     """Whether a failed write means the reader went away (``| head``): a broken pipe, and
     on Windows EINVAL, which a write to a pipe whose reader closed gives there."""
     if isinstance(exc, BrokenPipeError):
         return True
-    return platform == "win32" and isinstance(exc, OSError) and exc.errno == errno.EINVAL
+    return sys.platform == "win32" and isinstance(exc, OSError) and exc.errno == errno.EINVAL

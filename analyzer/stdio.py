@@ -3,8 +3,10 @@ console closed) that acts like Ctrl-C."""
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import errno
+import io
 import os
 import signal
 import sys
@@ -53,6 +55,17 @@ class GuardedStdout:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.stream, name)
+
+
+def utf8_when_redirected(*streams: TextIO) -> None:
+    """Standard output and error sent to a file or a pipe write UTF-8, like every text
+    file of the tool (Windows would use its ANSI code page, which has no room for most
+    characters); a terminal keeps its own (Windows' console takes any text)."""
+    for stream in streams:
+        with contextlib.suppress(AttributeError, ValueError, OSError, LookupError):
+            if stream.isatty() or codecs.lookup(stream.encoding or "utf-8").name == "utf-8":
+                continue
+            cast(io.TextIOWrapper, stream).reconfigure(encoding="utf-8")
 
 
 @contextlib.contextmanager

@@ -53,6 +53,7 @@ class Recorder:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
+            encoding="utf-8",
         )
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -303,6 +304,7 @@ def test_an_adapter_that_is_not_there_fails_at_start(tmp_path: Path) -> None:
             capture_output=True,
             text=True,
             timeout=60,
+            encoding="utf-8",
         )
         assert proc.returncode == 1, proc.stderr
         lines = proc.stderr.splitlines()

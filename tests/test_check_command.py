@@ -151,7 +151,12 @@ def start_check(gimbal: Gimbal, output: Path, *options: str) -> Run:
     command += ["-o", str(output), *FAST, *options]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        encoding="utf-8",
     )
     return Run(gimbal, output, process)
 
@@ -332,7 +337,7 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     # `report` of the recording later shows the same steps on top.
     later = tmp_path / "later.html"
     assert main(["report", str(output), "-o", str(later)]) == 0
-    text = later.read_text()
+    text = later.read_text(encoding="utf-8")
     assert text.index('id="check-steps"') < text.index("<h2>Overview</h2>")
     assert text.count('class="v st-pass"') == 9
 

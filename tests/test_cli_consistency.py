@@ -24,7 +24,7 @@ CANDUMP_LINE = "(1715680800.010000) can0 030F0000#0F01000000000000\n"
 def test_the_manual_makes_its_exit_code_table_from_the_code() -> None:
     """The manual's table is generated from EXIT_CODES when it is built (tests/test_manual.py
     checks the built page), so it has no copy of its own to go stale."""
-    text = (ROOT / "docs" / "reference" / "exit-codes.md").read_text()
+    text = (ROOT / "docs" / "reference" / "exit-codes.md").read_text(encoding="utf-8")
     assert "```{gimbal-exit-codes}" in text
     assert not re.search(r"^\| \d+ \|", text, re.MULTILINE)
 
@@ -41,14 +41,19 @@ def test_help_shows_the_exit_code_table(capsys: pytest.CaptureFixture[str]) -> N
 
 def test_a_command_loads_only_its_own_module(tmp_path: Path) -> None:
     log = tmp_path / "x.log"
-    log.write_text(CANDUMP_LINE)
+    log.write_text(CANDUMP_LINE, encoding="utf-8")
     code = (
         "import sys; from analyzer.cli import main; "
         f"main(['--local-time', 'decode', '--summary', {str(log)!r}]); "
         "print(sorted(m for m in sys.modules if m.startswith('analyzer.commands.')))"
     )
     proc = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=ENV, check=True
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        check=True,
+        encoding="utf-8",
     )
     assert proc.stdout.splitlines()[-1] == "['analyzer.commands.decode']"
 
@@ -67,7 +72,7 @@ def test_unreadable_mcap_input_is_exit_2_in_every_command(
     empty = tmp_path / "empty.mcap"
     empty.write_bytes(b"")
     not_mcap = tmp_path / "text.mcap"
-    not_mcap.write_text("hello\n")
+    not_mcap.write_text("hello\n", encoding="utf-8")
     for path in (empty, not_mcap):
         for args in (
             ["info", str(path)],

@@ -90,7 +90,7 @@ def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path)
     page = tmp_path / "mixed.html"
     code, out, _ = cli("fleet", dataset, "--sql", sql, "--html", str(page))
     assert code == 0 and out.startswith(f"Query: {sql}\n")
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert (
         f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
     )
@@ -116,6 +116,7 @@ def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes
         stdout=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(root)},
+        encoding="utf-8",
     )
     assert child.stdout is not None
     try:

@@ -148,8 +148,8 @@ def test_a_backend_whose_detection_fails_is_named_and_the_rest_listed(
 def test_socketcan_links_up_and_down_from_sysfs(tmp_path: Path) -> None:
     def interface(name: str, kind: int, flags: str) -> None:
         (tmp_path / name).mkdir()
-        (tmp_path / name / "type").write_text(f"{kind}\n")
-        (tmp_path / name / "flags").write_text(f"{flags}\n")
+        (tmp_path / name / "type").write_text(f"{kind}\n", encoding="utf-8")
+        (tmp_path / name / "flags").write_text(f"{flags}\n", encoding="utf-8")
 
     interface("can0", 280, "0x40081")  # UP, RUNNING, NOARP: as a gs_usb can0 that is up
     interface("can1", 280, "0x80")  # NOARP only: down
@@ -181,6 +181,7 @@ def test_a_real_run_lists_what_pyserial_and_python_can_see(tmp_path: Path) -> No
         capture_output=True,
         text=True,
         timeout=120,
+        encoding="utf-8",
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""  # the warnings of python-can's absent backends are not news
@@ -198,6 +199,7 @@ def test_a_real_run_lists_what_pyserial_and_python_can_see(tmp_path: Path) -> No
         capture_output=True,
         text=True,
         timeout=120,
+        encoding="utf-8",
     )
     assert text.returncode == 0 and text.stdout.startswith("CAN adapters (python-can):\n")
     assert all(f"--source {p['serial_source']}" in text.stdout for p in found["serial"])

@@ -316,6 +316,7 @@ def test_record_serves_the_live_stream_while_recording(tmp_path: Path) -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        encoding="utf-8",
     )
     client = None
     try:
