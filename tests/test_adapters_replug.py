@@ -26,7 +26,11 @@ from analyzer.mcapio.read.reader import read_replay
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk
 from tests.mcap_doctor import examine
+from tests.platforms import posix_signals, pseudo_terminals
 from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
+
+# A simulated USB adapter is a pseudo-terminal; the recorder is stopped with SIGINT / SIGTERM.
+pytestmark = [pseudo_terminals, posix_signals]
 
 ROOT = Path(__file__).resolve().parent.parent
 DEADLINE_S = 20.0

@@ -21,6 +21,7 @@ from analyzer.cli import main
 from analyzer.inputs.python_can.reader import frame_from_message
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import TOPIC_CAN_BUS_STATE, TOPIC_DIAGNOSTICS
+from tests.platforms import linux
 
 CAN_ERR_FLAG = 0x20000000
 T0 = 1700000000.0
@@ -158,6 +159,7 @@ def test_socketcan_pcap(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert [e["error"] for e in bus_errors(events)] == ISSUE_TEXTS
 
 
+@linux
 def test_live_socketcan_through_python_can(tmp_path: Path) -> None:
     """python-can's socketcan receive code (``capture_message``) on the bytes a CAN_RAW
     socket delivers (struct can_frame plus its SO_TIMESTAMPNS), then the decoder."""

@@ -38,6 +38,7 @@ from analyzer.protocol.types import Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.runner import SimulatorRunner
 from analyzer.sim.transports import Link, TcpServerLink, open_gimbal_link, parse_link
+from tests.platforms import posix_signals
 from tests.test_report_command import load
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -416,6 +417,7 @@ def test_steps_in_a_feedback_silence_fail_as_no_feedback(tcp_runs: dict[str, Run
     assert steps["look_down"]["verdict"] == "pass"
 
 
+@posix_signals
 def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
     gimbal = Gimbal("tcp:127.0.0.1:0")
     run = start_check(

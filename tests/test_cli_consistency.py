@@ -15,6 +15,7 @@ import pytest
 
 from analyzer.cli import main
 from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE, UsageError
+from tests.platforms import posix_signals
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -86,6 +87,7 @@ def test_unreadable_mcap_input_is_exit_2_in_every_command(
     assert not (tmp_path / "out.mcap").exists()
 
 
+@posix_signals
 def test_sigterm_during_convert_removes_the_partial_output_and_says_so(tmp_path: Path) -> None:
     out = tmp_path / "out.mcap"
     proc = subprocess.Popen(
@@ -198,6 +200,7 @@ def test_a_live_record_that_received_nothing_is_exit_1(
     assert not Recording(out).recovered  # finished all the same, with its link diagnostics
 
 
+@posix_signals
 def test_a_signal_during_a_critical_step_takes_effect_after_it() -> None:
     from analyzer.errors import Terminated
     from analyzer.stdio import interrupts_deferred

@@ -21,6 +21,7 @@ from tests.fleet_flights import (
     recording,
     rows,
 )
+from tests.platforms import posix_signals, symlinks
 
 
 @pytest.fixture(scope="module")
@@ -96,6 +97,7 @@ def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path)
     )
 
 
+@posix_signals
 def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
     tmp_path: Path,
 ) -> None:
@@ -151,6 +153,7 @@ def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes
     assert out == "n\n12\n"
 
 
+@symlinks
 def test_a_failed_input_is_skipped_next_time_unless_retried(
     fleet: dict[str, Any], tmp_path: Path
 ) -> None:

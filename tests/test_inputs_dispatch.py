@@ -95,7 +95,10 @@ def test_directory_is_a_usage_error(tmp_path: Path) -> None:
         open_input(str(tmp_path))
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root reads everything")
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() == 0,
+    reason="root reads everything (Windows: no POSIX permissions)",
+)
 def test_unreadable_file_is_a_usage_error(tmp_path: Path) -> None:  # pragma: no cover
     path = tmp_path / "secret.log"
     path.write_bytes(LOG_LINE)

@@ -12,6 +12,7 @@ from analyzer.cli import main
 from analyzer.commands import demo
 from analyzer.mcapio.read.reader import Recording
 from analyzer.output_file import OutputFile, OutputRefused, check_output, write_output
+from tests.platforms import posix_permissions, symlinks
 
 CANDUMP = "".join(f"({1715680800 + n * 0.01:.6f}) can0 0F01#0F040CFE00000000\n" for n in range(50))
 
@@ -50,6 +51,7 @@ def test_an_existing_file_is_replaced_only_with_force(tmp_path: Path) -> None:
     assert _listing(tmp_path) == ["out.txt"]
 
 
+@posix_permissions
 def test_the_new_file_gets_the_usual_permissions(tmp_path: Path) -> None:
     old = os.umask(0o022)
     try:
@@ -65,6 +67,7 @@ def test_the_new_file_gets_the_usual_permissions(tmp_path: Path) -> None:
 @pytest.mark.parametrize("dangling", [True, False])
 @pytest.mark.parametrize("force", [True, False])
 @pytest.mark.parametrize("atomic", [True, False])
+@symlinks
 def test_a_symlink_at_the_output_is_never_followed(
     tmp_path: Path, dangling: bool, force: bool, atomic: bool
 ) -> None:
@@ -92,6 +95,7 @@ def test_the_output_may_never_be_an_input_even_with_force(tmp_path: Path) -> Non
     assert source.read_text(encoding="utf-8") == "x"
 
 
+@symlinks
 def test_a_file_planted_while_writing_is_kept_and_so_is_the_output(tmp_path: Path) -> None:
     target = tmp_path / "out.txt"
     out = OutputFile(target, encoding="utf-8")
@@ -103,6 +107,7 @@ def test_a_file_planted_while_writing_is_kept_and_so_is_the_output(tmp_path: Pat
     assert Path(out.written_path).read_text(encoding="utf-8") == "ours"
 
 
+@symlinks
 def test_a_direct_output_refuses_a_name_taken_after_the_check(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -135,6 +140,7 @@ def test_discard_removes_only_our_own_file(tmp_path: Path) -> None:
 # -- the commands -------------------------------------------------------------------------------
 
 
+@symlinks
 def test_convert_needs_force_and_ignores_a_planted_partial_symlink(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -155,6 +161,7 @@ def test_convert_needs_force_and_ignores_a_planted_partial_symlink(
     assert _listing(tmp_path) == ["flight.log", "flight.mcap", "flight.mcap.partial", "victim.txt"]
 
 
+@symlinks
 def test_convert_refuses_a_symlinked_output(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -177,6 +184,7 @@ def test_record_never_overwrites_its_own_input(
     assert log.read_text(encoding="utf-8") == CANDUMP
 
 
+@symlinks
 def test_record_does_not_follow_a_dangling_symlink(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

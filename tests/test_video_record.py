@@ -28,6 +28,7 @@ from analyzer.mcapio.write.video import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDE
 from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 from analyzer.video.spec import VIDEO_HOLD_BACK_S
 from tests.mcap_doctor import examine
+from tests.platforms import posix_signals
 
 ROOT = Path(__file__).resolve().parent.parent
 FRAME_INTERVAL = 1 / 30
@@ -316,6 +317,7 @@ def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
     assert "h264 640x360" in info.stdout and f" {len(video)} frames" in info.stdout
 
 
+@posix_signals
 def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path) -> None:
     out = tmp_path / "flight.mcap"
     with gimbal() as port:
