@@ -8,9 +8,12 @@ without any extra into a fresh venv and runs the demo from it (``.ci/run``).
 
 from __future__ import annotations
 
+import contextlib
 import os
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -136,6 +139,47 @@ def test_report_and_info_of_a_video_recording_without_video(
     assert info.returncode == 0, info.stderr
     assert "/camera/main  h264 size not read" in info.stdout
     assert "the video extra is not installed" in info.stdout
+
+
+def test_record_and_check_against_a_simulated_gimbal_without_any_extra(tmp_path: Path) -> None:
+    port = free_port()
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    missing = ",".join(everything_but())
+    gimbal = subprocess.Popen(
+        [sys.executable, "-c", WITHOUT, missing, "simulate", "--on", f"tcp:127.0.0.1:{port}"],
+        cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        wait_for_port(port)
+        record = run_without(
+            everything_but(), "record", "--source", f"tcp:127.0.0.1:{port}", "-o", "rec.mcap",
+            "--duration", "2", "-q", cwd=tmp_path,
+        )  # fmt: skip
+        assert record.returncode == 0, record.stderr
+        check = run_without(
+            everything_but(), "check", "--to", f"tcp:127.0.0.1:{port}", "--report", "bench.html",
+            cwd=tmp_path,
+        )  # fmt: skip
+        assert check.returncode == 0, check.stdout + check.stderr
+    finally:
+        gimbal.kill()
+        gimbal.wait(10)
+    assert (tmp_path / "bench.html").exists() and (tmp_path / "rec.mcap").stat().st_size > 0
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def wait_for_port(port: int, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with contextlib.suppress(OSError), socket.create_connection(("127.0.0.1", port), 0.5):
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"the simulated gimbal never listened on {port}")
 
 
 def test_each_extra_alone_missing_leaves_the_others_working(tmp_path: Path) -> None:
