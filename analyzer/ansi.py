@@ -33,7 +33,11 @@ class WindowsConsole:
         import ctypes
         import msvcrt
 
-        self._kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)  # type: ignore[attr-defined]
+        kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)  # type: ignore[attr-defined]
+        # HANDLEs are pointer-sized: without argtypes ctypes would pass a C int
+        kernel32.GetConsoleMode.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32)]
+        kernel32.SetConsoleMode.argtypes = [ctypes.c_void_p, ctypes.c_uint32]
+        self._kernel32 = kernel32
         self._handle = msvcrt.get_osfhandle  # type: ignore[attr-defined]
         self._dword = ctypes.c_uint32
 
