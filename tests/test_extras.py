@@ -190,7 +190,7 @@ def test_each_extra_alone_missing_leaves_the_others_working(tmp_path: Path) -> N
     assert fleet.returncode == 0 and "flights" in fleet.stdout.lower(), fleet.stderr
     demo = run_without(
         FLEET.modules + ARDUPILOT.modules,
-        "demo", "--no-tui", "--duration", "2", "--video", "main", "-o", "video.mcap",
+        "demo", "--no-tui", "--duration", "5", "--video", "main", "-o", "video.mcap",
         cwd=tmp_path,
     )  # fmt: skip
     assert demo.returncode == 0, demo.stderr
