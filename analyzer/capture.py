@@ -12,8 +12,10 @@ from dataclasses import asdict, dataclass, field
 from types import FrameType
 from typing import Any
 
+from analyzer import wall_clock
 from analyzer.errors import OutputError, SourceError
 from analyzer.pipeline import Decoding, Pipeline, Sink, Stage
+from analyzer.portable import STOP_SIGNALS
 from analyzer.protocol.types import Event
 from analyzer.sources.base import link_event
 from analyzer.tally import Tally
@@ -261,7 +263,7 @@ class Capture:
             )
 
     def _deliver(self) -> None:
-        self.pipeline.deliver(time.time())
+        self.pipeline.deliver(wall_clock.now())
         self._batches += 1
         self._rate()
         self._report_sink_failures()
@@ -302,7 +304,7 @@ class Capture:
                 self.source.close()
             try:
                 notes, self._notes = self._notes, []
-                self.pipeline.finish(time.time(), notes)
+                self.pipeline.finish(wall_clock.now(), notes)
             except Exception as exc:
                 self._fail(f"decoder failed at the end: {_reason(exc)}", exc)
                 self.pipeline.finished = True
@@ -331,7 +333,7 @@ def run_until_interrupted(capture: Capture) -> int:
 
     previous: dict[int, Any] = {}
     if threading.current_thread() is threading.main_thread():
-        for signum in (int(signal.SIGINT), int(signal.SIGTERM)):
+        for signum in (int(signal.SIGINT), *STOP_SIGNALS):
             previous[signum] = signal.signal(signum, on_signal)
     try:
         if capture._thread is None:

@@ -22,7 +22,13 @@ from analyzer.errors import (
     UsageError,
     exit_code_table,
 )
-from analyzer.stdio import guarded_stdout, interrupt_name, sigterm_as_interrupt, silence_stdout
+from analyzer.stdio import (
+    guarded_stdout,
+    interrupt_name,
+    sigterm_as_interrupt,
+    silence_stdout,
+    utf8_when_redirected,
+)
 from analyzer.terminal_text import printable
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
@@ -140,6 +146,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; every failure ends as one line on stderr and an exit code from
     the table in ``analyzer.errors`` (no tracebacks for the user's mistakes or the OS's)."""
+    utf8_when_redirected(sys.stdout, sys.stderr)
     with guarded_stdout(), sigterm_as_interrupt():
         name = "gimbal-analyzer"
         try:

@@ -70,6 +70,7 @@ class OutputClosed(BrokenPipeError):
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, handled like Ctrl-C: ``signal_name`` says which one it was."""
+    """SIGTERM (Windows: Ctrl-Break, the console closed), handled like Ctrl-C:
+    ``signal_name`` says which one it was."""
 
-    signal_name = "SIGTERM"
+    signal_name: str = "SIGTERM"

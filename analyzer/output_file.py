@@ -15,11 +15,10 @@ from types import TracebackType
 from typing import IO
 
 from analyzer.errors import SourceError, UsageError
+from analyzer.portable import NO_HARD_LINKS, open_fd, set_permissions
 
 # The permissions of a new output file before the umask (what open() would give).
 _FILE_MODE = 0o666
-# Errors of os.link on file systems without hard links (FAT on a USB stick, some mounts).
-_NO_LINKS = frozenset({errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.ENOSYS})
 
 
 class OutputRefused(UsageError):
@@ -138,13 +137,13 @@ class OutputFile:
                     prefix=f".{self.path.name}.", suffix=".partial", dir=directory
                 )
                 self.temp_path: str | None = temp
-                os.fchmod(fd, _FILE_MODE & ~_umask())
+                set_permissions(fd, temp, _FILE_MODE & ~_umask())
             else:
                 self.temp_path = None
                 if self._may_replace:
                     os.unlink(self.path)  # never follows a link; O_EXCL below refuses one
                 flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
-                fd = os.open(self.path, flags | getattr(os, "O_CLOEXEC", 0), _FILE_MODE)
+                fd = open_fd(self.path, flags, _FILE_MODE)
         except FileExistsError:
             raise OutputRefused(
                 f"{self.name} appeared while it was being created; not overwriting it"
@@ -211,7 +210,7 @@ class OutputFile:
                         f"{self.name} appeared while it was being written; the output is kept "
                         f"as {temp}"
                     ) from None
-                if exc.errno not in _NO_LINKS:
+                if exc.errno not in NO_HARD_LINKS:
                     raise
                 os.replace(temp, self.path)
             else:
@@ -256,7 +255,7 @@ class OutputFile:
 def _sync_directory(directory: Path) -> None:
     """Make a rename durable (best effort: not every system can open a directory)."""
     with contextlib.suppress(OSError):
-        fd = os.open(str(directory) if str(directory) else ".", os.O_RDONLY)
+        fd = open_fd(str(directory) if str(directory) else ".", os.O_RDONLY)
         try:
             os.fsync(fd)
         finally:

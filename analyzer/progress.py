@@ -9,6 +9,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Protocol
 
+from analyzer.ansi import ansi_ok
+
 PROGRESS_INTERVAL_S = 0.2  # redrawn at most this often
 BAR = 30
 
@@ -42,6 +44,9 @@ class Progress:
         self.started = time.monotonic()
         self.last_draw = 0.0
         self.drawn = False
+        # Erase to the end of the line where escapes work, else blanks over the last line.
+        self.erase = ansi_ok(stream)
+        self.width = 0
 
     @classmethod
     def maybe(
@@ -82,7 +87,7 @@ class Progress:
         )
         if items is not None:
             text += f"  {items / elapsed:,.0f} frames/s"
-        self.stream.write("\r" + text + "\033[K")
+        self.stream.write("\r" + self._over(text))
         self.stream.flush()
         self.drawn = True
 
@@ -93,9 +98,17 @@ class Progress:
 
     def clear(self) -> None:
         if self.drawn:
-            self.stream.write("\r\033[K")
+            self.stream.write("\r" + self._over("") + ("" if self.erase else "\r"))
             self.stream.flush()
             self.drawn = False
+
+    def _over(self, text: str) -> str:
+        """``text`` written over the line drawn before: erased to its end, or padded."""
+        if self.erase:
+            return text + "\033[K"
+        padded = text.ljust(self.width)
+        self.width = len(text)
+        return padded
 
 
 def isatty(stream: IO[str] | None) -> bool:

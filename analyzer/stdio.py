@@ -1,8 +1,12 @@
-"""Standard output that fails with one clear error, and a SIGTERM that acts like Ctrl-C."""
+"""Standard output that fails with one clear error, and a SIGTERM (Windows: Ctrl-Break, the
+console closed) that acts like Ctrl-C."""
 
 from __future__ import annotations
 
+import codecs
 import contextlib
+import errno
+import io
 import os
 import signal
 import sys
@@ -12,6 +16,7 @@ from types import FrameType
 from typing import Any, TextIO, cast
 
 from analyzer.errors import OutputClosed, OutputError, Terminated
+from analyzer.portable import STOP_SIGNALS, is_closed_pipe, open_fd
 
 
 class GuardedStdout:
@@ -22,8 +27,8 @@ class GuardedStdout:
         self.stream = stream
 
     def _failed(self, exc: OSError) -> Exception:
-        if isinstance(exc, BrokenPipeError):
-            return OutputClosed(exc.errno, exc.strerror)
+        if is_closed_pipe(exc):
+            return OutputClosed(errno.EPIPE, exc.strerror)
         return OutputError(f"cannot write to standard output: {exc.strerror or exc}")
 
     def write(self, text: str) -> int:
@@ -52,6 +57,17 @@ class GuardedStdout:
         return getattr(self.stream, name)
 
 
+def utf8_when_redirected(*streams: TextIO) -> None:
+    """Standard output and error sent to a file or a pipe write UTF-8, like every text
+    file of the tool (Windows would use its ANSI code page, which has no room for most
+    characters); a terminal keeps its own (Windows' console takes any text)."""
+    for stream in streams:
+        with contextlib.suppress(AttributeError, ValueError, OSError, LookupError):
+            if stream.isatty() or codecs.lookup(stream.encoding or "utf-8").name == "utf-8":
+                continue
+            cast(io.TextIOWrapper, stream).reconfigure(encoding="utf-8")
+
+
 @contextlib.contextmanager
 def guarded_stdout() -> Iterator[GuardedStdout]:
     """``sys.stdout`` is a GuardedStdout inside the block."""
@@ -71,33 +87,43 @@ def silence_stdout() -> None:
     stream = getattr(sys.stdout, "stream", sys.stdout)
     with contextlib.suppress(OSError, ValueError, AttributeError):
         fd = stream.fileno()
-        devnull = os.open(os.devnull, os.O_WRONLY)
+        devnull = open_fd(os.devnull, os.O_WRONLY)
         os.dup2(devnull, fd)
         os.close(devnull)
 
 
+def terminated(signum: int) -> Terminated:
+    """The KeyboardInterrupt that a stop signal (``STOP_SIGNALS``) raises, named after it."""
+    exc = Terminated()
+    exc.signal_name = STOP_SIGNALS.get(signum, Terminated.signal_name)
+    return exc
+
+
 @contextlib.contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
-    """Inside the block SIGTERM raises ``Terminated`` (a KeyboardInterrupt) in the main
-    thread, so every command cleans up after it as after Ctrl-C."""
+    """Inside the block SIGTERM (and Windows' SIGBREAK: Ctrl-Break, the console closed)
+    raises ``Terminated`` (a KeyboardInterrupt) in the main thread, so every command
+    cleans up after it as after Ctrl-C."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
-    def on_sigterm(signum: int, frame: FrameType | None) -> None:
-        raise Terminated
+    def on_stop(signum: int, frame: FrameType | None) -> None:
+        raise terminated(signum)
 
-    previous = signal.signal(signal.SIGTERM, on_sigterm)
+    previous = {signum: signal.signal(signum, on_stop) for signum in STOP_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 @contextlib.contextmanager
 def interrupts_deferred() -> Iterator[None]:
-    """Ctrl-C and SIGTERM inside the block take effect when it ends, so a short step such
-    as creating an output file and keeping a handle on it is never cut in the middle."""
+    """Ctrl-C and the stop signals inside the block take effect when it ends, so a short
+    step such as creating an output file and keeping a handle on it is never cut in the
+    middle."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -106,7 +132,7 @@ def interrupts_deferred() -> Iterator[None]:
     def hold(signum: int, frame: FrameType | None) -> None:
         pending.append(signum)
 
-    signals = (signal.SIGINT, signal.SIGTERM)
+    signals = (int(signal.SIGINT), *STOP_SIGNALS)
     previous = {signum: signal.signal(signum, hold) for signum in signals}
     try:
         yield
@@ -114,9 +140,10 @@ def interrupts_deferred() -> Iterator[None]:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     if pending:
-        raise Terminated if pending[0] == signal.SIGTERM else KeyboardInterrupt
+        raise terminated(pending[0]) if pending[0] in STOP_SIGNALS else KeyboardInterrupt
 
 
 def interrupt_name(exc: BaseException) -> str:
-    """``SIGTERM`` for a Terminated, ``Ctrl-C`` for any other KeyboardInterrupt."""
+    """``SIGTERM`` (``Ctrl-Break``) for a Terminated, ``Ctrl-C`` for any other
+    KeyboardInterrupt."""
     return exc.signal_name if isinstance(exc, Terminated) else "Ctrl-C"

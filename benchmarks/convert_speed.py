@@ -114,7 +114,7 @@ def make_frames(count: int, *, gimbal_only: bool = False) -> list[CanFrame]:
 
 
 def write_candump(frames: list[CanFrame], path: Path) -> None:
-    with open(path, "w") as f:
+    with open(path, "w", encoding="utf-8") as f:
         for fr in frames:
             ident = f"{fr.can_id:08X}" if fr.extended else f"{fr.can_id:03X}"
             f.write(f"({fr.time:.6f}) {fr.channel} {ident}#{fr.data.hex().upper()}\n")

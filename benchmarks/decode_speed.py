@@ -255,7 +255,7 @@ PROTOCOL_ID_TEXTS = frozenset(
 def write_log(path: Path, frames: int, mix: str = "busy") -> dict[str, int]:
     """Write the log batch by batch (memory stays small); count the protocol frames."""
     written = protocol = 0
-    with path.open("w") as f:
+    with path.open("w", encoding="utf-8") as f:
         for batch in MIXES[mix](frames):
             f.write("\n".join(batch) + "\n")
             written += len(batch)

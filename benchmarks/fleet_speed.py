@@ -84,7 +84,7 @@ def make_recordings(folder: Path, count: int, seconds: float) -> list[Path]:
         frames, _ = run_offline(script(rng, seconds), seconds, config, start=start)
         log = work / f"flight-{n:03d}.log"
         lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-        log.write_text("\n".join(lines) + "\n")
+        log.write_text("\n".join(lines) + "\n", encoding="utf-8")
         recording = folder / "flights" / f"flight-{n:03d}.mcap"
         recording.parent.mkdir(exist_ok=True)
         assert cli(["convert", str(log), "-o", str(recording), "-q"]) == 0

@@ -24,7 +24,7 @@ class LiveClient:
     def __init__(self, url: str) -> None:
         script = Path(__file__)
         self.proc = subprocess.Popen(
-            [sys.executable, str(script), url], stdout=subprocess.PIPE, text=True
+            [sys.executable, str(script), url], stdout=subprocess.PIPE, text=True, encoding="utf-8"
         )
         assert self.proc.stdout is not None
         line = self.proc.stdout.readline()  # "subscribed N": every channel is advertised

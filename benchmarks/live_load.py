@@ -148,7 +148,7 @@ def native_threads_cpu(prefix: str) -> dict[int, float]:
         return out
     for tid in tasks:
         try:
-            with open(f"/proc/self/task/{tid}/stat") as stat:
+            with open(f"/proc/self/task/{tid}/stat", encoding="utf-8") as stat:
                 fields = stat.read()
         except OSError:
             continue
@@ -328,7 +328,7 @@ def convert_report(frames: int) -> list[str]:
     if not path.exists():
         return ["convert throughput: not measured (benchmarks/convert_speed.py is missing)"]
     command = [sys.executable, str(path), "--frames", str(frames), "--repeat", "1"]
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    done = subprocess.run(command, capture_output=True, text=True, check=False, encoding="utf-8")
     lines = ["== convert throughput (benchmarks/convert_speed.py)"]
     lines += (done.stdout + done.stderr).rstrip().splitlines()
     return lines

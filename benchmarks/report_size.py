@@ -68,7 +68,7 @@ def drawn_ms(page: Path, profile: Path) -> int:
         done = subprocess.run(
             [chromium, "--headless", "--no-sandbox", "--disable-gpu",
              f"--user-data-dir={profile}", "--dump-dom", page.as_uri()],
-            capture_output=True, text=True, timeout=300,
+            capture_output=True, text=True, timeout=300, encoding="utf-8",
         )  # fmt: skip
         found = re.search(r'data-drawn-ms="(\d+)"', done.stdout)
         if not found:

@@ -44,7 +44,12 @@ TICKS = os.sysconf("SC_CLK_TCK")
 def thread_cpu_s(tid: int) -> float:
     """User + system CPU seconds of one thread of this process."""
     try:
-        fields = Path(f"/proc/self/task/{tid}/stat").read_text().rsplit(")", 1)[1].split()
+        fields = (
+            Path(f"/proc/self/task/{tid}/stat")
+            .read_text(encoding="utf-8")
+            .rsplit(")", 1)[1]
+            .split()
+        )
     except OSError:
         return 0.0
     return (int(fields[11]) + int(fields[12])) / TICKS
@@ -59,7 +64,7 @@ def start_camera(
             "--fps", str(fps), "--bitrate", str(bitrate), "--gop", str(fps), "--pattern", pattern,
         ],
         stdout=subprocess.PIPE,
-        text=True,
+        text=True, encoding="utf-8",
     )  # fmt: skip
     assert camera.stdout is not None
     line = camera.stdout.readline()

@@ -87,17 +87,17 @@ def write_corpus(folder: Path) -> dict[str, Path]:
     for flight in FLIGHTS:
         frames, _ = run_offline(FLEET_SCRIPT, FLEET_SECONDS, flight.config, start=flight.start)
         path = folder / f"fleet-{flight.name}"
-        path.write_text(candump_text(frames))
+        path.write_text(candump_text(frames), encoding="utf-8")
         made[path.name] = path
     for name, config in SESSIONS.items():
         frames, _ = run_offline(DEMO_SCRIPT, SESSION_SECONDS, config, start=START)
         path = folder / name
-        path.write_text(candump_text(frames))
+        path.write_text(candump_text(frames), encoding="utf-8")
         made[name] = path
     for name, config in STICK_SESSIONS.items():
         frames, _ = run_offline(pilot_script(), SESSION_SECONDS, config, start=START)
         path = folder / name
-        path.write_text(candump_text(frames))
+        path.write_text(candump_text(frames), encoding="utf-8")
         made[name] = path
     # The sample's frames as other tools write them (ArduPilot DataFlash with GPS,
     # tcpdump -i any, SavvyCAN): the same findings must come out of every format.
@@ -106,9 +106,9 @@ def write_corpus(folder: Path) -> dict[str, Path]:
     made["sample-dataflash.bin"].write_bytes(ardupilot_log(frames, frames[0].time - 10)[0])
     made["sample-sll2.pcap"] = sll_pcap(folder / "sample-sll2.pcap", frames, 276)
     made["sample-savvycan.csv"] = folder / "sample-savvycan.csv"
-    made["sample-savvycan.csv"].write_text(savvycan_csv(frames))
+    made["sample-savvycan.csv"].write_text(savvycan_csv(frames), encoding="utf-8")
     dense = folder / "dense-mix.log"
-    with dense.open("w") as f:
+    with dense.open("w", encoding="utf-8") as f:
         for batch in _decode_speed().dense_lines(DENSE_FRAMES):
             f.write("\n".join(batch) + "\n")
     made[dense.name] = dense

@@ -54,6 +54,7 @@ def start_camera(*options: str) -> RtspCamera:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        encoding="utf-8",
     )
     assert process.stdout is not None
     line = process.stdout.readline()

@@ -288,7 +288,7 @@ def stream_bytes(seed: int = 23) -> bytes:
 def write_fault_logs(folder: Path) -> list[Path]:
     """Write both files into ``folder``; returns their paths."""
     candump = folder / CANDUMP_NAME
-    candump.write_text("\n".join(candump_lines()) + "\n")
+    candump.write_text("\n".join(candump_lines()) + "\n", encoding="utf-8")
     stream = folder / STREAM_NAME
     stream.write_bytes(stream_bytes())
     return [candump, stream]

@@ -67,7 +67,7 @@ UNREADABLE = "b-cut.pcap"  # a pcap file cut off inside its header: no capture a
 
 def candump(path: Path, frames: list[CanFrame]) -> Path:
     lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 

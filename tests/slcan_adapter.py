@@ -15,13 +15,10 @@ kept in ``commands``, over every plug.
 
 from __future__ import annotations
 
-import fcntl
 import os
 import struct
-import termios
 import threading
 import time
-import tty
 from pathlib import Path
 
 OK = b"\r"
@@ -65,6 +62,8 @@ class PtyDevice:
         """A new pty behind the link (a new ttyACMn, the same by-id name)."""
         assert not self.plugged, "already plugged in"
         self.master, self.slave = os.openpty()
+        import tty  # POSIX only: imported when a device is plugged
+
         tty.setraw(self.slave)  # no echo, no CR/LF translation, as a USB CDC-ACM port
         self.link.parent.mkdir(parents=True, exist_ok=True)
         self.link.symlink_to(os.ttyname(self.slave))
@@ -97,6 +96,9 @@ class PtyDevice:
         """Bytes written to the host that the host has not read yet."""
         if not self.plugged:
             return 0
+        import fcntl
+        import termios
+
         raw = fcntl.ioctl(self.slave, termios.FIONREAD, struct.pack("i", 0))
         return int(struct.unpack("i", raw)[0])
 

@@ -26,7 +26,11 @@ from analyzer.mcapio.read.reader import read_replay
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk
 from tests.mcap_doctor import examine
+from tests.platforms import posix_signals, pseudo_terminals
 from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
+
+# A simulated USB adapter is a pseudo-terminal; the recorder is stopped with SIGINT / SIGTERM.
+pytestmark = [pseudo_terminals, posix_signals]
 
 ROOT = Path(__file__).resolve().parent.parent
 DEADLINE_S = 20.0
@@ -53,6 +57,7 @@ class Recorder:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
+            encoding="utf-8",
         )
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -303,6 +308,7 @@ def test_an_adapter_that_is_not_there_fails_at_start(tmp_path: Path) -> None:
             capture_output=True,
             text=True,
             timeout=60,
+            encoding="utf-8",
         )
         assert proc.returncode == 1, proc.stderr
         lines = proc.stderr.splitlines()

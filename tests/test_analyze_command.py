@@ -21,7 +21,9 @@ from analyzer.sim.ground import Step
 from analyzer.sim.offline import run_offline, run_offline_stream
 
 ROOT = Path(__file__).resolve().parent.parent
-SCHEMA = json.loads((ROOT / "schemas" / "analysis.response.schema.json").read_text())
+SCHEMA = json.loads(
+    (ROOT / "schemas" / "analysis.response.schema.json").read_text(encoding="utf-8")
+)
 START = 1_700_000_000.0
 
 
@@ -33,7 +35,7 @@ def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
 
 def candump(path: Path, frames: list[CanFrame]) -> Path:
     lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 

@@ -9,6 +9,7 @@ import json
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -77,7 +78,7 @@ def test_every_public_name_is_documented_with_an_example() -> None:
         value = getattr(analyzer, name)
         where = "analyzer.api.commands" if name == "COMMANDS" else f"{value.__module__}.{name}"
         assert where in with_examples, f"{name}: no docstring example"
-    text = DOCS.read_text()
+    text = DOCS.read_text(encoding="utf-8")
     assert [n for n in PUBLIC if f"`{n}`" not in text] == []
 
 
@@ -100,6 +101,7 @@ def loaded_after(statement: str) -> list[str]:
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
         check=True,
+        encoding="utf-8",
     )
     return list(json.loads(done.stdout))
 
@@ -115,7 +117,10 @@ def test_importing_the_package_loads_nothing_else() -> None:
 @pytest.fixture
 def in_samples_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """A working folder where ``samples/`` is the source tree's, as the examples assume."""
-    (tmp_path / "samples").symlink_to(ROOT / "samples")
+    try:
+        (tmp_path / "samples").symlink_to(ROOT / "samples")
+    except OSError:  # Windows without developer mode: a copy does as well
+        shutil.copytree(ROOT / "samples", tmp_path / "samples")
     monkeypatch.chdir(tmp_path)
     return tmp_path
 
@@ -133,7 +138,7 @@ def test_the_examples_of_the_python_api_page_run(
     block in order, sharing one namespace, as a reader pasting them would."""
     from analyzer.cli import main
 
-    text = DOCS.read_text()
+    text = DOCS.read_text(encoding="utf-8")
     commands = re.findall(r"^    (gimbal-analyzer .*)$", text, re.M)
     assert commands == ["gimbal-analyzer convert samples/flight-candump.log -o flight.mcap"]
     for line in commands:
@@ -154,7 +159,7 @@ def test_the_examples_of_the_python_api_page_run(
 
 
 def test_the_readme_points_to_the_python_api_page() -> None:
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
     assert "(docs/howto/python-api.md)" in readme
 
 
@@ -166,7 +171,7 @@ def mypy_strict(script: Path, tmp_path: Path) -> subprocess.CompletedProcess[str
     project configuration, the package's own modules followed but not themselves judged,
     as for an installed package."""
     config = tmp_path / "mypy.ini"
-    config.write_text("[mypy]\n")
+    config.write_text("[mypy]\n", encoding="utf-8")
     return subprocess.run(
         [sys.executable, "-m", "mypy", "--strict", "--config-file", str(config),
          "--follow-imports=silent", "--cache-dir", str(tmp_path / "cache"), str(script)],
@@ -174,7 +179,7 @@ def mypy_strict(script: Path, tmp_path: Path) -> subprocess.CompletedProcess[str
         text=True,
         timeout=300,
         cwd=tmp_path,
-        env={**os.environ, "MYPYPATH": str(ROOT)},
+        env={**os.environ, "MYPYPATH": str(ROOT)}, encoding="utf-8",
     )  # fmt: skip
 
 
@@ -197,7 +202,7 @@ def test_a_users_script_passes_mypy_strict_and_its_mistakes_do_not(tmp_path: Pat
     assert "Success: no issues found in 1 source file" in done.stdout
     # The same mypy sees this tree's real signatures: each mistake is named.
     wrong = tmp_path / "wrong.py"
-    wrong.write_text(WRONG)
+    wrong.write_text(WRONG, encoding="utf-8")
     done = mypy_strict(wrong, tmp_path)
     errors = [
         line.split(": error: ")[1] for line in done.stdout.splitlines() if ": error: " in line

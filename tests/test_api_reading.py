@@ -62,7 +62,7 @@ def test_read_streams_and_takes_a_format(inputs: dict[str, Path]) -> None:
 def test_read_errors(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError, match="no such file"):
         read(tmp_path / "missing.log")
-    (tmp_path / "notes.txt").write_text("nothing to decode here\n")
+    (tmp_path / "notes.txt").write_text("nothing to decode here\n", encoding="utf-8")
     with pytest.raises(ValueError, match="cannot tell the format of"):
         read(tmp_path / "notes.txt")
     with pytest.raises(ValueError, match="unknown format 'xls'; valid: candump"):

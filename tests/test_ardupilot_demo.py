@@ -26,18 +26,20 @@ def test_export_writes_the_driver_and_its_page_and_replaces_neither_unasked(
 ) -> None:
     driver = tmp_path / DRIVER_NAME
     assert main(["export", "ardupilot", "-o", str(driver)]) == 0
-    assert driver.read_text() == lua_text()
+    assert driver.read_text(encoding="utf-8") == lua_text()
     page = driver.with_suffix(".md")
-    assert page.read_text() == markdown_text()
-    assert "VSH_CAN_DRV" in page.read_text() and "MNT1_TYPE | 9" in page.read_text()
+    assert page.read_text(encoding="utf-8") == markdown_text()
+    assert "VSH_CAN_DRV" in page.read_text(encoding="utf-8") and "MNT1_TYPE | 9" in page.read_text(
+        encoding="utf-8"
+    )
     assert main(["export", "ardupilot", "-o", str(driver)]) == 2
     assert "use --force" in capsys.readouterr().err
     assert main(["export", "ardupilot", "-o", str(driver), "--check"]) == 0
-    page.write_text("edited")
+    page.write_text("edited", encoding="utf-8")
     assert main(["export", "ardupilot", "-o", str(driver), "--check"]) == 1
     assert "out of date" in capsys.readouterr().out
     assert main(["export", "ardupilot", "-o", str(driver), "--force"]) == 0
-    assert page.read_text() == markdown_text()
+    assert page.read_text(encoding="utf-8") == markdown_text()
 
 
 def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_obeyed(
@@ -46,7 +48,7 @@ def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_ob
     from analyzer.mcapio.read.reader import Recording, read_events
 
     driver = tmp_path / DRIVER_NAME
-    driver.write_text(lua_text())
+    driver.write_text(lua_text(), encoding="utf-8")
     path = tmp_path / "ardupilot.mcap"
     args = ["demo", "--no-tui", "--clean", "--duration", "7", "-o", str(path)]
     assert main([*args, "--ardupilot", str(driver)]) == 0
@@ -148,7 +150,7 @@ def test_demo_ardupilot_refuses_a_driver_that_does_not_compile_and_stops_on_a_sc
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     broken = tmp_path / "broken.lua"
-    broken.write_text("local = 1\n")
+    broken.write_text("local = 1\n", encoding="utf-8")
     path = tmp_path / "x.mcap"
     assert main(["demo", "--no-tui", "-o", str(path), "--ardupilot", str(broken)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -158,7 +160,9 @@ def test_demo_ardupilot_refuses_a_driver_that_does_not_compile_and_stops_on_a_sc
     ]
     assert not path.exists()
     failing = tmp_path / "failing.lua"
-    failing.write_text("function update()\n  mount:get_rate_target()\nend\nreturn update, 100\n")
+    failing.write_text(
+        "function update()\n  mount:get_rate_target()\nend\nreturn update, 100\n", encoding="utf-8"
+    )
     code = main(
         ["demo", "--no-tui", "--duration", "2", "-o", str(path), "--ardupilot", str(failing)]
     )

@@ -210,7 +210,7 @@ def test_the_report_shows_each_camera_finding_with_its_two_frames(tmp_path: Path
     path = record(tmp_path / "seen.mcap", steps, 7.0, streams=("main", "thermal"))
     page = tmp_path / "seen.html"
     cli_output("report", str(path), "-o", str(page), "-q")
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     section = text.split('<h2 id="camera-judged">')[1].split("<h2>")[0]
     rows = section.split('<div class="judged">')[1]
     assert rows.count("<img") == 4  # before and after, for each of the two commands

@@ -31,6 +31,7 @@ def simulated_camera(gimbal_port: int) -> Iterator[int]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        encoding="utf-8",
     )
     try:
         assert process.stdout is not None
@@ -59,7 +60,7 @@ def check(gimbal_port: int, camera_port: int, out: Path) -> dict[str, Any]:
             "--steps", "zoom", "--video", "main", "--camera", f"127.0.0.1:{camera_port}",
             "--json", "-o", str(out),
         ],
-        env=_env(), capture_output=True, text=True, timeout=90,
+        env=_env(), capture_output=True, text=True, timeout=90, encoding="utf-8",
     )  # fmt: skip
     steps = [json.loads(line) for line in done.stdout.splitlines()]
     assert [s["step"] for s in steps] == ["zoom"], done.stderr

@@ -21,6 +21,7 @@ from analyzer.cli import main
 from analyzer.inputs.python_can.reader import frame_from_message
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.types import TOPIC_CAN_BUS_STATE, TOPIC_DIAGNOSTICS
+from tests.platforms import linux
 
 CAN_ERR_FLAG = 0x20000000
 T0 = 1700000000.0
@@ -45,7 +46,7 @@ def candump_log(path: Path, frames: list[tuple[int, str]] = ISSUE_FRAMES) -> Pat
         f"({T0 + i * 0.1:.6f}) can0 {CAN_ERR_FLAG | can_id:08X}#{data}\n"
         for i, (can_id, data) in enumerate(frames)
     ]
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     return path
 
 
@@ -127,7 +128,7 @@ def test_many_stuff_errors_among_data_frames_mean_bitrate_or_termination(
     path = tmp_path / "noisy.log"
     lines = [f"({T0 + i * 0.01:.6f}) can0 00000F01#0F04000000000000\n" for i in range(5)]
     lines += [f"({T0 + 1 + i * 0.01:.6f}) can0 20000088#0000020a00000000\n" for i in range(12)]
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     _, err = decoded(path, capsys)
     assert "12 stuff / form / bit errors: the bitrate or the termination is wrong" in err
 
@@ -136,7 +137,7 @@ def test_malformed_error_frame_is_a_diagnostic_with_its_bytes(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "bad.log"
-    path.write_text(f"({T0:.6f}) can0 20000C04#0010\n")
+    path.write_text(f"({T0:.6f}) can0 20000C04#0010\n", encoding="utf-8")
     events, _ = decoded(path, capsys)
     (error,) = bus_errors(events)
     assert error["raw"] == "00 10"
@@ -158,6 +159,7 @@ def test_socketcan_pcap(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert [e["error"] for e in bus_errors(events)] == ISSUE_TEXTS
 
 
+@linux
 def test_live_socketcan_through_python_can(tmp_path: Path) -> None:
     """python-can's socketcan receive code (``capture_message``) on the bytes a CAN_RAW
     socket delivers (struct can_frame plus its SO_TIMESTAMPNS), then the decoder."""
@@ -211,7 +213,7 @@ def test_asc_error_frames_written_by_python_can(
     with can.ASCWriter(str(path)) as writer:
         for message in messages():
             writer.on_message_received(message)
-    assert path.read_text().count("ErrorFrame") == 4
+    assert path.read_text(encoding="utf-8").count("ErrorFrame") == 4
     events, err = decoded(path, capsys)
     errors = bus_errors(events)
     assert [e["error"] for e in errors] == ["unspecified"] * 4
@@ -224,7 +226,7 @@ def test_report_names_the_worst_state_and_what_to_do(
 ) -> None:
     out = tmp_path / "report.html"
     assert main(["report", str(candump_log(tmp_path / "bus.log")), "-o", str(out)]) == 0
-    page = out.read_text()
+    page = out.read_text(encoding="utf-8")
     assert "worst bus-off at 2023-11-14 22:13:20.200Z on can0" in page
     assert "nothing on the bus acknowledges the frames sent" in page
     assert "received only error frames (4)" in page

@@ -33,6 +33,7 @@ from analyzer.protocol.types import (
 )
 from analyzer.sources import open_source
 from analyzer.tally import CAN_BITS_EXTENDED
+from tests.platforms import posix_signals
 
 DEADLINE_S = 5.0
 
@@ -311,6 +312,7 @@ def test_bus_load_estimate() -> None:
     assert bits == pytest.approx(131)
 
 
+@posix_signals
 def test_run_until_interrupted_stops_cleanly_on_sigterm() -> None:
     sink = ListSink()
     capture = Capture(ScriptedSource([], ends=False), [sink])

@@ -29,10 +29,10 @@ def written(fmt: str, folder: Path) -> Path:
     """The frames in ``fmt`` as the real tool writes it."""
     if fmt == "candump":
         path = folder / "flight.log"
-        path.write_text(candump(FRAMES))
+        path.write_text(candump(FRAMES), encoding="utf-8")
     elif fmt == "savvycan":
         path = folder / "flight.csv"
-        path.write_text(savvycan_csv(FRAMES))
+        path.write_text(savvycan_csv(FRAMES), encoding="utf-8")
     else:
         path = python_can_log(folder / f"flight.{fmt}", FRAMES)
     return path
@@ -51,10 +51,10 @@ def first_frame_line(lines: list[str], fmt: str) -> int:
 
 def cut_at_start(path: Path, fmt: str) -> Path:
     """The first frame's line cut in the middle, as a log copied from its middle is."""
-    lines = path.read_text().splitlines(keepends=True)
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     n = first_frame_line(lines, fmt)
     lines[n] = lines[n][len(lines[n]) // 2 :]
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     return path
 
 
@@ -84,7 +84,9 @@ def test_a_log_cut_at_its_start_is_dated_by_its_first_frame(fmt: str, tmp_path: 
 
 def test_a_header_line_before_a_candump_log(tmp_path: Path) -> None:
     path = tmp_path / "flight.log"
-    path.write_text("# candump -L can0, started by the logger\n" + candump(FRAMES))
+    path.write_text(
+        "# candump -L can0, started by the logger\n" + candump(FRAMES), encoding="utf-8"
+    )
     (note, first) = events(path)[:2]
     assert note["kind"] == BAD_LINE and note["time"] == first["time"] == pytest.approx(FIRST)
 
@@ -94,7 +96,7 @@ def test_a_damaged_timestamp_that_still_parses_is_kept_as_a_diagnostic(tmp_path:
     lines[10] = "(0000000001" + lines[10][11:]  # leading digits lost: 1970
     lines[0] = "(0715680800" + lines[0][11:]  # a flipped digit: 1992
     path = tmp_path / "flight.log"
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     found = events(path)
     bad = [e for e in found if e.get("kind") == "bad_frame"]
     assert [e["stated_time"] for e in bad] == [

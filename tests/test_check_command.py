@@ -38,6 +38,7 @@ from analyzer.protocol.types import Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.runner import SimulatorRunner
 from analyzer.sim.transports import Link, TcpServerLink, open_gimbal_link, parse_link
+from tests.platforms import posix_signals
 from tests.test_report_command import load
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -151,7 +152,12 @@ def start_check(gimbal: Gimbal, output: Path, *options: str) -> Run:
     command += ["-o", str(output), *FAST, *options]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        encoding="utf-8",
     )
     return Run(gimbal, output, process)
 
@@ -332,7 +338,7 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     # `report` of the recording later shows the same steps on top.
     later = tmp_path / "later.html"
     assert main(["report", str(output), "-o", str(later)]) == 0
-    text = later.read_text()
+    text = later.read_text(encoding="utf-8")
     assert text.index('id="check-steps"') < text.index("<h2>Overview</h2>")
     assert text.count('class="v st-pass"') == 9
 
@@ -411,6 +417,7 @@ def test_steps_in_a_feedback_silence_fail_as_no_feedback(tcp_runs: dict[str, Run
     assert steps["look_down"]["verdict"] == "pass"
 
 
+@posix_signals
 def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
     gimbal = Gimbal("tcp:127.0.0.1:0")
     run = start_check(

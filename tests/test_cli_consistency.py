@@ -16,6 +16,7 @@ import pytest
 
 from analyzer.cli import COMMANDS, build_parser, main
 from analyzer.errors import EXIT_CODES, EXIT_INTERRUPTED, EXIT_USAGE, UsageError
+from tests.platforms import posix_signals
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -25,7 +26,7 @@ CANDUMP_LINE = "(1715680800.010000) can0 030F0000#0F01000000000000\n"
 def test_the_manual_makes_its_exit_code_table_from_the_code() -> None:
     """The manual's table is generated from EXIT_CODES when it is built (tests/test_manual.py
     checks the built page), so it has no copy of its own to go stale."""
-    text = (ROOT / "docs" / "reference" / "exit-codes.md").read_text()
+    text = (ROOT / "docs" / "reference" / "exit-codes.md").read_text(encoding="utf-8")
     assert "```{gimbal-exit-codes}" in text
     assert not re.search(r"^\| \d+ \|", text, re.MULTILINE)
 
@@ -42,14 +43,19 @@ def test_help_shows_the_exit_code_table(capsys: pytest.CaptureFixture[str]) -> N
 
 def test_a_command_loads_only_its_own_module(tmp_path: Path) -> None:
     log = tmp_path / "x.log"
-    log.write_text(CANDUMP_LINE)
+    log.write_text(CANDUMP_LINE, encoding="utf-8")
     code = (
         "import sys; from analyzer.cli import main; "
         f"main(['--local-time', 'decode', '--summary', {str(log)!r}]); "
         "print(sorted(m for m in sys.modules if m.startswith('analyzer.commands.')))"
     )
     proc = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=ENV, check=True
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        check=True,
+        encoding="utf-8",
     )
     assert proc.stdout.splitlines()[-1] == "['analyzer.commands.decode']"
 
@@ -68,7 +74,7 @@ def test_unreadable_mcap_input_is_exit_2_in_every_command(
     empty = tmp_path / "empty.mcap"
     empty.write_bytes(b"")
     not_mcap = tmp_path / "text.mcap"
-    not_mcap.write_text("hello\n")
+    not_mcap.write_text("hello\n", encoding="utf-8")
     for path in (empty, not_mcap):
         for args in (
             ["info", str(path)],
@@ -82,6 +88,7 @@ def test_unreadable_mcap_input_is_exit_2_in_every_command(
     assert not (tmp_path / "out.mcap").exists()
 
 
+@posix_signals
 def test_sigterm_during_convert_removes_the_partial_output_and_says_so(tmp_path: Path) -> None:
     out = tmp_path / "out.mcap"
     proc = subprocess.Popen(
@@ -194,6 +201,7 @@ def test_a_live_record_that_received_nothing_is_exit_1(
     assert not Recording(out).recovered  # finished all the same, with its link diagnostics
 
 
+@posix_signals
 def test_a_signal_during_a_critical_step_takes_effect_after_it() -> None:
     from analyzer.errors import Terminated
     from analyzer.stdio import interrupts_deferred

@@ -20,7 +20,7 @@ needs_dev_full = pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no 
 
 
 def run_to_dev_full(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    with open("/dev/full", "w") as full:
+    with open("/dev/full", "w", encoding="utf-8") as full:
         return subprocess.run(
             [sys.executable, "-m", "analyzer", *args],
             stdout=full,
@@ -29,6 +29,7 @@ def run_to_dev_full(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
             cwd=cwd,
             env=ENV,
             timeout=60,
+            encoding="utf-8",
         )
 
 

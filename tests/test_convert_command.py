@@ -21,7 +21,7 @@ if not hasattr(inputs, "open_input"):
 
 def _candump(path: Path) -> list[CanFrame]:
     frames = [i for i in traffic(3.0) if isinstance(i, CanFrame)]
-    with open(path, "w") as f:
+    with open(path, "w", encoding="utf-8") as f:
         for fr in frames:
             ident = f"{fr.can_id:08X}" if fr.extended else f"{fr.can_id:03X}"
             f.write(f"({fr.time:.6f}) {fr.channel} {ident}#{fr.data.hex().upper()}\n")

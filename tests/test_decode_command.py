@@ -36,7 +36,7 @@ def log_file(tmp_path: Path, extra: list[str] | None = None) -> Path:
     lines += [f"({T0 + 0.5 + i / 1000:.6f}) can0 030F0001#{s.hex()}" for i, s in enumerate(att)]
     lines += extra or []
     path = tmp_path / "flight.log"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 
@@ -158,7 +158,7 @@ def test_errors_are_one_line_and_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], words: str
 ) -> None:
     notes = tmp_path / "notes.txt"
-    notes.write_text("not a capture\n")
+    notes.write_text("not a capture\n", encoding="utf-8")
     values = {"dir": str(tmp_path), "file": str(log_file(tmp_path)), "notes": str(notes)}
     code, out, err = run(capsys, *[a.format(**values) for a in args])
     assert code == 2 and out == ""
@@ -177,7 +177,7 @@ def test_stream_dump_with_format_option(tmp_path: Path, capsys: pytest.CaptureFi
 
 def test_stdin(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     line = f"(1.0) can0 00000F01#{encode_command('look_down').hex()}\n"
-    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(line.encode())))
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(line.encode()), encoding="utf-8"))
     code, out, _ = run(capsys, "-", "--json")
     assert code == 0 and json.loads(out)["name"] == "look_down"
 
@@ -285,7 +285,7 @@ def test_ctrl_c_on_live_input_still_prints_the_summary(
                 return self.lines.pop()
             raise KeyboardInterrupt
 
-    fake = io.TextIOWrapper(io.BufferedReader(Interrupting()))
+    fake = io.TextIOWrapper(io.BufferedReader(Interrupting()), encoding="utf-8")
     fake.buffer.readline = fake.buffer.raw.readline  # type: ignore[method-assign]
     monkeypatch.setattr(sys, "stdin", fake)
     code, out, _ = run(capsys, "-", "--summary")
@@ -308,7 +308,9 @@ def test_a_log_without_protocol_frames_says_so(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "other-bus.log"
-    path.write_text(f"({T0:.6f}) can0 18FEF100#0011\n({T0 + 1:.6f}) can0 123#01\n")
+    path.write_text(
+        f"({T0:.6f}) can0 18FEF100#0011\n({T0 + 1:.6f}) can0 123#01\n", encoding="utf-8"
+    )
     assert main(["decode", str(path)]) == 0
     err = capsys.readouterr().err
     assert "none of the 2 CAN frames uses a protocol ID" in err

@@ -36,7 +36,10 @@ needs_rlimit = pytest.mark.skipif(
 
 
 def _candump(path: Path, lines: int) -> None:
-    path.write_text("".join(f"({T0 + n * 0.002:.6f}) can0 0F01#{FEEDBACK}\n" for n in range(lines)))
+    path.write_text(
+        "".join(f"({T0 + n * 0.002:.6f}) can0 0F01#{FEEDBACK}\n" for n in range(lines)),
+        encoding="utf-8",
+    )
 
 
 def _run_limited(args: list[str], limit: int, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -55,6 +58,7 @@ def _run_limited(args: list[str], limit: int, cwd: Path) -> subprocess.Completed
         text=True,
         timeout=120,
         preexec_fn=limit_size,
+        encoding="utf-8",
     )
 
 

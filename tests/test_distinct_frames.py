@@ -84,7 +84,7 @@ def test_every_distinct_frame_decodes_to_what_was_sent(
 ) -> None:
     lines, sent = flight()
     path = tmp_path / "distinct.log"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     assert main(["decode", str(path), "--json"]) == 0
     events = [json.loads(text) for text in capsys.readouterr().out.splitlines()]
     assert [e["topic"] for e in events] == [topic for topic, _ in sent]

@@ -204,16 +204,20 @@ def test_random_uav_frames_decode_alike(can_id: int, data: bytes) -> None:
 def test_export_command_writes_checks_and_refuses_to_overwrite(tmp_path: Path) -> None:
     out = tmp_path / "gimbal.dbc"
     cmd = [sys.executable, "-c", "import sys; from analyzer.cli import main; sys.exit(main())"]
-    run = subprocess.run([*cmd, "export", "dbc", "-o", str(out)], capture_output=True, text=True)
+    run = subprocess.run(
+        [*cmd, "export", "dbc", "-o", str(out)], capture_output=True, text=True, encoding="utf-8"
+    )
     assert run.returncode == 0, run.stderr
-    assert out.read_text() == dbc_text()
-    again = subprocess.run([*cmd, "export", "dbc", "-o", str(out)], capture_output=True, text=True)
+    assert out.read_text(encoding="utf-8") == dbc_text()
+    again = subprocess.run(
+        [*cmd, "export", "dbc", "-o", str(out)], capture_output=True, text=True, encoding="utf-8"
+    )
     assert again.returncode == 2 and "--force" in again.stderr
-    out.write_text("stale")
+    out.write_text("stale", encoding="utf-8")
     check = [*cmd, "export", "dbc", "-o", str(out), "--check"]
-    stale = subprocess.run(check, capture_output=True, text=True)
+    stale = subprocess.run(check, capture_output=True, text=True, encoding="utf-8")
     assert stale.returncode == 1 and "out of date" in stale.stdout
     forced = [*cmd, "export", "dbc", "-o", str(out), "--force"]
-    assert subprocess.run(forced, capture_output=True, text=True).returncode == 0
-    assert subprocess.run(check, capture_output=True, text=True).returncode == 0
+    assert subprocess.run(forced, capture_output=True, text=True, encoding="utf-8").returncode == 0
+    assert subprocess.run(check, capture_output=True, text=True, encoding="utf-8").returncode == 0
     assert list(tmp_path.iterdir()) == [out]  # no temporary file left behind

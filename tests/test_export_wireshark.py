@@ -49,7 +49,7 @@ Item = tuple[Any, ...]
 @pytest.fixture(scope="module")
 def lua(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("lua") / "gimbal.lua"
-    path.write_text(lua_text())
+    path.write_text(lua_text(), encoding="utf-8")
     return path
 
 
@@ -74,7 +74,9 @@ def _flatten(tree: Any, out: dict[str, list[Any]]) -> None:
 def tshark_json(lua: Path, pcap: Path) -> list[dict[str, Any]]:
     assert TSHARK is not None, "tshark is not installed (Debian package tshark)"
     cmd = [TSHARK, "-n", "-X", f"lua_script:{lua}", "-r", str(pcap), "-T", "json"]
-    run = subprocess.run([*cmd, "--no-duplicate-keys"], capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [*cmd, "--no-duplicate-keys"], capture_output=True, text=True, timeout=120, encoding="utf-8"
+    )
     assert run.returncode == 0, run.stderr
     assert "Lua" not in run.stderr, run.stderr
     assert "Lua Error" not in run.stdout, "the dissector failed on some frame"
@@ -212,7 +214,11 @@ def compare(
             if item is not None:
                 theirs.append((time, pdu["gimbal.direction"][0], item))
     run = subprocess.run(
-        [*CLI, "decode", "--json", str(pcap)], capture_output=True, text=True, timeout=120
+        [*CLI, "decode", "--json", str(pcap)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        encoding="utf-8",
     )
     assert run.returncode == 0, run.stderr
     ours: list[tuple[float, str, Item]] = []
@@ -244,7 +250,7 @@ def test_sample_capture_shows_what_decode_gives(lua: Path) -> None:
 def _labels_and_units(lua: Path, pcap: Path) -> str:
     assert TSHARK is not None
     cmd = [TSHARK, "-n", "-X", f"lua_script:{lua}", "-r", str(pcap), "-V", "-O", "gimbal"]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=120).stdout
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, encoding="utf-8").stdout
 
 
 def test_values_are_shown_with_units_and_labels(lua: Path) -> None:
@@ -439,19 +445,28 @@ def test_random_streams_show_what_decode_gives(lua: Path, tmp_path: Path, seed: 
 def test_export_command_writes_the_dissector(tmp_path: Path) -> None:
     out = tmp_path / "gimbal.lua"
     run = subprocess.run(
-        [*CLI, "export", "wireshark", "-o", str(out)], capture_output=True, text=True
+        [*CLI, "export", "wireshark", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
     )
     assert run.returncode == 0, run.stderr
-    assert out.read_text() == lua_text()
+    assert out.read_text(encoding="utf-8") == lua_text()
 
 
 def test_the_port_is_a_preference(lua: Path, tmp_path: Path) -> None:
     moved = _split_capture(tmp_path / "moved.pcap", [200], port=3000)
     assert TSHARK is not None
     base = [TSHARK, "-n", "-X", f"lua_script:{lua}", "-r", str(moved)]
-    default = subprocess.run(base, capture_output=True, text=True, timeout=60).stdout
+    default = subprocess.run(
+        base, capture_output=True, text=True, timeout=60, encoding="utf-8"
+    ).stdout
     assert "GIMBAL" not in default
     changed = subprocess.run(
-        [*base, "-o", "gimbal.port:3000"], capture_output=True, text=True, timeout=60
+        [*base, "-o", "gimbal.port:3000"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        encoding="utf-8",
     ).stdout
     assert "GIMBAL" in changed and "gimbal_control" in changed

@@ -53,7 +53,7 @@ def write_log(path: Path, times: list[float]) -> Path:
         message = encode_attitude(pitch_deg=-10.0 + n * 0.01, yaw_deg=5.0, motor_yaw_deg=5.0)
         for part in segments(message):
             lines.append(f"({t:.6f}) can0 030F0001#{part.hex().upper()}")
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 

@@ -276,7 +276,7 @@ def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     page = tmp_path / "fleet.html"
     code, _, err = cli("fleet", str(fleet["dataset"]), "--html", str(page))
     assert code == 0 and err.startswith(f"wrote {page}")
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert "http://" not in text.replace("http://www.w3.org", "") and "https://cdn" not in text
     dom, console = load(page, tmp_path)
     assert 'data-plots-ready="yes"' in dom, console
@@ -319,6 +319,6 @@ def test_times_follow_local_time_in_text_and_report_but_not_json(
     page = tmp_path / "local.html"
     code, _, _ = cli("fleet", dataset, "--html", str(page), "--local-time")
     assert code == 0
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert "Times are local time; weeks are ISO weeks in UTC." in text
     assert "2023-11-15 03:43:20.000+05:30 to 2023-11-22 03:43:46.000+05:30" in text

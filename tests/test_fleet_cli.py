@@ -47,7 +47,7 @@ def test_errors_never_carry_an_exception_class_name(tmp_path: Path) -> None:
     assert error_text(ValueError("bad\nsecond line")) == "bad"
     assert error_text(MemoryError()) == "out of memory"
     text = tmp_path / "notes.mcap"
-    text.write_text("hello, this is not a recording\n")
+    text.write_text("hello, this is not a recording\n", encoding="utf-8")
     result = file_rows(FileWork(str(text), text.name, "h", 10))
     assert result.error == f"{text}: not an MCAP file"
 
@@ -61,7 +61,7 @@ def test_an_unreachable_scheduler_fails_in_seconds(tmp_path: Path) -> None:
         sock.bind(("127.0.0.1", 0))
         nobody = f"tcp://127.0.0.1:{sock.getsockname()[1]}"
     flight = tmp_path / "f.log"
-    flight.write_text("(1700000000.000000) can0 00000000#00\n")
+    flight.write_text("(1700000000.000000) can0 00000000#00\n", encoding="utf-8")
     began = time.monotonic()
     code, out, err = cli("table", str(flight), "-o", str(tmp_path / "fleet"), "--dask", nobody)
     assert time.monotonic() - began < 10  # the client alone retries for 30 s

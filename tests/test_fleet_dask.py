@@ -267,7 +267,7 @@ def test_the_fleet_report_from_a_cluster_is_the_local_one(
         page = tmp_path / f"{name}.html"
         code, _, err = cli("fleet", local, "--html", str(page), *extra)
         assert code == 0, err
-        pages[name] = re.sub(r"made [^.]+\.\d+Z", "made (time)", page.read_text())
+        pages[name] = re.sub(r"made [^.]+\.\d+Z", "made (time)", page.read_text(encoding="utf-8"))
     assert pages["there"] == pages["here"] and "b-cut.pcap" in pages["here"]
 
 
@@ -318,7 +318,7 @@ def test_a_wrong_scheduler_address_leaves_nothing_behind(
 ) -> None:
     monkeypatch.setattr("analyzer.fleet.runner.CONNECT_TIMEOUT_S", 1)
     flight = tmp_path / "f.log"
-    flight.write_text("(1700000000.000000) can0 00000000#00\n")
+    flight.write_text("(1700000000.000000) can0 00000000#00\n", encoding="utf-8")
     target = tmp_path / "fleet"
     nobody = f"tcp://127.0.0.1:{free_port()}"
     code, out, err = cli("table", str(flight), "-o", str(target), "--dask", nobody)

@@ -30,7 +30,7 @@ def test_twelve_ignored_pitches_are_twelve_commands_not_obeyed(tmp_path: Path) -
             faults=FaultConfig(corrupt=0.1, drop=0.02, seed=n),
         )
         frames, _ = run_offline(SCRIPT, 20.0, config, start=1_715_680_800.0 + 3600 * n)
-        (flights / f"flight-{n:02}.log").write_text(candump_text(frames))
+        (flights / f"flight-{n:02}.log").write_text(candump_text(frames), encoding="utf-8")
     dataset = tmp_path / "dataset"
     cli_output("table", str(flights), "-o", str(dataset), "-q")
     sql = "SELECT verdict, count(*) AS n FROM findings GROUP BY 1 ORDER BY 1"

@@ -21,6 +21,7 @@ from tests.fleet_flights import (
     recording,
     rows,
 )
+from tests.platforms import posix_signals, symlinks
 
 
 @pytest.fixture(scope="module")
@@ -90,12 +91,13 @@ def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path)
     page = tmp_path / "mixed.html"
     code, out, _ = cli("fleet", dataset, "--sql", sql, "--html", str(page))
     assert code == 0 and out.startswith(f"Query: {sql}\n")
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert (
         f"<h2>Query: {sql}</h2>" in text and "CRC error rate and feedback gaps per aircraft" in text
     )
 
 
+@posix_signals
 def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
     tmp_path: Path,
 ) -> None:
@@ -116,6 +118,7 @@ def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes
         stdout=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(root)},
+        encoding="utf-8",
     )
     assert child.stdout is not None
     try:
@@ -150,6 +153,7 @@ def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes
     assert out == "n\n12\n"
 
 
+@symlinks
 def test_a_failed_input_is_skipped_next_time_unless_retried(
     fleet: dict[str, Any], tmp_path: Path
 ) -> None:

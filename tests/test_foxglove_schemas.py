@@ -98,7 +98,9 @@ def test_every_generated_schema_is_in_the_foxglove_subset() -> None:
     files = sorted((ROOT / "schemas").glob("*.schema.json"))
     assert len(files) == len(SCHEMAS)
     for path in files:
-        assert foxglove_problems(json.loads(path.read_text()), path.name) == [], path.name
+        assert foxglove_problems(json.loads(path.read_text(encoding="utf-8")), path.name) == [], (
+            path.name
+        )
 
 
 def test_schemas_check_refuses_a_schema_foxglove_would_drop(
@@ -108,9 +110,9 @@ def test_schemas_check_refuses_a_schema_foxglove_would_drop(
     assert main(["schemas", "--check", str(tmp_path)]) == 0
     assert "subset Foxglove reads" in capsys.readouterr().out
     path = tmp_path / "gimbal.command.schema.json"
-    schema = json.loads(path.read_text())
+    schema = json.loads(path.read_text(encoding="utf-8"))
     schema["properties"]["palette"]["type"] = ["string", "integer"]  # the old, refused form
-    path.write_text(json.dumps(schema))
+    path.write_text(json.dumps(schema), encoding="utf-8")
     assert main(["schemas", "--check", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "gimbal.command.schema.json: palette: unsupported type ['string', 'integer']" in out

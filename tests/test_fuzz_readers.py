@@ -256,7 +256,7 @@ def decode(path: Path, fmt: str | None, *, stdin: bool = False) -> tuple[int, st
     ``stdin`` the file is piped in (``decode -``)."""
     out, err = io.StringIO(), io.StringIO()
     args = ["decode", "-" if stdin else str(path)] + (["--format", fmt] if fmt else [])
-    piped = io.TextIOWrapper(io.BytesIO(path.read_bytes() if stdin else b""))
+    piped = io.TextIOWrapper(io.BytesIO(path.read_bytes() if stdin else b""), encoding="utf-8")
     saved = sys.stdin
     sys.stdin = piped
     try:
@@ -299,7 +299,7 @@ def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) 
     rng = random.Random(SEED)
     tried: dict[str, int] = {}
     failures: list[str] = []
-    with (tmp_path / "hang-traceback.txt").open("w") as dump:
+    with (tmp_path / "hang-traceback.txt").open("w", encoding="utf-8") as dump:
         try:
             _fuzz(seeds, rng, tmp_path, dump, tried, failures)
         finally:
@@ -332,7 +332,7 @@ def _fuzz(
         # Text and raw streams also come through a pipe, read by the standard-input readers.
         piped = mutant.fmt in ("candump", "stream") and number % 2 == 0
         label = f"#{number} {mutant.what} --format {mutant.fmt}" + (" < stdin" if piped else "")
-        current.write_text(f"{label}: {path}\n")
+        current.write_text(f"{label}: {path}\n", encoding="utf-8")
         faulthandler.dump_traceback_later(HANG_S, exit=True, file=dump)
         try:
             code, _, err = decode(path, mutant.fmt, stdin=piped)
@@ -359,7 +359,7 @@ def test_a_savvycan_time_beyond_any_date_is_a_bad_line(tmp_path: Path) -> None:
     lines = savvycan_csv(_frames()[:3]).splitlines()
     lines[2] = "99999999999999999999999999" + lines[2][lines[2].index(",") :]
     path = tmp_path / "gvret.csv"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     code, bad, err = _bad_lines(path, "savvycan")
     assert code == 0, err
     assert len(bad) == 1 and "line 3" in bad[0] and "is out of range" in bad[0]
@@ -372,7 +372,9 @@ def test_a_python_can_time_of_infinity_is_a_bad_line(tmp_path: Path, name: str, 
     stamp = {"trc": f"{(frames[1].time - frames[0].time) * 1000:.1f}"}
     old = stamp.get(fmt, str(frames[1].time))
     assert old in text
-    (tmp_path / name).write_text(text.replace(old, "1e309", 1))  # python-can reads inf
+    (tmp_path / name).write_text(
+        text.replace(old, "1e309", 1), encoding="utf-8"
+    )  # python-can reads inf
     code, bad, err = _bad_lines(tmp_path / name, fmt)
     assert code == 0, err
     assert len(bad) == 1 and "inf s is out of range" in bad[0]
@@ -384,7 +386,7 @@ def test_a_line_python_can_skips_with_a_warning_is_a_bad_line_not_a_stderr_messa
     text = _python_can(tmp_path, "x.trc", _frames()[:3]).decode().splitlines()
     last = len(text)
     text.append("      4")  # a message number and nothing else: python-can logs and skips it
-    (tmp_path / "x.trc").write_text("\n".join(text) + "\n")
+    (tmp_path / "x.trc").write_text("\n".join(text) + "\n", encoding="utf-8")
     code, bad, err = _bad_lines(tmp_path / "x.trc", "trc")
     assert code == 0 and err == ""
     assert len(bad) == 1 and f"line {last + 1}: can: TRCReader: Failed to parse" in bad[0]

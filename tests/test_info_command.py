@@ -96,6 +96,6 @@ def test_info_command_text_and_json(tmp_path: Path, capsys: pytest.CaptureFixtur
 
 def test_info_on_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "x.mcap"
-    path.write_text("not a recording\n")
+    path.write_text("not a recording\n", encoding="utf-8")
     assert main(["info", str(path)]) == 2
     assert "not an MCAP file" in capsys.readouterr().err

@@ -43,7 +43,7 @@ def flight_times(count: int = 41, seed: int = 7) -> list[float]:
 
 def frames_of(text: str, tmp_path: Path) -> tuple[list[CanFrame], str | None]:
     path = tmp_path / "screen.log"
-    path.write_text(text)
+    path.write_text(text, encoding="utf-8")
     with open_input(str(path)) as reader:
         frames = [i for i in reader if isinstance(i, CanFrame)]
         return frames, reader.time_base
@@ -92,7 +92,7 @@ def test_delta_times_from_a_pipe_are_added_up_too() -> None:
 
 def test_summary_names_the_time_base(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "td.log"
-    path.write_text(screen(["000.000000"] + ["000.100000", "000.050000"] * 10))
+    path.write_text(screen(["000.000000"] + ["000.100000", "000.050000"] * 10), encoding="utf-8")
     assert main(["decode", str(path), "--summary"]) == 0
     out = capsys.readouterr().out
     assert "time base      time since the previous frame (accumulated)" in out
@@ -155,7 +155,7 @@ def test_a_busmaster_log_gets_one_note_and_capped_diagnostics(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "bench.log"
-    path.write_text(busmaster_log(3000))
+    path.write_text(busmaster_log(3000), encoding="utf-8")
     with open_input(str(path)) as reader:
         items = list(reader)
     assert len(items) <= 11  # the first bad lines, then one count
@@ -172,7 +172,7 @@ def test_an_asc_file_named_log_says_which_format_to_try(tmp_path: Path) -> None:
     lines = ["date Tue May 14 10:00:00.000 am 2024", "base hex  timestamps absolute"]
     lines += [f"   {i / 10:.6f} 1  F01x   Rx   d 8 {DATA}" for i in range(30)]
     path = tmp_path / "export.log"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     with open_input(str(path)) as reader:
         list(reader)
     assert len(reader.notes) == 1 and "--format asc" in reader.notes[0]

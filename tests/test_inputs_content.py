@@ -23,7 +23,7 @@ def notes_of(path: Path) -> str:
     done = subprocess.run(
         [sys.executable, "-m", "analyzer", "decode", "--summary", "--format", "stream", str(path)],
         capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
-        cwd=ROOT, timeout=60, check=True,
+        cwd=ROOT, timeout=60, check=True, encoding="utf-8",
     )  # fmt: skip
     return "\n".join(line for line in done.stderr.splitlines() if line.startswith("note:"))
 
@@ -51,7 +51,7 @@ def test_random_bytes_are_called_probably_no_stream(tmp_path: Path) -> None:
 
 def test_text_read_as_a_stream_is_called_text(tmp_path: Path) -> None:
     path = tmp_path / "readme.bin"
-    path.write_text("This is a text file, not a dump of a UART.\n" * 40)
+    path.write_text("This is a text file, not a dump of a UART.\n" * 40, encoding="utf-8")
     assert "readme.bin looks like text, not a raw stream" in notes_of(path)
     assert describe(b"\x1f\x8b\x08\x00") == ("gzip-compressed data", None)
 
@@ -62,7 +62,7 @@ def summary_of(path: Path) -> tuple[str, dict[str, object]]:
         subprocess.run(
             [*command, *extra, str(path)],
             capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
-            cwd=ROOT, timeout=60, check=True,
+            cwd=ROOT, timeout=60, check=True, encoding="utf-8",
         ).stdout
         for extra in ([], ["--json"])
     ]  # fmt: skip

@@ -39,7 +39,7 @@ def same(got: list[CanFrame], want: list[CanFrame], offset: float = 0.0) -> None
 
 def test_savvycan_csv_is_recognised_by_its_header_and_gives_the_frames(tmp_path: Path) -> None:
     path = tmp_path / "savvy.csv"
-    path.write_text(savvycan_csv(FRAMES))
+    path.write_text(savvycan_csv(FRAMES), encoding="utf-8")
     assert detect_format(str(path)) == "savvycan"
     frames, events, reader = read(path)
     assert events == []
@@ -53,7 +53,7 @@ def test_savvycan_times_since_the_capture_started_are_relative(tmp_path: Path) -
     start = FRAMES[0].time
     shifted = [CanFrame(f.time - start, f.can_id, f.data, f.extended) for f in FRAMES[:20]]
     path = tmp_path / "relative.csv"
-    path.write_text(savvycan_csv(shifted))
+    path.write_text(savvycan_csv(shifted), encoding="utf-8")
     frames, _, reader = read(path)
     same(frames, FRAMES[:20], offset=start)
     assert reader.time_base == RELATIVE_TO_START
@@ -64,7 +64,7 @@ def test_a_damaged_savvycan_line_is_reported_and_the_next_is_read(tmp_path: Path
     lines[5] = lines[5].replace(",true,", ",maybe,", 1)
     lines[6] = lines[6][:20] + "\n"  # cut short
     path = tmp_path / "damaged.csv"
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     frames, events, _ = read(path)
     same(frames, FRAMES[:4] + FRAMES[6:])
     assert [e.fields["line"] for e in events] == [6, 7]
@@ -72,7 +72,7 @@ def test_a_damaged_savvycan_line_is_reported_and_the_next_is_read(tmp_path: Path
 
 
 def python_can_csv(path: Path, frames: list[CanFrame]) -> list[str]:
-    return python_can_log(path, frames).read_text().splitlines(keepends=True)
+    return python_can_log(path, frames).read_text(encoding="utf-8").splitlines(keepends=True)
 
 
 @pytest.mark.parametrize("header", [True, False])
@@ -88,7 +88,7 @@ def test_python_can_csv_with_three_bad_lines_keeps_every_other_frame(
     if not header:  # a file cut out of a longer log, without its header line
         lines = lines[1:]
         bad = [k - 1 for k in bad]
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     frames, events, reader = read(path, "csv")
     same(frames, [f for i, f in enumerate(FRAMES) if i not in dropped])
     assert [e.fields["line"] for e in events] == [k + 1 for k in bad]
@@ -97,7 +97,7 @@ def test_python_can_csv_with_three_bad_lines_keeps_every_other_frame(
 
 def test_a_savvycan_file_read_as_python_can_csv_reports_every_line(tmp_path: Path) -> None:
     path = tmp_path / "savvy.csv"
-    path.write_text(savvycan_csv(FRAMES[:30]))
+    path.write_text(savvycan_csv(FRAMES[:30]), encoding="utf-8")
     frames, events, _ = read(path, "csv")
     assert frames == []
     assert [e.fields["line"] for e in events if "line" in e.fields] == list(range(1, 32))
@@ -112,7 +112,8 @@ def test_a_savvycan_file_read_as_python_can_csv_reports_every_line(tmp_path: Pat
 def test_any_savvycan_lines_never_raise(tmp_path: Path, lines: list[str]) -> None:
     path = tmp_path / "fuzz.csv"
     path.write_text(
-        "Time Stamp,ID,Extended,Dir,Bus,LEN,D1,D2,D3,D4,D5,D6,D7,D8\n" + "\n".join(lines)
+        "Time Stamp,ID,Extended,Dir,Bus,LEN,D1,D2,D3,D4,D5,D6,D7,D8\n" + "\n".join(lines),
+        encoding="utf-8",
     )
     frames, events, _ = read(path)
     assert len(frames) + len(events) <= len(lines)

@@ -216,7 +216,7 @@ def test_decode_command_reads_the_log_as_the_candump_sample(
     def summary(path: str, *extra: str) -> str:
         done = subprocess.run(
             [sys.executable, "-m", "analyzer", "decode", "--summary", path, *extra],
-            capture_output=True, text=True, env=env, cwd=ROOT, timeout=60, check=True,
+            capture_output=True, text=True, env=env, cwd=ROOT, timeout=60, check=True, encoding="utf-8",
         )  # fmt: skip
         return done.stdout + done.stderr
 

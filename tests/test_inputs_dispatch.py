@@ -79,7 +79,7 @@ def test_unknown_extension_is_sniffed(tmp_path: Path) -> None:
 
 def test_unknown_content_is_a_usage_error(tmp_path: Path) -> None:
     path = tmp_path / "notes.txt"
-    path.write_text("shopping list\n")
+    path.write_text("shopping list\n", encoding="utf-8")
     with pytest.raises(UsageError, match="--format"):
         open_input(str(path))
 
@@ -95,7 +95,10 @@ def test_directory_is_a_usage_error(tmp_path: Path) -> None:
         open_input(str(tmp_path))
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root reads everything")
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() == 0,
+    reason="root reads everything (Windows: no POSIX permissions)",
+)
 def test_unreadable_file_is_a_usage_error(tmp_path: Path) -> None:  # pragma: no cover
     path = tmp_path / "secret.log"
     path.write_bytes(LOG_LINE)
@@ -175,7 +178,7 @@ def test_stdin_lines_come_through_before_the_pipe_closes() -> None:
 
 
 def test_dash_means_stdin(monkeypatch: pytest.MonkeyPatch) -> None:
-    fake = io.TextIOWrapper(io.BytesIO(LOG_LINE * 2))
+    fake = io.TextIOWrapper(io.BytesIO(LOG_LINE * 2), encoding="utf-8")
     monkeypatch.setattr(sys, "stdin", fake)
     reader = open_input("-")
     assert isinstance(reader, StdinCandumpReader) and reader.source == "stdin"
@@ -184,7 +187,7 @@ def test_dash_means_stdin(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_dash_as_stream(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(LOOK_DOWN)))
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(LOOK_DOWN), encoding="utf-8"))
     reader = open_input("-", "stream")
     assert isinstance(reader, StdinStreamReader)
     chunks: list[Any] = list(reader)

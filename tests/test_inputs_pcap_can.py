@@ -62,7 +62,7 @@ def test_tshark_reads_the_same_frames(tmp_path: Path, link: int) -> None:
     path = sll_pcap(tmp_path / "any.pcap", FRAMES[:50], link)
     done = subprocess.run(
         ["tshark", "-r", str(path), "-T", "fields", "-e", "can.id", "-e", "can.len", "-e", "data.data"],
-        capture_output=True, text=True, timeout=60, check=True,
+        capture_output=True, text=True, timeout=60, check=True, encoding="utf-8",
     )  # fmt: skip
     rows = [line.split("\t") for line in done.stdout.splitlines()]
     frames, _, _ = read(path)

@@ -81,9 +81,9 @@ def test_explicit_format_overrides_the_extension(tmp_path: Path) -> None:
 
 def test_damaged_csv_line_is_reported_and_reading_goes_on(tmp_path: Path) -> None:
     path = write(tmp_path / "x.csv", messages())
-    lines = path.read_text().splitlines()
+    lines = path.read_text(encoding="utf-8").splitlines()
     lines.insert(3, "this,is,not,a,frame")
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     items: list[Any] = list(open_input(str(path)))
     assert [type(i) for i in items] == [CanFrame, CanFrame, Event] + [CanFrame] * 4
     assert items[2].topic == TOPIC_DIAGNOSTICS and items[2].fields["kind"] == BAD_LINE
@@ -104,7 +104,7 @@ def test_mf4_without_its_package_is_a_usage_error(
 
 def test_a_text_log_that_gives_no_frame_says_so(tmp_path: Path) -> None:
     path = tmp_path / "junk.asc"
-    path.write_text("this is\nnot an ASC export\nat all\n")
+    path.write_text("this is\nnot an ASC export\nat all\n", encoding="utf-8")
     items: list[Any] = list(open_input(str(path)))
     assert all(item.fields["kind"] == BAD_LINE for item in items)
     assert [item.fields.get("line") for item in items[:-1]] == [1, 2, 3]  # each line said

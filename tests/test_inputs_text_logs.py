@@ -79,11 +79,11 @@ DAMAGE = {
 def test_each_text_format_reads_every_valid_frame_after_a_damaged_line(tmp_path: Path) -> None:
     for fmt, damage in DAMAGE.items():
         path = write(tmp_path / f"flight.{fmt}", flight(30))
-        lines = path.read_text().splitlines(keepends=True)
+        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
         first = first_frame_line(lines, fmt)
         bad = first + 7  # the 8th frame
         lines[bad] = damage(lines[bad])
-        path.write_text("".join(lines))
+        path.write_text("".join(lines), encoding="utf-8")
         frames, events, reader = items_of(path)
         expected = [m for i, m in enumerate(flight(30)) if i != 7]
         assert len(frames) == 29, fmt
@@ -99,7 +99,7 @@ def test_each_text_format_reads_every_valid_frame_after_a_damaged_line(tmp_path:
 
 def test_damaged_lines_in_a_gzipped_asc(tmp_path: Path) -> None:
     plain = write(tmp_path / "f.asc", flight(30))
-    lines = plain.read_text().splitlines(keepends=True)
+    lines = plain.read_text(encoding="utf-8").splitlines(keepends=True)
     first = first_frame_line(lines, "asc")
     for k in (3, 4, 20):
         lines[first + k] = DAMAGE["asc"](lines[first + k])
@@ -131,7 +131,7 @@ def vector_relative_asc(deltas: list[float]) -> str:
 
 def test_relative_asc_times_are_added_up_from_the_header_date(tmp_path: Path) -> None:
     path = tmp_path / "relative.asc"
-    path.write_text(vector_relative_asc([0.0] + [0.1] * 20))  # 2 s of frames
+    path.write_text(vector_relative_asc([0.0] + [0.1] * 20), encoding="utf-8")  # 2 s of frames
     frames, events, reader = items_of(path)
     start = datetime.datetime(2024, 5, 14, 10, 0, 0).timestamp()  # local time, as Vector
     assert events == []
@@ -146,7 +146,7 @@ def test_relative_asc_keeps_counting_time_over_a_damaged_line(tmp_path: Path) ->
     path = tmp_path / "relative.asc"
     text = vector_relative_asc([0.5] * 10).splitlines(keepends=True)
     text[10] = DAMAGE["asc"](text[10])
-    path.write_text("".join(text))
+    path.write_text("".join(text), encoding="utf-8")
     frames, events, _ = items_of(path)
     assert len(frames) == 9 and len(events) == 1
     assert abs(frames[-1].time - frames[0].time - 4.5) < 1e-6
@@ -200,10 +200,10 @@ def test_any_damaged_line_costs_at_most_that_line(
     tmp_path_factory: Any, fmt: str, where: int, junk: str
 ) -> None:
     path = write(tmp_path_factory.mktemp("d") / f"f.{fmt}", flight(12))
-    lines = path.read_text().splitlines(keepends=True)
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     first = first_frame_line(lines, fmt)
     lines[first + where] = junk.replace("\n", " ").replace("\r", " ") + "\n"
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     frames, events, _ = items_of(path)
     kept = [bytes(m.data) for i, m in enumerate(flight(12)) if i != where]
     got = [f.data for f in frames]
@@ -222,14 +222,18 @@ def test_an_asc_frame_whose_time_is_damaged_is_a_bad_line_not_a_silent_loss(
 ) -> None:
     # python-can's ASCReader skips a line whose time column is no decimal number (1e309,
     # nan, garbage) as if it were a comment; the frame must not vanish without a word.
-    written = write(tmp_path / "clean.asc", flight(12)).read_text().splitlines(keepends=True)
+    written = (
+        write(tmp_path / "clean.asc", flight(12))
+        .read_text(encoding="utf-8")
+        .splitlines(keepends=True)
+    )
     first = first_frame_line(written, "asc")
     for noise in TEXT_NOISE:
         lines = list(written)
         time_word = lines[first + 5].split()[0]
         lines[first + 5] = lines[first + 5].replace(time_word, noise, 1)
         path = tmp_path / "damaged.asc"
-        path.write_text("".join(lines))
+        path.write_text("".join(lines), encoding="utf-8")
         frames, events, reader = items_of(path)
         assert len(frames) == 11, noise
         assert [e.fields["line"] for e in events] == [first + 6], noise
@@ -242,7 +246,7 @@ def test_a_relative_asc_time_of_1e309_adds_no_time(tmp_path: Path) -> None:
     path = tmp_path / "relative.asc"
     text = vector_relative_asc([0.5] * 10).splitlines(keepends=True)
     text[10] = text[10].replace("0.500000", "1e309", 1)
-    path.write_text("".join(text))
+    path.write_text("".join(text), encoding="utf-8")
     frames, events, _ = items_of(path)
     assert len(frames) == 9 and [e.fields["line"] for e in events] == [11]
     assert abs(frames[-1].time - frames[0].time - 4.0) < 1e-6
@@ -250,11 +254,15 @@ def test_a_relative_asc_time_of_1e309_adds_no_time(tmp_path: Path) -> None:
 
 def test_a_trc_frame_whose_type_column_is_damaged_is_a_bad_line(tmp_path: Path) -> None:
     # python-can's TRCReader drops a record of an unknown type at log level INFO.
-    lines = write(tmp_path / "clean.trc", flight(12)).read_text().splitlines(keepends=True)
+    lines = (
+        write(tmp_path / "clean.trc", flight(12))
+        .read_text(encoding="utf-8")
+        .splitlines(keepends=True)
+    )
     first = first_frame_line(lines, "trc")
     lines[first + 3] = lines[first + 3].replace(" DT ", " nan ", 1)
     path = tmp_path / "damaged.trc"
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     frames, events, _ = items_of(path)
     assert len(frames) == 11
     assert [e.fields["line"] for e in events] == [first + 4]
@@ -263,7 +271,7 @@ def test_a_trc_frame_whose_type_column_is_damaged_is_a_bad_line(tmp_path: Path) 
     # the first one (then read as the header's last line) included.
     for k in (0, 6):
         lines[first + k] = lines[first + k].replace(f"{k} ", "; ", 1)
-    path.write_text("".join(lines))
+    path.write_text("".join(lines), encoding="utf-8")
     frames, events, _ = items_of(path)
     assert len(frames) == 9
     assert [e.fields["line"] for e in events] == [first + 1, first + 4, first + 7]
@@ -279,13 +287,17 @@ def test_asc_and_trc_events_that_are_no_frames_are_not_damage(tmp_path: Path) ->
         "// a comment\n",
         "\n",
     ]
-    (tmp_path / "events.asc").write_text("".join(asc))
+    (tmp_path / "events.asc").write_text("".join(asc), encoding="utf-8")
     frames, events, _ = items_of(tmp_path / "events.asc")
     assert len(frames) == 3 and events == []
-    trc = write(tmp_path / "plain.trc", flight(3)).read_text().splitlines(keepends=True)
+    trc = (
+        write(tmp_path / "plain.trc", flight(3))
+        .read_text(encoding="utf-8")
+        .splitlines(keepends=True)
+    )
     first = first_frame_line(trc, "trc")
     trc.insert(first + 1, "      9       100.000 ST  1  Bus heavy\n")
-    (tmp_path / "events.trc").write_text("".join(trc))
+    (tmp_path / "events.trc").write_text("".join(trc), encoding="utf-8")
     frames, events, _ = items_of(tmp_path / "events.trc")
     assert len(frames) == 3 and events == []
 

@@ -6,15 +6,19 @@ import json
 import os
 import subprocess
 import sys
+import types
 from pathlib import Path
 from typing import Any
 
 import pytest
+from can.interfaces import BACKENDS
 from serial.tools.list_ports_common import ListPortInfo
 
 from analyzer.cli import main
 from analyzer.sources import detect
+from analyzer.sources.can_bus import bus_arguments
 from analyzer.sources.spec import CanSpec, SerialSpec, parse_source
+from tests.platforms import symlinks
 
 ROOT = Path(__file__).resolve().parent.parent
 CANABLE_BY_ID = "/dev/serial/by-id/usb-canable.io_CANable_8c005eb_0037001A5948-if00"
@@ -148,8 +152,8 @@ def test_a_backend_whose_detection_fails_is_named_and_the_rest_listed(
 def test_socketcan_links_up_and_down_from_sysfs(tmp_path: Path) -> None:
     def interface(name: str, kind: int, flags: str) -> None:
         (tmp_path / name).mkdir()
-        (tmp_path / name / "type").write_text(f"{kind}\n")
-        (tmp_path / name / "flags").write_text(f"{flags}\n")
+        (tmp_path / name / "type").write_text(f"{kind}\n", encoding="utf-8")
+        (tmp_path / name / "flags").write_text(f"{flags}\n", encoding="utf-8")
 
     interface("can0", 280, "0x40081")  # UP, RUNNING, NOARP: as a gs_usb can0 that is up
     interface("can1", 280, "0x80")  # NOARP only: down
@@ -159,6 +163,7 @@ def test_socketcan_links_up_and_down_from_sysfs(tmp_path: Path) -> None:
     assert detect.socketcan_links(tmp_path / "missing") == {}
 
 
+@symlinks
 def test_stable_names_from_by_id_links(tmp_path: Path) -> None:
     device = tmp_path / "ttyACM3"
     device.touch()
@@ -181,6 +186,7 @@ def test_a_real_run_lists_what_pyserial_and_python_can_see(tmp_path: Path) -> No
         capture_output=True,
         text=True,
         timeout=120,
+        encoding="utf-8",
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""  # the warnings of python-can's absent backends are not news
@@ -198,6 +204,104 @@ def test_a_real_run_lists_what_pyserial_and_python_can_see(tmp_path: Path) -> No
         capture_output=True,
         text=True,
         timeout=120,
+        encoding="utf-8",
     )
     assert text.returncode == 0 and text.stdout.startswith("CAN adapters (python-can):\n")
     assert all(f"--source {p['serial_source']}" in text.stdout for p in found["serial"])
+
+
+def vector_channel(serial: int, hw_channel: int, index: int) -> Any:
+    """A channel as the Vector XL driver describes it (python-can's VectorChannelConfig)."""
+    from can.interfaces.vector import canlib, xldefine
+
+    return canlib.VectorChannelConfig(
+        name=f"VN1630A Channel {hw_channel + 1}",
+        hw_type=xldefine.XL_HardwareType.XL_HWTYPE_VN1630,
+        hw_index=0,
+        hw_channel=hw_channel,
+        channel_index=index,
+        channel_mask=1 << index,
+        channel_capabilities=xldefine.XL_ChannelCapabilities(0),
+        channel_bus_capabilities=xldefine.XL_BusCapabilities.XL_BUS_ACTIVE_CAP_CAN,
+        is_on_bus=False,
+        connected_bus_type=xldefine.XL_BusTypes.XL_BUS_TYPE_CAN,
+        bus_params=None,
+        serial_number=serial,
+        article_number=0,
+        transceiver_name="On board CAN 1051cap(Highspeed)",
+    )
+
+
+def test_a_vector_channel_keeps_its_devices_serial_number(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two VN1630A on one laptop: channel 0 of each is told apart by the serial number,
+    from python-can's own detection (its XL driver stood in for: Windows only)."""
+    from can.interfaces.vector import canlib
+
+    channels = [vector_channel(5050, 0, 0), vector_channel(5050, 1, 1), vector_channel(7070, 0, 2)]
+    monkeypatch.setattr(canlib, "get_channel_configs", lambda: channels)
+    monkeypatch.setattr(detect, "NOT_SEARCHED", detect.NOT_SEARCHED | (set(BACKENDS) - {"vector"}))
+    monkeypatch.setattr(detect, "socketcan_links", lambda: {})
+    monkeypatch.setattr(detect, "pyserial_ports", lambda: [])
+    assert main(["interfaces", "--json"]) == 0
+    sources = [adapter["source"] for adapter in json.loads(capsys.readouterr().out)["can"]]
+    assert sources == [
+        "can:vector:0@1000000,serial=5050",
+        "can:vector:1@1000000,serial=5050",
+        "can:vector:0@1000000,serial=7070",
+    ]
+    spec = parse_source(sources[2])
+    assert spec == CanSpec("vector", "0", 1_000_000, (("serial", 7070),))
+    kwargs = bus_arguments(spec)  # what can.Bus is given
+    assert (kwargs["channel"], kwargs["serial"], kwargs["listen_only"]) == ("0", 7070, True)
+
+
+def test_options_after_the_channel_and_commas_inside_it() -> None:
+    assert parse_source("can:vector:0,serial=12,app_name=CANalyzer") == CanSpec(
+        "vector", "0", 1_000_000, (("serial", 12), ("app_name", "CANalyzer"))
+    )
+    assert parse_source("can:slcan:/dev/odd,name@115200").channel == "/dev/odd,name"
+    assert str(parse_source("can:vector:0@500000,serial=12")) == "can:vector:0@500000,serial=12"
+
+
+class FakeGsUsb:
+    """What the gs_usb package's ``GsUsb.scan()`` gives: one per candleLight on USB."""
+
+    def __init__(self, serial: str, bus: int, address: int) -> None:
+        self.serial_number, self.bus, self.address = serial, bus, address
+
+
+def fake_gs_usb(monkeypatch: pytest.MonkeyPatch, devices: list[FakeGsUsb]) -> None:
+    package, module = types.ModuleType("gs_usb"), types.ModuleType("gs_usb.gs_usb")
+    module.GsUsb = type("GsUsb", (), {"scan": staticmethod(lambda: devices)})  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "gs_usb", package)
+    monkeypatch.setitem(sys.modules, "gs_usb.gs_usb", module)
+
+
+def test_gs_usb_adapters_are_listed_through_pyusb_off_linux(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    fake_gs_usb(monkeypatch, [FakeGsUsb("0037001A5948", 1, 4), FakeGsUsb("00410E3B", 1, 7)])
+    problems: list[str] = []
+    configs = detect.gs_usb_configs(problems, platform="win32")
+    adapters = detect.can_adapters(configs, {})
+    assert [a.source for a in adapters] == ["can:gs_usb:0@1000000", "can:gs_usb:1@1000000"]
+    assert adapters[1].config["serial"] == "00410E3B" and not problems
+    assert bus_arguments(parse_source(adapters[1].source))["index"] == 1  # python-can 4.6
+    # Linux: the kernel's gs_usb driver makes them SocketCAN interfaces, listed as such
+    assert detect.gs_usb_configs(problems, platform="linux") == []
+
+
+def test_gs_usb_without_its_package_or_libusb(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "gs_usb", None)  # python-can[gs-usb] not installed
+    assert detect.gs_usb_configs([], platform="darwin") == []
+
+    def no_backend() -> list[FakeGsUsb]:
+        raise RuntimeError("No backend available")  # pyusb's NoBackendError: no libusb
+
+    fake_gs_usb(monkeypatch, [])
+    sys.modules["gs_usb.gs_usb"].GsUsb.scan = staticmethod(no_backend)  # type: ignore[attr-defined]
+    problems: list[str] = []
+    assert detect.gs_usb_configs(problems, platform="darwin") == []
+    assert problems == ["gs_usb: detection failed: No backend available"]

@@ -18,8 +18,12 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "shared plumbing",
         (
             "errors",
+            "extras",
+            "portable",
+            "wall_clock",
             "timefmt",
             "terminal_text",
+            "ansi",
             "stdio",
             "output_file",
             "bus_figures",
@@ -72,7 +76,7 @@ def imported_modules(path: Path) -> set[str]:
     ``from analyzer.x import y`` counts as importing ``analyzer.x.y`` when that is a
     module."""
     names: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -169,7 +173,7 @@ def test_the_protocol_core_imports_only_itself_from_the_analyzer() -> None:
 
 def test_the_package_root_imports_nothing_of_the_analyzer_when_imported() -> None:
     """Its re-exports sit in a function or under TYPE_CHECKING: nothing at import time."""
-    tree = ast.parse((PACKAGE / "__init__.py").read_text())
+    tree = ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8"))
     at_import: list[str] = []
     for node in tree.body:
         if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING":
@@ -194,7 +198,8 @@ def test_the_checks_see_imports_inside_functions_and_for_type_checking(tmp_path:
     module.write_text(
         "from typing import TYPE_CHECKING\n"
         "if TYPE_CHECKING:\n    from analyzer.tally import Tally\n"
-        "def f():\n    from analyzer.analysis.findings import VERDICTS\n"
+        "def f():\n    from analyzer.analysis.findings import VERDICTS\n",
+        encoding="utf-8",
     )
     assert {"analyzer.tally", "analyzer.analysis.findings"} <= imported_modules(module)
 
@@ -210,6 +215,6 @@ def test_every_package_says_what_it_holds() -> None:
     silent = [
         str(init.relative_to(ROOT))
         for init in PACKAGE.rglob("__init__.py")
-        if not (ast.get_docstring(ast.parse(init.read_text())) or "").strip()
+        if not (ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or "").strip()
     ]
     assert not silent, f"packages without a one-line docstring: {silent}"

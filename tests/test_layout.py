@@ -106,16 +106,16 @@ def test_layout_command_writes_and_refuses_to_overwrite(
     monkeypatch.chdir(tmp_path)
     assert main(["layout"]) == 0
     written = tmp_path / "gimbal-layout.json"
-    assert json.loads(written.read_text()) == json.loads(json.dumps(layout()))
+    assert json.loads(written.read_text(encoding="utf-8")) == json.loads(json.dumps(layout()))
     assert "Import layout" in capsys.readouterr().err
-    written.write_text("mine")
+    written.write_text("mine", encoding="utf-8")
     assert main(["layout"]) == 2
     assert "exists; choose another name or use --force" in capsys.readouterr().err
-    assert written.read_text() == "mine"
+    assert written.read_text(encoding="utf-8") == "mine"
     assert main(["layout", "--force"]) == 0
-    assert json.loads(written.read_text())["configById"]
+    assert json.loads(written.read_text(encoding="utf-8"))["configById"]
     capsys.readouterr()
     assert main(["layout", "-o", "-"]) == 0
-    assert json.loads(capsys.readouterr().out) == json.loads(written.read_text())
+    assert json.loads(capsys.readouterr().out) == json.loads(written.read_text(encoding="utf-8"))
     assert main(["layout", "-o", str(tmp_path / "missing" / "x.json")]) == 2
     assert list(tmp_path.iterdir()) == [written]  # no temporary file left behind

@@ -50,7 +50,7 @@ def test_the_live_server_carries_the_camera_as_it_is_recorded(
     rtsp_camera: Any, tmp_path: Path
 ) -> None:
     out = tmp_path / "demo.mcap"
-    said = (tmp_path / "said.txt").open("w")
+    said = (tmp_path / "said.txt").open("w", encoding="utf-8")
     proc = subprocess.Popen(
         [
             *(sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "8"),
@@ -62,6 +62,7 @@ def test_the_live_server_carries_the_camera_as_it_is_recorded(
         stdout=said,
         stderr=subprocess.PIPE,
         text=True,
+        encoding="utf-8",
     )
     client = None
     try:
@@ -90,7 +91,7 @@ def test_the_live_server_carries_the_camera_as_it_is_recorded(
         assert got.get(topic) == messages[topic], (topic, len(got.get(topic, [])))
         assert client.channels_by_topic()[topic]["schema"] == channels[topic]["schema"]
     assert len(messages["/camera/main"]) > 100  # about 30 frames a second for 8 s
-    served = (tmp_path / "said.txt").read_text()
+    served = (tmp_path / "said.txt").read_text(encoding="utf-8")
     assert "foxglove: served" in served and "dropped" not in served
     overlay = json.loads(got["/camera/main/annotations"][-1][1])
     assert overlay["texts"][0]["text"].startswith("P ")

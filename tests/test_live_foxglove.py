@@ -36,6 +36,7 @@ from analyzer.protocol.types import CanFrame
 from analyzer.tui.state import MonitorState
 from analyzer.tui.status_bar import StatusInfo, render_status
 from tests.foxglove_client import FoxgloveClient
+from tests.platforms import posix_signals
 from tests.test_record_command import FakeIdu
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -303,6 +304,7 @@ def test_the_old_subprotocol_is_refused_and_counted() -> None:
 # -- the command ------------------------------------------------------------------------------
 
 
+@posix_signals
 def test_record_serves_the_live_stream_while_recording(tmp_path: Path) -> None:
     idu = FakeIdu()
     path = tmp_path / "flight.mcap"
@@ -316,6 +318,7 @@ def test_record_serves_the_live_stream_while_recording(tmp_path: Path) -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        encoding="utf-8",
     )
     client = None
     try:

@@ -61,6 +61,7 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Path:
         timeout=600,
         check=False,
         cwd=ROOT,
+        encoding="utf-8",
     )
     assert done.returncode == 0, f"the manual does not build:\n{done.stderr[-4000:]}"
     assert "WARNING" not in done.stderr, done.stderr[-4000:]
@@ -278,7 +279,9 @@ def _dump_dom(target: str, tmp_path: Path) -> str:
         "--dump-dom",
         target,
     ]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+    done = subprocess.run(
+        command, capture_output=True, text=True, timeout=120, check=False, encoding="utf-8"
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
 

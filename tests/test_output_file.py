@@ -12,6 +12,7 @@ from analyzer.cli import main
 from analyzer.commands import demo
 from analyzer.mcapio.read.reader import Recording
 from analyzer.output_file import OutputFile, OutputRefused, check_output, write_output
+from tests.platforms import posix_permissions, symlinks
 
 CANDUMP = "".join(f"({1715680800 + n * 0.01:.6f}) can0 0F01#0F040CFE00000000\n" for n in range(50))
 
@@ -41,15 +42,16 @@ def test_a_failure_inside_the_block_leaves_nothing(tmp_path: Path) -> None:
 
 def test_an_existing_file_is_replaced_only_with_force(tmp_path: Path) -> None:
     target = tmp_path / "out.txt"
-    target.write_text("precious")
+    target.write_text("precious", encoding="utf-8")
     with pytest.raises(OutputRefused, match="use --force"):
         write_output(target, "new")
-    assert target.read_text() == "precious"
+    assert target.read_text(encoding="utf-8") == "precious"
     write_output(target, "new", force=True)
-    assert target.read_text() == "new"
+    assert target.read_text(encoding="utf-8") == "new"
     assert _listing(tmp_path) == ["out.txt"]
 
 
+@posix_permissions
 def test_the_new_file_gets_the_usual_permissions(tmp_path: Path) -> None:
     old = os.umask(0o022)
     try:
@@ -65,12 +67,13 @@ def test_the_new_file_gets_the_usual_permissions(tmp_path: Path) -> None:
 @pytest.mark.parametrize("dangling", [True, False])
 @pytest.mark.parametrize("force", [True, False])
 @pytest.mark.parametrize("atomic", [True, False])
+@symlinks
 def test_a_symlink_at_the_output_is_never_followed(
     tmp_path: Path, dangling: bool, force: bool, atomic: bool
 ) -> None:
     victim = tmp_path / "victim.txt"
     if not dangling:
-        victim.write_text("precious")
+        victim.write_text("precious", encoding="utf-8")
     link = tmp_path / "out.mcap"
     link.symlink_to(victim)
     with pytest.raises(OutputRefused, match="symbolic link"):
@@ -78,20 +81,21 @@ def test_a_symlink_at_the_output_is_never_followed(
     assert link.is_symlink()
     assert victim.exists() is not dangling
     if not dangling:
-        assert victim.read_text() == "precious"
+        assert victim.read_text(encoding="utf-8") == "precious"
 
 
 def test_the_output_may_never_be_an_input_even_with_force(tmp_path: Path) -> None:
     source = tmp_path / "flight.log"
-    source.write_text("x")
+    source.write_text("x", encoding="utf-8")
     alias = tmp_path / "alias.log"
     os.link(source, alias)  # the same file under another name
     for name in (source, alias):
         with pytest.raises(OutputRefused, match="overwrite the input"):
             check_output(name, force=True, inputs=[source])
-    assert source.read_text() == "x"
+    assert source.read_text(encoding="utf-8") == "x"
 
 
+@symlinks
 def test_a_file_planted_while_writing_is_kept_and_so_is_the_output(tmp_path: Path) -> None:
     target = tmp_path / "out.txt"
     out = OutputFile(target, encoding="utf-8")
@@ -100,9 +104,10 @@ def test_a_file_planted_while_writing_is_kept_and_so_is_the_output(tmp_path: Pat
     with pytest.raises(OutputRefused, match="appeared while it was being written"):
         out.commit()
     assert target.is_symlink() and not (tmp_path / "elsewhere").exists()
-    assert Path(out.written_path).read_text() == "ours"
+    assert Path(out.written_path).read_text(encoding="utf-8") == "ours"
 
 
+@symlinks
 def test_a_direct_output_refuses_a_name_taken_after_the_check(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -127,25 +132,26 @@ def test_discard_removes_only_our_own_file(tmp_path: Path) -> None:
     assert not target.exists()
     out = OutputFile(target, atomic=False)
     os.unlink(target)
-    target.write_text("someone else's")
+    target.write_text("someone else's", encoding="utf-8")
     out.discard()
-    assert target.read_text() == "someone else's"
+    assert target.read_text(encoding="utf-8") == "someone else's"
 
 
 # -- the commands -------------------------------------------------------------------------------
 
 
+@symlinks
 def test_convert_needs_force_and_ignores_a_planted_partial_symlink(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "flight.log"
-    log.write_text(CANDUMP)
+    log.write_text(CANDUMP, encoding="utf-8")
     out = tmp_path / "flight.mcap"
     victim = tmp_path / "victim.txt"
-    victim.write_text("precious")
+    victim.write_text("precious", encoding="utf-8")
     (tmp_path / "flight.mcap.partial").symlink_to(victim)  # the old predictable temp name
     assert main(["convert", str(log), "-o", str(out), "-q"]) == 0
-    assert victim.read_text() == "precious"
+    assert victim.read_text(encoding="utf-8") == "precious"
     first = out.read_bytes()
     assert main(["convert", str(log), "-o", str(out), "-q"]) == 2
     assert "use --force" in capsys.readouterr().err
@@ -155,11 +161,12 @@ def test_convert_needs_force_and_ignores_a_planted_partial_symlink(
     assert _listing(tmp_path) == ["flight.log", "flight.mcap", "flight.mcap.partial", "victim.txt"]
 
 
+@symlinks
 def test_convert_refuses_a_symlinked_output(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "flight.log"
-    log.write_text(CANDUMP)
+    log.write_text(CANDUMP, encoding="utf-8")
     (tmp_path / "out.mcap").symlink_to(tmp_path / "nowhere.mcap")
     assert main(["convert", str(log), "-o", str(tmp_path / "out.mcap"), "--force"]) == 2
     assert "symbolic link" in capsys.readouterr().err
@@ -170,18 +177,19 @@ def test_record_never_overwrites_its_own_input(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "X.log"
-    log.write_text(CANDUMP)
+    log.write_text(CANDUMP, encoding="utf-8")
     code = main(["record", "--source", f"file:{log}", "-o", str(log), "--force", "-q"])
     assert code == 2
     assert "overwrite the input" in capsys.readouterr().err
-    assert log.read_text() == CANDUMP
+    assert log.read_text(encoding="utf-8") == CANDUMP
 
 
+@symlinks
 def test_record_does_not_follow_a_dangling_symlink(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "X.log"
-    log.write_text(CANDUMP)
+    log.write_text(CANDUMP, encoding="utf-8")
     out = tmp_path / "rec.mcap"
     out.symlink_to(tmp_path / "planted.mcap")
     assert main(["record", "--source", f"file:{log}", "-o", str(out), "-q"]) == 2
@@ -191,7 +199,7 @@ def test_record_does_not_follow_a_dangling_symlink(
 
 def test_record_force_replaces_an_earlier_recording(tmp_path: Path) -> None:
     log = tmp_path / "X.log"
-    log.write_text(CANDUMP)
+    log.write_text(CANDUMP, encoding="utf-8")
     out = tmp_path / "rec.mcap"
     out.write_bytes(b"old")
     assert main(["record", "--source", f"file:{log}", "-o", str(out), "-q"]) == 2

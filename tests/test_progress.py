@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import io
 import os
-import pty
 import subprocess
 import sys
 from pathlib import Path
@@ -23,6 +22,7 @@ from analyzer.mcapio.write.video import write_frames
 from analyzer.pipeline import Pipeline, run_items
 from analyzer.progress import Progress, further_pass
 from analyzer.video.rtsp_stream import VideoFrame
+from tests.platforms import pseudo_terminals
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "samples" / "flight-candump.log"
@@ -30,7 +30,7 @@ SAMPLE = ROOT / "samples" / "flight-candump.log"
 
 def run_on_a_terminal(*args: str, cwd: Path) -> tuple[int, str]:
     """Run the command with stderr on a pseudo-terminal (stdout a pipe); what it drew."""
-    main, child = pty.openpty()
+    main, child = os.openpty()
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     proc = subprocess.Popen(
         [sys.executable, "-m", "analyzer", *args],
@@ -64,6 +64,7 @@ COMMANDS = {
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))
+@pseudo_terminals
 def test_every_command_draws_the_same_progress_line(name: str, tmp_path: Path) -> None:
     code, drawn = run_on_a_terminal(*COMMANDS[name], cwd=tmp_path)
     assert code == 0, drawn
@@ -73,6 +74,7 @@ def test_every_command_draws_the_same_progress_line(name: str, tmp_path: Path) -
 
 
 @pytest.mark.parametrize("name", ["analyze", "convert", "report", "table"])
+@pseudo_terminals
 def test_quiet_draws_nothing(name: str, tmp_path: Path) -> None:
     code, drawn = run_on_a_terminal(*COMMANDS[name], "-q", cwd=tmp_path)
     assert code == 0 and "%" not in drawn and "MB/s" not in drawn

@@ -19,7 +19,7 @@ def test_checked_in_schemas_match_the_table() -> None:
     files = rendered()
     assert sorted(files) == sorted(p.name for p in (ROOT / "schemas").glob("*.schema.json"))
     for name, text in files.items():
-        assert (ROOT / "schemas" / name).read_text() == text, (
+        assert (ROOT / "schemas" / name).read_text(encoding="utf-8") == text, (
             f"schemas/{name} is out of date: run `gimbal-analyzer schemas`"
         )
 

@@ -147,6 +147,7 @@ def _info(path: Path) -> str:
         capture_output=True,
         text=True,
         check=True,
+        encoding="utf-8",
     )
     return done.stdout
 

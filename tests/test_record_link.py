@@ -139,6 +139,7 @@ def test_record_from_a_port_nobody_listens_on_says_refused_and_exits_1(tmp_path:
         capture_output=True,
         text=True,
         timeout=60,
+        encoding="utf-8",
     )
     assert proc.returncode == 1, proc.stderr
     lines = proc.stderr.splitlines()

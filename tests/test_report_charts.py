@@ -38,14 +38,14 @@ def demo_flight(path: Path, duration: float = 31.0) -> Path:
     config = SimConfig(uav=True, behaviour=behaviour)
     frames, _ = run_offline(tuple(steps), duration, config, start=START)
     lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 
 def embedded(page: Path) -> dict[str, Any]:
     """The plot data the page carries."""
     found = re.search(r'<script id="report-data" type="application/json">(.*?)</script>',
-                      page.read_text(), re.S)  # fmt: skip
+                      page.read_text(encoding="utf-8"), re.S)  # fmt: skip
     assert found
     data: dict[str, Any] = json.loads(found.group(1).replace("<\\/", "</"))
     return data
@@ -142,7 +142,9 @@ def test_status_texts_of_the_flight_controller_are_listed(
     flight: tuple[Path, dict[str, Any], str],
 ) -> None:
     page, _, dom = flight
-    section = page.read_text().split("<h2>UAV status texts</h2>")[1].split("<h2>")[0]
+    section = (
+        page.read_text(encoding="utf-8").split("<h2>UAV status texts</h2>")[1].split("<h2>")[0]
+    )
     texts = re.findall(r"<tr><td>([0-9:.]+Z)</td><td>([^<]+)</td></tr>", section)
     assert texts and ("22:13:20.841Z", "UAV armed") in texts
     assert "UAV armed" in dom
@@ -223,5 +225,5 @@ def test_with_local_time_the_page_says_which_times_are_local(
         assert main(["--local-time", "report", str(log), "-o", str(page)]) == 0
     finally:
         timefmt.use_local_time(False)
-    assert "Times in the tables are local time" in page.read_text()
-    assert "Times are UTC." in flight[0].read_text()
+    assert "Times in the tables are local time" in page.read_text(encoding="utf-8")
+    assert "Times are UTC." in flight[0].read_text(encoding="utf-8")

@@ -55,7 +55,9 @@ def browser(
     profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
     address = page.as_uri() + fragment
     command = [CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args, address]
-    return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+    return subprocess.run(
+        command, capture_output=True, text=True, timeout=120, check=False, encoding="utf-8"
+    )
 
 
 def load(page: Path, tmp_path: Path, fragment: str = "") -> tuple[str, list[str]]:
@@ -92,12 +94,12 @@ def session(path: Path) -> Path:
     config = SimConfig(uav=True, behaviour=Behaviour(reach=0.7, drift_s=1.0))
     frames, _ = run_offline(steps, 30.0, config, start=1_700_000_000.0)
     lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 
 def test_report_is_self_contained(samples: dict[str, Path], tmp_path: Path) -> None:
-    page = report(tmp_path, samples["flight-candump.log"]).read_text()
+    page = report(tmp_path, samples["flight-candump.log"]).read_text(encoding="utf-8")
     assert page.startswith("<!DOCTYPE html>") and "Chart.js v4" in page
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", page)
     assert "<link" not in page and "@import" not in page and "sourceMappingURL" not in page
@@ -120,7 +122,9 @@ def test_report_is_self_contained(samples: dict[str, Path], tmp_path: Path) -> N
 def test_report_loads_in_chromium_with_every_plot_drawn(tmp_path: Path) -> None:
     page = report(tmp_path, session(tmp_path / "flight.log"))
     # The yaw target's row says which reference judged it and why.
-    assert '<td>north<br><span class="small">FF13 present</span></td>' in page.read_text()
+    assert '<td>north<br><span class="small">FF13 present</span></td>' in page.read_text(
+        encoding="utf-8"
+    )
     dom, console = load(page, tmp_path)
     assert console == []  # no error, no warning, no message at all
     assert 'data-plots-ready="yes"' in dom
@@ -146,7 +150,7 @@ def test_report_of_every_sample_loads(name: str, samples: dict[str, Path], tmp_p
         assert list(canvases(dom)) == ["plot-track"]  # positions need no clock
         assert "nothing to plot over time" in dom and "no timestamps" in dom
         # the responses say why there are none, not that no command had an effect
-        responses = page.read_text().split("<h2>Responses</h2>")[1].split("<h2>")[0]
+        responses = page.read_text(encoding="utf-8").split("<h2>Responses</h2>")[1].split("<h2>")[0]
         assert "carries no timestamps" in responses and "cannot be timed" in responses
         assert "no command with a visible effect" not in responses
 
@@ -158,7 +162,7 @@ def test_report_of_a_demo_recording(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert main(["analyze", str(recording)]) == 0
     assert "verdicts:" in capsys.readouterr().out
     page = report(tmp_path, recording)
-    assert "demo.mcap (mcap)" in page.read_text()
+    assert "demo.mcap (mcap)" in page.read_text(encoding="utf-8")
     dom, console = load(page, tmp_path)
     assert console == [] and len(canvases(dom)) == len(PLOTS)
 
@@ -167,12 +171,12 @@ def test_output_is_never_overwritten_silently(
     samples: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "report.html"
-    out.write_text("keep me")
+    out.write_text("keep me", encoding="utf-8")
     source = str(samples["idu-tcp.pcap"])
     assert main(["report", source, "-o", str(out)]) == 2
-    assert out.read_text() == "keep me" and "--force" in capsys.readouterr().err
+    assert out.read_text(encoding="utf-8") == "keep me" and "--force" in capsys.readouterr().err
     assert main(["report", source, "-o", str(out), "--force"]) == 0
-    assert out.read_text().startswith("<!DOCTYPE html>")
+    assert out.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
     assert main(["report", source, "-o", source, "--force"]) == 2
     assert "input" in capsys.readouterr().err
     assert samples["idu-tcp.pcap"].read_bytes()[:4] == b"\xd4\xc3\xb2\xa1"
@@ -184,7 +188,7 @@ def test_the_report_shows_each_stick_movement_with_its_figures(
     """A ground station driving like a pilot: each movement, the re-sent target and the
     tracking session are one finding each, with the figures that judged them."""
     page = report(tmp_path, samples["pilot-candump.log"])
-    responses = page.read_text().split("<h2>Responses</h2>")[1].split("<h2>")[0]
+    responses = page.read_text(encoding="utf-8").split("<h2>Responses</h2>")[1].split("<h2>")[0]
     rate = responses.split('data-check="rate"')[1].split("<h3")[0]
     assert "<th>pan ratio</th><th>tilt ratio</th><th>lag s</th><th>commands</th>" in rate
     rows = re.findall(r"<tr><td>([^<]+)</td><td><span[^>]*>obeyed</span></td>(.*?)</tr>", rate)

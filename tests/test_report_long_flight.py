@@ -53,7 +53,7 @@ def test_the_report_of_a_long_flight_is_small(dense: tuple[Path, Path]) -> None:
     assert len(data["attitude"]) == 4000
     # 36,000 stick commands: the extremes of each time bucket, not every command
     assert 6000 < len(data["commanded"]) < 36000
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert "--json</code>" in text and "/analysis/response</code>" in text
 
 
@@ -65,7 +65,7 @@ def test_findings_are_counted_exactly_as_analyze_counts_them(
     assert main(["analyze", str(log), "--json"]) == 0
     found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     expected = Counter((f["command"], f["check"], f["verdict"]) for f in found)
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     head = re.search(r"<tr><th>command</th><th>check</th>(.*?)</tr>", text)
     assert head
     columns = re.findall(r"<th>([a-z /]+)</th>", head.group(1))

@@ -32,7 +32,7 @@ def test_checked_in_samples_are_what_the_generator_makes(tmp_path: Path) -> None
 
 def test_samples_are_small_and_documented() -> None:
     assert sum(p.stat().st_size for p in SAMPLES.iterdir()) < 200_000
-    readme = (SAMPLES / "README.md").read_text()
+    readme = (SAMPLES / "README.md").read_text(encoding="utf-8")
     assert "python -m analyzer.samplegen samples/" in readme
     for name in WRITERS:
         assert name in readme

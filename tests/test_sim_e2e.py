@@ -43,6 +43,7 @@ from analyzer.sim.transports import (
     parse_link,
 )
 from analyzer.sources import open_source
+from tests.platforms import pseudo_terminals
 
 TIMEOUT = 8.0  # generous: these tests wait for a condition, they never assert on timing
 
@@ -204,6 +205,7 @@ def test_loopback_tcp_corruption_is_a_crc_mismatch_on_the_stream() -> None:
             assert wait_for(lambda: attitude(sink.events, lambda f: True))
 
 
+@pseudo_terminals
 def test_serial_gimbal_on_a_pty() -> None:
     master, slave = os.openpty()
     try:

@@ -225,9 +225,9 @@ def test_a_socketcan_interface_that_is_down_is_not_open(
 
 def test_sysfs_says_whether_an_interface_is_down(tmp_path: Path) -> None:
     (tmp_path / "can0").mkdir()
-    (tmp_path / "can0" / "flags").write_text("0x80\n")
+    (tmp_path / "can0" / "flags").write_text("0x80\n", encoding="utf-8")
     (tmp_path / "can1").mkdir()
-    (tmp_path / "can1" / "flags").write_text("0x40081\n")
+    (tmp_path / "can1" / "flags").write_text("0x40081\n", encoding="utf-8")
     assert socketcan_down("can0", tmp_path)
     assert not socketcan_down("can1", tmp_path)
     assert not socketcan_down("vcan9", tmp_path)

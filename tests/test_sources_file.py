@@ -67,7 +67,7 @@ def test_fast_replay_yields_everything_then_ends(
     tmp_path: Path, fake_inputs: list[FakeInput]
 ) -> None:
     path = tmp_path / "flight.log"
-    path.write_text("x")
+    path.write_text("x", encoding="utf-8")
     source = open_source(f"file:{path}")
     started = time.monotonic()
     items = drain(source)
@@ -82,7 +82,7 @@ def test_fast_replay_yields_everything_then_ends(
 
 def test_recorded_speed_keeps_the_gaps(tmp_path: Path, fake_inputs: list[FakeInput]) -> None:
     path = tmp_path / "flight.log"
-    path.write_text("x")
+    path.write_text("x", encoding="utf-8")
     source = FileReplaySource(str(path), replay_speed=2.0)
     seen: list[tuple[float, Any]] = []
     started = time.monotonic()
@@ -101,7 +101,7 @@ def test_recorded_speed_keeps_the_gaps(tmp_path: Path, fake_inputs: list[FakeInp
 
 def test_bad_replay_speed(tmp_path: Path) -> None:
     path = tmp_path / "f.log"
-    path.write_text("x")
+    path.write_text("x", encoding="utf-8")
     with pytest.raises(UsageError):
         open_source(f"file:{path}", replay_speed=0.0)
 
@@ -113,7 +113,8 @@ def test_replays_a_real_candump_file(tmp_path: Path) -> None:
     path = tmp_path / "flight.log"
     path.write_text(
         "(1700000000.000000) can0 00000F01#0F040CFE00000000\n"
-        "(1700000000.100000) can0 0000FF16#F6C5000000000000\n"
+        "(1700000000.100000) can0 0000FF16#F6C5000000000000\n",
+        encoding="utf-8",
     )
     items = drain(open_source(f"file:{path}"))
     frames = [i for i in items if isinstance(i, CanFrame)]

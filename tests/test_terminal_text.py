@@ -51,7 +51,8 @@ def _hostile_candump(path: Path) -> None:
         f"(1715680800.010000) can{HOSTILE}0 00000F01#0F01000000000000\n"
         f"(1715680800.020000) can0 02008201#{text}\n"
         "(1715680800.030000) can0 02008202#21000000\n"
-        f"(1715680800.040000) can{HOSTILE}1 030F0001#EB900C0000000000\n"
+        f"(1715680800.040000) can{HOSTILE}1 030F0001#EB900C0000000000\n",
+        encoding="utf-8",
     )
 
 
@@ -112,7 +113,10 @@ def test_raw_summary_note_does_not_suggest_raw(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     log = tmp_path / "other.log"
-    log.write_text("(1715680800.010000) can0 12345678#00\n(1715680800.020000) can0 12345678#01\n")
+    log.write_text(
+        "(1715680800.010000) can0 12345678#00\n(1715680800.020000) can0 12345678#01\n",
+        encoding="utf-8",
+    )
     assert main(["decode", str(log), "--summary"]) == 0
     assert "(--raw shows them)" in capsys.readouterr().err
     assert main(["decode", str(log), "--raw", "--summary"]) == 0

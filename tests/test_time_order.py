@@ -73,7 +73,9 @@ def test_convert_of_a_log_that_goes_back_in_time_stays_in_order_and_says_so(
     # a clock set back by 60 s in the middle of a log
     log = tmp_path / "back.log"
     times = [1_700_000_000 + i * 0.01 - (60 if i >= 3000 else 0) for i in range(6000)]
-    log.write_text("".join(f"({t:.6f}) can0 00000F01#0F04E803F4010000\n" for t in times))
+    log.write_text(
+        "".join(f"({t:.6f}) can0 00000F01#0F04E803F4010000\n" for t in times), encoding="utf-8"
+    )
     out = tmp_path / "back.mcap"
     assert main(["convert", str(log), "-o", str(out), "-q"]) == 0
     assert_in_order(out)

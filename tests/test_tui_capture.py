@@ -139,7 +139,7 @@ def test_monitor_replays_a_candump_file(tmp_path: Path) -> None:
         f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}"
         for f in session(T0, 2.0, foreign_per_s=50)
     ]
-    log.write_text("\n".join(lines) + "\n")
+    log.write_text("\n".join(lines) + "\n", encoding="utf-8")
     source = open_source(f"file:{log}")
     capture = Capture(source, [], batch_interval=0.02)
     bridge = TuiBridge()

@@ -28,6 +28,7 @@ from analyzer.mcapio.write.video import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDE
 from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 from analyzer.video.spec import VIDEO_HOLD_BACK_S
 from tests.mcap_doctor import examine
+from tests.platforms import posix_signals
 
 ROOT = Path(__file__).resolve().parent.parent
 FRAME_INTERVAL = 1 / 30
@@ -131,7 +132,7 @@ def info_of(path: Path, *options: str) -> str:
     """``gimbal-analyzer info`` of a recording (stdout; exit 0 checked)."""
     done = subprocess.run(
         [sys.executable, "-m", "analyzer", "info", *options, str(path)],
-        env=_env(), capture_output=True, text=True, timeout=60,
+        env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     return done.stdout
@@ -186,6 +187,7 @@ def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
         capture_output=True,
         text=True,
         timeout=60,
+        encoding="utf-8",
     )
     assert info.returncode == 0, info.stderr
     assert "video streams" in info.stdout
@@ -194,7 +196,7 @@ def test_record_video_decodes_back_completely_and_lines_up_with_the_telemetry(
     assert "h264 640x360" in line and f"{len(video)} frames" in line and "0 gaps" in line
     as_json = subprocess.run(
         [sys.executable, "-m", "analyzer", "info", "--json", str(out)],
-        env=_env(), capture_output=True, text=True, timeout=60,
+        env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     (stream,) = json.loads(as_json.stdout)["video_streams"]
     assert stream["topic"] == "/camera/main" and stream["frames"] == len(video)
@@ -241,7 +243,7 @@ def test_a_dropped_stream_is_a_link_diagnostic_and_comes_back_at_a_keyframe(
                 "-o", str(out), "--duration", "9", "--video", "main",
                 "--camera", f"127.0.0.1:{camera.port}",
             ],
-            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True, encoding="utf-8",
         )  # fmt: skip
         time.sleep(4)
         camera.kill()  # power cut: no teardown, the link just drops
@@ -309,12 +311,13 @@ def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
     assert len(video) > 10 and decode_all(video) == len(video), done.stderr
     info = subprocess.run(
         [sys.executable, "-m", "analyzer", "info", str(out)],
-        env=_env(), capture_output=True, text=True, timeout=60,
+        env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     assert info.returncode == 0, info.stderr
     assert "h264 640x360" in info.stdout and f" {len(video)} frames" in info.stdout
 
 
+@posix_signals
 def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path) -> None:
     out = tmp_path / "flight.mcap"
     with gimbal() as port:
@@ -323,7 +326,7 @@ def test_ctrl_c_finishes_a_recording_with_video(rtsp_camera: Any, tmp_path: Path
                 sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
                 "-o", str(out), "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
             ],
-            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True, encoding="utf-8",
         )  # fmt: skip
         time.sleep(3)
         started = time.monotonic()
@@ -344,7 +347,7 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
             sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "5",
             "--sluggish", "0.4", "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
         ],
-        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     found = messages(out)
@@ -358,10 +361,10 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     page = tmp_path / "report.html"
     done = subprocess.run(
         [sys.executable, "-m", "analyzer", "report", str(out), "-o", str(page)],
-        env=_env(), capture_output=True, text=True, timeout=60,
+        env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     section = text.split("<h2>What the camera saw</h2>")[1].split("<h2>")[0]
     pictures = re.findall(r'src="data:image/jpeg;base64,([^"]+)"', section)
     strip = section.split('<div class="strip">')[1].split("</div>")[0].count("<img")
@@ -383,7 +386,7 @@ def test_a_recorder_killed_with_kill_9_leaves_video_that_decodes(
                 sys.executable, "-m", "analyzer", "record", "--source", f"tcp:127.0.0.1:{port}",
                 "-o", str(out), "-q", "--video", "main", "--camera", f"127.0.0.1:{rtsp_camera.port}",
             ],
-            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True, encoding="utf-8",
         )  # fmt: skip
         time.sleep(5)
         recorder.kill()
@@ -414,7 +417,7 @@ def test_timestamps_that_start_over_at_a_keyframe_are_anchored_again(
                 "-o", str(out), "-q", "--duration", "7", "--video", "main",
                 "--camera", f"127.0.0.1:{rtsp_camera.port}",
             ],
-            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True,
+            cwd=tmp_path, env=_env(), stderr=subprocess.PIPE, text=True, encoding="utf-8",
         )  # fmt: skip
         time.sleep(3)
         viewer = av.open(rtsp_camera.url(0), options={"rtsp_transport": "tcp"}, timeout=5.0)
@@ -509,7 +512,7 @@ def test_two_cameras_with_their_own_passwords_from_a_file_and_a_url(
     document = rtsp_camera_factory("--password", "doc-pw")
     bench = rtsp_camera_factory("--user", "bob", "--password", "bench-pw")
     secret = tmp_path / "camera.secret"
-    secret.write_text("doc-pw\n")
+    secret.write_text("doc-pw\n", encoding="utf-8")
     out = tmp_path / "flight.mcap"
     bench_url = bench.url(1, user="bob", password="bench-pw")
     done = record_camera(
@@ -565,7 +568,7 @@ def test_demo_with_a_camera_that_never_answers_ends_with_exit_1_and_info_lists_i
             sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "2",
             "-o", str(out), "--video", f"bench={url}",
         ],
-        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60,
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
     assert done.returncode == 1, done.stderr
     assert "gimbal-analyzer demo: the video stream /camera/bench (rtsp://admin@" in done.stderr

@@ -191,7 +191,7 @@ def test_the_password_from_a_file_or_the_environment_stays_out_of_the_command_li
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     secret = tmp_path / "camera.secret"
-    secret.write_text("from-file\nsecond line ignored\n")
+    secret.write_text("from-file\nsecond line ignored\n", encoding="utf-8")
     monkeypatch.setenv(PASSWORD_ENV, "from-env")
     (main,) = video_specs(_options("--video", "main", "--camera-password-file", str(secret)))
     assert "admin:from-file@" in main.url and "from-file" not in main.shown

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
@@ -165,12 +166,19 @@ def _read_findings(decoding: Decoding, settings: Settings, path: Path) -> Iterat
     # camera judgement, with PyAV and OpenCV, is imported only when a file is read).
     from analyzer.analysis.camera.hook import camera_judge, with_camera
 
-    judging = with_camera(ResponseAnalyzer(settings), camera_judge(path, settings.time_allowed_s))
+    camera = camera_judge(path, settings.time_allowed_s, note=_warn)
+    judging = with_camera(ResponseAnalyzer(settings), camera)
     try:
         with input_errors(path):
             yield from _findings(decoding.reader, decoding.pipeline, judging, decoding.batch_items)
     finally:
         decoding.reader.close()
+
+
+def _warn(note: str) -> None:
+    """A library's way of saying something was left out (the camera, without the video
+    extra): a warning the caller sees once, and may turn into an error."""
+    warnings.warn(note, RuntimeWarning, stacklevel=4)
 
 
 def _findings(

@@ -78,7 +78,11 @@ class Recording:
         from the topic's schema: ``recording`` (the file name), ``content_hash``,
         ``time`` (UTC timestamp), ``source``, the fields (a labelled value as its label,
         its number in the ``<name>_code`` column), ``warnings``, and ``extra`` (JSON of
-        fields the schema does not name). ``ValueError`` for a topic without a table."""
+        fields the schema does not name). ``ValueError`` for a topic without a table;
+        ``MissingExtra`` without the fleet extra (pyarrow)."""
+        from analyzer.extras import FLEET, require
+
+        require(FLEET, "Recording.table")
         from analyzer.fleet.column_sink import CollectedTables, ColumnSink
         from analyzer.fleet.columns import TOPIC_TABLES, event_schema
         from analyzer.fleet.runner import plan

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import threading
-import time
 
+from analyzer import wall_clock
 from analyzer.errors import SourceError
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID
@@ -57,7 +57,7 @@ class CheckLink(QueuedSource):
             if self._error is not None:  # the receiving side found the link broken
                 raise SourceError(self._error)
             self.link.send(CONTROL_ID, data)
-            now = time.time()
+            now = wall_clock.now()
             self.sent += 1
             self.last_sent = now
         if self.spec.kind == "can":

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from analyzer import wall_clock
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.targets import SETTLED_S, STILL_DEG
 from analyzer.analysis.yaw_geometry import angle_error, psi_offset
@@ -86,11 +87,11 @@ class CheckRunner:
             )
         for index, step in enumerate(steps, 1):
             plan = step.plan(self.attitude(), self.options)
-            running = _Running(index, step, plan, time.time())
+            running = _Running(index, step, plan, wall_clock.now())
             for action in plan.actions:
                 self._act(action, running)
                 self._flush(force=False)  # an earlier step decided by this action's command
-            running.ended_at = time.time()
+            running.ended_at = wall_clock.now()
             self._pending.append(running)
             self._flush(force=False)
         self.centre(wait=True)
@@ -185,7 +186,7 @@ class CheckRunner:
 
     def _still(self, action: Send, t: float) -> bool:
         """No goal axis has moved for SETTLED_S (the analysis' own rule for a final answer)."""
-        if time.time() - t < MIN_SETTLE_WAIT_S:
+        if wall_clock.now() - t < MIN_SETTLE_WAIT_S:
             return False
         after = self._after(t)
         if len(after) < 3:
@@ -249,5 +250,5 @@ class CheckRunner:
             lines,
         )
         self.results.append(result)
-        self.link.note(Event(TOPIC_CHECK_STEPS, time.time(), "check", result.fields()))
+        self.link.note(Event(TOPIC_CHECK_STEPS, wall_clock.now(), "check", result.fields()))
         self.report(result)

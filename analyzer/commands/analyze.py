@@ -158,7 +158,9 @@ def run(args: argparse.Namespace) -> int:
     decoding = open_decoding_of(args)
     reader, pipeline = decoding.reader, decoding.pipeline
     analyzer = ResponseAnalyzer(settings)
-    judging = with_camera(analyzer, camera_judge(args.file, settings.time_allowed_s))
+    extra_notes: list[str] = []  # the camera not judged: the video extra is missing
+    camera = camera_judge(args.file, settings.time_allowed_s, note=extra_notes.append)
+    judging = with_camera(analyzer, camera)
     out = sys.stdout
     output = FindingsOutput(
         judging, pipeline.tally, json_lines=args.json, problems=args.problems
@@ -173,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
         reader.close()
     for failure in pipeline.failures:
         raise failure.error
-    notes = list(reader.notes)
+    notes = [*reader.notes, *extra_notes]
     if output.untimed:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
         analyzer.verdicts.clear()

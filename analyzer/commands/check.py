@@ -199,8 +199,6 @@ def run(args: argparse.Namespace) -> int:
 def _run_check(
     args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
 ) -> int:
-    from analyzer.analysis.camera.live import LiveVideo
-    from analyzer.analysis.camera.stage import CameraJudge
     from analyzer.analysis.stage import analysis_stages
     from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
@@ -239,6 +237,9 @@ def _run_check(
     stages = analysis_stages(limits.settings)
     video = video_recorder(args, sink)
     if video is not None:  # the zoom judged from the picture, as the frames come in
+        from analyzer.analysis.camera.live import LiveVideo  # PyAV, OpenCV: --video only
+        from analyzer.analysis.camera.stage import CameraJudge
+
         pictures = LiveVideo([s.spec.name for s in video.streams])
         video.taps.append(pictures.add)
         stages += [video.stage, CameraJudge(pictures, limits.settings.time_allowed_s)]

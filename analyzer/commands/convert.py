@@ -72,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
 
     # Made before the output exists: the decoder's import takes a while. A recording with
     # video has its camera commands judged from it too.
-    pipeline = Pipeline(stages=[*analysis_stages(), *camera_stages(args.input)])
+    notes: list[str] = []  # the camera not judged: the video extra is missing
+    pipeline = Pipeline(stages=[*analysis_stages(), *camera_stages(args.input, note=notes.append)])
     progress = Progress.maybe(source, sys.stderr, quiet=args.quiet, label="converting ")
     started = time.perf_counter()
     sink: McapSink | None = None
@@ -107,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERRUPTED
-    for note in getattr(source, "notes", ()):
+    for note in [*getattr(source, "notes", ()), *notes]:
         print(f"note: {note}", file=sys.stderr)
     if sink is not None and sink.retimed_input:
         print(

@@ -210,12 +210,16 @@ def _write(out: IO[str], lines: list[str], flush: bool) -> None:
 
 
 def use_color(choice: str, out: IO[str]) -> bool:
-    """Colour when asked for, or (auto) on a terminal unless NO_COLOR is set."""
+    """Colour when asked for, or (auto) on a terminal that shows it (a Windows console
+    once its virtual-terminal mode is on) unless NO_COLOR is set."""
+    from analyzer.ansi import ansi_ok
+
     if choice == "always":
+        ansi_ok(out)  # turns a Windows console's virtual-terminal mode on
         return True
     if choice == "never":
         return False
-    return bool(out.isatty()) and not os.environ.get("NO_COLOR")
+    return not os.environ.get("NO_COLOR") and ansi_ok(out)
 
 
 def make_printer(as_json: bool, color: bool) -> Callable[[Any], str]:

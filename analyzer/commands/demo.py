@@ -257,6 +257,9 @@ def _plain(event: Event) -> str:
 
 def _driver(args: argparse.Namespace) -> Any:
     """The --ardupilot driver, read and compiled in the --lua interpreter."""
+    from analyzer.extras import ARDUPILOT, require
+
+    require(ARDUPILOT, "--ardupilot")  # the driver runs in lupa's Lua
     from analyzer.ardupilot.live import load_driver
 
     def say(text: str) -> None:

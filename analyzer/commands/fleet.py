@@ -75,6 +75,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.extras import FLEET, require
+
+    require(FLEET, "`fleet`")
     from analyzer.fleet.output import write_csv, write_json, write_text
     from analyzer.output_file import OutputFile, check_output
 

@@ -57,9 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from analyzer.analysis.camera.hook import camera_judge, with_camera
+    from analyzer.analysis.camera.hook import NOT_JUDGED, camera_judge, with_camera
     from analyzer.analysis.response import ResponseAnalyzer
     from analyzer.commands.analyze import open_reader, settings_from
+    from analyzer.extras import VIDEO, installed
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.progress import Progress, further_pass
@@ -75,8 +76,14 @@ def run(args: argparse.Namespace) -> int:
     reader = open_reader(args)
     data = ReportData(source=reader.source, format_name=reader.format_name)
     camera_stage = None
+    left_out: list[str] = []  # what the missing video extra leaves out, in words
     if reader.format_name == "mcap":  # a recording with video: camera commands judged by it
-        camera_stage = camera_judge(args.file, settings.time_allowed_s, keep_pictures=True)
+        camera_stage = camera_judge(
+            args.file,
+            settings.time_allowed_s,
+            keep_pictures=True,
+            note=lambda _: left_out.append(NOT_JUDGED),
+        )
     stage = FindingsInto(with_camera(ResponseAnalyzer(settings), camera_stage), data)
     sinks = [EventsInto(data.add)]
     overlays = None
@@ -90,6 +97,9 @@ def run(args: argparse.Namespace) -> int:
             overlays = OverlayTimeline(thumbnail_times(args.file, read))
         if overlays.moments:
             sinks.append(EventsInto(overlays.add))
+            if not installed(VIDEO):
+                left_out.append("camera pictures shown without their overlay")
+    camera_notes = [f"{' and '.join(left_out)}: {VIDEO.missing}"] if left_out else []
     # The same decoding and counting as every command; the analysis is a stage of it.
     pipeline = Pipeline(sinks, stages=[stage])
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
@@ -97,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
-    data.notes.extend(reader.notes)
+    data.notes.extend([*reader.notes, *camera_notes])
     lead = ""
     data.frames = pipeline.tally.frames
     if data.first is not None and data.first == data.last and data.topics.total() > 1:
@@ -138,6 +148,6 @@ def run(args: argparse.Namespace) -> int:
         f"wrote {args.output} ({size / 1024:,.0f} KiB): {data.findings.total:,} findings "
         f"(verdicts: {data.counts.verdict_line()}; feedback: {data.counts.health_line()})"
     )
-    for note in reader.notes:
+    for note in [*reader.notes, *camera_notes]:
         sys.stderr.write(f"note: {note}\n")
     return 0

@@ -50,7 +50,8 @@ def run(args: argparse.Namespace) -> int:
         stale = [
             name
             for name, text in files.items()
-            if not (directory / name).is_file() or (directory / name).read_text() != text
+            if not (directory / name).is_file()
+            or (directory / name).read_text(encoding="utf-8") != text
         ]
         if stale:
             print(f"out of date in {directory}: {', '.join(stale)} (run: gimbal-analyzer schemas)")
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         directory.mkdir(parents=True, exist_ok=True)
         for name, text in files.items():
-            (directory / name).write_text(text)
+            (directory / name).write_text(text, encoding="utf-8")
     except OSError as exc:
         raise UsageError(f"cannot write schemas to {directory}: {exc.strerror}") from None
     print(f"wrote {len(files)} schemas to {directory}")

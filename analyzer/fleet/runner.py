@@ -183,7 +183,7 @@ def workers_reach(client: Client, root: str) -> None:
         raise UsageError(f"the Dask cluster has no workers ({waited})") from None
     token = uuid.uuid4().hex
     probe = Dataset(root).scratch(f"reach-{token}")
-    probe.write_text(token)
+    probe.write_text(token, encoding="utf-8")
     try:
         seen: dict[str, str] = client.run(sees, str(probe), token)
     finally:

@@ -7,6 +7,7 @@ import time
 from collections.abc import Iterable, Iterator
 from typing import IO
 
+from analyzer import wall_clock
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.candump.reader import CandumpParser
 from analyzer.inputs.textlines import MAX_LINE
@@ -77,7 +78,7 @@ class StdinStreamReader(InputReader):
                 break
             self.position_bytes += len(data)
             self.chunks += 1
-            now = time.time()
+            now = wall_clock.now()
             if self.first_time is None:
                 self.first_time = now
             self.last_time = now

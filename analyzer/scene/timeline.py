@@ -7,6 +7,7 @@ from collections.abc import Iterable, Iterator
 from functools import cached_property
 from typing import Protocol
 
+from analyzer.extras import VIDEO, installed
 from analyzer.protocol.types import Event
 from analyzer.scene.overlays import Overlay, overlay
 from analyzer.scene.state import COMMAND, FEEDBACK, INPUT_TOPICS, GimbalState
@@ -83,6 +84,9 @@ class OverlaidPicture:
 
     @cached_property
     def jpeg(self) -> bytes:
-        from analyzer.scene.raster import jpeg_with_overlay  # PyAV: pictures need it anyway
+        """The JPEG with the overlay drawn in (as recorded without the video extra)."""
+        if not installed(VIDEO):
+            return self._source
+        from analyzer.scene.raster import jpeg_with_overlay  # PyAV
 
         return jpeg_with_overlay(self._source, self.overlay) or self._source

@@ -6,11 +6,11 @@ import contextlib
 import select
 import selectors
 import socket
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from analyzer import wall_clock
 from analyzer.errors import SourceError, UsageError
 from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.framing import wrap_can, wrap_control
@@ -192,7 +192,7 @@ class TcpServerLink:
                 if not data:
                     self._drop(peer, "disconnected")
                     continue
-                out.append(StreamChunk(time.time(), data, source=peer.label, direction=TO_IDU))
+                out.append(StreamChunk(wall_clock.now(), data, source=peer.label, direction=TO_IDU))
         return out
 
     def send(self, can_id: int, data: bytes) -> None:
@@ -273,7 +273,7 @@ class TcpClientLink:
             raise SourceError(f"{self.name}: {exc.strerror or exc}") from None
         if not data:
             raise SourceError(f"{self.name}: the other side closed the connection")
-        return [StreamChunk(time.time(), data, source=self.name, direction=FROM_IDU)]
+        return [StreamChunk(wall_clock.now(), data, source=self.name, direction=FROM_IDU)]
 
     def send(self, can_id: int, data: bytes) -> None:
         try:
@@ -313,7 +313,7 @@ class SerialLink:
             raise SourceError(f"{self.name}: {exc}") from None
         if not data:
             return []
-        return [StreamChunk(time.time(), data, source=self.name, direction=self.direction)]
+        return [StreamChunk(wall_clock.now(), data, source=self.name, direction=self.direction)]
 
     def send(self, can_id: int, data: bytes) -> None:
         try:

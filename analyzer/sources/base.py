@@ -5,9 +5,9 @@ from __future__ import annotations
 import contextlib
 import queue
 import threading
-import time
 from typing import Any, Protocol, runtime_checkable
 
+from analyzer import wall_clock
 from analyzer.errors import SourceError
 from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk, diagnostic
 
@@ -44,7 +44,9 @@ def link_event(
 ) -> Event:
     """A /diagnostics event of kind ``link``: a connection state change of a live source
     (at time ``at``, now by default)."""
-    return diagnostic(time.time() if at is None else at, source, LINK, detail, state=state, **extra)
+    return diagnostic(
+        wall_clock.now() if at is None else at, source, LINK, detail, state=state, **extra
+    )
 
 
 def overflow_event(source: str, items: int, size: int, total: int) -> Event:

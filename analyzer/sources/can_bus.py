@@ -63,7 +63,10 @@ def bus_arguments(spec: CanSpec) -> dict[str, Any]:
     }
     if spec.bitrate is not None:
         kwargs["bitrate"] = spec.bitrate
+    if spec.interface == "gs_usb" and spec.channel.isdigit():
+        kwargs["index"] = int(spec.channel)  # python-can 4.6 takes the device's number so
     kwargs.update(listen_only_kwargs(spec.interface))
+    kwargs.update(spec.options)
     return kwargs
 
 
@@ -90,8 +93,7 @@ class CanLink(DeviceLink):
     def __init__(self, spec: CanSpec, opener: BusOpener) -> None:
         self.spec = spec
         self.opener = opener
-        rate = f"@{spec.bitrate}" if spec.bitrate else ""
-        self.description = f"can:{spec.interface}:{spec.channel}{rate}"
+        self.description = str(spec)
         self.listen_only = bool(LISTEN_ONLY_OPTIONS.get(spec.interface))
         self._bus: ReceivingBus | None = None
         self._lock = threading.Lock()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -12,15 +13,21 @@ from typing import Any
 from analyzer.sources.can_bus import LISTEN_ONLY_OPTIONS
 from analyzer.sources.reconnect import error_words
 from analyzer.sources.socketcan_links import socketcan_links
-from analyzer.sources.spec import DEFAULT_CAN_BITRATE, DEFAULT_SERIAL_BAUDRATE
+from analyzer.sources.spec import (
+    DEFAULT_CAN_BITRATE,
+    DEFAULT_SERIAL_BAUDRATE,
+    NO_BITRATE,
+    CanSpec,
+)
 
 # python-can "interfaces" that are no adapter: software buses, and its own serial
 # protocol (which lists every serial port; those are listed below as serial ports).
 NOT_ADAPTERS = frozenset({"virtual", "udp_multicast", "serial"})
 # Not searched: socketcand servers on the network (finding one takes 4 s of listening).
 NOT_SEARCHED = NOT_ADAPTERS | {"socketcand"}
-# Interfaces whose bitrate is not python-can's to set (set on the link, or none at all).
-NO_BITRATE = frozenset({"socketcan", "virtual", "udp_multicast"})
+# What of python-can's detected config a --source keeps to open the same channel again:
+# a Vector channel's number counts within its device, named by its serial number.
+KEPT_OPTIONS: dict[str, tuple[str, ...]] = {"vector": ("serial",)}
 BY_ID = "/dev/serial/by-id"
 DETECT_TIMEOUT_S = 5.0
 
@@ -118,9 +125,42 @@ def listen_only_words(interface: str, channel: str) -> str:
     return "python-can has none for this interface: opened normally, only read"
 
 
-def can_source(interface: str, channel: str) -> str:
-    rate = "" if interface in NO_BITRATE else f"@{DEFAULT_CAN_BITRATE}"
-    return f"can:{interface}:{channel}{rate}"
+def can_source(interface: str, channel: str, config: Mapping[str, Any] | None = None) -> str:
+    """The --source of a detected channel (with what ``KEPT_OPTIONS`` keeps of ``config``)."""
+    options = tuple(
+        (key, config[key])
+        for key in KEPT_OPTIONS.get(interface, ())
+        if config is not None and isinstance(config.get(key), int | str) and config[key] != ""
+    )
+    rate = None if interface in NO_BITRATE else DEFAULT_CAN_BITRATE
+    return str(CanSpec(interface, channel, rate, options))
+
+
+def gs_usb_configs(problems: list[str], platform: str | None = None) -> list[dict[str, Any]]:
+    """gs_usb / candleLight adapters, numbered as python-can's gs_usb interface opens
+    them (``GsUsb.scan()`` of the gs_usb package, through pyusb and libusb), which has no
+    detection of its own. Nothing when python-can[gs-usb] is not installed, and nothing on
+    Linux, whose gs_usb driver makes them SocketCAN interfaces (listed as those)."""
+    if (platform or sys.platform).startswith("linux"):
+        return []
+    try:
+        from gs_usb.gs_usb import GsUsb
+    except ImportError:
+        return []
+    try:
+        devices = list(GsUsb.scan())
+    except Exception as exc:  # no libusb backend, no permission
+        problems.append(f"gs_usb: detection failed: {error_words(exc)}")
+        return []
+    found: list[dict[str, Any]] = []
+    for index, device in enumerate(devices):
+        config: dict[str, Any] = {"interface": "gs_usb", "channel": str(index)}
+        with contextlib.suppress(Exception):  # reading a string descriptor may be refused
+            config["serial"] = str(device.serial_number)
+        with contextlib.suppress(Exception):
+            config["bus"], config["address"] = int(device.bus), int(device.address)
+        found.append(config)
+    return found
 
 
 def python_can_configs(
@@ -157,28 +197,29 @@ def can_adapters(
 ) -> list[CanAdapter]:
     """The adapters among python-can's configs, and the SocketCAN links it left out."""
     out: list[CanAdapter] = []
-    seen: set[tuple[str, str]] = set()
+    seen: set[str] = set()  # sources: a channel of two devices differs by their serial
     for config in configs:
         interface = str(config.get("interface", ""))
         channel = str(config.get("channel", ""))
         if not interface or not channel or interface in NOT_ADAPTERS:
             continue
-        if (interface, channel) in seen:
+        source = can_source(interface, channel, config)
+        if source in seen:
             continue
-        seen.add((interface, channel))
+        seen.add(source)
         state = links.get(channel, "") if interface == "socketcan" else ""
         out.append(
             CanAdapter(
                 interface,
                 channel,
-                can_source(interface, channel),
+                source,
                 listen_only_words(interface, channel),
                 state,
                 dict(config),
             )
         )
     for name, state in links.items():
-        if ("socketcan", name) not in seen:
+        if can_source("socketcan", name) not in seen:
             out.append(
                 CanAdapter(
                     "socketcan",
@@ -252,7 +293,7 @@ def detect() -> Inventory:
     """Look at this machine: python-can's adapters, SocketCAN links, pyserial's ports."""
     problems: list[str] = []
     return Inventory(
-        can_adapters(python_can_configs(problems), socketcan_links()),
+        can_adapters(python_can_configs(problems) + gs_usb_configs(problems), socketcan_links()),
         serial_ports(pyserial_ports(), by_id_links()),
         problems,
     )

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from analyzer import wall_clock
 from analyzer.errors import SourceError, UsageError
 from analyzer.sources.backoff import Backoff
 from analyzer.sources.base import QueuedSource, SourceItem, link_event
@@ -161,7 +161,7 @@ class ReconnectingSource(QueuedSource):
         if lost_at is None:
             self._link(detail, self.link.open_state)
             return
-        now = time.time()
+        now = wall_clock.now()
         down = max(0.0, now - lost_at)
         self._link(
             f"{detail} again after {down:.1f} s without it",
@@ -194,7 +194,7 @@ class ReconnectingSource(QueuedSource):
                     self._open = False
                     if self._stopping.is_set():
                         break
-                    lost_at = time.time()
+                    lost_at = wall_clock.now()
                     self._link(self.link.lost_words(reason), LOST, at=lost_at)
                     if got_data:
                         backoff.reset()

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import contextlib
 import threading
-import time
 from collections.abc import Callable
 from typing import Protocol
 
+from analyzer import wall_clock
 from analyzer.protocol.types import StreamChunk
 from analyzer.sources.reconnect import DeviceLink, Put, ReconnectingSource, error_words
 from analyzer.sources.spec import SerialSpec
@@ -64,7 +64,7 @@ class SerialLink(DeviceLink):
                 return got_data, error_words(exc)
             if data:
                 got_data = True
-                put(StreamChunk(time.time(), bytes(data), source))
+                put(StreamChunk(wall_clock.now(), bytes(data), source))
         return got_data, "capture stopped"
 
     def release(self) -> None:

@@ -24,9 +24,9 @@ def socketcan_links(sys_net: Path = SYS_NET) -> dict[str, str]:
     with contextlib.suppress(OSError):
         for entry in sorted(sys_net.iterdir()):
             try:
-                if int((entry / "type").read_text().strip()) != ARPHRD_CAN:
+                if int((entry / "type").read_text(encoding="utf-8").strip()) != ARPHRD_CAN:
                     continue
-                flags = int((entry / "flags").read_text().strip(), 16)
+                flags = int((entry / "flags").read_text(encoding="utf-8").strip(), 16)
             except (OSError, ValueError):
                 continue
             links[entry.name] = "up" if flags & IFF_UP else "down"
@@ -36,7 +36,7 @@ def socketcan_links(sys_net: Path = SYS_NET) -> dict[str, str]:
 def socketcan_down(name: str, sys_net: Path = SYS_NET) -> bool:
     """True when ``name`` is a SocketCAN interface that is down (bound, it receives nothing)."""
     try:
-        flags = int((sys_net / name / "flags").read_text().strip(), 16)
+        flags = int((sys_net / name / "flags").read_text(encoding="utf-8").strip(), 16)
     except (OSError, ValueError):
         return False  # not a network interface here: python-can says what is wrong
     return not flags & IFF_UP

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from analyzer.errors import UsageError
@@ -14,7 +15,8 @@ DEFAULT_PROXY_LISTEN_HOST = "0.0.0.0"
 LOOPBACK_HOST = "127.0.0.1"
 
 SOURCE_FORMS = (
-    "can:INTERFACE:CHANNEL[@BITRATE] (e.g. can:socketcan:can0, can:virtual:demo), "
+    "can:INTERFACE:CHANNEL[@BITRATE][,KEY=VALUE...] (e.g. can:socketcan:can0, "
+    "can:virtual:demo, can:vector:0@1000000,serial=12345), "
     "tcp:HOST:PORT (tcp:HOST uses port 2000, tcp:PORT means 127.0.0.1:PORT, "
     "tcp: alone the IDU at 192.168.42.200:2000), "
     "proxy:[LISTEN_HOST:]PORT->IDU_HOST:PORT (a LISTEN port alone listens on all interfaces), "
@@ -28,6 +30,14 @@ class CanSpec:
     interface: str
     channel: str
     bitrate: int | None  # None: the interface has no bitrate (virtual) or none was given
+    # python-can's own keyword arguments of the interface (a Vector device's ``serial``),
+    # from ``,KEY=VALUE`` after the channel: digits as numbers, anything else as text
+    options: tuple[tuple[str, int | str], ...] = ()
+
+    def __str__(self) -> str:
+        rate = f"@{self.bitrate}" if self.bitrate else ""
+        extra = "".join(f",{key}={value}" for key, value in self.options)
+        return f"can:{self.interface}:{self.channel}{rate}{extra}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,8 +67,9 @@ class FileSpec:
 
 SourceSpec = CanSpec | TcpSpec | ProxySpec | SerialSpec | FileSpec
 
-# Interfaces without a bitrate setting of their own: no default bitrate is passed.
-_NO_BITRATE = frozenset({"virtual", "socketcan", "udp_multicast"})
+# Interfaces without a bitrate setting of their own (set on the link, or none at all): no
+# default bitrate is passed.
+NO_BITRATE = frozenset({"virtual", "socketcan", "udp_multicast"})
 
 
 class SpecError(UsageError):
@@ -114,6 +125,21 @@ def tcp_address(text: str, spec: str) -> tuple[str, int]:
     return split_host_port(text, spec, default_port=DEFAULT_IDU_PORT)
 
 
+_OPTION = re.compile(r"([a-z_][a-z0-9_]*)=(.+)")
+
+
+def _split_options(text: str) -> tuple[str, tuple[tuple[str, int | str], ...]]:
+    """``0@1000000,serial=12345`` -> (``0@1000000``, (("serial", 12345),)): the trailing
+    ``,KEY=VALUE`` parts; any other comma stays in the channel."""
+    parts = text.split(",")
+    options: list[tuple[str, int | str]] = []
+    while len(parts) > 1 and (match := _OPTION.fullmatch(parts[-1])):
+        key, value = match.groups()
+        options.insert(0, (key, int(value) if value.isdigit() else value))
+        parts.pop()
+    return ",".join(parts), tuple(options)
+
+
 def _split_rate(text: str) -> tuple[str, int | None]:
     """``NAME@123`` -> (NAME, 123); a trailing ``@`` part that is not digits stays in the name."""
     name, sep, rate = text.rpartition("@")
@@ -132,14 +158,15 @@ def parse_source(spec: str) -> SourceSpec:
         interface, sep, channel = rest.partition(":")
         if not interface or not sep or not channel:
             raise _bad(spec, "CAN sources need an interface and a channel")
+        channel, options = _split_options(channel)
         channel, bitrate = _split_rate(channel)
         if not channel:
             raise _bad(spec, "missing CAN channel")
-        if bitrate is None and interface not in _NO_BITRATE:
+        if bitrate is None and interface not in NO_BITRATE:
             bitrate = DEFAULT_CAN_BITRATE
         if bitrate is not None and bitrate <= 0:
             raise _bad(spec, "bitrate must be positive")
-        return CanSpec(interface, channel, bitrate)
+        return CanSpec(interface, channel, bitrate, options)
     if kind == "tcp":
         if not rest:
             return TcpSpec(DEFAULT_IDU_HOST, DEFAULT_IDU_PORT)

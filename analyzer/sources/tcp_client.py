@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import socket
 import threading
-import time
 
+from analyzer import wall_clock
 from analyzer.protocol.types import FROM_IDU, StreamChunk
 from analyzer.sources.netutil import address, close_quietly, enable_keepalive, error_text
 from analyzer.sources.reconnect import Put, ReconnectingSource
@@ -50,7 +50,7 @@ class TcpLink:
             if not data:
                 return got_data, "closed by the peer"
             got_data = True
-            put(StreamChunk(time.time(), data, self.source_name, FROM_IDU))
+            put(StreamChunk(wall_clock.now(), data, self.source_name, FROM_IDU))
         return got_data, "capture stopped"
 
     def release(self) -> None:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import contextlib
 import selectors
 import socket
-import time
 from typing import Any
 
+from analyzer import wall_clock
 from analyzer.errors import SourceError
 from analyzer.protocol.types import FROM_IDU, TO_IDU, StreamChunk
 from analyzer.sources.base import QueuedSource, link_event
@@ -142,7 +142,7 @@ class TcpProxySource(QueuedSource):
             self._end_session(selector, f"{side} closed the connection")
             return
         direction = TO_IDU if from_gs else FROM_IDU
-        self._put(StreamChunk(time.time(), data, self.source_name, direction))
+        self._put(StreamChunk(wall_clock.now(), data, self.source_name, direction))
         try:
             dst.sendall(data)
         except OSError as exc:

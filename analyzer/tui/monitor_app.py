@@ -19,6 +19,7 @@ from textual.message import Message
 from textual.screen import Screen
 from textual.widgets import DataTable
 
+from analyzer.portable import STOP_SIGNALS
 from analyzer.tui.bridge import TuiBridge
 from analyzer.tui.command_log import CommandLog
 from analyzer.tui.detail_screen import DetailScreen
@@ -123,6 +124,7 @@ class MonitorApp(App[int]):
         self._log_key: tuple[object, ...] = ()
         self._capture_stopped = False
         self._handle_sigterm = handle_sigterm
+        self._signal_handlers: dict[int, signal.Handlers | Callable[..., object] | int | None] = {}
         self.exit_when_done = exit_when_done  # quit once the source has ended and is shown
         self._mounted = False
         self.page = "state"
@@ -134,11 +136,19 @@ class MonitorApp(App[int]):
 
     def on_mount(self) -> None:
         if self._handle_sigterm:
-            # SIGTERM quits like q does, so the recording is finalised
-            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-                asyncio.get_running_loop().add_signal_handler(
-                    signal.SIGTERM, lambda: self.call_later(self.action_quit)
-                )
+            # SIGTERM (Windows: Ctrl-Break, the console closed) quits like q does, so the
+            # recording is finalised
+            for signum in STOP_SIGNALS:
+                try:
+                    asyncio.get_running_loop().add_signal_handler(
+                        signum, lambda: self.call_later(self.action_quit)
+                    )
+                except NotImplementedError:  # Windows' event loops: a plain handler
+                    self._signal_handlers[signum] = signal.signal(
+                        signum, lambda *_: self.call_later(self.action_quit)
+                    )
+                except (RuntimeError, ValueError):  # not the main thread
+                    pass
         # widgets of the main screen, kept so redraws work while a pop-up screen is shown
         self._status = self.query_one(StatusBar)
         self._gimbal = self.query_one(GimbalPanel)
@@ -202,8 +212,12 @@ class MonitorApp(App[int]):
         self._mounted = False
         self.bridge.disconnect()
         if self._handle_sigterm:
-            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-                asyncio.get_running_loop().remove_signal_handler(signal.SIGTERM)
+            for signum in STOP_SIGNALS:
+                if signum in self._signal_handlers:
+                    signal.signal(signum, self._signal_handlers.pop(signum))
+                    continue
+                with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                    asyncio.get_running_loop().remove_signal_handler(signum)
 
     # -- data in -------------------------------------------------------------------------------
 

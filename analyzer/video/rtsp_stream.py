@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 import struct
 import threading
-import time
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -13,6 +12,7 @@ from typing import Any
 
 import av
 
+from analyzer import wall_clock
 from analyzer.protocol.types import Event
 from analyzer.sources.backoff import Backoff
 from analyzer.sources.base import OVERFLOW, link_event
@@ -298,7 +298,7 @@ class _Assembler:
                 break
             if packet.size == 0:
                 continue
-            arrival = time.time()
+            arrival = wall_clock.now()
             units = split_nals(bytes(packet))
             pts = packet.pts
             wallclock = _wallclock(packet)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from urllib.parse import quote, unquote, urlsplit, urlunsplit
 
 from analyzer.errors import UsageError
+from analyzer.extras import VIDEO, require
 from analyzer.protocol.types import Event
 
 # Vendor document section 1.3: the camera's address and its RTSP streams.
@@ -110,7 +111,8 @@ def add_video_options(parser: argparse.ArgumentParser) -> None:
 
 
 def video_specs(args: argparse.Namespace) -> list[VideoSpec]:
-    """The streams the options ask for (UsageError with the reason when one is wrong)."""
+    """The streams the options ask for (UsageError with the reason when one is wrong,
+    MissingExtra when there are some and the video extra is not installed)."""
     interval = getattr(args, "thumbnail_interval", DEFAULT_THUMBNAIL_S)
     if interval is not None and interval < 0:
         raise UsageError("--thumbnail-interval must be 0 (none) or a positive number of seconds")
@@ -129,6 +131,8 @@ def video_specs(args: argparse.Namespace) -> list[VideoSpec]:
     for name in names:
         if names.count(name) > 1:
             raise UsageError(f"--video {name} is given twice (each stream needs its own name)")
+    if specs:
+        require(VIDEO, "--video")
     return specs
 
 

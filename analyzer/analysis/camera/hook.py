@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
-from typing import Protocol
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Protocol
 
-from analyzer.analysis.camera.source import recording_video
-from analyzer.analysis.camera.stage import CameraJudge
+from analyzer.extras import VIDEO, not_installed_note
 from analyzer.protocol.types import Event
+
+if TYPE_CHECKING:  # PyAV and OpenCV: imported only for a recording with video
+    from analyzer.analysis.camera.stage import CameraJudge
+
+NOT_JUDGED = "camera commands not judged from the recording's video"
 
 
 class Judging(Protocol):
@@ -46,15 +50,24 @@ def camera_judge(
     time_allowed_s: float,
     *,
     keep_pictures: bool = False,
+    note: Callable[[str], object] | None = None,
 ) -> CameraJudge | None:
     """The camera judgement of an input file when it is a recording with video (None
-    otherwise: nothing to judge camera commands with)."""
-    if path is None or str(path) == "-":
+    otherwise: nothing to judge camera commands with). Without the video extra there is
+    none either, and ``note`` is told so in one line."""
+    from analyzer.mcapio.read.video_window import has_video
+
+    if path is None or str(path) == "-" or not has_video(path):
         return None
-    video = recording_video(path)
-    if video is None:
+    missing = not_installed_note(VIDEO, NOT_JUDGED)
+    if missing is not None:
+        if note is not None:
+            note(missing)
         return None
-    return CameraJudge(video, time_allowed_s, keep_pictures=keep_pictures)
+    from analyzer.analysis.camera.source import RecordingVideo
+    from analyzer.analysis.camera.stage import CameraJudge
+
+    return CameraJudge(RecordingVideo(path), time_allowed_s, keep_pictures=keep_pictures)
 
 
 def with_camera(analysis: Judging, camera: CameraJudge | None) -> Judging:
@@ -63,8 +76,10 @@ def with_camera(analysis: Judging, camera: CameraJudge | None) -> Judging:
 
 
 def camera_stages(
-    path: str | os.PathLike[str] | None, time_allowed_s: float = 5.0
+    path: str | os.PathLike[str] | None,
+    time_allowed_s: float = 5.0,
+    note: Callable[[str], object] | None = None,
 ) -> Sequence[CameraJudge]:
     """The camera judgement as extra stages of a file's pipeline (none without video)."""
-    camera = camera_judge(path, time_allowed_s)
+    camera = camera_judge(path, time_allowed_s, note=note)
     return [] if camera is None else [camera]

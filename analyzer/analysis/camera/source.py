@@ -45,10 +45,3 @@ class RecordingVideo:
 
     def until(self) -> float:
         return math.inf
-
-
-def recording_video(path: str | os.PathLike[str]) -> RecordingVideo | None:
-    """The video of a recording, None when the file has none (or is no recording)."""
-    from analyzer.mcapio.read.video_window import has_video
-
-    return RecordingVideo(path) if has_video(path) else None

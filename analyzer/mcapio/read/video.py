@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from analyzer import timefmt
+from analyzer.extras import VIDEO, installed, not_installed_note
 from analyzer.mcapio.write.video import (
     ROLE_THUMBNAIL,
     ROLE_VIDEO,
@@ -85,8 +86,11 @@ def _camera_messages(
 
 
 def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
-    """Every camera stream of a recording: codec, size, frames, rate and gaps."""
-    from analyzer.video.thumbnail import picture_size
+    """Every camera stream of a recording: codec, size, frames, rate and gaps (the size
+    only with the video extra, which decodes a picture)."""
+    size_of: Callable[[str, bytes], tuple[int, int]] | None = None
+    if installed(VIDEO):
+        from analyzer.video.thumbnail import picture_size as size_of
 
     out: dict[str, VideoSummary] = {}
     times: dict[str, list[float]] = {}
@@ -96,9 +100,10 @@ def video_summaries(path: str | os.PathLike[str]) -> list[VideoSummary]:
             out.setdefault(base, VideoSummary(base)).thumbnails += 1
             continue
         summary = out.setdefault(message.topic, VideoSummary(message.topic))
-        if not summary.width:  # the size of the first picture that decodes
+        if not summary.codec:
             summary.codec = message.format
-            summary.width, summary.height = picture_size(message.format, message.data)
+        if not summary.width and size_of is not None:  # the first picture that decodes
+            summary.width, summary.height = size_of(message.format, message.data)
         summary.frames += 1
         times.setdefault(message.topic, []).append(message.time)
     for topic, stamps in times.items():
@@ -182,14 +187,18 @@ def video_lines(path: str | os.PathLike[str]) -> list[str]:
             )
             continue
         gaps = f"{len(s.gaps)} gaps" if len(s.gaps) != 1 else "1 gap"
+        size = f"{s.width}x{s.height}" if s.width else "size not read"
         lines.append(
-            f"  {s.topic:<{width}}  {s.codec} {s.width}x{s.height}  {s.fps:.1f} fps  "
+            f"  {s.topic:<{width}}  {s.codec} {size}  {s.fps:.1f} fps  "
             f"{s.frames} frames  {s.thumbnails} thumbnails  {gaps}"
         )
         for start, end in s.gaps[:5]:
             lines.append(
                 f"  {'':<{width}}  gap {end - start:.2f} s from {timefmt.format_clock(start)}"
             )
+    missing = not_installed_note(VIDEO, "picture sizes not read")
+    if missing is not None:
+        lines.append(f"  note: {missing}")
     return lines
 
 

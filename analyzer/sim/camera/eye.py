@@ -5,11 +5,14 @@ from __future__ import annotations
 import copy
 import math
 import threading
+from typing import TYPE_CHECKING
 
-from analyzer.sim.camera.frames import Shot
 from analyzer.sim.engine import SimulatedGimbal
 from analyzer.sim.model import EARTH_M_PER_DEG, GimbalModel, UavPose
 from analyzer.sim.uav import FlightPath
+
+if TYPE_CHECKING:  # the pictures (OpenCV) only when a stream is asked for
+    from analyzer.sim.camera.frames import Shot
 
 HOME = FlightPath()  # the world's origin is the orbit's centre
 
@@ -23,6 +26,8 @@ def local_metres(latitude_deg: float, longitude_deg: float) -> tuple[float, floa
 
 def shot_of(model: GimbalModel, pose: UavPose) -> Shot:
     """The camera's shot for a gimbal model hanging under an aircraft at ``pose``."""
+    from analyzer.sim.camera.frames import Shot
+
     east, north = local_metres(pose.latitude_deg, pose.longitude_deg)
     box = model.tracking_box if model.tracking else (0.0, 0.0)
     return Shot(
