@@ -122,7 +122,7 @@ LUACHECK_ENUMS: dict[str, tuple[str, ...]] = {
 
 def docs_globals() -> dict[str, list[str] | None]:
     """docs.lua's globals: a table's field names, None for a function."""
-    data = json.loads(GLOBALS_FILE.read_text())
+    data = json.loads(GLOBALS_FILE.read_text(encoding="utf-8"))
     assert ARDUPILOT_COMMIT in data["source"], "the globals come from another commit"
     globals_: dict[str, list[str] | None] = data["globals"]
     return globals_

@@ -110,7 +110,7 @@ def test_demo_runs_the_driver_in_lua_built_as_arduPilot_builds_it(
     cache = build_cache(pytestconfig, tmp_path_factory)  # built there by the fixture
     monkeypatch.setattr(lua_build, "default_cache", lambda: cache)
     driver = tmp_path / DRIVER_NAME
-    driver.write_text(lua_text())
+    driver.write_text(lua_text(), encoding="utf-8")
     path = tmp_path / "ardupilot.mcap"
     args = ["demo", "--no-tui", "--clean", "--duration", "4", "-o", str(path)]
     assert main([*args, "--ardupilot", str(driver), "--lua", "ardupilot"]) == 0
@@ -121,7 +121,7 @@ def test_demo_runs_the_driver_in_lua_built_as_arduPilot_builds_it(
     assert topics["/ardupilot/mount"] > 0 and topics["/uav/gps"] >= 15
     # 60 more locals at the top level: past ArduPilot's 100 (lupa's Lua would take 200)
     crowded = tmp_path / "crowded.lua"
-    crowded.write_text(with_locals(60))
+    crowded.write_text(with_locals(60), encoding="utf-8")
     refused = [*args, "--force", "--ardupilot", str(crowded), "--lua", "ardupilot"]
     assert main(refused) == 2
     err = capsys.readouterr().err

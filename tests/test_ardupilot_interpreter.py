@@ -19,7 +19,9 @@ from tests.ardupilot_lua import ardupilot_lua, with_locals
 
 __all__ = ["ardupilot_lua"]  # the fixture
 
-MANUAL = (Path(__file__).resolve().parents[1] / "docs" / "howto" / "ardupilot.md").read_text()
+MANUAL = (Path(__file__).resolve().parents[1] / "docs" / "howto" / "ardupilot.md").read_text(
+    encoding="utf-8"
+)
 TOO_MANY = re.escape(f"too many local variables (limit is {MAX_LOCALS}) in main function")
 HEADROOM = 30  # locals an edited copy may add at the driver's top level
 

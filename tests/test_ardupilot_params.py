@@ -64,7 +64,7 @@ def test_the_autopilot_gets_the_parameters_with_their_defaults() -> None:
 def test_the_usage_text_the_page_and_the_manual_say_the_same() -> None:
     header = lua_text().split("--]]")[0]
     page = markdown_text()
-    manual = MANUAL.read_text()
+    manual = MANUAL.read_text(encoding="utf-8")
     rows = dict(re.findall(r"^\| `(\w+)` \| ([^|]+?) \|", manual, flags=re.M))
     for p in PARAMETERS:
         assert f"    {p.full_name} {p.usage}" in header

@@ -39,12 +39,13 @@ def luacheck(tmp_path: Path, name: str, text: str) -> tuple[int, str]:
     """luacheck as ArduPilot's CI runs it (run_luacheck.sh) with its rules: code, report."""
     assert LUACHECK is not None, "luacheck is not installed (Debian package lua-check)"
     config = tmp_path / "ardupilot.luacheckrc"  # not luacheck.lua: it would shadow luacheck
-    config.write_text(luacheck_config())
-    (tmp_path / name).write_text(text)
+    config.write_text(luacheck_config(), encoding="utf-8")
+    (tmp_path / name).write_text(text, encoding="utf-8")
     done = subprocess.run(
         [LUACHECK, "--no-color", "--codes", name, "--config", config.name],
         capture_output=True,
         text=True,
+        encoding="utf-8",
         timeout=120,
         cwd=tmp_path,
         check=False,

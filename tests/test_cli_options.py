@@ -94,7 +94,7 @@ def test_a_file_given_to_monitor_without_source_points_to_file_source(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "flight-candump.log").write_text("(1.0) can0 0F01#0F04\n")
+    (tmp_path / "flight-candump.log").write_text("(1.0) can0 0F01#0F04\n", encoding="utf-8")
     for argv, spec in (
         (["monitor", "flight-candump.log"], "file:flight-candump.log"),
         (["record", "-o", "x.mcap"], "file:PATH"),

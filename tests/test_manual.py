@@ -238,7 +238,8 @@ def test_the_api_page_documents_classes_functions_and_tables_by_their_kind(
 ) -> None:
     api_reference = _docs_extension("api_reference")
     (tmp_path / "package_defs.py").write_text(
-        'COMMANDS: tuple[int, ...] = (1, 2)\n"""The table,\n  of two."""\nUNDOCUMENTED = 3\n'
+        'COMMANDS: tuple[int, ...] = (1, 2)\n"""The table,\n  of two."""\nUNDOCUMENTED = 3\n',
+        encoding="utf-8",
     )
     monkeypatch.syspath_prepend(str(tmp_path))
     package = types.ModuleType("package")

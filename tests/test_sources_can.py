@@ -291,6 +291,7 @@ def test_what_python_can_logs_while_opening_a_bus_is_no_line_on_stderr(
         [sys.executable, "-m", "analyzer", *record],
         capture_output=True,
         text=True,
+        encoding="utf-8",
         timeout=60,
         check=False,
         cwd=tmp_path,

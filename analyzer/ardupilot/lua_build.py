@@ -99,7 +99,9 @@ def fetch_sdist(version: str, into: Path) -> Path:
     command = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps"]
     command += ["--no-binary", "lupa", f"lupa=={version}", "-d", str(into)]
     env = {**os.environ, "LUPA_NO_LUAJIT": "true"}
-    done = subprocess.run(command, capture_output=True, text=True, check=False, env=env)
+    done = subprocess.run(
+        command, capture_output=True, text=True, encoding="utf-8", check=False, env=env
+    )
     found = sorted(into.glob(f"lupa-{version}.tar.gz"))
     if done.returncode != 0 or not found:
         why = (done.stderr or done.stdout).strip().splitlines()
@@ -174,7 +176,7 @@ def _compile(src: Path, target: Path) -> Path:
     command += [f"-D{name}" for name in DEFINES]
     command += ["-DCYTHON_CLINE_IN_TRACEBACK=0", f"-I{src}", f"-I{include}"]
     command += ["-o", str(target), str(src / "lua53.c"), *lua_sources, "-lm"]
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    done = subprocess.run(command, capture_output=True, text=True, encoding="utf-8", check=False)
     if done.returncode != 0:
         raise BuildError(f"the C compiler failed: {done.stderr.strip()[-2000:]}")
     return target
