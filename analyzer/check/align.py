@@ -24,6 +24,13 @@ from analyzer.protocol.codec import EncodeError, encode_command
 Goals = tuple[tuple[str, float], ...]  # (axis, angle): pitch, motor_yaw or yaw
 
 FRESH_S = 1.0  # feedback older than this (two periods) does not say where the gimbal is now
+# How every bench tool leaves the gimbal (at the end, on an error, on Ctrl-C): speeds 0
+# first (a gimbal_control stream stops), then back to the centre.
+CENTRING: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}),
+    ("forward", {}),
+)
+CENTRE: Goals = ((PITCH, 0.0), (MOTOR_YAW, 0.0))
 MIN_SETTLE_WAIT_S = 1.5  # a move is not taken as over (the gimbal still) before this
 LABELS = {PITCH: "pitch", MOTOR_YAW: "yaw motor", YAW: "yaw from north"}
 
@@ -165,7 +172,7 @@ def bring_to(
     frames: list[tuple[str, bytes]] = []
     for name, params in commands_for(goals):
         try:
-            frames.append((_said(name, params), encode_command(name, **params)))
+            frames.append((command_words(name, params), encode_command(name, **params)))
         except EncodeError as exc:
             return Arrival(False, f"{describe(goals)} cannot be asked for: {exc}", (), 0.0, last)
     sent = 0.0
@@ -191,7 +198,31 @@ def bring_to(
     return Arrival(False, why, said, took, seen[-1] if seen else last, bool(seen))
 
 
-def _said(name: str, params: dict[str, Any]) -> str:
+def centre(
+    sender: Sender,
+    feedback: Feedback,
+    *,
+    tolerance_deg: float,
+    timeout_s: float | None,
+    clock: Clock = WALL_CLOCK,
+) -> bool | None:
+    """Send CENTRING; with ``timeout_s``, wait that long for two feedback messages in a
+    row showing the gimbal centred and say whether they came (None: not waited for)."""
+    sent = 0.0
+    for name, params in CENTRING:
+        sent = sender.send(encode_command(name, **params))
+    if timeout_s is None:
+        return None
+
+    def there() -> bool:
+        after = [s for s in feedback.samples if s.time > sent]
+        return at_attitude(after, CENTRE, tolerance_deg)
+
+    return feedback.wait(there, clock.monotonic() + timeout_s)
+
+
+def command_words(name: str, params: dict[str, Any]) -> str:
+    """A command in words: 'specified_angle axis=pitch pitch_deg=-30'."""
     shown = " ".join(
         f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items()
     )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW
-from analyzer.check.align import Goals, commands_for
+from analyzer.check.align import CENTRING, Goals, commands_for
 from analyzer.check.runner import AFTER_DEADLINE_S, encode
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Send, Step
 from analyzer.protocol.framing import wrap_control
@@ -66,7 +66,6 @@ def dry_run_lines(
                 lines.append(_line(at, step.name, action.describe(), data))
                 at += (wait if action.goals or action.check else 0.0) + action.pause
         attitude = plan.end
-    for name, params in (("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}),):
+    for name, params in CENTRING:
         lines.append(_line(at, "(centre)", Send(name, params).describe(), encode(name, params)))
-    lines.append(_line(at, "(centre)", "forward", encode("forward", {})))
     return lines

@@ -56,7 +56,11 @@ class SimulatedBench:
     # -- the link --------------------------------------------------------------------------
 
     def send(self, data: bytes) -> float:
-        frame = CanFrame(self.now, CONTROL_ID, data, channel=CHANNEL)
+        return self.send_frame(CONTROL_ID, data)
+
+    def send_frame(self, can_id: int, data: bytes) -> float:
+        """A frame of the ground station's: a command, or UAV status the gimbal takes in."""
+        frame = CanFrame(self.now, can_id, data, channel=CHANNEL)
         self._on_bus([frame])
         for event in self._decoder.feed(frame):
             self.gimbal.handle(event, self.now)

@@ -6,7 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
+from analyzer.analysis.samples import Sample
 from analyzer.analysis.yaw_geometry import psi_offset
 from analyzer.check.align import (
     WALL_CLOCK,
@@ -14,6 +14,7 @@ from analyzer.check.align import (
     Goals,
     at_attitude,
     bring_to,
+    centre,
     describe,
     stopped,
     time_needed,
@@ -28,7 +29,6 @@ from analyzer.protocol.types import TOPIC_CHECK_STEPS, Event
 
 FIRST_FEEDBACK_WAIT_S = 2.0  # before the first step: wait this long for the gimbal to speak
 AFTER_DEADLINE_S = 0.8  # a verdict comes with the first feedback after the time allowed
-CENTRE_NAME = "forward"
 # A verdict from the picture comes later: the camera's frames reach the recorder after the
 # telemetry, and a zoom is judged once it could have settled.
 PICTURE_WAIT_S = 3.0
@@ -135,12 +135,15 @@ class CheckRunner:
 
     def centre(self, *, wait: bool) -> None:
         """Speeds to 0 first, then ``forward``; with ``wait``, until the feedback shows it."""
-        self.link.send(encode("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}))
-        sent = self.link.send(encode(CENTRE_NAME, {}))
+        centred = centre(
+            self.link,
+            self.observer,
+            tolerance_deg=self.limits.settings.tolerance_deg,
+            timeout_s=self.allowed_s + AFTER_DEADLINE_S if wait else None,
+            clock=self.clock,
+        )
         if wait:
-            goals = ((PITCH, 0.0), (MOTOR_YAW, 0.0))
-            until = self.clock.monotonic() + self.allowed_s + AFTER_DEADLINE_S
-            self.centred = self.observer.wait(lambda: self._reached(goals, sent), until)
+            self.centred = centred
 
     def _start(self, goals: Goals) -> str:
         """Bring the gimbal to a step's start: '' when it is there, else why it is not.

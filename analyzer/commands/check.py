@@ -152,13 +152,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         )
 
 
-def default_output(now: float | None = None) -> Path:
-    """check-YYYYMMDD-HHMMSS.mcap in the current directory, with -2, -3 ... if taken."""
+def default_output(now: float | None = None, command: str = "check") -> Path:
+    """check-YYYYMMDD-HHMMSS.mcap (``command``-...) in the current directory, with -2, -3
+    ... if taken."""
     stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(now))
-    path = Path(f"check-{stamp}.mcap")
+    path = Path(f"{command}-{stamp}.mcap")
     number = 2
     while path.exists() or path.is_symlink():
-        path = Path(f"check-{stamp}-{number}.mcap")
+        path = Path(f"{command}-{stamp}-{number}.mcap")
         number += 1
     return path
 
