@@ -208,7 +208,7 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
             sink.close()
     if sink.error is not None:
         raise SourceError(sink.error)
-    for line in _summary(outcome, span, path, args.file):
+    for line in _summary(outcome, span, path):
         print(line)
     if capture.error is not None:
         raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
@@ -218,7 +218,7 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
     return 0
 
 
-def _summary(outcome: Outcome, span: Span, path: str, flight: str) -> list[str]:
+def _summary(outcome: Outcome, span: Span, path: str) -> list[str]:
     lines = []
     arrival = outcome.arrival
     if arrival is not None and arrival.sent:
@@ -244,8 +244,6 @@ def _summary(outcome: Outcome, span: Span, path: str, flight: str) -> list[str]:
     elif outcome.centred:
         lines.append("the gimbal is stopped and centred")
     lines.append(f"recorded to {path}")
-    if outcome.began is not None and not outcome.stopped:
-        lines.append(f"compare it with the flight: gimbal-analyzer compare {flight} {path}")
     return lines
 
 

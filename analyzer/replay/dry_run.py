@@ -50,7 +50,8 @@ def dry_run_lines(span: Span, speed: float, align: bool, spec: LinkSpec | None) 
     if align and span.attitude is not None:
         goals = start_goals(span.attitude)
         lines.append(
-            f"first the gimbal is brought to the flight's first attitude ({describe(goals)}):"
+            f"first the gimbal is brought to the flight's first attitude ({describe(goals)}), "
+            "unless its feedback shows it there:"
         )
         for name, params in commands_for(goals):
             data = encode_command(name, **params)
