@@ -23,7 +23,15 @@ from analyzer.check.steps import select
 from analyzer.cli import main
 from analyzer.mcapio.write.sink import McapSink, recording_metadata
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
+from analyzer.protocol.ids import (
+    ALTITUDE_ID,
+    CONTROL_ID,
+    FEEDBACK_ID,
+    GPS_ID,
+    TEXT_END_ID,
+    TEXT_ID,
+    UAV_ATTITUDE_ID,
+)
 from analyzer.replay.flight import Span
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig
@@ -83,7 +91,8 @@ def test_the_flights_commands_and_uav_status_go_in_order_with_their_intervals(
     assert outcome.began is not None and outcome.ended is not None
     sent = sent_frames(bench, outcome.began, outcome.ended)
     assert [(i, d) for _, i, d in sent] == [(f.can_id, f.data) for f in span.frames]
-    assert {GPS_ID, UAV_ATTITUDE_ID, CONTROL_ID} <= {i for _, i, _ in sent}
+    kinds = {GPS_ID, ALTITUDE_ID, UAV_ATTITUDE_ID, TEXT_ID, TEXT_END_ID, CONTROL_ID}
+    assert kinds <= {i for _, i, _ in sent}  # the commands and every kind of UAV status
     for (t, _, _), frame in zip(sent, span.frames, strict=True):
         assert -1e-6 <= (t - outcome.began) - (frame.time - span.start) < TICK_S + 1e-6
 

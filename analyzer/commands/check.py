@@ -72,6 +72,10 @@ Exit codes: 0 every step passed (or was skipped), 1 a step failed or the link
 failed, 2 usage errors (no --to, a bad option), 130 interrupted (gimbal centred).
 """
 
+TO_HELP = (  # check and replay: the bench's one link
+    "the gimbal: can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (as the ground station "
+    "connecting to the IDU) or serial:PORT[@BAUD]; required to send anything"
+)
 DEFAULT_MIN_SLEW = 30.0
 DEFAULT_SPEED_TOLERANCE = 0.25
 # What the steps ask for: option, default, unit, what it sets.
@@ -100,12 +104,7 @@ def _number(low: float, what: str) -> Callable[[str], float]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from analyzer.commands.analyze import add_settings_arguments
 
-    parser.add_argument(
-        "--to",
-        metavar="LINK",
-        help="the gimbal: can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (as the ground "
-        "station connecting to the IDU) or serial:PORT[@BAUD]; required to send anything",
-    )
+    parser.add_argument("--to", metavar="LINK", help=TO_HELP)
     parser.add_argument(
         "--dry-run", action="store_true", help="print the frames it would send, send nothing"
     )

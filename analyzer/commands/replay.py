@@ -53,34 +53,13 @@ an empty span), 130 interrupted (gimbal centred).
 """
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be above 0")
-    return value
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be 0 or more seconds")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from analyzer.commands.analyze import positive_number
+    from analyzer.commands.check import TO_HELP
+    from analyzer.commands.simulate import seconds_value
+
     add_input_arguments(parser)
-    parser.add_argument(
-        "--to",
-        metavar="LINK",
-        help="the gimbal: can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (as the ground "
-        "station connecting to the IDU) or serial:PORT[@BAUD]; required to send anything",
-    )
+    parser.add_argument("--to", metavar="LINK", help=TO_HELP)
     parser.add_argument(
         "-o",
         "--output",
@@ -90,16 +69,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-f", "--force", action="store_true", help="replace an existing -o file")
     parser.add_argument(
         "--speed",
-        type=_positive,
+        type=positive_number,
         default=1.0,
         metavar="X",
         help="replay at X times the flight's speed (default 1: its own timing)",
     )
     parser.add_argument(
-        "--start", type=_seconds, default=0.0, metavar="S", help="begin S seconds into the flight"
+        "--start",
+        type=seconds_value,
+        default=0.0,
+        metavar="S",
+        help="begin S seconds into the flight",
     )
     parser.add_argument(
-        "--end", type=_seconds, metavar="S", help="end S seconds into the flight (default: its end)"
+        "--end",
+        type=seconds_value,
+        metavar="S",
+        help="end S seconds into the flight (default: its end)",
     )
     parser.add_argument(
         "--no-align",

@@ -93,19 +93,15 @@ def rules(tolerance_deg: float) -> tuple[Rule, ...]:
         Rule("overshoot_deg", "overshoot", ".1f", "deg", absolute=tolerance_deg, band=angle),
         Rule("error_deg", "error", ".2f", "deg", absolute=tolerance_deg, band=angle),
         Rule("moved_deg", "moved", ".1f", "deg", absolute=tolerance_deg, band=angle),
-        Rule(
-            "scale",
-            "scale",
-            ".3g",
-            relative=(1 - SCALE_TOLERANCE, 1 + SCALE_TOLERANCE),
-            band=f"{SCALE_TOLERANCE * 100:.0f} % (a zoom ratio reached)",
-        ),
-        Rule(
-            "scale_back",
-            "scale back",
-            ".3g",
-            relative=(1 - SCALE_TOLERANCE, 1 + SCALE_TOLERANCE),
-            band=f"{SCALE_TOLERANCE * 100:.0f} % (a zoom ratio reached)",
+        *(
+            Rule(
+                name,
+                label,
+                ".3g",
+                relative=(1 - SCALE_TOLERANCE, 1 + SCALE_TOLERANCE),
+                band=f"{SCALE_TOLERANCE * 100:.0f} % (a zoom ratio reached)",
+            )
+            for name, label in (("scale", "scale"), ("scale_back", "scale back"))
         ),
         Rule(
             "period_s",
