@@ -40,10 +40,10 @@ the flight it replayed over that same span; times count from the span's start.
   gimbal-analyzer compare bench-fw1.mcap bench-fw2.mcap --html fw.html
   gimbal-analyzer compare check-old.mcap check-new.mcap --json | jq 'select(.differs)'
 
---json prints one object per pair (command, kind, time_a, time_b, verdict_a,
-verdict_b, each figure as NAME_a and NAME_b, differs, why), then
-{"summary": {...}}. --html FILE draws both attitude tracks on one time axis,
-with the pairs below.
+--json prints one object per pair (command, kind, check, time_a and time_b in Unix
+seconds, at_a and at_b in seconds on the table's time axis, verdict_a, verdict_b,
+each figure as NAME_a and NAME_b, differs, why), then {"summary": {...}}.
+--html FILE draws both attitude tracks on one time axis, with the pairs below.
 
 Exit codes: 0 nothing differs, 1 something differs, 2 usage errors (an input that
 cannot be read, a bad option).
@@ -52,6 +52,7 @@ cannot be read, a bad option).
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from analyzer.commands.analyze import add_settings_arguments
+    from analyzer.input_options import add_port_argument
 
     parser.add_argument("a", metavar="A", help="the first recording or capture file")
     parser.add_argument("b", metavar="B", help="the second, compared with the first")
@@ -60,9 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-f", "--force", action="store_true", help="replace an existing --html file"
     )
-    parser.add_argument(
-        "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
-    )
+    add_port_argument(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress line")
     add_settings_arguments(parser)
 

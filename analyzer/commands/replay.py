@@ -167,6 +167,8 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
     progress = None if args.quiet else _progress(span, args.speed)
     player = Player(link, observer, source=link.source_name, progress=progress)
     print(f"replay over {link.description}; recording {path}", flush=True)
+    if not args.no_align and span.attitude is None:
+        print("the flight has no attitude feedback: the gimbal is not aligned first")
     capture.start()
     completed = False
     try:
