@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         span = span_of(reader, args.file, args.start, args.end)
     except FlightError as exc:
         raise UsageError(str(exc)) from None
-    for line in plan_lines(span, args.speed, span.skipped_feedback):
+    for line in plan_lines(span, args.speed):
         print(line)
     if path is None:
         print("dry run: nothing is sent; the times are after the alignment, at --speed")

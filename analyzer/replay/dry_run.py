@@ -14,13 +14,13 @@ from analyzer.terminal_text import printable
 WHAT_WIDTH = 52
 
 
-def plan_lines(span: Span, speed: float, feedback: int) -> list[str]:
+def plan_lines(span: Span, speed: float) -> list[str]:
     """What will be sent and what not, in a few lines."""
     status = f" and {span.status:,} UAV status frames" if span.status else ""
     lines = [
         f"{span.words()}: {span.commands:,} commands{status}, at {speed:g} times the "
         f"flight's speed ({(span.end - span.start) / speed:.1f} s); the gimbal's own feedback "
-        f"({feedback:,} messages in it) is not sent"
+        f"({span.skipped_feedback:,} messages in it) is not sent"
     ]
     if span.refused:
         lines.append(
