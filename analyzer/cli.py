@@ -45,6 +45,8 @@ COMMANDS: dict[str, str] = {
     "simulate": "analyzer.commands.simulate",
     "send": "analyzer.commands.send",
     "check": "analyzer.commands.check",
+    "replay": "analyzer.commands.replay",
+    "compare": "analyzer.commands.compare",
     "interfaces": "analyzer.commands.interfaces",
     "commands": "analyzer.commands.list_commands",
     "schemas": "analyzer.commands.schemas",

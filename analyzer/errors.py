@@ -20,7 +20,8 @@ EXIT_CODES: tuple[tuple[int, str], ...] = (
         EXIT_FAILED,
         "the work started but failed: a write failure (disk full, standard output "
         "unwritable), a source that failed, a live capture that never received anything, "
-        "a step of a bench check that failed",
+        "a step of a bench check that failed, a replay stopped by a silent gimbal; "
+        "compare: the two recordings differ",
     ),
     (
         EXIT_USAGE,

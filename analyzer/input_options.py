@@ -15,6 +15,11 @@ def add_input_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FORMAT",
         help="file format instead of guessing it: " + ", ".join(FORMATS),
     )
+    add_port_argument(parser)
+
+
+def add_port_argument(parser: argparse.ArgumentParser) -> None:
+    """The IDU's TCP port in pcap captures (also for a command reading two inputs)."""
     parser.add_argument(
         "--port", type=int, default=2000, help="TCP port of the IDU in pcap captures (default 2000)"
     )

@@ -59,6 +59,7 @@ class Gimbal:
             faults=simulate.fault_config(args),
             behaviour=simulate.behaviour(args),
             heading_deg=args.heading,
+            attitude=(args.start_pitch, args.start_yaw),
         )
         self.duration: float | None = args.duration  # then it goes away, link and all
         self.link: Link = open_gimbal_link(parse_link(on))
@@ -173,8 +174,10 @@ TCP_RUNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ("--steps", "yaw_airframe,yaw_geodetic"),
     ),
     "drop": (("--drop", "0.3", "--seed", "1"), ("--steps", "feedback", "--listen", "6")),
-    # Silent from 2.5 s to 7.5 s after the check connected: the step that starts in it
-    # fails as "no feedback", the one after it passes.
+    # Left looking down and to the right by the last person at the bench.
+    "left_anywhere": (("--start-pitch", "-45", "--start-yaw", "120"), ("--steps", "pitch_angle")),
+    # Silent from 2.5 s to 7.5 s after the check connected: the steps in it fail as
+    # "no feedback", the last one, well after it, passes.
     "link_lost": (("--duration", "5"), ("--steps", "pitch_angle,yaw_airframe,look_down")),
     "silence": (
         ("--stop-feedback-at", "2.5", "--stop-feedback-for", "5"),
@@ -372,6 +375,23 @@ def test_a_sluggish_gimbal_fails_the_moves_and_the_speeds(tcp_runs: dict[str, Ru
     assert "sluggish" in speed["detail"]
 
 
+def test_a_step_first_brings_the_gimbal_to_its_start_from_where_it_was_left(
+    tcp_runs: dict[str, Run],
+) -> None:
+    run = tcp_runs["left_anywhere"].finish()
+    (step,) = run.steps
+    assert run.code == 0 and step["verdict"] == "pass", step
+    assert step["slew_dps"] == pytest.approx(SLEW_DPS, rel=0.15)
+    assert step["target_deg"] == -90
+    angles = [
+        (e.fields["name"], e.fields.get("pitch_deg"))
+        for e in run.gimbal.received
+        if e.topic == "/gimbal/command"
+    ]
+    # to its start (pitch 0) first, then the move it judges; at the end, centred
+    assert angles[:2] == [("specified_angle", 0.0), ("specified_angle", -90.0)]
+
+
 def test_a_gimbal_that_falls_short_fails_with_the_error(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["fall_short"].finish()
     assert run.code == 1
@@ -410,7 +430,7 @@ def test_dropped_feedback_shows_in_the_feedback_step(tcp_runs: dict[str, Run]) -
 def test_steps_in_a_feedback_silence_fail_as_no_feedback(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["silence"].finish()
     steps = run.by_name()
-    assert steps["yaw_airframe"]["verdict"] == "fail"
+    assert any(step["verdict"] == "fail" for step in run.steps)
     for step in run.steps:
         if step["verdict"] == "fail":
             assert step["detail"].startswith("no feedback"), step

@@ -52,7 +52,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ),
     ("analysis", ("analysis",)),
     ("engines", ("capture", "live", "sim", "samplegen", "ardupilot")),
-    ("user interfaces", ("report", "tui", "fleet", "check")),
+    ("user interfaces", ("report", "tui", "fleet", "check", "replay", "compare")),
     ("the Python API", ("api",)),  # what `import analyzer` gives integrators
     ("commands", ("commands", "cli", "__main__")),
 )

@@ -1,4 +1,5 @@
-"""The check's one link: a capture source that also transmits, and records what it sends."""
+"""The bench's one link (check, replay): a capture source that also transmits, and records
+what it sends."""
 
 from __future__ import annotations
 
@@ -6,10 +7,9 @@ import threading
 
 from analyzer import wall_clock
 from analyzer.errors import SourceError
-from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import TO_IDU, CanFrame, Event, StreamChunk
-from analyzer.sim.transports import Link, LinkSpec, open_ground_link
+from analyzer.sim.transports import Link, LinkSpec, open_ground_link, to_stream
 from analyzer.sources.base import QueuedSource, link_event
 
 RECEIVE_WAIT_S = 0.05
@@ -27,7 +27,9 @@ class CheckLink(QueuedSource):
 
     thread_name = "check-link"
 
-    def __init__(self, spec: LinkSpec, link: Link | None = None) -> None:
+    def __init__(
+        self, spec: LinkSpec, link: Link | None = None, purpose: str = "the check"
+    ) -> None:
         super().__init__()
         self.spec = spec
         self.link = link if link is not None else open_ground_link(spec)
@@ -36,7 +38,7 @@ class CheckLink(QueuedSource):
         self.sent = 0
         self.last_sent = 0.0  # time of the newest command sent
         self._send_lock = threading.Lock()
-        self._put(link_event(self.source_name, f"opened {self.link.name} for the check", "open"))
+        self._put(link_event(self.source_name, f"opened {self.link.name} for {purpose}", "open"))
         self._start()
 
     def _run(self) -> None:
@@ -53,17 +55,22 @@ class CheckLink(QueuedSource):
 
     def send(self, data: bytes) -> float:
         """Transmit one command's 8 data bytes; returns the time it was sent (Unix s)."""
+        return self.send_frame(CONTROL_ID, data)
+
+    def send_frame(self, can_id: int, data: bytes) -> float:
+        """Transmit one frame of the ground station's (a command, or UAV status on its own
+        CAN ID) in the link's framing; returns the time it was sent (Unix s)."""
         with self._send_lock:
             if self._error is not None:  # the receiving side found the link broken
                 raise SourceError(self._error)
-            self.link.send(CONTROL_ID, data)
+            self.link.send(can_id, data)
             now = wall_clock.now()
             self.sent += 1
             self.last_sent = now
         if self.spec.kind == "can":
-            self._put(CanFrame(now, CONTROL_ID, data, True, self.source_name, direction="tx"))
+            self._put(CanFrame(now, can_id, data, True, self.source_name, direction="tx"))
         else:
-            self._put(StreamChunk(now, wrap_control(data), self.link.name, TO_IDU))
+            self._put(StreamChunk(now, to_stream(can_id, data), self.link.name, TO_IDU))
         return now
 
     def note(self, event: Event) -> None:

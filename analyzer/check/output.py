@@ -119,8 +119,8 @@ def result_from_fields(fields: dict[str, Any]) -> StepResult:
     )
 
 
-def recorded_steps_html(path: str) -> str:
-    """The steps table of a recording `check` made ('' for any other recording)."""
+def recorded_steps(path: str) -> list[StepResult]:
+    """The steps of a recording `check` made, in order (none for any other recording)."""
     from analyzer.mcapio.read.reader import Recording
     from analyzer.protocol.types import TOPIC_CHECK_STEPS
 
@@ -130,4 +130,10 @@ def recorded_steps_html(path: str) -> str:
             fields = json.loads(message.data)
             if isinstance(fields, dict):
                 results.append(result_from_fields(fields))
+    return results
+
+
+def recorded_steps_html(path: str) -> str:
+    """The steps table of a recording `check` made ('' for any other recording)."""
+    results = recorded_steps(path)
     return steps_table_html(results, "Bench check") if results else ""

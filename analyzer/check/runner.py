@@ -2,30 +2,45 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
-from analyzer import wall_clock
-from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
-from analyzer.analysis.targets import SETTLED_S, STILL_DEG
-from analyzer.analysis.yaw_geometry import angle_error, psi_offset
+from analyzer.analysis.samples import Sample
+from analyzer.analysis.yaw_geometry import psi_offset
+from analyzer.check.align import (
+    WALL_CLOCK,
+    Clock,
+    Goals,
+    at_attitude,
+    bring_to,
+    centre,
+    describe,
+    stopped,
+    time_needed,
+)
 from analyzer.check.judge import Evidence, Limits, StepResult, judge, required_check
-from analyzer.check.link import CheckLink
 from analyzer.check.observer import Observer
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Plan, Send, Step
+from analyzer.protocol.check_fields import FAIL
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.response_fields import CHECK_PICTURE
 from analyzer.protocol.types import TOPIC_CHECK_STEPS, Event
 
 FIRST_FEEDBACK_WAIT_S = 2.0  # before the first step: wait this long for the gimbal to speak
-MIN_SETTLE_WAIT_S = 1.5  # a move is not judged still before this much time has passed
 AFTER_DEADLINE_S = 0.8  # a verdict comes with the first feedback after the time allowed
-CENTRE_NAME = "forward"
 # A verdict from the picture comes later: the camera's frames reach the recorder after the
 # telemetry, and a zoom is judged once it could have settled.
 PICTURE_WAIT_S = 3.0
+
+
+class StepLink(Protocol):
+    """What the runner needs of the link (``analyzer.check.link.CheckLink``): sending a
+    command's data bytes (returns the time it went) and recording an event of its own."""
+
+    def send(self, data: bytes) -> float: ...
+
+    def note(self, event: Event) -> None: ...
 
 
 @dataclass
@@ -38,6 +53,7 @@ class _Running:
     started_at: float
     ended_at: float = 0.0
     judged: list[tuple[Send | Hold, float, float]] = field(default_factory=list)
+    failed: str = ""  # why the step failed before its judged commands (its start)
 
 
 def encode(name: str, params: dict[str, Any]) -> bytes:
@@ -47,23 +63,28 @@ def encode(name: str, params: dict[str, Any]) -> bytes:
 class CheckRunner:
     """Drives the steps over ``link``; ``report`` gets each step's result, in step order.
 
-    Verdicts come from the findings of the capture's ResponseAnalyzer stage (the
+    Each step first brings the gimbal to the attitude it starts from
+    (``analyzer.check.align.bring_to``), and fails with the reason when it cannot get
+    there. Verdicts come from the findings of the capture's ResponseAnalyzer stage (the
     ``observer`` sees them). A move's finding comes when the time allowed has passed, or
     as soon as the next motion command shows that it is over: so a step that has
     reached its target and is still moves on, and is reported when its finding arrives.
+    ``clock``: the wall clock, or a simulated one (``analyzer.check.offline``).
     """
 
     def __init__(
         self,
-        link: CheckLink,
+        link: StepLink,
         observer: Observer,
         limits: Limits,
         options: Options,
         report: Callable[[StepResult], None],
         notice: Callable[[str], None] = print,
+        clock: Clock = WALL_CLOCK,
     ) -> None:
         self.link = link
         self.observer = observer
+        self.clock = clock
         self.limits = limits
         self.options = options
         self.report = report
@@ -79,7 +100,8 @@ class CheckRunner:
     # -- the sequence ----------------------------------------------------------------------
 
     def run(self, steps: tuple[Step, ...]) -> list[StepResult]:
-        first = time.monotonic() + FIRST_FEEDBACK_WAIT_S
+        clock = self.clock
+        first = clock.monotonic() + FIRST_FEEDBACK_WAIT_S
         if not self.observer.wait(lambda: bool(self.observer.samples), first):
             self.notice(
                 f"no attitude feedback in {FIRST_FEEDBACK_WAIT_S:g} s: is the gimbal on this "
@@ -87,15 +109,18 @@ class CheckRunner:
             )
         for index, step in enumerate(steps, 1):
             plan = step.plan(self.attitude(), self.options)
-            running = _Running(index, step, plan, wall_clock.now())
-            for action in plan.actions:
+            running = _Running(index, step, plan, clock.time())
+            running.failed = self._start(plan.start)
+            self._flush(force=False)  # an earlier step decided by the start's commands
+            running.started_at = clock.time()
+            for action in () if running.failed else plan.actions:
                 self._act(action, running)
                 self._flush(force=False)  # an earlier step decided by this action's command
-            running.ended_at = wall_clock.now()
+            running.ended_at = clock.time()
             self._pending.append(running)
             self._flush(force=False)
         self.centre(wait=True)
-        deadline = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
+        deadline = clock.monotonic() + self.allowed_s + AFTER_DEADLINE_S
         if any(required_check(a) == CHECK_PICTURE for r in self._pending for a, _, _ in r.judged):
             deadline += PICTURE_WAIT_S
         self.observer.wait(self._all_decided, deadline)
@@ -110,12 +135,37 @@ class CheckRunner:
 
     def centre(self, *, wait: bool) -> None:
         """Speeds to 0 first, then ``forward``; with ``wait``, until the feedback shows it."""
-        self.link.send(encode("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0}))
-        sent = self.link.send(encode(CENTRE_NAME, {}))
+        centred = centre(
+            self.link,
+            self.observer,
+            tolerance_deg=self.limits.settings.tolerance_deg,
+            timeout_s=self.allowed_s + AFTER_DEADLINE_S if wait else None,
+            clock=self.clock,
+        )
         if wait:
-            goals = ((PITCH, 0.0), (MOTOR_YAW, 0.0))
-            until = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
-            self.centred = self.observer.wait(lambda: self._reached(goals, sent), until)
+            self.centred = centred
+
+    def _start(self, goals: Goals) -> str:
+        """Bring the gimbal to a step's start: '' when it is there, else why it is not.
+
+        It has the time a gimbal at the slowest slew that passes (--min-slew) needs for
+        the turn, and the time allowed on top."""
+        if not goals:
+            return ""
+        tolerance = self.limits.settings.tolerance_deg
+        needed = time_needed(goals, self.observer.latest(), self.limits.min_slew_dps)
+        arrival = bring_to(
+            self.link,
+            self.observer,
+            goals,
+            tolerance_deg=tolerance,
+            timeout_s=needed + self.allowed_s,
+            clock=self.clock,
+        )
+        if arrival.reached:
+            return ""
+        why = f"the gimbal could not be brought to the step's start ({describe(goals)}): "
+        return ("" if arrival.heard else "no feedback: ") + why + arrival.reason
 
     # -- actions ---------------------------------------------------------------------------
 
@@ -128,14 +178,14 @@ class CheckRunner:
             self._send(action, running)
 
     def _sleep(self, seconds: float) -> None:
-        self.observer.wait(lambda: False, time.monotonic() + seconds)
+        self.observer.wait(lambda: False, self.clock.monotonic() + seconds)
 
     def _send(self, action: Send, running: _Running) -> None:
         sent = self.link.send(encode(action.name, action.params))
         number = len(running.judged)
         if action.judged:
             running.judged.append((action, sent, sent))
-        until = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
+        until = self.clock.monotonic() + self.allowed_s + AFTER_DEADLINE_S
         if action.goals:
 
             def over() -> bool:
@@ -154,21 +204,22 @@ class CheckRunner:
         data = encode(
             "gimbal_control", {"pan_speed_dps": action.pan_dps, "tilt_speed_dps": action.tilt_dps}
         )
+        clock = self.clock
         first = last = 0.0
-        next_at = time.monotonic()
+        next_at = clock.monotonic()
         for count in range(action.count):
             last = self.link.send(data)
             first = first or last
             next_at += REPEAT_S
             if count + 1 < action.count:
-                time.sleep(max(0.0, next_at - time.monotonic()))
+                clock.sleep(next_at - clock.monotonic())
         stop = self.link.send(
             encode("gimbal_control", {"pan_speed_dps": 0.0, "tilt_speed_dps": 0.0})
         )
         number = len(running.judged)
         running.judged.append((action, first, stop))
         # The analysis watches a while after the stop, well within the time allowed.
-        until = time.monotonic() + self.allowed_s + AFTER_DEADLINE_S
+        until = clock.monotonic() + self.allowed_s + AFTER_DEADLINE_S
         self.observer.wait(lambda: self._decided(running, number), until)
 
     # -- what the feedback shows -----------------------------------------------------------
@@ -176,28 +227,14 @@ class CheckRunner:
     def _after(self, t: float) -> list[Sample]:
         return [s for s in self.observer.samples if s.time > t]
 
-    def _reached(self, goals: tuple[tuple[str, float], ...], t: float) -> bool:
+    def _reached(self, goals: Goals, t: float) -> bool:
         """The last two samples after ``t`` are within the tolerance of every goal."""
-        recent = self._after(t)[-2:]
-        tolerance = self.limits.settings.tolerance_deg
-        return len(recent) == 2 and all(
-            abs(angle_error(axis, target, s)) <= tolerance for s in recent for axis, target in goals
-        )
+        return at_attitude(self._after(t), goals, self.limits.settings.tolerance_deg)
 
     def _still(self, action: Send, t: float) -> bool:
         """No goal axis has moved for SETTLED_S (the analysis' own rule for a final answer)."""
-        if wall_clock.now() - t < MIN_SETTLE_WAIT_S:
-            return False
-        after = self._after(t)
-        if len(after) < 3:
-            return False
-        last = after[-1]
-        for s in reversed(after):
-            if any(abs(s.value(a) - last.value(a)) >= STILL_DEG for a, _ in action.goals):
-                return False
-            if last.time - s.time >= SETTLED_S + 0.1:
-                return True
-        return False
+        axes = [axis for axis, _ in action.goals]
+        return stopped(self._after(t), axes, self.clock.time() - t)
 
     def _decided(self, running: _Running, number: int) -> bool:
         if number >= len(running.judged):
@@ -238,7 +275,12 @@ class CheckRunner:
             damaged=observer.damaged_in(start, end),
             findings=findings,
         )
-        verdict, detail, figures, lines = judge(evidence, self.limits)
+        figures: dict[str, Any] = {}
+        lines: list[str] = []
+        if running.failed:
+            verdict, detail = FAIL, running.failed
+        else:
+            verdict, detail, figures, lines = judge(evidence, self.limits)
         result = StepResult(
             running.step.name,
             verdict,
@@ -250,5 +292,5 @@ class CheckRunner:
             lines,
         )
         self.results.append(result)
-        self.link.note(Event(TOPIC_CHECK_STEPS, wall_clock.now(), "check", result.fields()))
+        self.link.note(Event(TOPIC_CHECK_STEPS, self.clock.time(), "check", result.fields()))
         self.report(result)

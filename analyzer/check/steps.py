@@ -6,7 +6,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW
+from analyzer.analysis.samples import MOTOR_YAW, MOTOR_YAW_LIMITS, PITCH, PITCH_LIMITS, YAW
+from analyzer.check.align import Goals
 from analyzer.protocol.check_fields import STEP_NAMES
 from analyzer.protocol.response_fields import CHECK_PICTURE
 
@@ -83,13 +84,17 @@ Action = Send | Hold | Listen
 
 @dataclass(frozen=True)
 class Plan:
-    """A step's actions, the attitude an obedient gimbal ends in, and what is measured."""
+    """A step's actions, the attitude an obedient gimbal ends in, and what is measured.
+
+    ``start``: the attitude (of the axes it names) the gimbal is brought to before the
+    first action, whatever attitude it was in (``analyzer.check.align``)."""
 
     actions: tuple[Action, ...]
     end: Attitude
     axis: str = ""  # the axis whose motion figures are reported
     target: float | None = None
     skipped: str = ""  # why the step cannot be judged from the feedback (zoom)
+    start: Goals = ()
 
 
 @dataclass(frozen=True)
@@ -104,33 +109,31 @@ def _pitch(target: float) -> Send:
     return Send("specified_angle", params, ((PITCH, target),), True, "target")
 
 
-def _forward(start: Attitude, options: Options) -> Plan:
-    # Start from an offset, so that returning to the centre is a move worth measuring.
-    pitch, yaw = -45.0, 120.0
-    prepare = (
-        Send("specified_angle", {"axis": "pitch", "pitch_deg": pitch}, ((PITCH, pitch),)),
-        Send(
-            "specified_angle",
-            {"axis": "yaw", "yaw_deg": yaw, "coordinate_system": "airframe"},
-            ((MOTOR_YAW, yaw),),
-        ),
-    )
+# Where the steps start. Every step names the attitude (of the axes it moves) it starts
+# from, and the gimbal is brought there first: a step does the same from wherever the
+# gimbal was left.
+FORWARD_FROM: Goals = ((PITCH, -45.0), (MOTOR_YAW, 120.0))  # off centre: a move to measure
+LEVEL: Goals = ((PITCH, 0.0),)
+NOSE: Goals = ((MOTOR_YAW, 0.0),)
+
+
+def _forward(now: Attitude, options: Options) -> Plan:
     judged = Send("forward", {}, ((PITCH, 0.0), (MOTOR_YAW, 0.0)), True, "target")
-    end = Attitude(0.0, 0.0, start.heading)
-    return Plan((*prepare, judged), end, MOTOR_YAW, 0.0)
+    end = Attitude(0.0, 0.0, now.heading)
+    return Plan((judged,), end, MOTOR_YAW, 0.0, start=FORWARD_FROM)
 
 
-def _pitch_angle(start: Attitude, options: Options) -> Plan:
-    target = -90.0 if start.pitch > -45.0 else 0.0
-    return Plan((_pitch(target),), Attitude(target, start.motor_yaw, start.heading), PITCH, target)
+def _pitch_angle(now: Attitude, options: Options) -> Plan:
+    target = -90.0
+    end = Attitude(target, now.motor_yaw, now.heading)
+    return Plan((_pitch(target),), end, PITCH, target, start=LEVEL)
 
 
-def _yaw_airframe(start: Attitude, options: Options) -> Plan:
-    target = start.motor_yaw + 150.0 if start.motor_yaw <= 20.0 else start.motor_yaw - 150.0
-    target = round(target, 1)
-    params = {"axis": "yaw", "yaw_deg": target % 360.0, "coordinate_system": "airframe"}
+def _yaw_airframe(now: Attitude, options: Options) -> Plan:
+    target = 150.0
+    params = {"axis": "yaw", "yaw_deg": target, "coordinate_system": "airframe"}
     send = Send("specified_angle", params, ((MOTOR_YAW, target),), True, "target")
-    return Plan((send,), Attitude(start.pitch, target, start.heading), MOTOR_YAW, target)
+    return Plan((send,), Attitude(now.pitch, target, now.heading), MOTOR_YAW, target, start=NOSE)
 
 
 def geodetic_target(start: Attitude) -> tuple[float, float]:
@@ -141,51 +144,54 @@ def geodetic_target(start: Attitude) -> tuple[float, float]:
     return round((start.heading + motor) % 360.0, 1), motor
 
 
-def _yaw_geodetic(start: Attitude, options: Options) -> Plan:
-    north, motor = geodetic_target(start)
+def _yaw_geodetic(now: Attitude, options: Options) -> Plan:
+    north, motor = geodetic_target(Attitude(now.pitch, 0.0, now.heading))
     params = {"axis": "yaw", "yaw_deg": north, "coordinate_system": "geodetic"}
     send = Send("specified_angle", params, ((YAW, north),), True, "target")
-    return Plan((send,), Attitude(start.pitch, motor, start.heading), YAW, north)
+    return Plan((send,), Attitude(now.pitch, motor, now.heading), YAW, north, start=NOSE)
 
 
-def _pan_speed(start: Attitude, options: Options) -> Plan:
-    speed = -options.speed_dps if start.motor_yaw > 0 else options.speed_dps
+def speed_start(speed: float, seconds: float, low: float, high: float) -> float:
+    """Where a speed step starts on an axis of range low..high: the turn it asks for
+    (``speed`` deg/s for ``seconds``) is centred in the range."""
+    middle = (low + high) / 2 - speed * seconds / 2
+    return round(min(high, max(low, middle)), 1)
+
+
+def _pan_speed(now: Attitude, options: Options) -> Plan:
+    speed = options.speed_dps  # to the right, from left of the nose
+    yaw = speed_start(speed, options.speed_for_s, -MOTOR_YAW_LIMITS, MOTOR_YAW_LIMITS)
     hold = Hold(speed, 0.0, options.speed_for_s)
-    end = Attitude(start.pitch, start.motor_yaw + speed * options.speed_for_s, start.heading)
-    return Plan((hold,), end, MOTOR_YAW)
+    end = Attitude(now.pitch, yaw + speed * options.speed_for_s, now.heading)
+    return Plan((hold,), end, MOTOR_YAW, start=((MOTOR_YAW, yaw),))
 
 
-def _tilt_speed(start: Attitude, options: Options) -> Plan:
-    speed = -options.speed_dps if start.pitch > -25.0 else options.speed_dps
+def _tilt_speed(now: Attitude, options: Options) -> Plan:
+    speed = -options.speed_dps  # downward, from above the middle of the range
+    pitch = speed_start(speed, options.speed_for_s, *PITCH_LIMITS)
     hold = Hold(0.0, speed, options.speed_for_s)
-    end = Attitude(start.pitch + speed * options.speed_for_s, start.motor_yaw, start.heading)
-    return Plan((hold,), end, PITCH)
+    end = Attitude(pitch + speed * options.speed_for_s, now.motor_yaw, now.heading)
+    return Plan((hold,), end, PITCH, start=((PITCH, pitch),))
 
 
-def _look_down(start: Attitude, options: Options) -> Plan:
-    actions: tuple[Action, ...] = ()
-    if start.pitch < -30.0:  # already looking down: come up first, so the move shows
-        actions = (Send("specified_angle", {"axis": "pitch", "pitch_deg": 0.0}, ((PITCH, 0.0),)),)
+def _look_down(now: Attitude, options: Options) -> Plan:
     judged = Send("look_down", {}, ((PITCH, -90.0),), True, "target")
-    return Plan((*actions, judged), Attitude(-90.0, start.motor_yaw, start.heading), PITCH, -90.0)
+    end = Attitude(-90.0, now.motor_yaw, now.heading)
+    return Plan((judged,), end, PITCH, -90.0, start=LEVEL)
 
 
-def _zoom(start: Attitude, options: Options) -> Plan:
+def _zoom(now: Attitude, options: Options) -> Plan:
     if options.video:  # judged from the picture: zoomed in, then back to 1x
         judged = (
-            # the ground (or the bench) in view: texture for the picture's scale, not the sky
-            Send(
-                "specified_angle",
-                {"axis": "pitch", "pitch_deg": ZOOM_PITCH},
-                ((PITCH, ZOOM_PITCH),),
-            ),
             Send("zoom", {"action": "zoom_in"}, judged=True, check=CHECK_PICTURE, pause=ZOOM_IN_S),
             Send("zoom", {"action": "stop"}, pause=0.2),
             Send(
                 "zoom", {"action": "zoom_1x"}, judged=True, check=CHECK_PICTURE, pause=ZOOM_BACK_S
             ),
         )
-        return Plan(judged, Attitude(ZOOM_PITCH, start.motor_yaw, start.heading))
+        # the ground (or the bench) in view: texture for the picture's scale, not the sky
+        end = Attitude(ZOOM_PITCH, now.motor_yaw, now.heading)
+        return Plan(judged, end, start=((PITCH, ZOOM_PITCH),))
     actions = (
         Send("zoom", {"action": "zoom_in"}, pause=ZOOM_IN_S),
         Send("zoom", {"action": "stop"}, pause=0.2),
@@ -195,31 +201,35 @@ def _zoom(start: Attitude, options: Options) -> Plan:
         "the attitude feedback does not report the zoom ratio: record the camera's video "
         "(--video) to judge it from the picture"
     )
-    return Plan(actions, start, skipped=why)
+    return Plan(actions, now, skipped=why)
 
 
-def _tracking(start: Attitude, options: Options) -> Plan:
+def _tracking(now: Attitude, options: Options) -> Plan:
     box = {"x": IMAGE_CENTRE, "y": IMAGE_CENTRE, "width": 512, "height": 512}
     actions = (
         Send("tracking", box, judged=True, check="tracking"),
         Send("tracking_stop", {}, judged=True, check="tracking"),
     )
-    return Plan(actions, start)
+    return Plan(actions, now)
 
 
-def _feedback(start: Attitude, options: Options) -> Plan:
-    return Plan((Listen(options.listen_s),), start)
+def _feedback(now: Attitude, options: Options) -> Plan:
+    return Plan((Listen(options.listen_s),), now)
 
 
 STEPS: tuple[Step, ...] = (
     Step("feedback", "listen: feedback period, lost messages, CRC errors", _feedback),
-    Step("forward", "from pitch -45 / yaw 120 back to the centre (forward)", _forward),
+    Step("forward", "from pitch -45 / yaw motor 120 back to the centre (forward)", _forward),
     Step("pitch_angle", "specified_angle pitch 0 -> -90", _pitch_angle),
-    Step("yaw_airframe", "specified_angle yaw 150 deg from the nose (DATA4 = 1)", _yaw_airframe),
-    Step("yaw_geodetic", "specified_angle yaw from north, 120 deg of motor travel", _yaw_geodetic),
+    Step(
+        "yaw_airframe",
+        "specified_angle yaw motor 0 -> 150 from the nose (DATA4 = 1)",
+        _yaw_airframe,
+    ),
+    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> -120", _yaw_geodetic),
     Step("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
     Step("tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed),
-    Step("look_down", "look_down: pitch to -90", _look_down),
+    Step("look_down", "look_down: pitch 0 -> -90", _look_down),
     Step("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
     Step("tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking),
 )

@@ -65,7 +65,7 @@ schemas/analysis.response.schema.json), 'time' being the command's time.
 """
 
 
-def _positive(text: str) -> float:
+def positive_number(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -85,7 +85,7 @@ def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument(
         "--tolerance",
-        type=_positive,
+        type=positive_number,
         default=DEFAULT_TOLERANCE_DEG,
         metavar="DEG",
         help="an angle this close to the target counts as reached "
@@ -93,7 +93,7 @@ def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--time-allowed",
-        type=_positive,
+        type=positive_number,
         default=DEFAULT_TIME_ALLOWED_S,
         metavar="S",
         help="seconds a target command (specified_angle, look_down, forward) has to reach "
@@ -101,7 +101,7 @@ def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--flag-allowed",
-        type=_positive,
+        type=positive_number,
         default=DEFAULT_FLAG_ALLOWED_S,
         metavar="S",
         help="seconds tracking / tracking_stop have to show in the feedback's tracking flag "

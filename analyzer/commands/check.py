@@ -31,25 +31,32 @@ reference), plus the figures measured from the feedback.
   gimbal-analyzer check --to tcp:127.0.0.1:2000 --steps pitch_angle,pan_speed --json
   gimbal-analyzer check --dry-run                 the frames it would send, nothing sent
 
-The steps, in this order (--steps a,b,c runs a subset, in this order):
+The steps, in this order (--steps a,b,c runs a subset, in this order). Each one
+first brings the gimbal to its start (the attitude in brackets, with
+specified_angle) and waits until the feedback shows it there, so a step does the
+same wherever the gimbal was left; a gimbal that cannot get there fails the step,
+with the reason:
   feedback      listen a few seconds: feedback period, lost messages, CRC errors
-  forward       from pitch -45 / yaw 120 back to the centre with `forward`
-  pitch_angle   specified_angle pitch 0 -> -90
-  yaw_airframe  specified_angle yaw 150 deg from the nose (DATA4 = 1)
-  yaw_geodetic  specified_angle yaw from north: the aircraft's heading is taken from
-                the feedback (psi minus the motor's yaw), the target is 120 deg of
-                motor travel toward the middle of its range
-  pan_speed     gimbal_control pan at --speed every 50 ms for --speed-for, then 0
-  tilt_speed    the same on tilt
-  look_down     look_down: pitch to -90
+  forward       [pitch -45, yaw motor 120] back to the centre with `forward`
+  pitch_angle   [pitch 0] specified_angle pitch -90
+  yaw_airframe  [yaw motor 0] specified_angle yaw 150 deg from the nose (DATA4 = 1)
+  yaw_geodetic  [yaw motor 0] specified_angle yaw from north: the aircraft's heading
+                is taken from the feedback (psi minus the motor's yaw), the target
+                is 120 deg of motor travel (the motor at -120)
+  pan_speed     [yaw motor left of the nose] gimbal_control pan at --speed every 50 ms
+                for --speed-for, then 0: the turn is centred on the nose
+  tilt_speed    [pitch above -25] the same on tilt, downward, centred on -25
+  look_down     [pitch 0] look_down: pitch to -90
   zoom          zoom in, stop, zoom 1x: the feedback does not report the zoom, so
                 with --video the step is judged from the camera's picture (the scale
-                measured, see docs/explanation/camera.md), without it 'skipped'
+                measured, see docs/explanation/camera.md; [pitch -45]), without it
+                'skipped'
   tracking      tracking at the image centre (flag on), tracking_stop (flag off)
 A move passes when the analysis finds it obeyed and its measured slew rate is at
 least --min-slew; a speed step when the rate is within --speed-tolerance of the
 speed asked; a step during which the feedback stopped fails as "no feedback".
-Each step waits for the gimbal to settle, at most --time-allowed.
+Each step waits for the gimbal to settle, at most --time-allowed; to reach its start
+it has the time a turn at --min-slew takes, and --time-allowed on top.
 
 Safety: without --to nothing is sent (exit 2). Frames go to the one link given and
 nowhere else. At the end, on a failure and on Ctrl-C the gimbal is stopped (speeds
@@ -65,6 +72,10 @@ Exit codes: 0 every step passed (or was skipped), 1 a step failed or the link
 failed, 2 usage errors (no --to, a bad option), 130 interrupted (gimbal centred).
 """
 
+TO_HELP = (  # check and replay: the bench's one link
+    "the gimbal: can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (as the ground station "
+    "connecting to the IDU) or serial:PORT[@BAUD]; required to send anything"
+)
 DEFAULT_MIN_SLEW = 30.0
 DEFAULT_SPEED_TOLERANCE = 0.25
 # What the steps ask for: option, default, unit, what it sets.
@@ -93,12 +104,7 @@ def _number(low: float, what: str) -> Callable[[str], float]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from analyzer.commands.analyze import add_settings_arguments
 
-    parser.add_argument(
-        "--to",
-        metavar="LINK",
-        help="the gimbal: can:INTERFACE:CHANNEL[@BITRATE], tcp:HOST:PORT (as the ground "
-        "station connecting to the IDU) or serial:PORT[@BAUD]; required to send anything",
-    )
+    parser.add_argument("--to", metavar="LINK", help=TO_HELP)
     parser.add_argument(
         "--dry-run", action="store_true", help="print the frames it would send, send nothing"
     )
@@ -145,13 +151,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         )
 
 
-def default_output(now: float | None = None) -> Path:
-    """check-YYYYMMDD-HHMMSS.mcap in the current directory, with -2, -3 ... if taken."""
+def default_output(now: float | None = None, command: str = "check") -> Path:
+    """check-YYYYMMDD-HHMMSS.mcap (``command``-...) in the current directory, with -2, -3
+    ... if taken."""
     stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(now))
-    path = Path(f"check-{stamp}.mcap")
+    path = Path(f"{command}-{stamp}.mcap")
     number = 2
     while path.exists() or path.is_symlink():
-        path = Path(f"check-{stamp}-{number}.mcap")
+        path = Path(f"{command}-{stamp}-{number}.mcap")
         number += 1
     return path
 
@@ -184,7 +191,9 @@ def run(args: argparse.Namespace) -> int:
             "would go, for a gimbal that starts centred: a step moves on as soon as the "
             "gimbal has settled."
         )
-        for line in dry_run_lines(steps, options, limits.settings.time_allowed_s):
+        for line in dry_run_lines(
+            steps, options, limits.settings.time_allowed_s, limits.min_slew_dps
+        ):
             print(line)
         return 0
     if args.to is None:

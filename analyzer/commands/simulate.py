@@ -101,6 +101,16 @@ def heading_value(text: str) -> float:
     return value % 360.0
 
 
+def angle_value(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not an angle in degrees")
+    return value
+
+
 def add_heading_argument(parser: argparse.ArgumentParser, *, uav_always: bool = False) -> None:
     """--heading; ``uav_always``: the command always plays the UAV (demo has no --uav)."""
     flying = (
@@ -218,6 +228,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="print only the start and the end, not each command",
     )
+    for axis, what, limits in (
+        ("pitch", "pitch", "-110..60"),
+        ("yaw", "yaw motor angle from the nose", "+-170"),
+    ):
+        parser.add_argument(
+            f"--start-{axis}",
+            type=angle_value,
+            default=0.0,
+            metavar="DEG",
+            help=f"the {what} the gimbal starts at (default 0; within {limits}): a gimbal "
+            "on the bench is wherever it was left",
+        )
     add_heading_argument(parser)
     add_fault_arguments(parser)
     add_behaviour_arguments(parser)
@@ -288,6 +310,7 @@ def run(args: argparse.Namespace) -> int:
         faults=fault_config(args),
         behaviour=behaviour(args),
         heading_deg=args.heading,
+        attitude=(args.start_pitch, args.start_yaw),
     )
     gimbal = SimulatedGimbal(start, config)
     camera = _camera(args, gimbal, link)
@@ -322,6 +345,9 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.heading is not None:
         say(f"  aircraft heading: {args.heading:g} deg (psi = heading + yaw motor angle)")
+    if args.start_pitch or args.start_yaw:
+        model = gimbal.model
+        say(f"  starts at pitch {model.pitch_deg:g}, yaw motor {model.motor_yaw_deg:g}")
     say(f"  faults: {config.faults.describe()}")
     say(f"  behaviour: {config.behaviour.describe()}")
     if camera is not None:

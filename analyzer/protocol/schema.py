@@ -286,6 +286,24 @@ def ardupilot_schemas() -> dict[str, dict[str, Any]]:
     return {TOPIC_ARDUPILOT_MOUNT: mount, TOPIC_ARDUPILOT_TARGETS: targets}
 
 
+# The link diagnostics a replay marks its span with (state "replay" where it begins,
+# "replay_end" where it ends): ``compare`` takes what lies between as the replay.
+REPLAY_MARK_FIELDS: dict[str, dict[str, str]] = {
+    "flight": {"type": "string", "description": "replay marks: the flight replayed"},
+    "flight_from": {
+        "type": "number",
+        "description": "replay marks: where the replayed span begins, in the flight's time",
+    },
+    "flight_to": {"type": "number", "description": "replay marks: where it ends"},
+    "span_start_s": {
+        "type": "number",
+        "description": "replay marks: where the span begins, seconds into the flight",
+    },
+    "span_end_s": {"type": "number", "description": "replay marks: where it ends, the same"},
+    "speed": {"type": "number", "description": "replay marks: times the flight's speed"},
+}
+
+
 def topic_schemas() -> dict[str, dict[str, Any]]:
     """Topic -> JSON Schema of its events."""
     out: dict[str, dict[str, Any]] = {TOPIC_COMMAND: command_schema()}
@@ -346,6 +364,7 @@ def topic_schemas() -> dict[str, dict[str, Any]]:
             "packets_read": {"type": "integer", "description": "pcap packets read until then"},
             "frames_read": {"type": "integer", "description": "frames read until then"},
             "missing_bytes": {"type": "integer", "description": "bytes a capture lacks"},
+            **REPLAY_MARK_FIELDS,
             **ERROR_FRAME_FIELDS,
         }
     )

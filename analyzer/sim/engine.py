@@ -41,6 +41,7 @@ class SimConfig:
     faults: FaultConfig = field(default_factory=FaultConfig)
     behaviour: Behaviour = field(default_factory=Behaviour)
     heading_deg: float | None = None  # the aircraft's heading (psi = heading + motor yaw)
+    attitude: tuple[float, float] = (0.0, 0.0)  # pitch, yaw motor where it starts (deg)
 
 
 class SimulatedGimbal:
@@ -57,6 +58,7 @@ class SimulatedGimbal:
         self.model = GimbalModel(
             start, gimbal_type=self.config.gimbal_type, behaviour=self.config.behaviour
         )
+        self.model.point_at(*self.config.attitude)
         self.faults = FaultInjector(self.config.faults)
         heading = self.config.heading_deg
         if heading is not None:

@@ -155,6 +155,11 @@ class GimbalModel:
             "success": True,
         }
 
+    def point_at(self, pitch: float, motor_yaw: float) -> None:
+        """Put the gimbal at this attitude (within its range), still: where it was left."""
+        self._set_pitch(pitch)
+        self._set_motor_yaw(motor_yaw)
+
     # -- time ----------------------------------------------------------------------------------
 
     def step(self, now: float) -> None:

@@ -1,0 +1,43 @@
+"""One pass over an input file for `replay` and `compare`: read and decoded as `decode` does."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from analyzer.errors import UsageError
+from analyzer.pipeline import Sink, Stage
+
+
+def read_through(
+    path: str,
+    sinks: Sequence[Sink],
+    *,
+    stages: Sequence[Stage] = (),
+    file_format: str | None = None,
+    port: int = 2000,
+    quiet: bool = False,
+    label: str = "",
+) -> Any:
+    """Decode ``path`` (anything `decode` reads) through ``stages`` into ``sinks``, with
+    a progress line on a terminal (not with ``quiet``); returns the reader (its
+    ``format_name``, ``notes``). A sink that failed raises its error."""
+    from analyzer.api.reading import open_decoding
+    from analyzer.pipeline import run_items
+    from analyzer.progress import Progress
+
+    if not 0 < port < 65536:
+        raise UsageError(f"--port must be 1..65535, not {port}")
+    decoding = open_decoding(path, file_format, port=port)
+    reader, pipeline = decoding.reader, decoding.pipeline
+    pipeline.stages.extend(stages)
+    pipeline.sinks.extend(sinks)
+    progress = Progress.maybe(reader, sys.stderr, quiet=quiet, label=label)
+    try:
+        run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
+    finally:
+        reader.close()
+    for failure in pipeline.failures:
+        raise failure.error
+    return reader

@@ -1,0 +1,1 @@
+"""Two recordings' judgements side by side: did the gimbal behave the same?"""
