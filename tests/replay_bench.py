@@ -31,7 +31,7 @@ def write_flight(path: Path, behaviour: Behaviour | None = None) -> Path:
     config = SimConfig(uav=True, behaviour=behaviour or Behaviour())
     frames, _ = run_offline(pilot_steps(), SECONDS, config, start=START, channel="can0")
     lines = [f"({f.time:.6f}) can0 {f.can_id:08X}#{f.data.hex().upper()}" for f in frames]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
 

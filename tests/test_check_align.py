@@ -170,6 +170,6 @@ def test_the_manual_shows_the_failure_the_check_prints() -> None:
     out = io.StringIO()
     TablePrinter(out)(result)
     printed = out.getvalue().splitlines()[1:]  # below the header
-    shown = HOWTO.read_text().splitlines()
+    shown = HOWTO.read_text(encoding="utf-8").splitlines()
     at = shown.index("    " + printed[0].rstrip())
     assert [line.removeprefix("    ") for line in shown[at : at + 2]] == printed

@@ -30,6 +30,7 @@ from analyzer import read
 from analyzer.mcapio.read.reader import Recording
 from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID
 from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
+from tests.platforms import posix_signals
 from tests.readme_blocks import read_blocks
 from tests.readme_examples import compare as compare_shown
 from tests.replay_bench import read_span
@@ -68,7 +69,13 @@ def start_replay(gimbal: Gimbal, folder: Path, *options: str) -> Replay:
     command = [sys.executable, "-m", "analyzer", "replay", FLIGHT, "--to", gimbal.to, *options]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen(
-        command, cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        command,
+        cwd=folder,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        encoding="utf-8",
     )
     return Replay(gimbal, folder, process)
 
@@ -107,6 +114,7 @@ def flight_commands(end_s: float | None = 12.0) -> list[str]:
 
 
 @pytest.mark.slow
+@posix_signals
 def test_ctrl_c_mid_replay_stops_and_centres_the_gimbal(runs: dict[str, Replay]) -> None:
     run = runs["interrupted"]
     deadline = time.monotonic() + 60
@@ -188,7 +196,7 @@ def masked(lines: list[str]) -> list[str]:
 
 def shown_outputs() -> dict[str, list[str]]:
     """The how-to's blocks that begin with a replay or compare command: their output."""
-    blocks = read_blocks(HOWTO.read_text().splitlines(), "docs/howto/replay.md")
+    blocks = read_blocks(HOWTO.read_text(encoding="utf-8").splitlines(), "docs/howto/replay.md")
     out = {}
     for block in blocks:
         commands = block.commands()
@@ -244,7 +252,7 @@ def test_the_html_draws_both_attitude_tracks_on_one_time_axis(
         "compare", str(folder / FLIGHT), str(folder / "bench.mcap"), "--html", str(page)
     )
     assert code == 1, err
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     assert text.startswith("<!DOCTYPE html>") and "Chart.js v4" in text
     assert "lag 0.30 | 0.0" in text and "<h2>Gimbal attitude</h2>" in text
     dom, console = load(page, tmp_path)

@@ -158,7 +158,7 @@ def test_values_outside_the_documents_ranges_are_refused(tmp_path: Path) -> None
         f"(1715684403.000000) can0 {CONTROL_ID:08X}#{encode_command('look_down').hex().upper()}",
     ]
     log = tmp_path / "bad.log"
-    log.write_text("\n".join(lines) + "\n")
+    log.write_text("\n".join(lines) + "\n", encoding="utf-8")
     part = read_span(log)
     assert [f.what.split()[0] for f in part.frames] == ["forward", "look_down"]
     assert [f.refused for f in part.refused] == [
@@ -174,7 +174,12 @@ def test_values_outside_the_documents_ranges_are_refused(tmp_path: Path) -> None
 def test_a_flight_without_commands_is_a_clear_error(flight: Path, tmp_path: Path) -> None:
     feedback_only = tmp_path / "feedback.log"
     feedback_only.write_text(
-        "".join(line + "\n" for line in flight.read_text().splitlines() if "030F0001#" in line)
+        "".join(
+            line + "\n"
+            for line in flight.read_text(encoding="utf-8").splitlines()
+            if "030F0001#" in line
+        ),
+        encoding="utf-8",
     )
     code, _, err = cli("replay", str(feedback_only), "--dry-run")
     assert code == 2
@@ -339,6 +344,6 @@ def test_unreadable_inputs_and_a_refused_output_are_usage_errors(
     code, _, err = cli("compare", str(flight), str(tmp_path / "missing.mcap"))
     assert code == 2 and "error:" in err and "Traceback" not in err
     page = tmp_path / "page.html"
-    page.write_text("keep me")
+    page.write_text("keep me", encoding="utf-8")
     code, _, err = cli("compare", str(flight), str(flight), "--html", str(page))
-    assert code == 2 and "exists" in err and page.read_text() == "keep me"
+    assert code == 2 and "exists" in err and page.read_text(encoding="utf-8") == "keep me"
