@@ -15,41 +15,26 @@ from __future__ import annotations
 
 import faulthandler
 import gzip
-import io
 import os
 import random
-import sys
 import time
 import traceback
 from collections.abc import Callable, Iterator
-from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
 import pytest
 
-from analyzer.cli import main
 from analyzer.inputs import FORMATS
-from analyzer.protocol.types import CanFrame
-from tests.log_makers import (
-    SAMPLE,
-    ardupilot_log,
-    flight_frames,
-    python_can_log,
-    savvycan_csv,
-    sll_pcap,
-)
-from tests.rosbag2_files import ros1_bag, rosbag2_mcap
-from tests.test_mcap_support import traffic, write_recording
-from tests.test_ros_bags import rosbags_bag
+from fuzz.rules import one_error_line, run_cli
+from fuzz.seeds import FRAMES, Seed, make_seeds, python_can_bytes, seed_frames
+from tests.log_makers import savvycan_csv
 
-SAMPLES = SAMPLE.parent
 SEED = int(os.environ.get("GIMBAL_FUZZ_SEED", "28"))
 MUTANTS = int(os.environ.get("GIMBAL_FUZZ_MUTANTS", "1500"))
 BUDGET_S = float(os.environ.get("GIMBAL_FUZZ_SECONDS", "25"))
 HANG_S = 60.0  # one mutant decoding longer than this is a hang (see _fuzz)
-FRAMES = 40  # frames per seed file: small files keep each decode in milliseconds
 TEXT_FORMATS = frozenset({"candump", "asc", "trc", "csv", "savvycan"})
 # Values a damaged size or count field takes: zero, small, the edges of signed and
 # unsigned 16/32/64-bit integers.
@@ -64,62 +49,6 @@ EXTREMES = (
     b"\x00\x00\x00\xa0",  # 2.7 GB
 )
 TEXT_NOISE = ("-1", "nan", "1e309", "99999999999999999999", "", "#", "\x00", "é", "0x", ";")
-
-
-@dataclass(frozen=True)
-class Seed:
-    """A file as its tool writes it: ``name`` (the suffix matters), ``fmt`` its format."""
-
-    name: str
-    fmt: str
-    data: bytes
-
-
-def _frames() -> list[CanFrame]:
-    return flight_frames()[:FRAMES]
-
-
-def _python_can(folder: Path, name: str, frames: list[CanFrame]) -> bytes:
-    return python_can_log(folder / name, frames).read_bytes()
-
-
-def _screen(frames: list[CanFrame]) -> bytes:
-    """candump's default screen output with -ta: ``(time)  can0  ID   [n]  AA BB ...``."""
-    lines = []
-    for frame in frames:
-        ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
-        data = " ".join(f"{b:02X}" for b in frame.data)
-        lines.append(f" ({frame.time:.6f})  can0  {ident}   [{len(frame.data)}]  {data}")
-    return ("\n".join(lines) + "\n").encode()
-
-
-def make_seeds(folder: Path) -> list[Seed]:
-    frames = _frames()
-    log = b"".join(SAMPLE.read_bytes().splitlines(keepends=True)[:FRAMES])
-    dataflash, _ = ardupilot_log(frames, frames[0].time - 30.0)
-    seeds = [
-        Seed("flight.log", "candump", log),
-        Seed("screen.log", "candump", _screen(frames)),
-        Seed("flight.log.gz", "candump", gzip.compress(log)),
-        Seed("idu-tcp.pcap", "pcap", (SAMPLES / "idu-tcp.pcap").read_bytes()),
-        Seed("sll.pcap", "pcap", sll_pcap(folder / "sll.pcap", frames, 113).read_bytes()),
-        Seed(
-            "sll2.pcapng", "pcap", sll_pcap(folder / "s.pcapng", frames, 276, ng=True).read_bytes()
-        ),
-        Seed("uart-dump.bin", "stream", (SAMPLES / "uart-dump.bin").read_bytes()),
-        Seed("00000042.BIN", "dataflash", dataflash),
-        Seed("00000043.BIN.gz", "dataflash", gzip.compress(dataflash)),
-        Seed("gvret.csv", "savvycan", savvycan_csv(frames).encode()),
-        Seed("rosbag2.mcap", "mcap", rosbag2_mcap(frames)),
-        Seed("ros1.bag", "rosbag", ros1_bag(folder / "r.bag", frames).read_bytes()),
-        Seed("bag.db3", "rosbag", rosbags_bag(folder / "bag", frames, "db3").read_bytes()),
-    ]
-    for name in ("x.asc", "x.blf", "x.trc", "x.csv", "x.mf4", "x.asc.gz", "x.trc.gz"):
-        fmt = name.split(".")[1]
-        seeds.append(Seed(name, fmt, _python_can(folder, name, frames)))
-    write_recording(folder / "rec.mcap", traffic(1.0))
-    seeds.append(Seed("recording.mcap", "mcap", (folder / "rec.mcap").read_bytes()))
-    return seeds
 
 
 # -- mutators: (rng, data, another seed's data) -> mutated data, what was done ---------------
@@ -254,29 +183,12 @@ def mutants(seeds: list[Seed], rng: random.Random) -> Iterator[Mutant]:
 def decode(path: Path, fmt: str | None, *, stdin: bool = False) -> tuple[int, str, str]:
     """``gimbal-analyzer decode`` in this process: (exit code, stdout, stderr); with
     ``stdin`` the file is piped in (``decode -``)."""
-    out, err = io.StringIO(), io.StringIO()
     args = ["decode", "-" if stdin else str(path)] + (["--format", fmt] if fmt else [])
-    piped = io.TextIOWrapper(io.BytesIO(path.read_bytes() if stdin else b""))
-    saved = sys.stdin
-    sys.stdin = piped
-    try:
-        with redirect_stdout(out), redirect_stderr(err):
-            code = main(args)
-    finally:
-        sys.stdin = saved
-    return code, out.getvalue(), err.getvalue()
+    return run_cli(args, path.read_bytes() if stdin else b"")
 
 
 def _one_error(code: int, err: str) -> bool:
-    """Nothing on stderr after exit 0; after exit 2 one error line (and the indented
-    details some errors list, e.g. a recording's channels)."""
-    lines = err.splitlines()
-    if "Traceback" in err or "Exception ignored" in err:
-        return False
-    if code == 0:  # notes about the input, each a line of its own
-        return all(line.startswith(("note: ", "  ")) for line in lines)
-    head = "gimbal-analyzer decode: error: "
-    return bool(lines) and lines[0].startswith(head) and all(x.startswith("  ") for x in lines[1:])
+    return one_error_line("decode", code, err)
 
 
 @pytest.fixture(scope="module")
@@ -356,7 +268,7 @@ def _bad_lines(path: Path, fmt: str) -> tuple[int, list[str], str]:
 
 
 def test_a_savvycan_time_beyond_any_date_is_a_bad_line(tmp_path: Path) -> None:
-    lines = savvycan_csv(_frames()[:3]).splitlines()
+    lines = savvycan_csv(seed_frames()[:3]).splitlines()
     lines[2] = "99999999999999999999999999" + lines[2][lines[2].index(",") :]
     path = tmp_path / "gvret.csv"
     path.write_text("\n".join(lines) + "\n")
@@ -367,8 +279,8 @@ def test_a_savvycan_time_beyond_any_date_is_a_bad_line(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("name", "fmt"), [("x.trc", "trc"), ("x.csv", "csv")])
 def test_a_python_can_time_of_infinity_is_a_bad_line(tmp_path: Path, name: str, fmt: str) -> None:
-    frames = _frames()[:3]
-    text = _python_can(tmp_path, name, frames).decode()
+    frames = seed_frames()[:3]
+    text = python_can_bytes(tmp_path, name, frames).decode()
     stamp = {"trc": f"{(frames[1].time - frames[0].time) * 1000:.1f}"}
     old = stamp.get(fmt, str(frames[1].time))
     assert old in text
@@ -381,7 +293,7 @@ def test_a_python_can_time_of_infinity_is_a_bad_line(tmp_path: Path, name: str, 
 def test_a_line_python_can_skips_with_a_warning_is_a_bad_line_not_a_stderr_message(
     tmp_path: Path,
 ) -> None:
-    text = _python_can(tmp_path, "x.trc", _frames()[:3]).decode().splitlines()
+    text = python_can_bytes(tmp_path, "x.trc", seed_frames()[:3]).decode().splitlines()
     last = len(text)
     text.append("      4")  # a message number and nothing else: python-can logs and skips it
     (tmp_path / "x.trc").write_text("\n".join(text) + "\n")
@@ -395,7 +307,7 @@ def test_an_mf4_that_asammdf_cannot_open_is_one_line_without_a_cleanup_traceback
 ) -> None:
     import gc
 
-    data = _python_can(tmp_path, "x.mf4", _frames())
+    data = python_can_bytes(tmp_path, "x.mf4", seed_frames())
     path = tmp_path / "cut.mf4"
     path.write_bytes(data[:1000])
     code, _, err = decode(path, None)
@@ -409,7 +321,7 @@ def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_o
 ) -> None:
     import struct
 
-    data = bytearray(_python_can(tmp_path, "x.mf4", _frames()))
+    data = bytearray(python_can_bytes(tmp_path, "x.mf4", seed_frames()))
     group = data.find(b"##CG")  # the CAN frames' channel group: 40 records
     links = struct.unpack_from("<Q", data, group + 16)[0]
     cycles_at = group + 24 + 8 * links + 8  # after cg_record_id
