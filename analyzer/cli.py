@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from types import ModuleType
 from typing import NoReturn
 
-from analyzer import __version__, timefmt
+from analyzer import timefmt
 from analyzer.errors import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -23,6 +23,7 @@ from analyzer.errors import (
 )
 from analyzer.stdio import guarded_stdout, interrupt_name, sigterm_as_interrupt, silence_stdout
 from analyzer.terminal_text import printable
+from analyzer.version import __version__
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
 # run(args) -> int, and keeps heavy imports (textual, mcap, can) inside run().
