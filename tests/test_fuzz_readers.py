@@ -207,6 +207,7 @@ def test_every_seed_decodes_cleanly(seeds: list[Seed], tmp_path: Path) -> None:
         assert "/gimbal/" in out, seed.name
 
 
+@pytest.mark.slow
 def test_mutants_of_every_reader_never_raise(seeds: list[Seed], tmp_path: Path) -> None:
     rng = random.Random(SEED)
     tried: dict[str, int] = {}
@@ -332,3 +333,34 @@ def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_o
     code, _, err = decode(path, None)
     assert code == 2
     assert "holds data but counts no record" in err and err.count("\n") == 1
+
+
+REGRESSIONS = Path(__file__).resolve().parent.parent / "fuzz" / "regressions"
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "object-of-size-0-unknown-header-version.blf",  # python-can loops, warning each time
+        "object-of-size-0-can-message.blf",  # ... yielding the same frame each time
+        "object-of-size-0-unknown-type.blf",  # ... silently
+    ],
+)
+def test_a_blf_object_whose_size_is_0_ends_the_reading_with_a_diagnostic(name: str) -> None:
+    code, out, err = decode(REGRESSIONS / "blf" / name, "blf")
+    assert code == 0 and err == ""
+    stopped = [line for line in out.splitlines() if "reading stopped" in line]
+    assert len(stopped) == 1 and "an object whose size field is 0" in stopped[0]
+
+
+def test_an_asc_line_of_control_characters_is_a_bad_line() -> None:
+    code, bad, err = _bad_lines(REGRESSIONS / "asc" / "control-character-line.asc", "asc")
+    assert code == 0 and err == ""
+    assert "line 1: " in bad[0] and "a line of control characters" in bad[0]
+
+
+def test_an_mf4_channel_outside_its_record_is_refused_before_asammdf_reads_it() -> None:
+    """asammdf would read outside its buffer and crash the process (SIGSEGV)."""
+    code, _, err = decode(REGRESSIONS / "mf4" / "channel-outside-its-record.mf4", None)
+    assert code == 2 and err.count("\n") == 1
+    assert "ends at byte 1,143,153,499 of a record of 84 bytes" in err
