@@ -28,6 +28,8 @@ from analyzer.protocol.types import LINK, CanFrame, Event, StreamChunk
 from tests.mcap_doctor import examine
 from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
 
+pytestmark = pytest.mark.slow  # adapters unplugged and plugged again, seconds each
+
 ROOT = Path(__file__).resolve().parent.parent
 DEADLINE_S = 20.0
 CANABLE = by_id_name("canable.io", "CANable_8c005eb", "0037001A5948")

@@ -190,6 +190,7 @@ analyzer.decode("x.log")
 """
 
 
+@pytest.mark.slow
 def test_a_users_script_passes_mypy_strict_and_its_mistakes_do_not(tmp_path: Path) -> None:
     assert (ROOT / "analyzer" / "py.typed").exists()
     done = mypy_strict(USER_SCRIPT, tmp_path)

@@ -241,6 +241,7 @@ def test_only_the_scripting_can_driver_it_is_given() -> None:
     assert "VSH: no scripting CAN driver 2" in [t for _, _, t in missing.vehicle.texts]
 
 
+@pytest.mark.slow
 def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
     session = run_session(lua_text(), DRIVER_NAME, 40.0)  # two rounds of the demo plan
     assert session.error is None

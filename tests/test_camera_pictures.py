@@ -83,6 +83,7 @@ def test_a_lens_that_stays_keeps_the_scale_while_the_gimbal_turns() -> None:
     assert found is not None and found.scale == pytest.approx(1.0, abs=0.01)
 
 
+@pytest.mark.slow
 def test_every_palette_is_told_from_every_other_and_from_itself() -> None:
     """Two frames 1/15 s apart (the gimbal turning 20 deg/s, the aircraft flying 12 m/s):
     another palette always shows, the same one never does."""

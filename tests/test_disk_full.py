@@ -152,6 +152,7 @@ class _EndlessBus:
         self.closed.set()
 
 
+@pytest.mark.slow
 def test_a_write_error_in_the_flush_thread_stops_the_capture(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -88,6 +88,7 @@ def sync(lazy: Any) -> Any:
     return lazy.compute(scheduler="sync")
 
 
+@pytest.mark.slow
 @settings(max_examples=10, deadline=None)
 @given(flights=st.lists(flight, min_size=1, max_size=14))
 def test_sql_and_dask_renderings_give_the_same_answers(flights: list[dict[str, Any]]) -> None:

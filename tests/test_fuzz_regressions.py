@@ -59,6 +59,7 @@ def test_a_crash_found_by_fuzzing_stays_fixed(path: Path) -> None:
     run_bounded(targets()[path.parent.name], path.read_bytes())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [name for name in targets() if name != ALL])
 def test_every_target_takes_its_seeds(name: str) -> None:
     target = targets()[name]

@@ -220,6 +220,7 @@ def test_a_late_joiner_gets_every_channel_at_once(tmp_path: Path) -> None:
     assert {"/stream/bytes", "/gimbal/ranging/fix", "/analysis/response"} <= set(first)
 
 
+@pytest.mark.slow
 def test_a_client_that_stops_reading_does_not_hold_the_recording_back(tmp_path: Path) -> None:
     items = sample_items(100)
     first, rest = items[:200], items[200:]

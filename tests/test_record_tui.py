@@ -15,6 +15,8 @@ import pytest
 
 from analyzer.mcapio.read.reader import read_events
 
+pytestmark = pytest.mark.slow  # the monitor UI recording, seconds each
+
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLE = ROOT / "samples" / "flight-candump.log"
 

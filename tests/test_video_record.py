@@ -29,6 +29,8 @@ from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 from analyzer.video.spec import VIDEO_HOLD_BACK_S
 from tests.mcap_doctor import examine
 
+pytestmark = pytest.mark.slow  # a real RTSP camera
+
 ROOT = Path(__file__).resolve().parent.parent
 FRAME_INTERVAL = 1 / 30
 
