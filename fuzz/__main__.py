@@ -17,11 +17,13 @@ from fuzz.rules import HANG_S
 from fuzz.targets import ALL, Target, of_all, targets
 
 WORK = REPO / "build" / "fuzz"
+TAIL_LINES = 60  # of a run's log shown when it found something
 EPILOG = f"""\
 examples:
   python -m fuzz --list                    the targets
   python -m fuzz blf --seconds 300         fuzz one target for five minutes
-  python -m fuzz all --seconds 60          every target at once (CI does this)
+  python -m fuzz all --seconds 60          every target at once
+  python -m fuzz all --seconds 40 --table  the same, its figures only (CI does this)
   python -m fuzz blf asc --seconds 120 --jobs 2
                                            several, one process each, and a table
   python -m fuzz blf --replay FILE...      run inputs once (a crash to reproduce)
@@ -47,7 +49,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--runs", type=int, help="stop after this many inputs")
     p.add_argument("--jobs", type=int, default=1, help="targets fuzzed at once (default 1)")
     p.add_argument("--work", type=Path, help="corpus and findings (default build/fuzz/TARGET)")
-    p.add_argument("--markdown", action="store_true", help="the table in Markdown")
+    p.add_argument(
+        "--table", action="store_true", help="run in a subprocess and print only its figures"
+    )
+    p.add_argument("--markdown", action="store_true", help="the figures as a Markdown table")
     p.add_argument("--replay", nargs="+", type=Path, metavar="FILE", help="run these inputs")
     return p
 
@@ -66,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
         if len(args.targets) != 1:
             parser().error("--replay takes one target")
         return replay(known[args.targets[0]], args.replay)
-    if len(args.targets) == 1 and args.jobs == 1 and not args.markdown:
+    if len(args.targets) == 1 and args.jobs == 1 and not (args.table or args.markdown):
         from fuzz.engine import fuzz
 
         name = args.targets[0]
@@ -111,9 +116,10 @@ def several(names: list[str], seconds: float, runs: int | None, jobs: int, md: b
         log = work / "log.txt"
         before = set(finds(work))
         with log.open("w") as out:
-            subprocess.run(command, cwd=REPO, stdout=out, stderr=subprocess.STDOUT, check=False)
+            done = subprocess.run(command, cwd=REPO, stdout=out, stderr=subprocess.STDOUT)
         figures = parse(name, log.read_text(errors="replace"))
         figures.found = sorted(set(finds(work)) - before)
+        figures.exit_code = done.returncode
         print(f"{name}: {figures.executions:,} inputs, {len(figures.found)} found", flush=True)
         return figures
 
@@ -121,9 +127,14 @@ def several(names: list[str], seconds: float, runs: int | None, jobs: int, md: b
         runs_done = list(pool.map(one, names))
     print(table(runs_done, markdown=md))
     found = [f"build/fuzz/{f.target}/{name}" for f in runs_done for name in f.found]
+    for figures in runs_done:
+        if not figures.ok:  # what the run said: the traceback, where the input is
+            log = (WORK / figures.target / "log.txt").read_text(errors="replace")
+            print(f"-- {figures.target} (exit {figures.exit_code}):", flush=True)
+            print(*log.splitlines()[-TAIL_LINES:], sep="\n")
     if found:
         print("found (reproduce with python -m fuzz TARGET --replay FILE):", *found, sep="\n  ")
-    return 1 if found else 0
+    return 0 if all(figures.ok for figures in runs_done) else 1
 
 
 if __name__ == "__main__":

@@ -28,10 +28,11 @@ class Figures:
     corpus: int = 0  # inputs kept (each adds coverage)
     peak_rss_mb: int = 0
     found: list[str] = field(default_factory=list)  # inputs saved as crashes / hangs / OOMs
+    exit_code: int = 0  # of the process that ran it (a seed that crashes: no input saved)
 
     @property
     def ok(self) -> bool:
-        return not self.found
+        return not self.found and self.exit_code == 0
 
 
 def finds(work: Path) -> list[str]:

@@ -80,4 +80,7 @@ def make_seeds(folder: Path, *, recording_s: float = 1.0) -> list[Seed]:
         seeds.append(Seed(name, fmt, python_can_bytes(folder, name, frames)))
     write_recording(folder / "rec.mcap", traffic(recording_s))
     seeds.append(Seed("recording.mcap", "mcap", (folder / "rec.mcap").read_bytes()))
+    # Uncompressed (record --compression none): a mutation lands in a record, not in zstd.
+    write_recording(folder / "plain.mcap", traffic(recording_s), compression="none")
+    seeds.append(Seed("plain-recording.mcap", "mcap", (folder / "plain.mcap").read_bytes()))
     return seeds

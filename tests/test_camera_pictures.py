@@ -55,6 +55,7 @@ def shots(count: int, **change: float) -> list[Shot]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("zoom", [1.0, 3.0, 10.0, 30.0])
 def test_the_ground_has_texture_at_every_zoom(zoom: float) -> None:
     world = make_world()
@@ -105,6 +106,7 @@ def _with(shot: Shot, palette: str) -> Shot:
     return Shot(shot.east_m, shot.north_m, shot.up_m, shot.yaw_deg, shot.pitch_deg, palette=palette)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 def test_a_steady_layout_stays_while_the_picture_moves(mode: int) -> None:
     world = make_world()

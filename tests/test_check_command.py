@@ -338,6 +338,7 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     assert text.count('class="v st-pass"') == 9
 
 
+@pytest.mark.slow
 def test_healthy_gimbal_over_tcp_passes_every_step(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["healthy"].finish()
     assert run.code == 0, run.stderr

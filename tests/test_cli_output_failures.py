@@ -54,6 +54,7 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+@pytest.mark.slow
 @needs_dev_full
 @pytest.mark.parametrize(
     "args",

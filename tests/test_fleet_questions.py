@@ -95,6 +95,7 @@ def test_sql_and_dask_renderings_give_the_same_answers(flights: list[dict[str, A
     same_answers(flights)
 
 
+@pytest.mark.slow
 def test_worst_flights_close_in_score_are_cut_alike() -> None:
     """Four flights that all show a score of 29.1: the order is the exact score's (the
     shown one is rounded), the same on both paths, whatever the names' order."""

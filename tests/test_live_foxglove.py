@@ -304,6 +304,7 @@ def test_the_old_subprotocol_is_refused_and_counted() -> None:
 # -- the command ------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_record_serves_the_live_stream_while_recording(tmp_path: Path) -> None:
     idu = FakeIdu()
     path = tmp_path / "flight.mcap"

@@ -145,6 +145,7 @@ def test_every_sub_command_and_every_option_of_help_has_its_entry(built: Path) -
         assert not missing, f"{command}: no entry for {sorted(missing)}"
 
 
+@pytest.mark.slow
 def test_an_option_without_help_fails_the_build() -> None:
     cli_reference = _docs_extension("cli_reference")
     parser = argparse.ArgumentParser(prog="gimbal-analyzer x")

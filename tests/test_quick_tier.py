@@ -17,8 +17,8 @@ import inspect
 import re
 import subprocess
 import sys
-import textwrap
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,50 +35,77 @@ RTSP, BROWSER, DASK = "a real RTSP camera", "Chromium", "a Dask cluster"
 LONG_DEMO, ARDUPILOT_DEMO = "a demo of a second or more", "the ArduPilot demo"
 
 
+@dataclass(frozen=True)
+class Facts:
+    """What one function's code shows: the names it uses (not its words: a docstring
+    may speak of Chromium), its string constants, the longest demo it runs, and the
+    functions of the tests it calls."""
+
+    names: frozenset[str] = frozenset()
+    strings: frozenset[str] = frozenset()
+    demo_s: float = 0.0
+    calls: tuple[Callable[..., Any], ...] = ()
+
+
 @functools.cache
-def reach(function: Callable[..., Any]) -> tuple[ast.AST, ...]:
-    """The syntax of ``function`` and of every function of the tests it calls, and so on."""
+def definitions(path: str) -> dict[int, ast.AST]:
+    """The functions a file defines, by the line of their ``def`` and of their first
+    decorator (a file read once: far quicker than inspect.getsource for each)."""
+    try:
+        tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    except (OSError, SyntaxError):
+        return {}
+    found: dict[int, ast.AST] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            for line in (node.lineno, *(d.lineno for d in node.decorator_list)):
+                found.setdefault(line, node)
+    return found
+
+
+@functools.cache
+def facts(function: Callable[..., Any]) -> Facts:
+    code = getattr(function, "__code__", None)
+    tree = definitions(code.co_filename).get(code.co_firstlineno) if code else None
+    if tree is None:
+        return Facts()
+    names: set[str] = set()
+    strings: set[str] = set()
+    calls: list[Callable[..., Any]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            names.add(node.attr)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            strings.add(node.value)
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            called = function.__globals__.get(node.func.id)
+            if inspect.isfunction(called) and ours(inspect.unwrap(called)):
+                calls.append(inspect.unwrap(called))
+    return Facts(frozenset(names), frozenset(strings), demo_seconds(tree), tuple(calls))
+
+
+@functools.cache
+def reach(function: Callable[..., Any]) -> frozenset[Callable[..., Any]]:
+    """``function`` and every function of the tests it calls, and so on."""
     seen: set[Callable[..., Any]] = set()
-    trees: list[ast.AST] = []
     pending = [function]
     while pending:
         current = pending.pop()
-        if current in seen:
-            continue
-        seen.add(current)
-        try:
-            tree = ast.parse(textwrap.dedent(inspect.getsource(current)))
-        except (OSError, TypeError, SyntaxError):
-            continue
-        trees.append(tree)
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
-                called = current.__globals__.get(node.func.id)
-                if inspect.isfunction(called) and ours(inspect.unwrap(called)):
-                    pending.append(inspect.unwrap(called))
-    return tuple(trees)
+        if current not in seen:
+            seen.add(current)
+            pending += facts(current).calls
+    return frozenset(seen)
 
 
+@functools.cache
 def ours(function: Callable[..., Any]) -> bool:
     """A function of the tests (not of pytest or of a library)."""
     try:
         return Path(inspect.getsourcefile(function) or "").is_relative_to(TESTS)
     except TypeError:
         return False
-
-
-def identifiers(trees: tuple[ast.AST, ...]) -> set[str]:
-    """The names the code uses (not its words: a docstring may speak of Chromium)."""
-    names: set[str] = set()
-    for tree in trees:
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Name):
-                names.add(node.id)
-            elif isinstance(node, ast.Attribute):
-                names.add(node.attr)
-            elif isinstance(node, ast.FunctionDef):
-                names.add(node.name)
-    return names
 
 
 def fixture_functions(item: pytest.Item) -> Iterator[Callable[..., Any]]:
@@ -103,24 +130,23 @@ def spelled_out(node: ast.AST) -> list[str]:
     return [p.value for p in parts if isinstance(p, ast.Constant) and isinstance(p.value, str)]
 
 
-def demo_seconds(trees: tuple[ast.AST, ...]) -> float:
+def demo_seconds(tree: ast.AST) -> float:
     """How long the longest demo the code runs lasts: its ``--duration``, or the default
     when it has none (a demo the code expects to be refused, exit 2, runs for none)."""
+    refused = any(
+        isinstance(n, ast.Compare)
+        and any(isinstance(c, ast.Constant) and c.value == 2 for c in n.comparators)
+        for n in ast.walk(tree)
+    )
     longest = 0.0
-    for tree in trees:
-        refused = any(
-            isinstance(n, ast.Compare)
-            and any(isinstance(c, ast.Constant) and c.value == 2 for c in n.comparators)
-            for n in ast.walk(tree)
-        )
-        for node in ast.walk(tree):
-            words = spelled_out(node)
-            if not words or words[0] != "demo" or "--help" in words:
-                continue
-            if "--duration" in words[:-1]:
-                longest = max(longest, float(words[words.index("--duration") + 1]))
-            elif not refused:
-                longest = max(longest, PLAIN_DURATION)
+    for node in ast.walk(tree):
+        words = spelled_out(node)
+        if not words or words[0] != "demo" or "--help" in words:
+            continue
+        if "--duration" in words[:-1]:
+            longest = max(longest, float(words[words.index("--duration") + 1]))
+        elif not refused:
+            longest = max(longest, PLAIN_DURATION)
     return longest
 
 
@@ -131,24 +157,17 @@ def why_slow(item: pytest.Item) -> str | None:
     function = getattr(item, "function", None)
     if function is None:
         return None
-    trees = reach(function) + tuple(t for f in fixture_functions(item) for t in reach(f))
-    names = identifiers(trees)
+    functions = reach(function).union(*(reach(f) for f in fixture_functions(item)))
+    found = [facts(f) for f in functions]
+    names = frozenset().union(*(f.names for f in found))
     if any("chromium" in name.lower() for name in names):
         return BROWSER
     if "LocalCluster" in names or {"distributed", "Client"} <= names:
         return DASK
-    if demo_seconds(trees) >= LONG_DEMO_S:
-        return ARDUPILOT_DEMO if "--ardupilot" in constants(trees) else LONG_DEMO
+    if max((f.demo_s for f in found), default=0.0) >= LONG_DEMO_S:
+        ardupilot = any("--ardupilot" in f.strings for f in found)
+        return ARDUPILOT_DEMO if ardupilot else LONG_DEMO
     return None
-
-
-def constants(trees: tuple[ast.AST, ...]) -> set[str]:
-    return {
-        node.value
-        for tree in trees
-        for node in ast.walk(tree)
-        if isinstance(node, ast.Constant) and isinstance(node.value, str)
-    }
 
 
 def test_what_takes_seconds_by_its_nature_is_marked_slow(request: pytest.FixtureRequest) -> None:
@@ -187,10 +206,10 @@ def _a_short_demo(main: Callable[[list[str]], int]) -> None:
 
 
 def test_the_check_reads_how_long_a_demo_runs() -> None:
-    assert demo_seconds(reach(_a_long_demo)) == 4.5
-    assert demo_seconds(reach(_a_plain_demo)) == PLAIN_DURATION
-    assert demo_seconds(reach(_a_refused_demo)) == 0.0
-    assert demo_seconds(reach(_a_short_demo)) == 0.3
+    assert facts(_a_long_demo).demo_s == 4.5
+    assert facts(_a_plain_demo).demo_s == PLAIN_DURATION
+    assert facts(_a_refused_demo).demo_s == 0.0
+    assert facts(_a_short_demo).demo_s == 0.3
 
 
 @pytest.mark.slow

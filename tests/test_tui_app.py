@@ -132,6 +132,7 @@ def test_widgets_show_decoded_values_on_a_120x40_screen() -> None:
     run(body)
 
 
+@pytest.mark.slow
 def test_feedback_age_turns_red_after_a_second_without_feedback() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)

@@ -38,6 +38,7 @@ def test_the_filter_prompt_selects_the_old_text_so_typing_replaces_it() -> None:
     asyncio.run(body())
 
 
+@pytest.mark.slow
 def test_the_all_topics_view_says_whose_attitude_it_is() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)

@@ -88,7 +88,8 @@ class _Blocks:
         return None
 
     def _outside(self, first: int, record: int) -> str | None:
-        pending, seen = [first], set()
+        pending: list[int] = [first]
+        seen: set[int] = set()
         while pending and len(seen) < _MAX_CHAIN:
             offset = pending.pop()
             if not offset or offset in seen:
