@@ -77,7 +77,10 @@ def scratch() -> Path:
 
 @functools.cache
 def all_seeds() -> tuple[Seed, ...]:
-    return tuple(make_seeds(scratch() / "seeds", recording_s=RECORDING_S))
+    """The seed files of every format (made once per process)."""
+    folder = scratch() / "seeds"
+    folder.mkdir(exist_ok=True)
+    return tuple(make_seeds(folder, recording_s=RECORDING_S))
 
 
 def read_file(fmt: str, path: Path) -> None:
@@ -102,7 +105,6 @@ def file_runner(spec: FileFormat) -> Callable[[bytes], None]:
 
 def file_seeds(spec: FileFormat) -> Callable[[], list[bytes]]:
     def seeds() -> list[bytes]:
-        (scratch() / "seeds").mkdir(exist_ok=True)
         return [seed.data for seed in all_seeds() if spec.seeds(seed)]
 
     return seeds

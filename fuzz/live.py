@@ -81,9 +81,10 @@ def _serve_once(server: socket.socket, send: bytes, expect: int, got: list[bytes
             conn.shutdown(socket.SHUT_RDWR)
 
 
-def _capture(spec: str, source: Any, path: Path, peers: Callable[[], None]) -> None:
+def _capture(spec: str, source: Any, path: Path, peers: Callable[[], None], sent: int) -> None:
     """Run ``source`` into a recording as ``record`` does, with ``peers`` talking to it,
-    until the link is lost; then the recording must read back."""
+    until the link is lost: the capture must have taken every one of the ``sent`` bytes,
+    and the recording must read back."""
     from analyzer.cli import build_parser
     from analyzer.commands.live_recording import open_live_recording
     from analyzer.mcapio.write.sink import recording_metadata
@@ -111,6 +112,9 @@ def _capture(spec: str, source: Any, path: Path, peers: Callable[[], None]) -> N
         raise Crash(f"the capture failed: {capture.error}")
     if not ended:
         raise Crash(f"the capture of {spec} did not see the peer close in {WAIT_S} s")
+    taken = capture.stats.bytes
+    if taken != sent:
+        raise Crash(f"the capture of {spec} took {taken:,} of the {sent:,} bytes sent")
     _read_back(path)
 
 
@@ -136,7 +140,7 @@ def run_client(data: bytes) -> None:
     try:
         source = open_source(spec)
         idu.start()
-        _capture(spec, source, scratch() / "tcp.mcap", lambda: idu.join(WAIT_S))
+        _capture(spec, source, scratch() / "tcp.mcap", lambda: idu.join(WAIT_S), len(data))
     finally:
         server.close()
 
@@ -178,7 +182,7 @@ def run_proxy(data: bytes) -> None:
             at_gs.append(f"{type(exc).__name__}: {exc}".encode())
 
     try:
-        _capture(spec, source, scratch() / "proxy.mcap", ground_station)
+        _capture(spec, source, scratch() / "proxy.mcap", ground_station, len(data[2:]))
     finally:
         server.close()
     if at_idu != [to_idu] or at_gs != [to_gs]:
