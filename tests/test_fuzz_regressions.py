@@ -93,3 +93,9 @@ def test_the_command_line_s_own_usage_errors_count_as_exit_codes() -> None:
 
     code, _, err = run_cli(["decode", "x.log", "--format", "nonsense"])
     assert code == 2 and err.startswith("gimbal-analyzer decode: error: ")
+
+
+def test_the_reliability_page_names_every_target() -> None:
+    page = (REGRESSIONS.parent.parent / "docs" / "explanation" / "reliability.md").read_text()
+    missing = [name for name in targets() if f"`{name}`" not in page]
+    assert not missing, f"docs/explanation/reliability.md does not name {missing}"
