@@ -3,10 +3,10 @@
 A test is marked ``slow`` (``@pytest.mark.slow`` or a module's ``pytestmark``) when it
 takes a second or more on a 2-core machine, and always when it drives a real RTSP
 camera, Chromium, a Dask cluster or a demo that runs for a second or more (the ArduPilot
-demo among them). The check below reads each collected test, the fixtures it uses and
-the helpers of its module it calls, and fails for one that does any of that unmarked;
-in a quick run (``-m "not slow"``) it fails for one that came through. The quick tier
-keeps at least 60 % of the tests.
+demo among them). The check below reads every collected test (in a quick run too, before
+``-m "not slow"`` leaves some out), the fixtures it uses and the helpers it calls, and
+fails for one that does any of that unmarked. The quick tier keeps at least 60 % of
+the tests.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from typing import Any
 import pytest
 
 from analyzer.commands.demo import PLAIN_DURATION
+from tests.collected import ALL_ITEMS
 
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
@@ -172,20 +173,18 @@ def why_slow(item: pytest.Item) -> str | None:
 
 
 def test_what_takes_seconds_by_its_nature_is_marked_slow(request: pytest.FixtureRequest) -> None:
-    """Every such test carries the mark (so a quick run has none of them); a full run
-    finds each kind, which shows the check sees them."""
+    """Every such test carries the mark, so that a quick run has none of them; and when
+    the whole suite was collected the check finds each kind (it sees them)."""
+    items = request.config.stash.get(ALL_ITEMS, request.session.items)
     kinds: dict[str, list[str]] = {}
-    for item in request.session.items:
+    for item in items:
         why = why_slow(item)
         if why:
             marked = item.get_closest_marker("slow") is not None
             kinds.setdefault(why, []).append("" if marked else item.nodeid)
     unmarked = [f"{node}: {why}" for why, nodes in kinds.items() for node in nodes if node]
     assert not unmarked, "mark these @pytest.mark.slow:\n" + "\n".join(unmarked)
-    everything = not request.config.getoption("markexpr") and not request.config.getoption(
-        "keyword"
-    )
-    if everything and len(request.session.items) > 1000:  # the whole suite was collected
+    if len(items) > 1000:  # the whole suite was collected
         assert set(kinds) == {RTSP, BROWSER, DASK, LONG_DEMO, ARDUPILOT_DEMO}, kinds.keys()
 
 
