@@ -364,3 +364,12 @@ def test_an_mf4_channel_outside_its_record_is_refused_before_asammdf_reads_it() 
     code, _, err = decode(REGRESSIONS / "mf4" / "channel-outside-its-record.mf4", None)
     assert code == 2 and err.count("\n") == 1
     assert "ends at byte 1,143,153,499 of a record of 84 bytes" in err
+
+
+def test_a_db3_message_whose_time_sqlite_holds_as_text_is_a_bad_frame() -> None:
+    """sqlite3 keeps any type in any column: the message is skipped in words, the rest
+    of the bag is read (here up to the page the same damage broke)."""
+    code, out, err = decode(REGRESSIONS / "ros2-db3" / "time-stored-as-text.db3", "rosbag")
+    assert code == 0 and err == ""
+    assert "message not read as a CAN frame: its time '' is no nanoseconds" in out
+    assert out.count("/gimbal/") > 10
