@@ -48,7 +48,12 @@ def fuzz(target: Target, seconds: float, work: Path, runs: int | None = None) ->
     """Fuzz ``target`` for ``seconds`` (libFuzzer exits the process at the end: exit 0,
     or non-zero with the input that crashed saved in ``work``). The corpus grows in
     ``work/corpus``; the seeds and the target's regression inputs start it."""
-    import atheris
+    try:
+        import atheris
+    except ImportError:
+        raise SystemExit(
+            "python -m fuzz: atheris is not installed (pip install -e '.[test,fuzz]')"
+        ) from None
 
     corpus, seeds = work / "corpus", work / "seeds"
     corpus.mkdir(parents=True, exist_ok=True)
