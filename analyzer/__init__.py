@@ -17,11 +17,11 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
-PROTOCOL_NOTES = "docs/protocol-notes.md"  # the corrections to the vendor's document
-PROTOCOL_DOCUMENT = (
-    f"Gimbal Interface Definition and Protocols (vendor), with the corrections of {PROTOCOL_NOTES}"
-)
+# The version and the document's name live in analyzer.version, which every module that
+# names them imports (never this root, which re-exports the API above them all).
+from analyzer.version import PROTOCOL_DOCUMENT as PROTOCOL_DOCUMENT
+from analyzer.version import PROTOCOL_NOTES as PROTOCOL_NOTES
+from analyzer.version import __version__ as __version__
 
 # Public name -> the module that defines it, imported when the name is first used.
 _PUBLIC: dict[str, str] = {

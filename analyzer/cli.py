@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from types import ModuleType
 from typing import NoReturn
 
-from analyzer import __version__, timefmt
+from analyzer import timefmt
 from analyzer.errors import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -30,6 +30,7 @@ from analyzer.stdio import (
     utf8_when_redirected,
 )
 from analyzer.terminal_text import printable
+from analyzer.version import __version__
 
 # name -> module. Each module has HELP (one line), add_arguments(parser) and
 # run(args) -> int, and keeps heavy imports (textual, mcap, can) inside run().

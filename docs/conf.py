@@ -16,7 +16,7 @@ DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS.parent))  # the analyzer package of this checkout
 sys.path.insert(0, str(DOCS / "_ext"))
 
-from analyzer import __version__  # noqa: E402
+from analyzer.version import __version__  # noqa: E402
 
 project = "gimbal-analyzer"
 author = "the gimbal-analyzer authors"

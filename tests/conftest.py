@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.collected import ALL_ITEMS
+
 CAMERA_SCRIPT = Path(__file__).resolve().parent / "rtsp_camera.py"
 SYSTEM_PYTHON = "/usr/bin/python3"
 # With this set (.ci/run does), the video tests fail instead of skipping without the server.
@@ -100,3 +102,10 @@ def rtsp_camera_factory(rtsp_available: bool) -> Iterator[Callable[..., RtspCame
 def rtsp_camera(rtsp_camera_factory: Callable[..., RtspCamera]) -> RtspCamera:
     """One test camera: H.264 640x360 at 30 fps, digest auth admin/admin."""
     return rtsp_camera_factory()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Keep every collected test before -m / -k deselect some (tests/test_quick_tier.py
+    checks the marks of all of them, in a quick run too)."""
+    config.stash[ALL_ITEMS] = list(items)

@@ -29,8 +29,9 @@ from tests.mcap_doctor import examine
 from tests.platforms import posix_signals, pseudo_terminals
 from tests.slcan_adapter import PtyDevice, SlcanAdapter, by_id_name
 
-# A simulated USB adapter is a pseudo-terminal; the recorder is stopped with SIGINT / SIGTERM.
-pytestmark = [pseudo_terminals, posix_signals]
+# A simulated USB adapter is a pseudo-terminal; the recorder is stopped with SIGINT / SIGTERM;
+# adapters unplugged and plugged again take seconds each.
+pytestmark = [pseudo_terminals, posix_signals, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parent.parent
 DEADLINE_S = 20.0

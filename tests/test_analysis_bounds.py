@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import random
 
+import pytest
+
 from analyzer.analysis.response import ResponseAnalyzer, Settings
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import Sample
@@ -94,6 +96,7 @@ def run(events: list[Event], settings: Settings | None = None) -> tuple[Response
     return analyzer, kept
 
 
+@pytest.mark.slow
 def test_samples_examined_per_command_do_not_grow_with_the_flight() -> None:
     per_command = []
     for seconds in (20.0, 80.0):
@@ -108,6 +111,7 @@ def test_samples_examined_per_command_do_not_grow_with_the_flight() -> None:
     assert per_command[1] <= per_command[0] * 1.2
 
 
+@pytest.mark.slow
 def test_a_stick_held_off_centre_all_flight_is_judged_a_minute_at_a_time() -> None:
     """No movement is kept open without end: one held for the whole flight is judged in
     pieces of MAX_MOVEMENT_S, so the samples and commands kept stay bounded."""

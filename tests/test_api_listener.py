@@ -41,6 +41,7 @@ class Seen:
         return found[-1] if found else None
 
 
+@pytest.mark.slow
 def test_the_listener_decodes_the_simulated_gimbals_feedback_in_the_notifier() -> None:
     channel = f"api-{uuid.uuid4().hex[:8]}"
     seen = Seen()
@@ -66,6 +67,7 @@ def test_the_listener_decodes_the_simulated_gimbals_feedback_in_the_notifier() -
     assert listener.errors == 0
 
 
+@pytest.mark.slow
 def test_an_exception_in_the_callback_never_stops_the_notifier(
     caplog: pytest.LogCaptureFixture,
 ) -> None:

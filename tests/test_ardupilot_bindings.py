@@ -64,6 +64,7 @@ def emulated_signatures() -> dict[tuple[str, str], tuple[str, ...]]:
     return out
 
 
+@pytest.mark.slow
 def test_every_emulated_binding_has_docs_lua_name_and_parameters() -> None:
     emulated = emulated_signatures()
     unknown = sorted(set(emulated) - set(SIGNATURES))

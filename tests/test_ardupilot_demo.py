@@ -42,6 +42,7 @@ def test_export_writes_the_driver_and_its_page_and_replaces_neither_unasked(
     assert page.read_text(encoding="utf-8") == markdown_text()
 
 
+@pytest.mark.slow
 def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_obeyed(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -146,6 +147,7 @@ def _valid_against_their_schemas(path: Path, topics: set[str]) -> None:
     assert set(seen) == topics
 
 
+@pytest.mark.slow
 def test_demo_ardupilot_refuses_a_driver_that_does_not_compile_and_stops_on_a_script_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

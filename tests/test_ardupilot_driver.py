@@ -186,6 +186,7 @@ def test_the_attitude_reported_is_the_feedbacks_pitch_and_motor_yaw() -> None:
     assert any(r.fields["yaw_deg"] < -60 for r in reports)
 
 
+@pytest.mark.slow
 def test_damaged_feedback_is_dropped_and_reported_to_the_gcs() -> None:
     faults = FaultConfig(corrupt=0.15, drop=0.1, seed=3)
     session = run((), 20.0, config=SimConfig(faults=faults))
@@ -209,6 +210,7 @@ def test_a_silent_gimbal_neither_blocks_nor_crashes_the_driver() -> None:
     assert named(commands(session), "specified_angle")  # targets go out all the same
 
 
+@pytest.mark.slow
 def test_uav_status_goes_out_at_5_hz_or_more_from_the_ahrs_and_the_gps() -> None:
     path = FlightPath(heading_deg=30.0)
     session = run((), 10.0, path=path)
@@ -258,6 +260,7 @@ def test_only_the_scripting_can_driver_it_is_given() -> None:
     assert "VSH: no scripting CAN driver 2" in [t for _, _, t in missing.vehicle.texts]
 
 
+@pytest.mark.slow
 def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
     session = run_session(lua_text(), DRIVER_NAME, 40.0, lua=LUA)  # two rounds of the plan
     assert session.error is None
@@ -277,6 +280,7 @@ def test_the_demo_plan_is_obeyed_as_analyze_judges_it() -> None:
     assert {e.fields["target"] for e in targets} == {"rate", "none", "angle", "location", "camera"}
 
 
+@pytest.mark.slow
 def test_a_dataflash_log_of_the_flight_is_judged_the_same(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

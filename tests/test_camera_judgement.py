@@ -16,6 +16,9 @@ from analyzer.sim.ground import Step
 from tests.camera_flights import Lens, camera_findings, record
 from tests.fleet_flights import cli_output
 
+# The simulated camera's video, judged from the picture: recordings of seconds each.
+pytestmark = pytest.mark.slow
+
 LOOK_DOWN = Step(0.3, "specified_angle", {"pitch_deg": -45})
 ZOOMS = (
     LOOK_DOWN,

@@ -55,6 +55,7 @@ def shots(count: int, **change: float) -> list[Shot]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("zoom", [1.0, 3.0, 10.0, 30.0])
 def test_the_ground_has_texture_at_every_zoom(zoom: float) -> None:
     world = make_world()
@@ -83,6 +84,7 @@ def test_a_lens_that_stays_keeps_the_scale_while_the_gimbal_turns() -> None:
     assert found is not None and found.scale == pytest.approx(1.0, abs=0.01)
 
 
+@pytest.mark.slow
 def test_every_palette_is_told_from_every_other_and_from_itself() -> None:
     """Two frames 1/15 s apart (the gimbal turning 20 deg/s, the aircraft flying 12 m/s):
     another palette always shows, the same one never does."""
@@ -104,6 +106,7 @@ def _with(shot: Shot, palette: str) -> Shot:
     return Shot(shot.east_m, shot.north_m, shot.up_m, shot.yaw_deg, shot.pitch_deg, palette=palette)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 def test_a_steady_layout_stays_while_the_picture_moves(mode: int) -> None:
     world = make_world()

@@ -19,6 +19,8 @@ from tests.camera_flights import camera_findings
 from tests.conftest import RtspCamera
 from tests.test_video_record import _env, free_port, gimbal
 
+pytestmark = pytest.mark.slow  # a real RTSP camera
+
 
 @contextmanager
 def simulated_camera(gimbal_port: int) -> Iterator[int]:

@@ -314,6 +314,7 @@ def test_an_existing_recording_is_never_replaced(tmp_path: Path) -> None:
 # -- a healthy gimbal ------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     tcp_runs: dict[str, Run], tmp_path: Path
 ) -> None:
@@ -346,6 +347,7 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
     assert text.count('class="v st-pass"') == 9
 
 
+@pytest.mark.slow
 def test_healthy_gimbal_over_tcp_passes_every_step(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["healthy"].finish()
     assert run.code == 0, run.stderr
@@ -401,6 +403,7 @@ def test_a_gimbal_that_falls_short_fails_with_the_error(tcp_runs: dict[str, Run]
     assert "stopped short at -63.0, 27.0 deg from the target" in step["detail"]
 
 
+@pytest.mark.slow
 def test_a_gimbal_ignoring_tracking_fails_only_tracking(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["ignore_tracking"].finish()
     assert run.code == 1
@@ -461,6 +464,7 @@ def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
     centred_last(messages(run.output, "/gimbal/command"))  # and the recording is finished
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs pseudo-terminals")
 def test_a_gimbal_on_a_serial_line_is_checked_the_same_way(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch

@@ -55,6 +55,7 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+@pytest.mark.slow
 @needs_dev_full
 @pytest.mark.parametrize(
     "args",
@@ -88,6 +89,7 @@ def test_help_to_a_full_standard_output(tmp_path: Path) -> None:
     assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr
 
 
+@pytest.mark.slow
 @needs_dev_full
 def test_demo_to_a_full_standard_output_finishes_its_recording(tmp_path: Path) -> None:
     proc = run_to_dev_full("demo", "--no-tui", "--duration", "0.5", "-o", "d.mcap", cwd=tmp_path)
@@ -112,6 +114,7 @@ def _read_one_line_then_close(args: list[str], cwd: Path) -> subprocess.Popen[by
     return proc
 
 
+@pytest.mark.slow
 def test_demo_piped_into_head_ends_quietly(tmp_path: Path) -> None:
     proc = _read_one_line_then_close(
         ["demo", "--no-tui", "--duration", "30", "-o", "d.mcap"], tmp_path

@@ -24,6 +24,7 @@ def topics_in(path: Path) -> Counter[str]:
         return Counter(channel.topic for _, channel, _ in reader.iter_messages())
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
 )
@@ -44,6 +45,7 @@ def test_demo_off_a_terminal_ends_by_itself_and_records_demo_mcap(
     assert topics["/gimbal/attitude"] >= 4
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
 )
@@ -90,6 +92,7 @@ def test_demo_replaces_demo_mcap_but_no_other_file_without_force(
     assert precious.read_bytes() == b"keep me"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
 )
@@ -144,6 +147,7 @@ def test_demo_help_names_only_what_exists(capsys: pytest.CaptureFixture[str]) ->
     assert set(re.findall(r"gimbal-analyzer (\w+)", text)) <= set(COMMANDS)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
 )
@@ -182,6 +186,7 @@ def test_the_stick_script_changes_the_speeds_in_every_command_and_centres_with_z
     assert not [t for t, _, _ in moving if 3.6 < t < 5.0]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     not HAVE_MCAP_SINK, reason="analyzer.mcapio.write.sink (the MCAP sink) is absent"
 )

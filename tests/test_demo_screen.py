@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from analyzer.tui.demo_screen import main
 
 
+@pytest.mark.slow
 def test_the_demo_screen_prints_the_monitor_and_writes_its_picture(
     tmp_path: Path, capsys: object
 ) -> None:

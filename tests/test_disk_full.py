@@ -62,6 +62,7 @@ def _run_limited(args: list[str], limit: int, cwd: Path) -> subprocess.Completed
     )
 
 
+@pytest.mark.slow
 @needs_rlimit
 def test_record_on_a_full_disk_keeps_every_complete_chunk_and_says_so(tmp_path: Path) -> None:
     log = tmp_path / "flight.log"
@@ -85,6 +86,7 @@ def test_record_on_a_full_disk_keeps_every_complete_chunk_and_says_so(tmp_path: 
     assert "STOPPED: disk full" in done.stderr
 
 
+@pytest.mark.slow
 @needs_rlimit
 def test_record_on_a_disk_already_full_leaves_no_file_behind(tmp_path: Path) -> None:
     log = tmp_path / "flight.log"
@@ -156,6 +158,7 @@ class _EndlessBus:
         self.closed.set()
 
 
+@pytest.mark.slow
 def test_a_write_error_in_the_flush_thread_stops_the_capture(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

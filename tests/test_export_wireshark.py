@@ -454,6 +454,7 @@ def test_export_command_writes_the_dissector(tmp_path: Path) -> None:
     assert out.read_text(encoding="utf-8") == lua_text()
 
 
+@pytest.mark.slow
 def test_the_port_is_a_preference(lua: Path, tmp_path: Path) -> None:
     moved = _split_capture(tmp_path / "moved.pcap", [200], port=3000)
     assert TSHARK is not None

@@ -268,6 +268,7 @@ def test_any_bytes_give_a_row_and_never_stop_the_fleet(
         assert set(result.tables) == {"recordings"} and "\n" not in result.error
 
 
+@pytest.mark.slow
 def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     fleet: dict[str, Any], tmp_path: Path
 ) -> None:

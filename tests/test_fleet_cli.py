@@ -167,6 +167,7 @@ def test_rows_leave_the_sink_a_row_group_at_a_time() -> None:
     assert spy.groups[-1] == ("attitude", 20) and sink.rows == 420
 
 
+@pytest.mark.slow
 def test_row_groups_give_the_same_dataset_and_answers(
     fleet: dict[str, Any], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

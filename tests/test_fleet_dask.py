@@ -180,6 +180,7 @@ def ran_on(out: str) -> dict[str, int]:
     return {place: int(n.rstrip(")")) for place, n in places}
 
 
+@pytest.mark.slow
 def test_table_on_a_dask_cluster_gives_the_local_dataset_written_by_the_workers(
     fleet: dict[str, Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -202,6 +203,7 @@ def test_table_on_a_dask_cluster_gives_the_local_dataset_written_by_the_workers(
         assert mine[name].equals(theirs[name]), name
 
 
+@pytest.mark.slow
 def test_client_writes_for_a_folder_the_workers_cannot_reach(
     fleet: dict[str, Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -229,6 +231,7 @@ def test_client_writes_for_a_folder_the_workers_cannot_reach(
         assert mine[name].equals(theirs[name]), name
 
 
+@pytest.mark.slow
 def test_fleet_questions_are_aggregated_on_the_workers(fleet: dict[str, Any]) -> None:
     local, address = str(fleet["local"]), fleet["address"]
     code, here, _ = cli("fleet", local, "--json")
@@ -258,6 +261,7 @@ def test_fleet_questions_are_aggregated_on_the_workers(fleet: dict[str, Any]) ->
     assert set().union(*kinds.values()) == set(fleet["workers"])
 
 
+@pytest.mark.slow
 def test_the_fleet_report_from_a_cluster_is_the_local_one(
     fleet: dict[str, Any], tmp_path: Path
 ) -> None:
@@ -271,6 +275,7 @@ def test_the_fleet_report_from_a_cluster_is_the_local_one(
     assert pages["there"] == pages["here"] and "b-cut.pcap" in pages["here"]
 
 
+@pytest.mark.slow
 def test_fleet_sql_on_a_cluster_reads_the_named_columns_there(fleet: dict[str, Any]) -> None:
     local, address = str(fleet["local"]), fleet["address"]
     sql = "SELECT f.verdict, count(*) AS n FROM findings f GROUP BY 1 ORDER BY 1"
@@ -286,6 +291,7 @@ def test_fleet_sql_on_a_cluster_reads_the_named_columns_there(fleet: dict[str, A
     )
 
 
+@pytest.mark.slow
 def test_a_cluster_without_the_package_is_one_line(fleet: dict[str, Any], tmp_path: Path) -> None:
     """A scheduler started where gimbal-analyzer is not installed cannot take its tasks."""
     port = free_port()

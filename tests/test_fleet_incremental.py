@@ -98,6 +98,7 @@ def test_runs_with_other_tags_add_columns(fleet: dict[str, Any], tmp_path: Path)
 
 
 @posix_signals
+@pytest.mark.slow
 def test_a_run_killed_with_sigkill_leaves_whole_files_and_the_next_run_completes(
     tmp_path: Path,
 ) -> None:

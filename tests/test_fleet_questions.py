@@ -88,12 +88,14 @@ def sync(lazy: Any) -> Any:
     return lazy.compute(scheduler="sync")
 
 
+@pytest.mark.slow
 @settings(max_examples=10, deadline=None)
 @given(flights=st.lists(flight, min_size=1, max_size=14))
 def test_sql_and_dask_renderings_give_the_same_answers(flights: list[dict[str, Any]]) -> None:
     same_answers(flights)
 
 
+@pytest.mark.slow
 def test_worst_flights_close_in_score_are_cut_alike() -> None:
     """Four flights that all show a score of 29.1: the order is the exact score's (the
     shown one is rounded), the same on both paths, whatever the names' order."""

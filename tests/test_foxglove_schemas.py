@@ -222,6 +222,7 @@ def test_any_feedback_payload_gives_valid_events(length_byte: int, payload: byte
     check(events)
 
 
+@pytest.mark.slow
 @FAST
 @given(st.lists(st.tuples(st.sampled_from([FEEDBACK_ID, CONTROL_ID]), st.binary(max_size=8))))
 def test_any_feedback_frames_give_valid_events(frames: list[tuple[int, bytes]]) -> None:

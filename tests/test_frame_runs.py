@@ -67,6 +67,7 @@ def parsed(text: bytes, cuts: list[int], wanted: frozenset[int] | None, runs: bo
     return shown, parser.stats, parser.first_time, parser.last_time, parser.notes
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.lists(lines(), max_size=60),
@@ -136,6 +137,7 @@ def as_run(frames: list[CanFrame]) -> FrameRun:
     )
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(st.lists(plain_frames(), max_size=4), st.booleans())
 def test_the_decoder_decodes_a_run_as_the_same_frames_one_by_one(
@@ -158,6 +160,7 @@ def test_the_decoder_decodes_a_run_as_the_same_frames_one_by_one(
     assert short.stats == long.stats  # type: ignore[attr-defined]
 
 
+@pytest.mark.slow
 @given(st.lists(plain_frames(), max_size=4))
 def test_the_counters_count_a_run_as_the_same_frames(batches: list[list[CanFrame]]) -> None:
     short, long = Tally(), Tally()

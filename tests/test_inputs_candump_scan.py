@@ -112,6 +112,7 @@ def summary(items: list[Any], parser: CandumpParser) -> tuple[Any, ...]:
     )
 
 
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.lists(lines(), max_size=60),

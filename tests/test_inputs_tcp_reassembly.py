@@ -115,6 +115,20 @@ def test_far_away_segment_is_out_of_window() -> None:
     assert accounted(state)
 
 
+def test_data_before_the_syn_is_out_of_window_not_a_retransmission() -> None:
+    """No byte of a connection precedes its SYN: a damaged SYN (a bit of its sequence
+    number flipped) leaves the data before it, which must not pass for old data."""
+    state = TcpDirection()
+    state.segment(ISN + (1 << 24), b"", 0.0, syn=True)
+    assert state.segment(ISN + 1, b"hello", 0.1) == []
+    assert state.bytes_out_of_window == 5 and state.bytes_duplicate == 0
+    assert accounted(state)
+    mid_way = TcpDirection()  # the capture began mid-connection: older data is a repeat
+    mid_way.segment(ISN + 100, b"later", 0.0)
+    mid_way.segment(ISN, b"older", 0.1)
+    assert mid_way.bytes_duplicate == 5 and mid_way.bytes_out_of_window == 0
+
+
 # -- properties ------------------------------------------------------------------------------
 
 

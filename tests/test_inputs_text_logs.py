@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import can
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -190,6 +191,7 @@ def test_truncated_blf_keeps_everything_before_the_cut(tmp_path: Path) -> None:
 # -- properties ------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @settings(max_examples=30, deadline=None)
 @given(
     fmt=st.sampled_from(sorted(DAMAGE)),

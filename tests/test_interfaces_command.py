@@ -176,6 +176,7 @@ def test_stable_names_from_by_id_links(tmp_path: Path) -> None:
     assert ports[0].serial_source == f"serial:{by_id}/{os.listdir(by_id)[0]}@115200"
 
 
+@pytest.mark.slow
 def test_a_real_run_lists_what_pyserial_and_python_can_see(tmp_path: Path) -> None:
     from serial.tools import list_ports
 

@@ -13,6 +13,7 @@ PROTOCOL = PACKAGE / "protocol"
 # before its own; never from one listed after it. Every module of the analyzer must fall
 # under one of these (a new package is placed here on purpose, not by accident).
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("the tool's version and protocol document", ("version",)),
     ("the sans-IO protocol core", ("protocol",)),
     (
         "shared plumbing",
@@ -56,10 +57,12 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("the Python API", ("api",)),  # what `import analyzer` gives integrators
     ("commands", ("commands", "cli", "__main__")),
 )
-# The package root holds the version and re-exports the Python API: each public name is
-# imported when first used (PEP 562) or by a type checker, never by `import analyzer`,
-# which runs before any module of the package. Those imports are no edge of the graph;
-# test_the_package_root_imports_nothing_of_the_analyzer_when_imported holds it to that.
+# The package root re-exports the version (from analyzer.version) and the Python API:
+# each public name of the API is imported when first used (PEP 562) or by a type
+# checker, never by `import analyzer`, which runs before any module of the package.
+# Those imports are no edge of the graph;
+# test_the_package_root_imports_nothing_of_the_analyzer_when_imported holds it to that,
+# and test_no_module_takes_a_name_from_the_package_root keeps the modules from it.
 PACKAGE_ROOT = "analyzer"
 ORDER = [package for _, packages in LAYERS for package in packages]
 
@@ -97,10 +100,10 @@ def analyzer_graph() -> dict[str, set[str]]:
 
 
 def package_of(module: str) -> str:
-    """``analyzer.inputs.pcap.reader`` -> ``inputs``; the package root itself -> ``errors``
-    (its ``__init__`` holds only the version, the lowest thing there is)."""
+    """``analyzer.inputs.pcap.reader`` -> ``inputs``; the package root itself -> ``version``
+    (at import time it holds only the version, the lowest thing there is)."""
     parts = module.split(".")
-    return parts[1] if len(parts) > 1 else "errors"
+    return parts[1] if len(parts) > 1 else "version"
 
 
 def test_every_module_has_a_place_in_the_layers() -> None:
@@ -182,9 +185,37 @@ def test_the_package_root_imports_nothing_of_the_analyzer_when_imported() -> Non
             nodes = [node]
         for statement in nodes:
             if isinstance(statement, ast.Import | ast.ImportFrom):
-                names = imported_modules_of(statement)
+                names = imported_modules_of(statement) - {VERSION}
                 at_import += sorted(n for n in names if n.startswith(PACKAGE_ROOT))
     assert not at_import, f"analyzer/__init__.py imports at import time: {at_import}"
+
+
+VERSION = "analyzer.version"  # the one module the root imports: it imports nothing
+
+
+def test_no_module_takes_a_name_from_the_package_root() -> None:
+    """The root re-exports the API, which imports nearly everything: a module that took
+    ``__version__`` from it would sit in a circle with the API (for a type checker);
+    it takes it from analyzer.version. Sub-modules (``from analyzer import timefmt``)
+    are no names of the root."""
+    modules = {module_name(path).rsplit(".", 1)[-1] for path in PACKAGE.glob("*.py")}
+    modules |= {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    taken = sorted(
+        f"{path.relative_to(ROOT)}: {alias.name}"
+        for path in PACKAGE.rglob("*.py")
+        if path != PACKAGE / "__init__.py"
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.ImportFrom) and node.module == PACKAGE_ROOT and not node.level
+        for alias in node.names
+        if alias.name not in modules
+    )
+    assert not taken, "names taken from the package root (take them where they live):\n" + (
+        "\n".join(taken)
+    )
+
+
+def test_the_version_module_imports_nothing_of_the_analyzer() -> None:
+    assert not {n for n in imported_modules(PACKAGE / "version.py") if n.startswith("analyzer")}
 
 
 def imported_modules_of(node: ast.Import | ast.ImportFrom) -> set[str]:

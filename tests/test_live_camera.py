@@ -16,8 +16,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from tests.foxglove_client import FoxgloveClient
 from tests.test_live_foxglove import recorded
+
+pytestmark = pytest.mark.slow  # a real RTSP camera
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMERA_CHANNELS = {

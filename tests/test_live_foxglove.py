@@ -221,6 +221,7 @@ def test_a_late_joiner_gets_every_channel_at_once(tmp_path: Path) -> None:
     assert {"/stream/bytes", "/gimbal/ranging/fix", "/analysis/response"} <= set(first)
 
 
+@pytest.mark.slow
 def test_a_client_that_stops_reading_does_not_hold_the_recording_back(tmp_path: Path) -> None:
     items = sample_items(100)
     first, rest = items[:200], items[200:]
@@ -305,6 +306,7 @@ def test_the_old_subprotocol_is_refused_and_counted() -> None:
 
 
 @posix_signals
+@pytest.mark.slow
 def test_record_serves_the_live_stream_while_recording(tmp_path: Path) -> None:
     idu = FakeIdu()
     path = tmp_path / "flight.mcap"

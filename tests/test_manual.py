@@ -136,6 +136,7 @@ def documented_options(built: Path) -> dict[str, set[str]]:
     return out
 
 
+@pytest.mark.slow
 def test_every_sub_command_and_every_option_of_help_has_its_entry(built: Path) -> None:
     shown = documented_options(built)
     found = commands(build_parser())
@@ -145,6 +146,7 @@ def test_every_sub_command_and_every_option_of_help_has_its_entry(built: Path) -
         assert not missing, f"{command}: no entry for {sorted(missing)}"
 
 
+@pytest.mark.slow
 def test_an_option_without_help_fails_the_build() -> None:
     cli_reference = _docs_extension("cli_reference")
     parser = argparse.ArgumentParser(prog="gimbal-analyzer x")
@@ -156,6 +158,7 @@ def test_an_option_without_help_fails_the_build() -> None:
     assert ".. option:: --said SAID" in rst and "   has its words" in rst
 
 
+@pytest.mark.slow
 def test_help_texts_are_shown_as_written(built: Path) -> None:
     text = html.unescape(re.sub(r"<[^>]+>", "", page(built, "reference/cli.html")))
     decode = build_parser("decode").commands["decode"]
@@ -183,6 +186,7 @@ def test_the_reference_shows_option_groups_and_no_line_runs_off_the_page(built: 
 # -- the protocol, topics, exit codes --------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_every_protocol_command_and_message_has_its_entry(built: Path) -> None:
     from analyzer.protocol.command_table import COMMANDS
     from analyzer.protocol.feedback import LAYOUTS
@@ -199,6 +203,7 @@ def test_every_protocol_command_and_message_has_its_entry(built: Path) -> None:
         assert f"{status.name} (CAN ID 0x{status.can_id:08X}" in text
 
 
+@pytest.mark.slow
 def test_every_topic_has_its_fields_and_schema(built: Path) -> None:
     from analyzer.protocol.schema import topic_schemas
 
@@ -209,6 +214,7 @@ def test_every_topic_has_its_fields_and_schema(built: Path) -> None:
             assert name in text, (topic, name)
 
 
+@pytest.mark.slow
 def test_every_exit_code_has_its_entry(built: Path) -> None:
     from analyzer.errors import EXIT_CODES
 
@@ -222,6 +228,7 @@ def test_every_exit_code_has_its_entry(built: Path) -> None:
 # -- the Python API --------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_every_public_name_has_its_entry(built: Path) -> None:
     text = page(built, "reference/python-api.html")
     for name in getattr(analyzer, "__all__", ()):
@@ -287,6 +294,7 @@ def _dump_dom(target: str, tmp_path: Path) -> str:
     return done.stdout
 
 
+@pytest.mark.slow
 def test_the_index_opens_in_chromium_with_the_navigation_and_a_search_box(
     built: Path, tmp_path: Path
 ) -> None:
@@ -300,6 +308,7 @@ def test_the_index_opens_in_chromium_with_the_navigation_and_a_search_box(
     assert re.search(r'<input class="sidebar-search"[^>]*name="q"', dom)
 
 
+@pytest.mark.slow
 def test_the_search_finds_the_pages_of_a_word(built: Path, tmp_path: Path) -> None:
     dom = _dump_dom((built / "search.html").as_uri() + "?q=DataFlash", tmp_path)
     results = re.search(r'<ul[^>]*class="search"[^>]*>(.*?)</ul>', dom, re.S)

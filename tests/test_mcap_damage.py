@@ -388,6 +388,7 @@ def _mutate(data: bytes, plan: list[tuple[str, int, int]]) -> tuple[bytes, set[i
     return bytes(out), touched
 
 
+@pytest.mark.slow
 @settings(
     max_examples=40,
     deadline=None,

@@ -6,6 +6,7 @@ import io
 import math
 
 import orjson
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mcap.reader import make_reader
@@ -56,6 +57,7 @@ def written(batch: list[CanFrame]) -> list[tuple[int, int, bytes]]:
     ]
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.lists(frames, min_size=1, max_size=40))
 def test_each_frame_is_written_as_can_frame_json_numbered_in_order(batch: list[CanFrame]) -> None:

@@ -262,6 +262,7 @@ def _arrivals(draw: st.DrawFn) -> tuple[list[tuple[str, int, int]], list[bool], 
     return messages, flushes, chunk_size
 
 
+@pytest.mark.slow
 @settings(
     max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )

@@ -57,6 +57,7 @@ def test_unfinished_file_is_recovered_up_to_the_last_flush(tmp_path: Path) -> No
     assert recording.metadata()["gimbal-analyzer"]["source"] == "t"
 
 
+@pytest.mark.slow
 def test_every_truncation_point_reads_a_prefix_without_error(tmp_path: Path) -> None:
     full = tmp_path / "full.mcap"
     flushed = _live_recording(full)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -96,6 +97,7 @@ def test_every_command_of_the_table_has_a_generated_decoder() -> None:
     assert decoder_for(0x0F77) is None  # not in the table: decoded the long way
 
 
+@pytest.mark.slow
 @settings(max_examples=1000)
 @given(command_data())
 def test_generated_command_decoders_equal_field_by_field(data: bytes) -> None:

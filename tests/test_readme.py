@@ -121,5 +121,6 @@ def test_the_readme_is_a_short_front_door_with_the_two_commands_first() -> None:
     assert len(lines) <= 200, f"README.md has {len(lines)} lines; the rest goes in docs/"
     assert lines[2:4] == [
         "    pip install . && gimbal-analyzer demo",
-        "    pip install '.[test]' && python -m pytest",
+        "    pip install '.[test]' && python -m pytest -m \"not slow\" -n 2 --dist loadfile"
+        " && python -m pytest -m slow",
     ]

@@ -112,6 +112,7 @@ def _yaws_in_events(path: Path) -> set[float]:
     }
 
 
+@pytest.mark.slow
 def test_kill_9_keeps_everything_older_than_a_second(tmp_path: Path) -> None:
     path, idu, killed, _, code = _record(tmp_path, 2.5, signal.SIGKILL)
     assert code == -signal.SIGKILL
@@ -152,6 +153,7 @@ def _info(path: Path) -> str:
     return done.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_sigterm_and_ctrl_c_finish_the_file(tmp_path: Path, sig: int) -> None:
     path, idu, signalled, err, code = _record(tmp_path, 1.2, sig)

@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from analyzer.commands.record import LinkWatch, StatusLine
 from analyzer.link_status import LinkStatus
 from analyzer.pipeline import Batch
@@ -119,6 +121,7 @@ def test_status_line_shows_connecting_then_the_link_message() -> None:
     assert watch.last_words() == "cannot connect to 127.0.0.1:9: connection refused"
 
 
+@pytest.mark.slow
 def test_record_from_a_port_nobody_listens_on_says_refused_and_exits_1(tmp_path: Path) -> None:
     port = free_loopback_port()
     proc = subprocess.run(

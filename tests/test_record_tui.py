@@ -18,7 +18,10 @@ from analyzer.mcapio.read.reader import read_events
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLE = ROOT / "samples" / "flight-candump.log"
 
-pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs a POSIX pty")
+pytestmark = [
+    pytest.mark.skipif(sys.platform == "win32", reason="needs a POSIX pty"),
+    pytest.mark.slow,  # the monitor UI recording, seconds each
+]
 
 
 def read_until(

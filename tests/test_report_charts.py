@@ -72,6 +72,7 @@ def flight(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, An
     return page, embedded(page), dom
 
 
+@pytest.mark.slow
 def test_every_point_of_the_uav_track_is_inside_the_axes_at_equal_scale(
     flight: tuple[Path, dict[str, Any], str],
 ) -> None:
@@ -95,6 +96,7 @@ def _label_time(label: str) -> float:
     return int(hours) * 3600 + int(minutes) * 60 + float(seconds)
 
 
+@pytest.mark.slow
 def test_time_labels_are_exact_times_not_the_start_second(
     flight: tuple[Path, dict[str, Any], str],
 ) -> None:
@@ -112,6 +114,7 @@ def test_time_labels_are_exact_times_not_the_start_second(
         assert all(label.count(".") == 0 for _, label in ticks), ticks
 
 
+@pytest.mark.slow
 def test_every_command_gets_its_mark(flight: tuple[Path, dict[str, Any], str]) -> None:
     _, data, _ = flight
     # (seconds into the script, label) of every mark
@@ -138,6 +141,7 @@ def test_every_command_gets_its_mark(flight: tuple[Path, dict[str, Any], str]) -
     assert sticks[0][1].startswith("gimbal_control pan 0.00 deg/s til")
 
 
+@pytest.mark.slow
 def test_status_texts_of_the_flight_controller_are_listed(
     flight: tuple[Path, dict[str, Any], str],
 ) -> None:
@@ -150,6 +154,7 @@ def test_status_texts_of_the_flight_controller_are_listed(
     assert "UAV armed" in dom
 
 
+@pytest.mark.slow
 def test_zoom_keeps_exact_labels_and_shows_the_samples_in_range(
     flight: tuple[Path, dict[str, Any], str], tmp_path: Path
 ) -> None:
@@ -213,6 +218,7 @@ def test_only_the_chosen_pictures_are_kept_while_reading() -> None:
     assert after is not None and after.time == 503.0  # no feedback moment: command + response
 
 
+@pytest.mark.slow
 def test_with_local_time_the_page_says_which_times_are_local(
     flight: tuple[Path, dict[str, Any], str], tmp_path: Path
 ) -> None:

@@ -119,6 +119,7 @@ def test_report_is_self_contained(samples: dict[str, Path], tmp_path: Path) -> N
     assert len(page) < 600_000
 
 
+@pytest.mark.slow
 def test_report_loads_in_chromium_with_every_plot_drawn(tmp_path: Path) -> None:
     page = report(tmp_path, session(tmp_path / "flight.log"))
     # The yaw target's row says which reference judged it and why.
@@ -139,6 +140,7 @@ def test_report_loads_in_chromium_with_every_plot_drawn(tmp_path: Path) -> None:
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 50_000
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["idu-tcp.pcap", "uart-dump.bin"])
 def test_report_of_every_sample_loads(name: str, samples: dict[str, Path], tmp_path: Path) -> None:
     page = report(tmp_path, samples[name])
@@ -155,6 +157,7 @@ def test_report_of_every_sample_loads(name: str, samples: dict[str, Path], tmp_p
         assert "no command with a visible effect" not in responses
 
 
+@pytest.mark.slow
 def test_report_of_a_demo_recording(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     recording = tmp_path / "demo.mcap"
     assert main(["demo", "--no-tui", "--duration", "3", "-o", str(recording)]) == 0

@@ -21,6 +21,8 @@ from benchmarks.decode_speed import write_log
 from tests.test_report_charts import axes, embedded
 from tests.test_report_command import canvases, load
 
+pytestmark = pytest.mark.slow  # a long flight's report, in Chromium
+
 FRAMES = 200_000
 FULL_FRAMES = 2_000_000
 FULL_LIMIT = 10_000_000  # bytes of HTML at FULL_FRAMES

@@ -7,6 +7,7 @@ import math
 import random
 from collections import Counter
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -118,6 +119,7 @@ def test_findings_are_counted_exactly_and_the_worst_are_kept_first() -> None:
     assert groups.worst_first()[0] is worst[0]
 
 
+@pytest.mark.slow
 def test_the_report_holds_bounded_summaries_of_any_number_of_events() -> None:
     from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_GIMBAL_ATTITUDE, Event
     from analyzer.report.collect import MAX_MARKS, MAX_TARGETS, ReportData

@@ -454,6 +454,7 @@ _TOPICS = (
 )  # fmt: skip
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(
     st.lists(
@@ -508,6 +509,7 @@ def test_the_overlay_at_each_picture_is_that_of_the_last_feedback_before_it() ->
         timeline.at(moments[1] + 0.001)  # not a picture's moment
 
 
+@pytest.mark.slow
 def test_the_overlays_kept_grow_with_the_pictures_not_with_the_feedback() -> None:
     pictures = [1_700_000_000.0 + 2.0 * k + 0.5 for k in range(50)]  # the first 100 s
     kept = []

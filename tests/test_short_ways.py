@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Any
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -42,6 +43,8 @@ from analyzer.protocol.types import (
 )
 from analyzer.protocol.uav import encode_gps
 from analyzer.tally import CAN_BITS_EXTENDED, CAN_BITS_STANDARD, Tally
+
+pytestmark = pytest.mark.slow  # long property runs
 
 ATTITUDE = encode_attitude(pitch_deg=-30, yaw_deg=12, motor_yaw_deg=0)
 RANGING = encode_ranging(distance_m=150, height_m=80, latitude_deg=31.1, longitude_deg=118.1)

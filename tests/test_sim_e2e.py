@@ -132,6 +132,7 @@ def channel() -> str:
 VCAN = os.path.exists("/sys/class/net/vcan0")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "bus",
     [
@@ -164,6 +165,7 @@ def test_can_bus_commands_are_decoded_and_feedback_follows_them(bus: str) -> Non
             ground.close()
 
 
+@pytest.mark.slow
 def test_virtual_bus_faults_give_the_matching_diagnostics() -> None:
     spec = parse_link(f"can:virtual:{channel()}")
     faults = FaultConfig(drop=0.2, corrupt=0.2, duplicate=0.2, seed=2)
@@ -175,6 +177,7 @@ def test_virtual_bus_faults_give_the_matching_diagnostics() -> None:
         )
 
 
+@pytest.mark.slow
 def test_loopback_tcp_through_the_proxy_both_directions() -> None:
     with simulator(parse_link("tcp:127.0.0.1:0")) as runner:
         host, port = runner.link.address  # type: ignore[attr-defined]
@@ -226,6 +229,7 @@ def test_serial_gimbal_on_a_pty() -> None:
         os.close(slave)
 
 
+@pytest.mark.slow
 def test_scene_plays_a_script_over_tcp() -> None:
     script = GroundScript(
         (Step(0.0, "tracking", {"x": 4096, "y": 4096}), Step(0.1, "look_down")), period=None

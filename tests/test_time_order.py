@@ -44,6 +44,7 @@ def test_record_writes_in_time_order(
     assert_in_order(out, compression)
 
 
+@pytest.mark.slow
 def test_demo_writes_in_time_order(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

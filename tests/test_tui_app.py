@@ -132,6 +132,7 @@ def test_widgets_show_decoded_values_on_a_120x40_screen() -> None:
     run(body)
 
 
+@pytest.mark.slow
 def test_feedback_age_turns_red_after_a_second_without_feedback() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
@@ -153,6 +154,7 @@ def test_feedback_age_turns_red_after_a_second_without_feedback() -> None:
     run(body)
 
 
+@pytest.mark.slow
 def test_pause_keeps_counting_and_resume_catches_up() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
@@ -179,6 +181,7 @@ def test_pause_keeps_counting_and_resume_catches_up() -> None:
     run(body)
 
 
+@pytest.mark.slow
 def test_filter_search_raw_view_and_clear() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
@@ -219,6 +222,7 @@ def test_filter_search_raw_view_and_clear() -> None:
     run(body)
 
 
+@pytest.mark.slow
 def test_select_event_shows_fields_and_raw_bytes_and_help_opens() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)

@@ -101,6 +101,7 @@ def test_quit_stops_the_capture_and_finalises_the_sinks() -> None:
     assert capture.stop_reason == "stopped"
 
 
+@pytest.mark.slow
 def test_a_finite_source_ends_and_the_screen_says_so() -> None:
     frames = list(session(T0, 2.0))
     capture = Capture(ListSource(frames, finite=True), [], batch_interval=0.02)

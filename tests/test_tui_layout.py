@@ -36,6 +36,8 @@ from analyzer.tui.command_log import CommandLog
 from analyzer.tui.formatting import labelled
 from analyzer.tui.screen_text import screen_text
 
+pytestmark = pytest.mark.slow  # the monitor UI at several sizes, seconds each
+
 SAMPLE = Path(__file__).resolve().parent.parent / "samples" / "flight-candump.log"
 SIZES = [(80, 24), (100, 30), (120, 40), (160, 45)]
 SOURCE = "file:samples/flight-candump.log"

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
+
 from analyzer.pipeline import Batch
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, segments
@@ -15,6 +17,7 @@ from analyzer.tui.prompt_bar import PromptBar
 from tests.test_tui_app import T0, Clock, batch_of, make_app, sample_frames, settle
 
 
+@pytest.mark.slow
 def test_the_filter_prompt_selects_the_old_text_so_typing_replaces_it() -> None:
     async def body() -> None:
         app, bridge = make_app(Clock(T0 + 0.5))
@@ -35,6 +38,7 @@ def test_the_filter_prompt_selects_the_old_text_so_typing_replaces_it() -> None:
     asyncio.run(body())
 
 
+@pytest.mark.slow
 def test_the_all_topics_view_says_whose_attitude_it_is() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
@@ -84,6 +88,7 @@ def test_the_log_is_in_time_order_when_a_report_comes_late() -> None:
     assert [e.event.time for e in state.command_log] == [T0 + 6, T0 + 6.5, T0 + 7]
 
 
+@pytest.mark.slow
 def test_the_cursor_stays_on_its_entry_when_an_older_one_is_inserted() -> None:
     from analyzer.protocol.codec import encode_command
     from analyzer.protocol.ids import CONTROL_ID

@@ -30,6 +30,8 @@ from analyzer.video.spec import VIDEO_HOLD_BACK_S
 from tests.mcap_doctor import examine
 from tests.platforms import posix_signals
 
+pytestmark = pytest.mark.slow  # a real RTSP camera
+
 ROOT = Path(__file__).resolve().parent.parent
 FRAME_INTERVAL = 1 / 30
 

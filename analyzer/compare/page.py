@@ -6,13 +6,14 @@ import json
 import time
 from importlib import resources
 
-from analyzer import __version__, timefmt
+from analyzer import timefmt
 from analyzer.check.output import STEPS_CSS
 from analyzer.compare.figures import Rule
 from analyzer.compare.judged import Judged
 from analyzer.compare.output import axis_words, figures_text, sides, verdict_line
 from analyzer.compare.pairs import Pair
 from analyzer.report.page import CHART_JS, CHECK_JS, CSS, _e, _plot, _rows
+from analyzer.version import __version__
 
 PAGE_CSS = ".differs { color: #d62728; font-weight: 600; } .same { color: #2ca02c; }"
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from importlib import resources
 
-from analyzer import __version__
 from analyzer.export.ardupilot_params import (
     MESSAGE_PREFIX,
     PARAM_TABLE_PREFIX,
@@ -25,6 +24,7 @@ from analyzer.protocol.ids import (
     HEADER,
 )
 from analyzer.protocol.uav import STATUS_FRAMES
+from analyzer.version import __version__
 
 __all__ = ["DRIVER_NAME", "PARAMETERS", "lua_text", "markdown_text"]
 

@@ -9,11 +9,12 @@ from datetime import datetime
 from importlib import resources
 from typing import Any
 
-from analyzer import __version__, timefmt
+from analyzer import timefmt
 from analyzer.analysis.findings import VERDICTS
 from analyzer.fleet.output import human
 from analyzer.fleet.queries import Answer, Value
 from analyzer.report.page import CHART_JS, CHECK_JS, CSS, _e, _plot, _rows
+from analyzer.version import __version__
 
 
 def _by_name(answers: Sequence[Answer], prefix: str) -> Answer | None:

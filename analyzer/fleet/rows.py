@@ -29,6 +29,7 @@ from analyzer.fleet.columns import (
 )
 from analyzer.output_file import OutputWriteError
 from analyzer.protocol.types import DIAGNOSTIC_KINDS
+from analyzer.version import __version__
 
 
 @dataclass(frozen=True)
@@ -178,8 +179,6 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
 
 def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None = None) -> pa.Table:
     """The one row of the recordings table for ``work`` (figures null when it failed)."""
-    from analyzer import __version__
-
     tags = dict(work.tags)
     row: dict[str, Any] = {
         "recording": work.recording,

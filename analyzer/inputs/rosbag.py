@@ -83,21 +83,28 @@ class RosbagReader(InputReader):
             ROS2_CANFD_FRAME: fd_frame_from_cdr,
         }
         messages = self._reader.messages(connections=self._wanted)
-        last_ns = 0
+        last = 0.0  # seconds: the time of the last message read
         try:
             for connection, log_time, data in messages:
-                last_ns = log_time
+                # sqlite3 keeps any type in any column: a damaged .db3 may hold text
+                at = _seconds(log_time)
+                raw = bytes(data) if isinstance(data, bytes | bytearray | memoryview) else b""
                 try:
+                    if at is None:
+                        raise RosFrameError(f"its time {log_time!r:.40} is no nanoseconds")
+                    if not isinstance(data, bytes | bytearray | memoryview):
+                        raise RosFrameError(f"its data is {type(data).__name__}, not bytes")
+                    last = at
                     decode = decoders[connection.msgtype]
-                    frame = decode(bytes(data), connection.topic, log_time)
+                    frame = decode(raw, connection.topic, log_time)
                 except RosFrameError as exc:
                     self.bad_messages += 1
                     yield diagnostic(
-                        log_time / 1e9,
+                        last,
                         connection.topic,
                         BAD_FRAME,
                         f"{connection.topic}: message not read as a CAN frame: {exc}",
-                        bytes(data),
+                        raw,
                     )
                     continue
                 self.frames += 1
@@ -107,7 +114,7 @@ class RosbagReader(InputReader):
                 yield frame
         except Exception as exc:  # a damaged bag: keep what was read, say where it stopped
             yield diagnostic(
-                last_ns / 1e9,
+                last,
                 self.source,
                 INCOMPLETE,
                 f"the bag cannot be read further ({_why(exc)}); {self.frames} frames read",
@@ -117,6 +124,16 @@ class RosbagReader(InputReader):
     @property
     def stats(self) -> dict[str, int]:
         return {"frames": self.frames, "bad_messages": self.bad_messages}
+
+
+def _seconds(log_time: object) -> float | None:
+    """A message's time in seconds (None: not a count of nanoseconds a float holds)."""
+    if not isinstance(log_time, int) or isinstance(log_time, bool):
+        return None
+    try:
+        return log_time / 1e9
+    except OverflowError:
+        return None
 
 
 def _why(exc: BaseException) -> str:

@@ -7,13 +7,14 @@ import time
 from importlib import resources
 from typing import Any
 
-from analyzer import __version__, timefmt
+from analyzer import timefmt
 from analyzer.protocol.types import Event
 from analyzer.render import describe_event
 from analyzer.report import camera, camera_judged, tables
 from analyzer.report.collect import ReportData
 from analyzer.report.decimate import Row
 from analyzer.report.tables import _e, _rows
+from analyzer.version import __version__
 
 MARK_LABEL = 34  # characters of a command mark's label
 

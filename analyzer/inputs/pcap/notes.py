@@ -94,6 +94,18 @@ def capture_problems(counts: PcapStats, port: int, source: str, time: float) -> 
                 packets=counts.oversized_packets,
             )
         )
+    if counts.bytes_out_of_window:
+        out.append(
+            diagnostic(
+                time,
+                source,
+                BAD_FRAME,
+                f"{counts.bytes_out_of_window:,} byte(s) of TCP segments of port {port} lay "
+                "before their connection's SYN or far beyond its window (a damaged sequence "
+                "number, or packets of another connection): they were not decoded",
+                byte_count=counts.bytes_out_of_window,
+            )
+        )
     if counts.bad_packets:
         out.append(
             diagnostic(

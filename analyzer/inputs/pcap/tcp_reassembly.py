@@ -53,6 +53,7 @@ class TcpDirection:
         self.max_pending = max_pending
         self.max_wait = max_wait
         self.base: int | None = None  # sequence number of stream offset 0
+        self.from_syn = False  # the base is the SYN's: no byte of the stream lies before it
         self.next = 0  # offset of the next byte to deliver
         self.fin_seen = False
         self._pending: dict[int, tuple[bytes, float]] = {}  # offset -> (data, time seen)
@@ -69,6 +70,7 @@ class TcpDirection:
         """A SYN: the stream starts right after ``seq``."""
         if self.base is None:
             self.base = (seq + 1) % SEQ_MOD
+            self.from_syn = True
 
     def _offset(self, seq: int) -> int:
         assert self.base is not None
@@ -91,7 +93,9 @@ class TcpDirection:
         self.bytes_in += size
         start = self._offset(seq)
         end = start + size
-        if end <= self.next:
+        if start < 0 and self.from_syn:  # before the SYN: no byte of this stream is
+            self.bytes_out_of_window += size  # (a damaged SYN or sequence number)
+        elif end <= self.next:
             self.bytes_duplicate += size
         elif start - self.next > WINDOW:
             self.bytes_out_of_window += size

@@ -1,5 +1,6 @@
 """MF4 files checked before asammdf reads them: a data group whose records are not
-counted makes asammdf loop for ever (ASAM MDF 4.x block layout)."""
+counted makes asammdf loop for ever, a channel placed outside its record makes it read
+outside its buffer and crash the process (ASAM MDF 4.x block layout)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,14 @@ _BLOCK = struct.Struct("<4s4xQQ")  # id "##XX", reserved, length, link count
 _HD_AT = 64  # the header block follows the 64-byte identification block
 _MAX_CHAIN = 100_000  # a longer chain of blocks is a loop in a damaged file
 _DATA_BLOCKS = (b"##DT", b"##DZ", b"##DL", b"##HL")
+# A channel group's data: cg_record_id, cg_cycle_count, cg_flags, cg_path_separator,
+# reserved, cg_data_bytes (the record's size); a VLSD group (flag bit 0) has no records.
+_GROUP_DATA = struct.Struct("<QQHH4xI")
+_VLSD_GROUP = 1
+# A channel's data: cn_type, cn_sync_type, cn_data_type, cn_bit_offset, cn_byte_offset,
+# cn_bit_count; virtual channels (types 3, 6) take no bytes of the record.
+_CHANNEL_DATA = struct.Struct("<BBBBII")
+_VIRTUAL = (3, 6)
 
 
 class _Block(NamedTuple):
@@ -55,6 +64,52 @@ class _Blocks:
             offset = group.links[0]
         return total
 
+    def data(self, block: _Block, layout: struct.Struct) -> tuple[int, ...] | None:
+        if block.data_at + layout.size > self.size:
+            return None
+        self.handle.seek(block.data_at)
+        return layout.unpack(self.handle.read(layout.size))
+
+    def channel_outside(self, first_group: int) -> str | None:
+        """Where a channel of the chain of channel groups from ``first_group`` lies
+        outside its group's record (its sub-channels included); None when none does."""
+        offset, groups = first_group, 0
+        while offset and groups < _MAX_CHAIN:
+            groups += 1
+            group = self.at(offset, b"##CG")
+            sizes = self.data(group, _GROUP_DATA) if group is not None else None
+            if group is None or sizes is None or len(group.links) < 2:
+                return None
+            if not sizes[2] & _VLSD_GROUP:
+                found = self._outside(group.links[1], sizes[4])
+                if found:
+                    return found
+            offset = group.links[0]
+        return None
+
+    def _outside(self, first: int, record: int) -> str | None:
+        pending: list[int] = [first]
+        seen: set[int] = set()
+        while pending and len(seen) < _MAX_CHAIN:
+            offset = pending.pop()
+            if not offset or offset in seen:
+                continue
+            seen.add(offset)
+            channel = self.at(offset, b"##CN")
+            fields = self.data(channel, _CHANNEL_DATA) if channel is not None else None
+            if channel is None or fields is None:
+                continue
+            pending += channel.links[:2]  # the next channel, the sub-channels
+            kind, _, _, bit_offset, byte_offset, bits = fields
+            end = byte_offset + (bit_offset + bits + 7) // 8
+            if kind not in _VIRTUAL and end > record:
+                return (
+                    f"its channel at byte {offset:,} ends at byte {end:,} of a record of "
+                    f"{record:,} bytes (a damaged MF4 file, which asammdf would read outside "
+                    "its memory)"
+                )
+        return None
+
     def holds_data(self, offset: int) -> bool:
         block = self.at(offset, b"")
         if block is None or block.kind not in _DATA_BLOCKS:
@@ -82,6 +137,9 @@ def mf4_problem(handle: IO[bytes], size: int) -> str | None:
                     f"its data group at byte {offset:,} holds data but counts no record "
                     "(a damaged or unfinished MF4 file, which asammdf cannot read)"
                 )
+            outside = blocks.channel_outside(group.links[1])
+            if outside:
+                return outside
             offset = group.links[0]
     except (OSError, struct.error):
         return None

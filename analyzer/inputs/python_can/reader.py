@@ -9,6 +9,7 @@ from typing import IO, Any
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader, time_problem
+from analyzer.inputs.python_can.blf_guard import guarded_blf_reader
 from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
 from analyzer.library_log import LibraryLog, library_log
 from analyzer.protocol.can_message import frame_from_message
@@ -52,6 +53,8 @@ class PythonCanReader(InputReader):
             raise UsageError(f"reading .{fmt} files needs python-can") from None
         self._can = can
         self._reader_class = getattr(can, class_name)
+        if fmt == "blf":  # python-can reads an object whose size is 0 for ever
+            self._reader_class = guarded_blf_reader(self._reader_class)
         self._raw = self._open_binary()
         self._log = LibraryLog()
         self.frames = 0
@@ -183,6 +186,7 @@ class PythonCanReader(InputReader):
             except StopIteration:
                 break
             except Exception as exc:  # python-can gives up on the first damaged record
+                yield from self._library_messages()  # what it said before it gave up
                 yield diagnostic(
                     self.last_time or 0.0,
                     self.source,

@@ -58,6 +58,8 @@ def asc_problem(line: str) -> str | None:
     if _ASC_READ.match(line) or _ASC_UNTIMED.match(line):
         return None
     words = line.split(None, 3)
+    if not words:  # separators python-can's patterns do not take for blanks (\x1c-\x1f)
+        return "a line of control characters"
     if not _DECIMAL.fullmatch(words[0]):
         return f"its time {words[0][:20]!r} is not a decimal number"
     if _FRAME_SHAPE.match(line):

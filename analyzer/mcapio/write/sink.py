@@ -10,7 +10,6 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from analyzer import PROTOCOL_DOCUMENT, __version__
 from analyzer.errors import SourceError
 from analyzer.mcapio.channels import METADATA_NAME, STATS_METADATA_NAME, MessageTee
 from analyzer.mcapio.foxglove import FoxgloveViews
@@ -23,6 +22,7 @@ from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
 from analyzer.tally import Tally
+from analyzer.version import PROTOCOL_DOCUMENT, __version__
 
 __all__ = [
     "DEFAULT_CHUNK_SIZE",

@@ -1,0 +1,1 @@
+"""Coverage-guided fuzzing (atheris) of all that reads untrusted bytes: ``python -m fuzz``."""
