@@ -100,6 +100,7 @@ def _status_on_schedule_and_attitudes_as_they_complete(events: list[Event]) -> N
     assert reports >= 8
 
 
+@pytest.mark.slow
 def test_demo_runs_the_driver_in_lua_built_as_arduPilot_builds_it(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],

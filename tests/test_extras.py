@@ -22,6 +22,9 @@ from analyzer.extras import ARDUPILOT, EXTRAS, FLEET, VIDEO
 from analyzer.sim.ground import Step
 from tests.camera_flights import record
 
+# Each test runs the command line in fresh interpreters (and some a demo): seconds each.
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "samples" / "flight-candump.log"
 
