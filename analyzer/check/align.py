@@ -25,6 +25,7 @@ Goals = tuple[tuple[str, float], ...]  # (axis, angle): pitch, motor_yaw or yaw
 
 FRESH_S = 1.0  # feedback older than this (two periods) does not say where the gimbal is now
 MIN_SETTLE_WAIT_S = 1.5  # a move is not taken as over (the gimbal still) before this
+ATTEMPTS = 4  # the commands are sent this often at most, while the gimbal comes nearer
 LABELS = {PITCH: "pitch", MOTOR_YAW: "yaw motor", YAW: "yaw from north"}
 
 
@@ -142,15 +143,17 @@ def bring_to(
     tolerance_deg: float,
     timeout_s: float,
     clock: Clock = WALL_CLOCK,
+    attempts: int = ATTEMPTS,
 ) -> Arrival:
     """Turn the gimbal to ``goals`` and wait until two feedback messages in a row show it
     within ``tolerance_deg`` of every goal: at most ``timeout_s`` after the commands, and
     no longer once it has stopped elsewhere (``stopped``).
 
     Sends nothing when the latest feedback (less than FRESH_S old) already shows it
-    there. Otherwise sends one ``specified_angle`` per goal; the Arrival's ``reason``
-    says what stood in the way: an angle no command can ask for or the motor cannot
-    reach, no feedback, or where the gimbal stopped instead.
+    there. Otherwise sends one ``specified_angle`` per goal, and again (``attempts`` in
+    all) while a gimbal that stopped short came nearer each time. The Arrival's
+    ``reason`` says what stood in the way: an angle no command can ask for or the motor
+    cannot reach, no feedback, or where the gimbal stopped instead.
     """
     began = clock.monotonic()
     samples = feedback.samples
@@ -168,27 +171,46 @@ def bring_to(
             frames.append((_said(name, params), encode_command(name, **params)))
         except EncodeError as exc:
             return Arrival(False, f"{describe(goals)} cannot be asked for: {exc}", (), 0.0, last)
-    sent = 0.0
-    for _, data in frames:
-        sent = sender.send(data)
-    said = tuple(text for text, _ in frames)
-
     axes = [axis for axis, _ in goals]
+    said: tuple[str, ...] = ()
+    seen: list[Sample] = []
+    for _ in range(attempts):
+        sent = 0.0
+        for _, data in frames:
+            sent = sender.send(data)
+        said += tuple(text for text, _ in frames)
+        begun = seen[-1] if seen else last
 
-    def after() -> list[Sample]:
-        return [s for s in feedback.samples if s.time > sent]
+        def after(since: float = sent) -> list[Sample]:
+            return [s for s in feedback.samples if s.time > since]
 
-    def over() -> bool:
+        def over(since: float = sent) -> bool:
+            seen = after(since)
+            return at_attitude(seen, goals, tolerance_deg) or stopped(
+                seen, axes, clock.time() - since
+            )
+
+        feedback.wait(over, clock.monotonic() + timeout_s)
         seen = after()
-        return at_attitude(seen, goals, tolerance_deg) or stopped(seen, axes, clock.time() - sent)
-
-    feedback.wait(over, clock.monotonic() + timeout_s)
-    seen = after()
+        if at_attitude(seen, goals, tolerance_deg):
+            return Arrival(True, "", said, clock.monotonic() - began, seen[-1])
+        if not seen or not _closer(goals, begun, seen[-1], tolerance_deg):
+            break  # no feedback, or it did not come nearer: asking again will not help
     took = clock.monotonic() - began
-    if at_attitude(seen, goals, tolerance_deg):
-        return Arrival(True, "", said, took, seen[-1])
     why = _why_not(goals, last, seen, took)
     return Arrival(False, why, said, took, seen[-1] if seen else last, bool(seen))
+
+
+def _closer(goals: Goals, before: Sample | None, now: Sample, tolerance: float) -> bool:
+    """``now`` is nearer every goal it is off than ``before`` by more than the tolerance
+    (a gimbal that stopped short on the way: asked again, it goes on)."""
+    if before is None:
+        return False
+    return all(
+        abs(angle_error(axis, angle, now)) <= tolerance
+        or abs(angle_error(axis, angle, before)) - abs(angle_error(axis, angle, now)) > tolerance
+        for axis, angle in goals
+    )
 
 
 def _said(name: str, params: dict[str, Any]) -> str:
