@@ -72,6 +72,9 @@ class Finding:
         return Event(TOPIC_ANALYSIS_RESPONSE, self.time, SOURCE, fields)
 
 
+STOPPED_BEFORE = "the feedback stopped before it"
+
+
 def cut_words(
     since: float, until: float, seen: float | None, ended: float | None, wait: float
 ) -> str:
@@ -84,8 +87,15 @@ def cut_words(
     if ended is not None and (seen is None or ended - seen <= wait):
         return f"the input ended {max(0.0, ended - since):.1f} s later"
     if seen is None or seen <= since:
-        return "the feedback stopped before it"
+        return STOPPED_BEFORE
     return f"the feedback stopped {seen - since:.1f} s after it"
+
+
+def no_feedback_until(why: str) -> str:
+    """'no attitude feedback came before <why>' in words that read."""
+    if why == STOPPED_BEFORE:
+        return "no attitude feedback came after it (the feedback had stopped)"
+    return f"no attitude feedback came {why if why.startswith('within') else f'before {why}'}"
 
 
 def verdict_line(counts: dict[str, int]) -> str:
@@ -116,6 +126,7 @@ __all__ = [
     "VERDICTS",
     "Finding",
     "cut_words",
+    "no_feedback_until",
     "verdict_line",
     "worst",
 ]

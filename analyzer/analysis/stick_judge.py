@@ -86,6 +86,9 @@ class StickJudge:
         own = movement.own_before
         if own is not None:
             own += HOLD_S  # its speeds held on that long
+            reference = self._reference(movement.start)
+            if reference is not None and reference.time >= own + LAG_MAX_S:
+                own = None  # over before the message the fit starts from
         since = max((t for t in (other, own) if t is not None), default=None)
         if since is None:
             return True
