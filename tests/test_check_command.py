@@ -382,8 +382,8 @@ def test_a_step_first_brings_the_gimbal_to_its_start_from_where_it_was_left(
         for e in run.gimbal.received
         if e.topic == "/gimbal/command"
     ]
-    # to its start (pitch 30) first, then the move it judges; at the end, centred
-    assert angles[:2] == [("specified_angle", 30.0), ("specified_angle", -90.0)]
+    # to its start (pitch 45) first, then the move it judges; at the end, centred
+    assert angles[:2] == [("specified_angle", 45.0), ("specified_angle", -90.0)]
 
 
 def test_a_gimbal_that_falls_short_fails_with_the_error(tcp_runs: dict[str, Run]) -> None:
@@ -391,8 +391,8 @@ def test_a_gimbal_that_falls_short_fails_with_the_error(tcp_runs: dict[str, Run]
     assert run.code == 1
     step = run.by_name()["pitch_angle"]
     assert step["verdict"] == "fail"
-    # brought to its start (30, asked again as it stopped short), then 70 % of 30 -> -90
-    assert step["error_deg"] == pytest.approx(-36.0, abs=1.5)
+    # brought to its start (45, asked again as it stopped short), then 70 % of 45 -> -90
+    assert step["error_deg"] == pytest.approx(-40.5, abs=1.5)
     assert f"stopped short at {-90 - step['error_deg']:.1f}" in step["detail"]
 
 

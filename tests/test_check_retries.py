@@ -17,8 +17,8 @@ from analyzer.sim.faults import FaultConfig
 
 
 def test_a_step_a_silence_cut_is_run_again_and_passes() -> None:
-    # pitch_angle's move starts 1 s in (after its start, 0 to 30): silent from 1.4 to 4.4 s
-    bench = SimulatedBench(SimConfig(faults=FaultConfig(stop_at=1.4, stop_for=3.0)))
+    # pitch_angle's move starts 1.5 s in (after its start, 0 to 45): silent from 1.9 to 4.9 s
+    bench = SimulatedBench(SimConfig(faults=FaultConfig(stop_at=1.9, stop_for=3.0)))
     (result,) = bench.check(select("pitch_angle"))
     assert result.verdict == PASS
     assert result.figures["tries"] == 2
@@ -29,7 +29,7 @@ def test_a_step_a_silence_cut_is_run_again_and_passes() -> None:
 
 
 def test_feedback_gone_for_good_fails_as_no_feedback_after_three_tries() -> None:
-    bench = SimulatedBench(SimConfig(faults=FaultConfig(stop_at=1.4, stop_for=600.0)))
+    bench = SimulatedBench(SimConfig(faults=FaultConfig(stop_at=1.9, stop_for=600.0)))
     (result,) = bench.check(select("pitch_angle"))
     assert result.verdict == FAIL and result.figures["tries"] == MAX_TRIES
     assert result.detail.startswith("no feedback")

@@ -11,6 +11,7 @@ airframe's nose) or ``yaw`` (from north), each reached with one ``specified_angl
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -144,6 +145,7 @@ def bring_to(
     timeout_s: float,
     clock: Clock = WALL_CLOCK,
     attempts: int = ATTEMPTS,
+    max_turn_deg: float | None = None,
 ) -> Arrival:
     """Turn the gimbal to ``goals`` and wait until two feedback messages in a row show it
     within ``tolerance_deg`` of every goal: at most ``timeout_s`` after the commands, and
@@ -151,10 +153,61 @@ def bring_to(
 
     Sends nothing when the latest feedback (less than FRESH_S old) already shows it
     there. Otherwise sends one ``specified_angle`` per goal, and again (``attempts`` in
-    all) while a gimbal that stopped short came nearer each time. The Arrival's
-    ``reason`` says what stood in the way: an angle no command can ask for or the motor
-    cannot reach, no feedback, or where the gimbal stopped instead.
+    all) while a gimbal that stopped short came nearer each time. A turn longer than
+    ``max_turn_deg`` is made in legs of equal length (the way the axis turns), each
+    waited for alike: so that each command asks for no more than the gimbal does within
+    the time a judgement of it allows. The Arrival's ``reason`` says what stood in the
+    way: an angle no command can ask for or the motor cannot reach, no feedback, or
+    where the gimbal stopped instead.
     """
+    samples = feedback.samples
+    ways = legs(goals, samples[-1] if samples else None, max_turn_deg)
+    arrival = Arrival(False, "", (), 0.0, None)
+    for way in ways:
+        leg = _arrive(sender, feedback, way, tolerance_deg, timeout_s, clock, attempts)
+        arrival = Arrival(
+            leg.reached,
+            leg.reason,
+            arrival.sent + leg.sent,
+            arrival.took_s + leg.took_s,
+            leg.sample,
+            leg.heard,
+        )
+        if not leg.reached:
+            break
+    return arrival
+
+
+def legs(goals: Goals, sample: Sample | None, max_turn_deg: float | None) -> list[Goals]:
+    """``goals`` and the goals on the way to them: a turn (along the way the axis turns)
+    longer than ``max_turn_deg`` in as many equal legs as it takes."""
+    if sample is None or not max_turn_deg:
+        return [goals]
+    turns = {axis: travel(axis, angle, sample) for axis, angle in goals}
+    count = max(math.ceil(abs(turn) / max_turn_deg - 1e-9) for turn in turns.values())
+    out: list[Goals] = []
+    for n in range(1, count):
+        share = n / count
+        way: list[tuple[str, float]] = []
+        for axis, turn in turns.items():
+            if axis == PITCH:
+                way.append((PITCH, round(sample.pitch + turn * share, 1)))
+            else:  # yaw either way: the motor turns
+                way.append((MOTOR_YAW, round(sample.motor_yaw + turn * share, 1)))
+        out.append(tuple(way))
+    return [*out, goals]
+
+
+def _arrive(
+    sender: Sender,
+    feedback: Feedback,
+    goals: Goals,
+    tolerance_deg: float,
+    timeout_s: float,
+    clock: Clock,
+    attempts: int,
+) -> Arrival:
+    """One leg of ``bring_to``."""
     began = clock.monotonic()
     samples = feedback.samples
     last = samples[-1] if samples else None

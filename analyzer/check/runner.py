@@ -165,19 +165,23 @@ class CheckRunner:
         if running.plan.skipped or not running.judged:
             return ""
         start, end = running.started_at, running.ended_at
-        silence, _ = longest_silence(self.observer.feedback_in(start, end), start, end)
+        heard = self.observer.feedback_in(start, end)
+        silence, _ = longest_silence(heard, start, end)
         if silence <= GAP_THRESHOLD_S and not self.observer.damaged_in(start, end):
             return ""
         evidence = self._evidence(running)
         pairs: list[tuple[str, str]] = []
         for number, (action, first, _) in enumerate(running.judged):
             found = evidence.findings[number]
+            name = action.name if isinstance(action, Send) else "gimbal_control"
             if set(required_checks(action)) <= {f.get("check") for f in found}:
                 pairs += [(str(f.get("verdict")), str(f.get("detail"))) for f in found]
-            elif isinstance(action, Send) and action.goals and self._reached(action.goals, first):
-                pairs.append((OBEYED, ""))
             elif not (isinstance(action, Send) and action.goals):
-                pairs.append((UNKNOWN, f"{action.name if isinstance(action, Send) else ''}"))
+                pairs.append((UNKNOWN, name))
+            elif self._reached(action.goals, first):
+                pairs.append((OBEYED, ""))
+            elif longest_silence(heard, first, end)[0] > GAP_THRESHOLD_S:
+                pairs.append((UNKNOWN, name))  # where it went in the silence is not known
         return undecided(evidence, measure(evidence, self.limits), pairs)
 
     def attitude(self) -> Attitude:
@@ -199,7 +203,8 @@ class CheckRunner:
         """Bring the gimbal to a step's start: '' when it is there, else why it is not.
 
         It has the time a gimbal at the slowest slew that passes (--min-slew) needs for
-        the turn, and the time allowed on top."""
+        the turn, and the time allowed on top; a longer turn than such a gimbal makes in
+        the time allowed goes in legs (each command is judged by the analysis too)."""
         if not goals:
             return ""
         tolerance = self.limits.settings.tolerance_deg
@@ -211,6 +216,8 @@ class CheckRunner:
             tolerance_deg=tolerance,
             timeout_s=needed + self.allowed_s,
             clock=self.clock,
+            # what a gimbal at its slowest slew that passes turns in the time allowed
+            max_turn_deg=self.limits.min_slew_dps * self.allowed_s,
         )
         if arrival.reached:
             return ""

@@ -17,6 +17,7 @@ ZOOM_IN_S = 1.0
 ZOOM_BACK_S = 2.5  # zoom_1x: back to 1x and still a while before the gimbal moves on
 ZOOM_PITCH = -45.0  # the zoom step looks this far down
 MIXED_UP_REACH = 160.0  # a yaw target read in the wrong frame stays this far from the back
+GEODETIC_TURN = 150.0  # the yaw_geodetic step's turn of the motor
 
 
 @dataclass(frozen=True)
@@ -113,10 +114,10 @@ def _pitch(target: float) -> Send:
 # Where the steps start. Every step names the attitude (of the axes it moves) it starts
 # from, and the gimbal is brought there first: a step does the same from wherever the
 # gimbal was left.
-FORWARD_FROM: Goals = ((PITCH, -45.0), (MOTOR_YAW, 120.0))  # off centre: a move to measure
-# Up first: a pitch move of 120 deg passes three feedback messages on its way at 60 deg/s,
-# so its slew is measured even when one of them is lost.
-LOOKING_UP: Goals = ((PITCH, 30.0),)
+FORWARD_FROM: Goals = ((PITCH, -45.0), (MOTOR_YAW, 150.0))  # off centre: a move to measure
+# Moves of 135 deg and more: at 60 deg/s they pass four feedback messages on their way,
+# so the slew is measured even when one of them is lost and another is a ranging one.
+LOOKING_UP: Goals = ((PITCH, 45.0),)
 NOSE: Goals = ((MOTOR_YAW, 0.0),)
 
 
@@ -140,12 +141,14 @@ def _yaw_airframe(now: Attitude, options: Options) -> Plan:
 
 
 def geodetic_target(start: Attitude) -> tuple[float, float]:
-    """(yaw from north to ask for, the motor angle that points there): 120 deg of travel
+    """(yaw from north to ask for, the motor angle that points there): 150 deg of travel
     from where the motor is, toward the middle of its range, so it can always get there.
     From the nose, either way: the one whose angle from north, taken as an angle from the
     nose (DATA4 mixed up), the motor could reach too, so that such a mix-up shows."""
-    ways = [-120.0, 120.0] if start.motor_yaw >= -50.0 else [120.0, -120.0]
-    if abs(start.motor_yaw) < 50.0:  # at the nose: either way stays in the range
+    ways = [-GEODETIC_TURN, GEODETIC_TURN]
+    if start.motor_yaw < -20.0:
+        ways.reverse()
+    if abs(start.motor_yaw) < 20.0:  # at the nose: either way stays in the range
         for way in ways:
             north = (start.heading + start.motor_yaw + way) % 360.0
             if abs((north + 180.0) % 360.0 - 180.0) <= MIXED_UP_REACH:
@@ -230,17 +233,17 @@ def _feedback(now: Attitude, options: Options) -> Plan:
 
 STEPS: tuple[Step, ...] = (
     Step("feedback", "listen: feedback period, lost messages, CRC errors", _feedback),
-    Step("forward", "from pitch -45 / yaw motor 120 back to the centre (forward)", _forward),
-    Step("pitch_angle", "specified_angle pitch 30 -> -90", _pitch_angle),
+    Step("forward", "from pitch -45 / yaw motor 150 back to the centre (forward)", _forward),
+    Step("pitch_angle", "specified_angle pitch 45 -> -90", _pitch_angle),
     Step(
         "yaw_airframe",
         "specified_angle yaw motor 0 -> 150 from the nose (DATA4 = 1)",
         _yaw_airframe,
     ),
-    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> -120", _yaw_geodetic),
+    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> +-150", _yaw_geodetic),
     Step("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
     Step("tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed),
-    Step("look_down", "look_down: pitch 30 -> -90", _look_down),
+    Step("look_down", "look_down: pitch 45 -> -90", _look_down),
     Step("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
     Step("tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking),
 )

@@ -37,16 +37,16 @@ specified_angle) and waits until the feedback shows it there, so a step does the
 same wherever the gimbal was left; a gimbal that cannot get there fails the step,
 with the reason:
   feedback      listen a few seconds: feedback period, lost messages, CRC errors
-  forward       [pitch -45, yaw motor 120] back to the centre with `forward`
-  pitch_angle   [pitch 30] specified_angle pitch -90
+  forward       [pitch -45, yaw motor 150] back to the centre with `forward`
+  pitch_angle   [pitch 45] specified_angle pitch -90
   yaw_airframe  [yaw motor 0] specified_angle yaw 150 deg from the nose (DATA4 = 1)
   yaw_geodetic  [yaw motor 0] specified_angle yaw from north: the aircraft's heading
                 is taken from the feedback (psi minus the motor's yaw), the target
-                is 120 deg of motor travel (the motor at -120)
+                is 150 deg of motor travel (the motor at -150 or 150)
   pan_speed     [yaw motor left of the nose] gimbal_control pan at --speed every 50 ms
                 for --speed-for, then 0: the turn is centred on the nose
   tilt_speed    [pitch above -25] the same on tilt, downward, centred on -25
-  look_down     [pitch 30] look_down: pitch to -90
+  look_down     [pitch 45] look_down: pitch to -90
   zoom          zoom in, stop, zoom 1x: the feedback does not report the zoom, so
                 with --video the step is judged from the camera's picture (the scale
                 measured, see docs/explanation/camera.md; [pitch -45]), without it
