@@ -41,6 +41,7 @@ from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.faults import FaultConfig
 from analyzer.sim.ground import Step
+from analyzer.sim.model import MAX_ZOOM, ZOOM_RATE
 from analyzer.sim.offline import run_offline
 from analyzer.tui.state import MonitorState
 from tests.soundness_scripts import PITCH_RANGE, YAW_RANGE, random_script
@@ -316,20 +317,27 @@ def run_check(scenario: Scenario) -> Outcome:
 
 
 def camera_script(rng: random.Random) -> tuple[tuple[Step, ...], float]:
-    """The camera looking down at the ground, zoom commands at random moments."""
+    """The camera looking down at the ground, zoom commands at random moments: a zoom in
+    first, then what the lens can do (no zoom out at its widest, 1x)."""
     steps = [Step(0.3, "specified_angle", {"axis": "pitch", "pitch_deg": rng.uniform(-80, -35)})]
     at = 3.0  # the turn down done: the picture's scale is then the lens's
-    for n in range(rng.randint(1, 3)):
-        ways = ("zoom_in", "zoom_in_2x") if n == 0 else ("zoom_in", "zoom_in_2x", "zoom_out_2x")
-        action = rng.choice((*ways, "zoom_1x") if n else ways)  # the first one zooms in
+    ratio = 1.0  # the lens's, as the simulator zooms (6x a second, at most 30x)
+    for _ in range(rng.randint(1, 3)):
+        ways = ["zoom_in", "zoom_in_2x"] if ratio < 10.0 else []
+        ways += ["zoom_out_2x", "zoom_1x"] if ratio >= 2.0 else []
+        action = rng.choice(ways)
         if action == "zoom_in":
             steps.append(Step(at, "zoom", {"action": "zoom_in"}))
-            at += rng.uniform(0.4, 1.2)
+            held = rng.uniform(0.4, 1.2)
+            at += held
             steps.append(Step(at, "zoom", {"action": "stop"}))
+            ratio = min(MAX_ZOOM, ratio + ZOOM_RATE * held)
         elif action == "zoom_1x":
             steps.append(Step(at, "zoom_1x"))
+            ratio = 1.0
         else:
             steps.append(Step(at, "zoom", {"action": action}))
+            ratio = ratio * 2 if action == "zoom_in_2x" else max(1.0, ratio / 2)
         at += rng.uniform(2.0, 3.0)
     return tuple(steps), at + 1.0
 
