@@ -249,9 +249,9 @@ def run_script(scenario: Scenario) -> Outcome:
     first = first_episode(scenario.model, ignored)
     duration = rng.uniform(6.0, 40.0)  # where the run is cut
     heading = config.heading_deg or 0.0
-    steps, kinds = random_script(rng, LONGEST_S, heading, config.attitude, first)
+    steps, first_done = random_script(rng, LONGEST_S, heading, config.attitude, first)
     if first is not None:  # the fault's episode is seen whole
-        duration = max(duration, kinds[0][2] + SEEN_FOR_S)
+        duration = max(duration, first_done + SEEN_FOR_S)
     steps = tuple(s for s in steps if s.at < duration)
     frames, events = run_offline(steps, duration, config, start=START)
     found = [f.fields for f in analyze(events)]

@@ -30,6 +30,7 @@ HOLD_S = 0.3  # a command's speeds hold this long (the simulator's model)
 CENTRE = 4096  # the image's centre in tracking coordinates
 FOV = (60.0, 34.0)  # the simulator's field of view at 1x (horizontal, vertical)
 FIRST_AT_S = 1.2  # a fault's first episode starts once the feedback has begun
+FIRST_TURN_DEG = 20.0  # and a target in it asks for a turn this long at least
 QUIET_AFTER_FIRST_S = 4.0  # nothing is sent this long after the first episode's end
 TARGETS = ("pitch", "yaw_airframe", "yaw_geodetic", "look_down", "forward")
 
@@ -69,14 +70,19 @@ class Script:
     # -- episodes ----------------------------------------------------------------------
 
     def target(self, kind: str | None = None, *, first: bool = False) -> None:
-        """A target; ``first``: it shows a fault, so a geodetic yaw is one that a gimbal
-        taking it from the nose could reach too."""
+        """A target; ``first``: it shows a fault, so it is one the gimbal must turn to
+        (look_down and forward from elsewhere: a pitch target first), and a geodetic
+        yaw is one that a gimbal taking it from the nose could reach too."""
         rng = self.rng
         kind = kind or rng.choice(TARGETS)
+        fixed = {"look_down": (-90.0, None), "forward": (0.0, 0.0)}.get(kind)
+        if first and fixed is not None and self.where.turn_to(*fixed) < FIRST_TURN_DEG:
+            self.target("pitch", first=True)
+            self.at = max(self.at, self.kinds[-1][2])  # once it is there
         pitch = yaw = None
         params: dict[str, Any] = {}
         name = "specified_angle"
-        for _ in range(50):  # a target the gimbal reaches in time from anywhere it may be
+        for _ in range(500):  # a target the gimbal reaches in time from anywhere it may be
             if kind == "pitch":
                 pitch = round(rng.uniform(*PITCH_RANGE), 1)
                 params = {"axis": "pitch", "pitch_deg": pitch}
@@ -98,7 +104,8 @@ class Script:
                 name, pitch = "look_down", -90.0
             else:
                 name, pitch, yaw = "forward", 0.0, 0.0
-            if self.where.turn_to(pitch, yaw) / SLEW_DPS <= MAX_TURN_S:
+            turn = self.where.turn_to(pitch, yaw)
+            if turn / SLEW_DPS <= MAX_TURN_S and (fixed or not first or turn >= FIRST_TURN_DEG):
                 break
         else:
             kind, name, params, pitch, yaw = "forward", "forward", {}, 0.0, 0.0
@@ -230,17 +237,18 @@ def random_script(
     heading: float,
     attitude: tuple[float, float],
     first: str | None = None,
-) -> tuple[tuple[Step, ...], list[tuple[str, float, float]]]:
+) -> tuple[tuple[Step, ...], float]:
     """Episodes until ``duration``, from a gimbal at ``attitude`` (pitch, yaw motor) under
-    an aircraft heading ``heading``; ``first``: the kind of the first episode (a target
-    kind, ``stick``, ``long_stick``, ``tracking``). Returns the steps and, per episode,
-    (kind, its last command, when the gimbal has done it)."""
+    an aircraft heading ``heading``. ``first``: the kind of the first episode, which
+    shows a fault (a target kind, ``long_stick``, ``released_stick`` let go at speed,
+    ``tracking``), once the feedback has begun and followed by a pause of
+    QUIET_AFTER_FIRST_S. Returns the steps and when the gimbal has done the first
+    episode (0 without one)."""
     script = Script(rng, heading, Where((attitude[0],) * 2, (attitude[1],) * 2))
+    first_done = 0.0
     if first is not None:  # once the feedback has begun
         script.at = FIRST_AT_S
-    if first == "stick":
-        script.stick()
-    elif first == "long_stick":
+    if first == "long_stick":
         script.stick(rng.uniform(2.0, 4.0), first=True)
     elif first == "released_stick":
         script.stick(rng.uniform(2.0, 4.0), released=True, first=True)
@@ -249,7 +257,8 @@ def random_script(
     elif first is not None:
         script.target(first, first=True)
     if first is not None:  # then a pause: what the gimbal does after it shows
-        script.at = max(script.at, script.kinds[0][2] + QUIET_AFTER_FIRST_S)
+        first_done = max(done for _, _, done in script.kinds)
+        script.at = max(script.at, first_done + QUIET_AFTER_FIRST_S)
     while script.at < duration:
         roll = rng.random()
         if roll < 0.4:
@@ -261,4 +270,4 @@ def random_script(
         else:
             script.zoom()
     steps = sorted((s for s in script.steps if s.at < duration), key=lambda s: s.at)
-    return tuple(steps), script.kinds
+    return tuple(steps), first_done
