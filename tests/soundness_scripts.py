@@ -184,7 +184,7 @@ class Script:
         if first or rng.random() < 0.8:
             last += rng.uniform(0.1, 0.6)
             self.steps.append(Step(last, "tracking_stop"))
-        self._next("tracking", last, start + 1.5, Where(pitch, yaw))
+        self._next("tracking", last, last + 1.5, Where(pitch, yaw))  # the flag's allowance
 
     def zoom(self) -> None:
         start = self.at
