@@ -203,9 +203,11 @@ def test_demo_stick_records_the_option_and_each_movement_is_one_finding(
     assert main(["analyze", str(path), "--json"]) == 0
     found = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     rates = [f for f in found if f["command"] == "gimbal_control" and f["check"] == "rate"]
-    # tilt, a moment centred (zeros), then pan: two movements, each judged sluggish
-    assert [r["verdict"] for r in rates] == ["partial", "partial"]
+    # tilt, a moment centred (zeros), then pan: two movements. The tilt is judged
+    # sluggish; the pan (1.2 s) is followed 0.2 s after it by a specified_angle and the
+    # run ends 1.1 s after it, both within the lag a gimbal may have: it is not judged
+    assert [r["verdict"] for r in rates] == ["partial", "unknown"]
     assert rates[0]["tilt_ratio"] == pytest.approx(0.4, abs=0.1) and "pan_ratio" not in rates[0]
-    assert rates[1]["pan_ratio"] == pytest.approx(0.4, abs=0.1)
+    assert "the input ended" in rates[1]["detail"] or "specified_angle came" in rates[1]["detail"]
     assert rates[0]["command_count"] > 20
     assert not [f for f in found if f["check"] == "repeat"]

@@ -255,3 +255,33 @@ def test_a_gimbal_that_takes_geodetic_targets_from_the_nose() -> None:
     model.step(3.0)
     assert model.motor_yaw_deg == pytest.approx(45.0) and model.yaw_deg == pytest.approx(75.0)
     assert "takes geodetic yaw targets from the airframe's nose" in model.behaviour.describe()
+
+
+def test_a_gimbal_that_turns_the_wrong_way_for_speeds() -> None:
+    model = GimbalModel(0.0, behaviour=Behaviour(wrong_way=True))
+    hold(model, command("gimbal_control", pan_speed_dps=20, tilt_speed_dps=-10), 0.0, 1.0)
+    model.step(1.0)
+    assert model.motor_yaw_deg == pytest.approx(-20.0) and model.pitch_deg == pytest.approx(10.0)
+    model.apply(command("specified_angle", pitch_deg=-30), 1.0)  # angles it gets right
+    model.step(3.0)
+    assert model.pitch_deg == pytest.approx(-30.0)
+    assert "turns the other way for gimbal_control speeds" in model.behaviour.describe()
+
+
+def test_a_drifting_gimbal_turns_on_after_a_stop_however_often_it_is_told() -> None:
+    model = GimbalModel(0.0, behaviour=Behaviour(drift_s=1.0))
+    hold(model, command("gimbal_control", pan_speed_dps=20), 0.0, 1.0)
+    hold(model, command("gimbal_control", pan_speed_dps=0), 1.05, 4.0)  # zeros at 20 Hz
+    assert model.motor_yaw_deg == pytest.approx(20.0 * 2.05)  # 1 s more after the first 0
+    model.step(6.0)  # and no longer
+    assert model.motor_yaw_deg == pytest.approx(20.0 * 2.05)
+
+
+def test_a_frozen_gimbal_and_one_left_off_centre() -> None:
+    frozen = SimulatedGimbal(0.0, SimConfig(behaviour=Behaviour(speed=0.0), attitude=(-45, 120)))
+    frozen.model.apply(command("forward"), 0.0)
+    frozen.model.step(5.0)
+    assert (frozen.model.pitch_deg, frozen.model.motor_yaw_deg) == (-45.0, 120.0)
+    assert frozen.model.behaviour.describe() == "does not move at all (frozen)"
+    beyond = SimulatedGimbal(0.0, SimConfig(attitude=(-200, 400)))  # kept within the range
+    assert (beyond.model.pitch_deg, beyond.model.motor_yaw_deg) == (PITCH_MIN, 170.0)

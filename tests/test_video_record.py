@@ -346,8 +346,8 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     out = tmp_path / "demo.mcap"
     done = subprocess.run(
         [
-            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "5",
-            "--sluggish", "0.4", "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
+            sys.executable, "-m", "analyzer", "demo", "--no-tui", "--duration", "7",
+            "--fall-short", "0.7", "-o", str(out), "--video", f"bench={rtsp_camera.url(1)}",
         ],
         cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=60, encoding="utf-8",
     )  # fmt: skip
@@ -367,11 +367,12 @@ def test_demo_records_a_bench_camera_next_to_the_simulated_gimbal(
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     text = page.read_text(encoding="utf-8")
-    section = text.split("<h2>What the camera saw</h2>")[1].split("<h2>")[0]
+    section = text.split("<h2>What the camera saw</h2>")[1].split("<h2")[0]
     pictures = re.findall(r'src="data:image/jpeg;base64,([^"]+)"', section)
     strip = section.split('<div class="strip">')[1].split("</div>")[0].count("<img")
     failed = section.split('<div class="seen">')[1].count("<img")
-    assert strip == len(found["/camera/bench/thumbnail"]) and failed >= 1  # sluggish: partial
+    # falling short: the yaw and pitch targets are partial (stopped short, then still)
+    assert strip == len(found["/camera/bench/thumbnail"]) and failed >= 1
     assert len(pictures) == strip + failed
     for jpeg in pictures:
         picture = av.CodecContext.create("mjpeg", "r").decode(av.Packet(base64.b64decode(jpeg)))

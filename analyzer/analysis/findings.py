@@ -72,6 +72,32 @@ class Finding:
         return Event(TOPIC_ANALYSIS_RESPONSE, self.time, SOURCE, fields)
 
 
+STOPPED_BEFORE = "the feedback stopped before it"
+
+
+def cut_words(
+    since: float, until: float, seen: float | None, ended: float | None, wait: float
+) -> str:
+    """Why the feedback a judgement waited for (from ``since``, the command, to
+    ``until``) did not reach ``until``, in words; '' when it did. ``seen``: the last
+    feedback message; ``ended``: the end of the input, when it ended (the input's end
+    is the reason unless the feedback had been silent for longer than ``wait``)."""
+    if seen is not None and seen >= until:
+        return ""
+    if ended is not None and (seen is None or ended - seen <= wait):
+        return f"the input ended {max(0.0, ended - since):.1f} s later"
+    if seen is None or seen <= since:
+        return STOPPED_BEFORE
+    return f"the feedback stopped {seen - since:.1f} s after it"
+
+
+def no_feedback_until(why: str) -> str:
+    """'no attitude feedback came before <why>' in words that read."""
+    if why == STOPPED_BEFORE:
+        return "no attitude feedback came after it (the feedback had stopped)"
+    return f"no attitude feedback came {why if why.startswith('within') else f'before {why}'}"
+
+
 def verdict_line(counts: dict[str, int]) -> str:
     """'3 obeyed, 1 partial, 2 not obeyed, 0 unknown' in a fixed order."""
     return ", ".join(f"{counts.get(v, 0)} {v.replace('_', ' ')}" for v in VERDICTS)
@@ -99,6 +125,8 @@ __all__ = [
     "UNKNOWN",
     "VERDICTS",
     "Finding",
+    "cut_words",
+    "no_feedback_until",
     "verdict_line",
     "worst",
 ]

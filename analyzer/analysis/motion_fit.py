@@ -9,11 +9,19 @@ between two feedback messages the measured change is compared with the commanded
 gimbal's answer to the stick; the lag is the one, of a search grid, that leaves the least
 residual. The commanded motion is piecewise linear (a speed held between two times), so
 it is kept as its corners and read off with ``numpy.interp`` at every lag at once.
+
+Only intervals the commands alone can explain are fitted: when something else may have
+been turning the gimbal before the movement (another command), or takes it over after
+(the next command), the intervals before ``free_from`` plus the lag, and after
+``free_until`` plus the lag, are left out, lag by lag. The lag cannot be told from the
+ratio with fewer than MIN_INTERVALS intervals; then only a movement seen whole (the
+gimbal free before it and the feedback on past its longest lag) is measured, by its
+whole change, which no lag alters (``whole``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,9 +31,10 @@ LAG_STEP_S = 0.05  # the lag search grid: 0, 50 ms, ... LAG_MAX_S
 LAG_MAX_S = 1.0
 LAGS = tuple(round(i * LAG_STEP_S, 3) for i in range(round(LAG_MAX_S / LAG_STEP_S) + 1))
 _TIE = 1e-9  # residuals this close are a tie: the shorter lag wins
-# Fewer feedback intervals than this cannot tell a lag from a ratio: the lag is not
-# searched (taken as 0), and the fit says it was not measured.
-MIN_INTERVALS_FOR_LAG = 3
+# Fewer feedback intervals than this, each with commanded or measured motion (INFORMATIVE
+# of the most in one interval), cannot tell a lag from a ratio: no fit is made.
+MIN_INTERVALS = 3
+INFORMATIVE = 0.1
 
 Floats = npt.NDArray[np.float64]
 
@@ -101,7 +110,7 @@ class AxisFit:
 @dataclass(frozen=True, slots=True)
 class Fit:
     """The lag that fits every fitted axis best, and each axis' fit at that lag;
-    ``lag_measured`` is False when too few intervals allowed no search (lag 0)."""
+    ``lag_measured`` is False for a movement measured whole (``whole``: no lag)."""
 
     lag_s: float
     axes: dict[int, AxisFit]  # 0 = pan, 1 = tilt
@@ -110,45 +119,85 @@ class Fit:
 
 def fit(
     motion: CommandedMotion,
-    samples: dict[int, Sequence[tuple[float, float]]],
+    samples: Mapping[int, Sequence[tuple[float, float]]],
     lags: Sequence[float] = LAGS,
+    *,
+    free_from: float | None = None,
+    free_until: float | None = None,
+    seen_until: float | None = None,
 ) -> Fit | None:
     """The least-squares fit of the measured angles ``samples`` (axis -> (time, angle),
     oldest first; 0 = pan, 1 = tilt) to ``motion`` over the lags of ``lags``.
 
-    None when no axis has two samples with commanded motion between them (at every lag).
-    With fewer than MIN_INTERVALS_FOR_LAG intervals on every axis only lag 0 is tried."""
-    searched = max((len(p) - 1 for p in samples.values()), default=0) >= MIN_INTERVALS_FOR_LAG
-    grid = np.array(lags if searched else (0.0,), dtype=np.float64)
+    At a lag L an interval counts when it starts at or after ``free_from`` + L, ends at
+    or before ``free_until`` + L and at or before ``seen_until`` (None: no bound). The
+    lags are compared only when at every one of them every axis has MIN_INTERVALS
+    intervals that count with commanded or measured motion in them (else a lag that
+    spreads the motion over more intervals would win by having them); the best is the
+    one with the least residual per interval. None when some lag cannot be tested."""
+    grid = np.array(lags, dtype=np.float64)
     residual = np.zeros(len(grid))
+    used = np.zeros(len(grid))
     usable = np.ones(len(grid), dtype=bool)
-    sums: dict[int, tuple[Floats, Floats, Floats]] = {}
+    sums: dict[int, tuple[Floats, Floats, Floats, npt.NDArray[np.int64]]] = {}
     for axis, points in samples.items():
         if len(points) < 2:
             continue
         times = np.array([t for t, _ in points], dtype=np.float64)
         measured = np.diff(np.array([v for _, v in points], dtype=np.float64))
         asked = motion.axis_at((times[None, :] - grid[:, None]).ravel(), axis)
-        asked = asked.reshape(len(grid), len(times))
-        steps = np.diff(asked, axis=1)
+        steps = np.diff(asked.reshape(len(grid), len(times)), axis=1)
+        counts = np.ones_like(steps, dtype=bool)
+        if free_from is not None:
+            counts &= times[None, :-1] >= free_from + grid[:, None] - 1e-9
+        if free_until is not None:
+            counts &= times[None, 1:] <= free_until + grid[:, None] + 1e-9
+        if seen_until is not None:  # at every lag alike
+            counts &= times[None, 1:] <= seen_until + 1e-9
+        steps = np.where(counts, steps, 0.0)
+        kept = np.where(counts, measured[None, :], 0.0)
         s_cc = (steps * steps).sum(axis=1)
-        s_mc = (steps * measured[None, :]).sum(axis=1)
-        fitted = s_cc > 1e-12
+        s_mc = (steps * kept).sum(axis=1)
+        number = counts.sum(axis=1)
+        # An interval in which neither the commands nor the gimbal turned says nothing of
+        # the ratio: with one that moved and two still, any lag fits perfectly.
+        asked_in = np.abs(steps) >= INFORMATIVE * np.abs(steps).max(axis=1, keepdims=True)
+        asked_in &= np.abs(steps) > 1e-9
+        moved = np.abs(measured)
+        moved_in = (moved >= INFORMATIVE * moved.max()) & (moved > 1e-9)
+        informative = ((asked_in | moved_in[None, :]) & counts).sum(axis=1)
+        fitted = (s_cc > 1e-12) & (informative >= MIN_INTERVALS)
         usable &= fitted
         ratio = np.where(fitted, s_mc / np.where(fitted, s_cc, 1.0), 0.0)
-        residual += float((measured * measured).sum()) - s_mc * ratio
-        sums[axis] = (ratio, asked[:, -1] - asked[:, 0], np.full(len(grid), measured.sum()))
-    if not sums or not usable.any():
+        residual += (kept * kept).sum(axis=1) - s_mc * ratio
+        used += number
+        sums[axis] = (ratio, steps.sum(axis=1), kept.sum(axis=1), number)
+    if not sums or not usable.all():  # every lag must be testable, or none is compared
         return None
-    candidates = np.where(usable, residual, np.inf)
+    candidates = residual / np.maximum(used, 1.0)
     best = int(np.flatnonzero(candidates <= candidates.min() + _TIE)[0])
     axes = {
-        axis: AxisFit(
-            float(ratio[best]),
-            float(commanded[best]),
-            float(measured[best]),
-            len(samples[axis]) - 1,
-        )
-        for axis, (ratio, commanded, measured) in sums.items()
+        axis: AxisFit(float(ratio[best]), float(commanded[best]), float(got[best]), int(n[best]))
+        for axis, (ratio, commanded, got, n) in sums.items()
     }
-    return Fit(float(grid[best]), axes, searched)
+    return Fit(float(grid[best]), axes, len(grid) > 1)
+
+
+def whole(
+    motion: CommandedMotion, samples: Mapping[int, Sequence[tuple[float, float]]]
+) -> Fit | None:
+    """Each axis' whole change from its first sample to its last over the change the
+    commands asked for in between: for a movement seen whole (the gimbal free before
+    the first sample, the last one past the movement's longest lag), which no lag alters.
+    None when an axis has fewer than two samples or no commanded change."""
+    axes: dict[int, AxisFit] = {}
+    for axis, points in samples.items():
+        if len(points) < 2:
+            return None
+        (t0, v0), (t1, v1) = points[0], points[-1]
+        start, end = motion.axis_at(np.array([t0, t1]), axis)
+        asked = float(end - start)
+        if abs(asked) <= 1e-9:
+            return None
+        axes[axis] = AxisFit((v1 - v0) / asked, asked, v1 - v0, len(points) - 1)
+    return Fit(0.0, axes, False) if axes else None

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import itertools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -16,9 +19,17 @@ from analyzer.analysis.findings import (
     Finding,
     worst,
 )
-from analyzer.analysis.motion_fit import AxisFit, CommandedMotion, fit
+from analyzer.analysis.motion_fit import (
+    LAG_MAX_S,
+    MIN_INTERVALS,
+    AxisFit,
+    CommandedMotion,
+    fit,
+    whole,
+)
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, Movement
+from analyzer.analysis.targets import STILL_DEG
 
 RATE_OK = (0.75, 1.33)  # measured / commanded motion within this range: obeyed
 RATE_NONE = 0.1  # below this (or negative): it did not follow
@@ -32,17 +43,37 @@ _SENT_ONCE = (
 )
 
 
+@dataclass(frozen=True)
+class Cut:
+    """The feedback ended before a movement's window was over: ``what`` ended ("the
+    input ended", "the feedback stopped") and ``at`` what time."""
+
+    what: str
+    at: float
+
+
 def judge_movement(
-    movement: Movement, before: Sample | None, inside: list[Sample], min_motion: float
+    movement: Movement,
+    before: Sample | None,
+    inside: list[Sample],
+    min_motion: float,
+    *,
+    free_from: float | None = None,
+    cut: Cut | None = None,
 ) -> Finding:
     """The movement's commanded motion against the motion the feedback shows.
 
     ``before`` is the last attitude sample before the movement, ``inside`` those up to
     its window's end; an axis counts as commanded when the commands asked it to turn by
-    more than ``min_motion`` degrees (the tolerance; both ways counted)."""
+    more than ``min_motion`` degrees (the tolerance; both ways counted). ``free_from``:
+    another command may have been turning the gimbal until the movement's start (what
+    it did before the start plus the lag is left out). ``cut``: the feedback ended before
+    the window did; unless what came shows the movement's motion over (past its lag),
+    it is ``unknown``."""
     end = movement.end if movement.end is not None else movement.last + HOLD_S
-    motion = CommandedMotion(movement.commands, HOLD_S)
-    asked = motion.at(end)
+    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    at_start = motion.at(movement.start)
+    asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
     duration = max(end - movement.start, 1e-9)
     path = motion.path(movement.start, end)
     extra: dict[str, Any] = {
@@ -73,22 +104,35 @@ def judge_movement(
             f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
         )
         return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
-    found = fit(motion, {i: p for i, p in series.items() if len(p) >= 2})
+    measured = {i: p for i, p in series.items() if len(p) >= 2}
+    found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
+    if found is None and _seen_whole(movement, before, points, free_from, end):
+        found = whole(motion, measured)
+    lag = found.lag_s if found is not None and found.lag_measured else LAG_MAX_S
+    # ``end`` is when the commands stopped asking for motion (a 0, 0 command, or the last
+    # one's hold): a gimbal ``lag`` late has done with the movement then.
+    if cut is not None and (not points or points[-1].time < end + lag):
+        text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
+        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
     verdicts: list[str] = []
     texts: list[str] = []
     ratios: list[float] = []
+    whole_movement = found is not None and not found.lag_measured
     for word, _, index, key in commanded:
         axis_fit = found.axes.get(index) if found is not None else None
         limit = limits[index]
         if axis_fit is None:
-            if limit is not None:
+            if limit is not None and limit * asked[index] > 0:
                 verdicts.append(OBEYED)
                 texts.append(f"{word} turned until its limit {limit:.1f}")
+            elif limit is not None:  # the stop on the other side: it turned the wrong way
+                verdicts.append(NOT_OBEYED)
+                texts.append(f"{word} turned to its limit {limit:.1f}, the wrong way")
             else:
                 verdicts.append(UNKNOWN)
-                texts.append(f"{word} not measurable: {_too_few(movement, len(series[index]))}")
+                texts.append(f"{word} not measurable: {_too_few(movement, free_from)}")
             continue
-        verdict, said = _axis_verdict(word, axis_fit)
+        verdict, said = _axis_verdict(word, axis_fit, whole_movement=whole_movement)
         ratios.append(axis_fit.ratio)
         extra[f"{key}_ratio"] = axis_fit.ratio
         extra[f"measured_{key}_dps"] = axis_fit.ratio * asked[index] / duration + 0.0
@@ -98,14 +142,53 @@ def judge_movement(
         texts.append(said)
     if ratios:
         extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
+    # How it followed while the stick was off centre, and not after (a gimbal that
+    # drifts on would pass for a late one): what the stop check takes as explained.
+    onset = fit(
+        motion, measured, free_from=free_from, free_until=movement.free_until, seen_until=end
+    )
+    if onset is not None:
+        movement.followed = (onset.lag_s, {i: a.ratio for i, a in onset.axes.items()})
     if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
         extra["lag_s"] = found.lag_s
         if found.lag_s >= LATE_S:
             texts.append(f"it followed about {found.lag_s:.1f} s late")
-    if movement.cut_short and UNKNOWN in verdicts:
-        texts.append(f"until {movement.cut_short}")
     verdict = worst(*verdicts)
     return Finding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+
+
+def _seen_whole(
+    movement: Movement,
+    before: Sample | None,
+    points: list[Sample],
+    free_from: float | None,
+    end: float,
+) -> bool:
+    """The feedback saw the whole movement and nothing else: the gimbal free of other
+    commands and of the stream's earlier speeds before it, a message before its start,
+    and the last one past its longest lag, before another command or the stream's next
+    movement asked for more."""
+    if before is None or free_from is not None or not points or points[0] is not before:
+        return False
+    if any(c.pan or c.tilt for c in movement.prior):
+        return False
+    last = points[-1].time
+    more = [c.time for c in movement.commands if c.time > end and (c.pan or c.tilt)]
+    if movement.free_until is not None:
+        more.append(movement.free_until)
+    return end + LAG_MAX_S <= last <= min(more, default=last)
+
+
+def _cut_words(movement: Movement, cut: Cut, end: float) -> str:
+    """'the input ended 0.4 s into the movement' or '... 0.6 s after it, before ...'."""
+    if cut.at < movement.start:
+        return f"{cut.what} {movement.start - cut.at:.1f} s before the movement"
+    if movement.ended_by == "the input ended" or cut.at < end:
+        return f"{cut.what} {max(0.0, cut.at - movement.start):.1f} s into the movement"
+    return (
+        f"{cut.what} {cut.at - end:.1f} s after it, before its last motion could be seen "
+        f"(a gimbal may follow up to {LAG_MAX_S:g} s late)"
+    )
 
 
 def _until_limit(points: list[Sample], axis: str) -> tuple[list[Sample], float | None]:
@@ -117,18 +200,23 @@ def _until_limit(points: list[Sample], axis: str) -> tuple[list[Sample], float |
     return points, None
 
 
-def _too_few(movement: Movement, count: int) -> str:
-    what = f"{count} attitude message{'s' if count != 1 else ''} from just before it"
-    until = f"until {movement.cut_short}" if movement.cut_short else "to after it"
-    return f"{what} {until} (two are needed)"
+def _too_few(movement: Movement, free_from: float | None) -> str:
+    """Why too few feedback intervals measured an axis."""
+    why = f"fewer than {MIN_INTERVALS} feedback intervals"
+    if free_from is not None:
+        why += f" after {movement.other_name} before it had done with the gimbal"
+    if movement.cut_short:
+        why += f", until {movement.cut_short}"
+    return why + " (a lag cannot be told from a ratio), and the movement was not seen whole"
 
 
-def _axis_verdict(word: str, axis_fit: AxisFit) -> tuple[str, str]:
+def _axis_verdict(word: str, axis_fit: AxisFit, *, whole_movement: bool) -> tuple[str, str]:
     ratio = axis_fit.ratio
+    n = axis_fit.intervals
+    how = "over the whole movement" if whole_movement else "by the fit"
     said = (
         f"{word} turned {axis_fit.measured_deg:.1f} deg for {axis_fit.commanded_deg:.1f} "
-        f"commanded ({ratio * 100:.0f} % by the fit over {axis_fit.intervals} feedback "
-        f"interval{'s' if axis_fit.intervals != 1 else ''})"
+        f"commanded ({ratio * 100:.0f} % {how} over {n} feedback interval{'s' if n != 1 else ''})"
     )
     if ratio < 0:
         return NOT_OBEYED, said + ", the wrong way"
@@ -141,21 +229,45 @@ def _axis_verdict(word: str, axis_fit: AxisFit) -> tuple[str, str]:
     return OBEYED, said
 
 
-def judge_stop(name: str, end: float, after: list[Sample], tolerance: float) -> Finding | None:
-    """Still moving after the stick came back (``end``)? None when too few samples show it."""
+def judge_stop(
+    name: str,
+    end: float,
+    after: list[Sample],
+    tolerance: float,
+    follows: Callable[[str, float], float] | None = None,
+) -> Finding | None:
+    """Still moving after the stick came back (``end``)? None when too few samples show it.
+
+    ``follows(axis, t)``: the angle of ``axis`` at ``t`` that the movement's commands,
+    followed late as its fit measured, still explain (a late gimbal finishes the
+    movement after the stick came back); only motion on beyond that counts (stopping
+    sooner than the fit says is no fault), by more than the tolerance and a quarter of
+    what the fit explains (its lag and ratio are estimates)."""
     if len(after) < 2:
         return None
-    first = after[0]
+
+    def explained(axis: str, s: Sample) -> float:
+        return follows(axis, s.time) if follows is not None else 0.0
+
+    first, last = after[0], after[-1]
     moved_at = None
     moved = 0.0
-    for prev, s in itertools.pairwise(after):
-        for axis in (PITCH, MOTOR_YAW):
-            total = abs(s.value(axis) - first.value(axis))
-            if abs(s.value(axis) - prev.value(axis)) > 0.05:
-                moved_at = s.time
-            moved = max(moved, total)
+    for axis in (PITCH, MOTOR_YAW):
+        expected = explained(axis, last) - explained(axis, first)
+        way = math.copysign(1.0, expected) if abs(expected) > STILL_DEG else 0.0
+        beyond = 0.0
+        for prev, s in itertools.pairwise(after):
+            step = (s.value(axis) - explained(axis, s)) - (prev.value(axis) - explained(axis, prev))
+            if abs(step) > 0.05:
+                moved_at = s.time if moved_at is None else max(moved_at, s.time)
+            more = (s.value(axis) - first.value(axis)) - (
+                explained(axis, s) - explained(axis, first)
+            )
+            beyond = max(beyond, way * more if way else abs(more))
+        if beyond > tolerance + 0.25 * abs(expected):
+            moved = max(moved, beyond)
     extra: dict[str, Any] = {"moved_deg": moved, "observed_at": after[-1].time}
-    if moved <= tolerance or moved_at is None:
+    if not moved or moved_at is None:
         extra["duration_s"] = after[-1].time - end
         text = f"stopped when the commands stopped (still for {after[-1].time - end:.1f} s)"
         return Finding(name, end, CHECK_STOP, OBEYED, text, extra)
@@ -174,8 +286,8 @@ def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
     """The stream repeated too slowly to keep the gimbal moving: said once per stream, at
     the first movement it shows in (None when fast enough, or said already)."""
     stream = movement.stream
-    if stream.cadence_said or not movement.too_slow():
-        return None
+    if stream.cadence_said or movement.ended_by == "the input ended" or not movement.too_slow():
+        return None  # (the input ended: what would have followed is not known)
     stream.cadence_said = True
     verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
     extra: dict[str, Any] = {

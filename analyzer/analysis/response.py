@@ -14,11 +14,12 @@ from analyzer.analysis.findings import (
     PARTIAL,
     UNKNOWN,
     Finding,
+    cut_words,
 )
 from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
-from analyzer.analysis.stick_judge import StickJudge
+from analyzer.analysis.stick_judge import LOOKBACK_S, StickJudge
 from analyzer.analysis.streams import STREAM_GAP_S
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
 from analyzer.analysis.tracking import (
@@ -38,7 +39,12 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import DAMAGED_FEEDBACK, EXPECTED_FEEDBACK_HZ, feedback_stream
+from analyzer.tally import (
+    DAMAGED_FEEDBACK,
+    EXPECTED_FEEDBACK_HZ,
+    GAP_THRESHOLD_S,
+    feedback_stream,
+)
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
@@ -49,7 +55,7 @@ DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the doc
 # one is held for its re-sends at most this long after its time allowed.
 RESEND_GAP_S = STREAM_GAP_S
 RESEND_HOLD_S = 30.0
-FEEDBACK_WAIT_S = 1.0  # without feedback, a judgement waits this long past its deadline
+FEEDBACK_WAIT_S = 2.0  # without feedback, a judgement waits this long past its deadline
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
 DAMAGED_KINDS = frozenset({CRC_MISMATCH, INCOMPLETE})  # damaged feedback, in the health
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
@@ -99,6 +105,7 @@ class ResponseAnalyzer:
         self._fc_attitude: float | None = None
         self._motion: tuple[str, float] | None = None
         self._at_limit: dict[str, float | None] = {PITCH: None, MOTOR_YAW: None}
+        self._last_target: TargetCheck | None = None  # the last motion command's, if a target
         self._tracking_seen = False  # a feedback message has shown the tracking flag on
         self._session: TrackingSession | None = None  # tracking commands since the first
 
@@ -116,7 +123,7 @@ class ResponseAnalyzer:
                 self._follow_session(sample)
                 out += self._limits(sample)
                 out += self._settle(t, sample)
-                self.samples.forget_before(self._needed(t))
+                self.samples.forget_before(min(self._needed(t), t - LOOKBACK_S))
         elif topic == TOPIC_GIMBAL_RANGING:
             out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
@@ -154,13 +161,14 @@ class ResponseAnalyzer:
         end = last.time if last is not None else None
         for check in self._targets:
             if check.finding is None:
-                self._judge_target(check, "the input ended", end)
+                self._judge_target(check, self._cut(check.time, check.deadline, ended=True), end)
             out.append(check.release())
         self._targets = []
         for tracking in self._tracking:
-            out.append(self._judge_tracking(tracking, None, "the input ended"))
+            why = self._cut(tracking.time, tracking.deadline, ended=True)
+            out.append(self._judge_tracking(tracking, None, why))
         self._tracking = []
-        out += self._sticks.close()
+        out += self._sticks.close(self.health.last if self.health.last is not None else 0.0)
         out += self.health.close()
         return self._emit(out)
 
@@ -181,7 +189,8 @@ class ResponseAnalyzer:
         session = self._session
         if name == "tracking" and session is not None:
             session.update(t)  # the box moved: the same session
-            return out
+            # the gimbal turns to the box: the tracker takes over from what came before
+            return self._interrupt(t, name, AXES[name])
         allowed = self.settings.time_allowed_s
         fresh = self._fc_attitude is not None and t - self._fc_attitude <= FC_ATTITUDE_FRESH_S
         check = target_check(name, t, fields, t + allowed, fresh)
@@ -197,6 +206,7 @@ class ResponseAnalyzer:
                 axes = frozenset()  # zoom
             out += self._interrupt(t, name, axes)
             self._motion = (name, t)
+            self._last_target = check
         if check is not None:
             self._targets.append(check)
         if name in ("tracking", "tracking_stop"):
@@ -236,10 +246,16 @@ class ResponseAnalyzer:
             # A speed takes over both axes; zeros (a centred stick) leave targets alone.
             out += self._end_targets(t, "gimbal_control", BOTH)
         component = str(fields.get("component") or "gimbal")
-        start = self._sticks.command(t, component, pan, tilt)
+        start = self._sticks.command(t, component, pan, tilt, self._target_met())
         if start is not None:
             self._motion = ("gimbal_control", start)
         return out
+
+    def _target_met(self) -> bool:
+        """The last motion command was a target the latest feedback shows the gimbal at
+        (so it had nothing more to do for it)."""
+        check, last = self._last_target, self.samples.last
+        return check is not None and last is not None and check.met(last, self.settings)
 
     def _end_targets(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
         """A new motion command: earlier targets on its axes are judged as they stand."""
@@ -272,7 +288,8 @@ class ResponseAnalyzer:
         keep: list[TargetCheck] = []
         for check in self._targets:
             if check.finding is None and t > check.deadline + (0.0 if sample is not None else late):
-                self._judge_target(check, "", check.deadline)
+                cut = "" if sample is not None else self._cut(check.time, check.deadline)
+                self._judge_target(check, cut, check.deadline)
             if check.finding is not None and (
                 t - check.last_sent > RESEND_GAP_S or t - check.deadline > RESEND_HOLD_S
             ):
@@ -285,13 +302,22 @@ class ResponseAnalyzer:
             if sample is not None and sample.tracking == tracking.want and t > tracking.time:
                 out.append(self._judge_tracking(tracking, sample, ""))
             elif t > tracking.deadline + (0.0 if sample is not None else late):
-                out.append(self._judge_tracking(tracking, None, ""))
+                cut = "" if sample is not None else self._cut(tracking.time, tracking.deadline)
+                out.append(self._judge_tracking(tracking, None, cut))
             else:
                 still.append(tracking)
         self._tracking = still
         if self._sticks.active:
             out += self._sticks.settle(t, sample)
         return out
+
+    def _cut(self, since: float, until: float, *, ended: bool = False) -> str:
+        """What ended the feedback before ``until`` (for a command at ``since``), in words;
+        '' when the feedback reached ``until`` (``analyzer.analysis.findings.cut_words``)."""
+        last = self.samples.last
+        seen = last.time if last is not None else None
+        end = self.health.last if ended else None
+        return cut_words(since, until, seen, end, FEEDBACK_WAIT_S)
 
     def _between(self, start: float, end: float) -> list[Sample]:
         return self.samples.between(start, end)
@@ -326,12 +352,20 @@ class ResponseAnalyzer:
     # -- judgements -----------------------------------------------------------------------
 
     def _judge_target(self, check: TargetCheck, cut_short: str, end: float | None) -> None:
+        """Judge ``check`` on the feedback up to ``end`` (its deadline at most); a silence
+        that lost messages up to there cut it short as the end of the feedback would."""
         stop = check.deadline if end is None else min(end, check.deadline)
         settings = self.settings
+        seen = self._between(check.time, stop)
+        last = seen[-1].time if seen else check.time
+        if not cut_short and stop - last >= GAP_THRESHOLD_S:
+            cut_short = f"the feedback stopped {last - check.time:.1f} s after it"
+            if not seen:
+                cut_short = "the feedback stopped before it"
         check.finding = judge_target(
             check,
             self._before(check.time),
-            self._between(check.time, stop),
+            seen,
             settings.tolerance_deg,
             settings.time_allowed_s,
             cut_short,

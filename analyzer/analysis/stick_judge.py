@@ -2,24 +2,40 @@
 
 from __future__ import annotations
 
+import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from analyzer.analysis.findings import Finding
-from analyzer.analysis.rates import judge_cadence, judge_movement, judge_stop
+from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion
+from analyzer.analysis.rates import Cut, judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
-from analyzer.analysis.samples import Sample
-from analyzer.analysis.streams import Movement, Streams
+from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
+from analyzer.analysis.streams import HOLD_S, Movement, Streams
+from analyzer.analysis.targets import STILL_DEG
+from analyzer.tally import FEEDBACK_PERIOD_S
 
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
+STOP_LONGEST_S = 4.0  # or longer, while too few feedback messages came to tell
+# A whole message can come this late with no warning (its segments together): its time
+# may be this much later than it measured.
+UNSEEN_LATE_S = 0.3
+# The samples of this long before now are kept: whether the gimbal was still before a
+# movement (after another command) is seen in them.
+LOOKBACK_S = LAG_MAX_S + 2.0
 
 
 @dataclass
 class _StopCheck:
-    """After a movement the stick is centred: the gimbal is watched until ``until``."""
+    """After a movement the stick is centred: the gimbal is watched until ``until``
+    (sooner when ``cut`` by the stick or another command)."""
 
     movement: Movement
     until: float
+    cut: bool = False
 
 
 class StickJudge:
@@ -41,29 +57,60 @@ class StickJudge:
         streams = self.streams
         return bool(streams.open or streams.waiting or self._stops)
 
-    def command(self, t: float, component: str, pan: float, tilt: float) -> float | None:
+    def command(
+        self, t: float, component: str, pan: float, tilt: float, target_met: bool = False
+    ) -> float | None:
         """One gimbal_control; the first command of its movement when the stick is off
-        centre (the motion a limit finding would name), else None."""
+        centre (the motion a limit finding would name), else None. ``target_met``: the
+        last other motion command was a target the gimbal is at (nothing left to do)."""
         if pan != 0 or tilt != 0:
             for stop in self._stops:
                 if stop.movement.component == component:
-                    stop.until = min(stop.until, t)  # the stick moved again
+                    stop.until, stop.cut = min(stop.until, t), True  # the stick moved again
         self._stopped(self.streams.command(t, component, pan, tilt))
         stream = self.streams.open.get(component)
         if (pan != 0 or tilt != 0) and stream is not None and stream.movement is not None:
-            return stream.movement.start
+            movement = stream.movement
+            if movement.start == t and not self._free_before(movement, target_met):
+                movement.free_from = t
+            return movement.start
         return None
 
+    def _free_before(self, movement: Movement, target_met: bool) -> bool:
+        """Nothing the movement's commands do not tell was turning the gimbal when it
+        started: neither another motion command (but a target the gimbal is at), nor the
+        stream's own commands older than those it carries. So when no such command came,
+        when the stream's commands it carries took over a lag after the other one, or when
+        two feedback messages in a row since showed the gimbal still."""
+        other = None if target_met else movement.other_before
+        own = movement.own_before
+        if own is not None:
+            own += HOLD_S  # its speeds held on that long
+            reference = self._reference(movement.start)
+            if reference is not None and reference.time >= own + LAG_MAX_S:
+                own = None  # over before the message the fit starts from
+        since = max((t for t in (other, own) if t is not None), default=None)
+        if since is None:
+            return True
+        if (
+            other is not None
+            and own is None
+            and any(other <= c.time <= movement.start - LAG_MAX_S for c in movement.prior)
+        ):
+            return True
+        seen = [s for s in self.samples.between(since + LAG_MAX_S, movement.start) if not s.late]
+        return any(
+            all(abs(b.value(axis) - a.value(axis)) < STILL_DEG for axis in (PITCH, MOTOR_YAW))
+            for a, b in itertools.pairwise(seen)
+        )
+
     def interrupt(self, t: float, name: str) -> list[Finding]:
-        """Another motion command at ``t``: every stream ends, what waits is judged on
-        what came before it."""
+        """Another motion command at ``t``: every stream ends; what waits is judged once
+        its window, which reaches on by the longest lag, is over."""
         out: list[Finding] = []
-        self.streams.cut(t, f"{name} came")
-        for movement in self.streams.waiting:
-            out += self._judge_movement(movement, None)
-        self.streams.waiting = []
+        self.streams.cut(t, name)
         for stop in self._stops:
-            stop.until = min(stop.until, t)
+            stop.until, stop.cut = min(stop.until, t), True
             out += self._judge_stop(stop)
         self._stops = []
         return out
@@ -80,10 +127,10 @@ class StickJudge:
             for movement in streams.waiting:
                 end = movement.window_end
                 assert end is not None
-                if sample is not None and t >= end:
+                if sample is not None and not sample.late and t >= end:
                     out += self._judge_movement(movement, t)
-                elif t > end + self.late:
-                    out += self._judge_movement(movement, None)
+                elif t > end + self.late:  # no good message after the window
+                    out += self._judge_movement(movement, None, self._stopped_at(end))
                 else:
                     waiting.append(movement)
             streams.waiting = waiting
@@ -91,18 +138,28 @@ class StickJudge:
             watching: list[_StopCheck] = []
             for stop in self._stops:
                 if t > stop.until + late:
-                    out += self._judge_stop(stop)
+                    found = self._judge_stop(stop)
+                    out += found
+                    longest = stop.movement.stopped_at + STOP_GRACE_S + STOP_LONGEST_S
+                    if not found and not stop.cut and stop.until < longest:
+                        stop.until += FEEDBACK_PERIOD_S  # messages were lost: watch on
+                        watching.append(stop)
                 else:
                     watching.append(stop)
             self._stops = watching
         return out
 
-    def close(self) -> list[Finding]:
-        """The end of the input: every stream ends, everything is judged."""
+    def close(self, ended_at: float) -> list[Finding]:
+        """The end of the input (at ``ended_at``): every stream ends, everything is judged."""
         out: list[Finding] = []
         self._stopped(self.streams.end())
+        last = self.samples.last
         for movement in self.streams.waiting:
-            out += self._judge_movement(movement, None)
+            cut = Cut("the input ended", ended_at)
+            if last is None or last.time < max(ended_at - self.late, movement.start):
+                # the feedback had gone silent before: that is what cut it
+                cut = Cut("the feedback stopped", last.time if last is not None else ended_at)
+            out += self._judge_movement(movement, None, cut)
         self.streams.waiting = []
         for stop in self._stops:
             out += self._judge_stop(stop)
@@ -120,20 +177,70 @@ class StickJudge:
                 until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
                 self._stops.append(_StopCheck(movement, until))
 
-    def _judge_movement(self, movement: Movement, upto: float | None) -> list[Finding]:
+    def _judge_movement(
+        self, movement: Movement, upto: float | None, cut: Cut | None = None
+    ) -> list[Finding]:
         """A stick movement against the feedback up to ``upto`` (a sample's time at or
-        after its window's end; None: up to the window's end), and its stream's cadence."""
+        after its window's end; None: up to the window's end, which ``cut`` says the
+        feedback did not reach), and its stream's cadence."""
         end = movement.window_end
         assert end is not None
         last = end if upto is None or movement.cut_short else max(upto, end)
-        before = self.samples.before(movement.start)
+        before = self._reference(movement.start)
         inside = self.samples.between(movement.start, last)
-        rate = judge_movement(movement, before, inside, self.tolerance)
+        rate = judge_movement(
+            movement, before, inside, self.tolerance, free_from=movement.free_from, cut=cut
+        )
         cadence = judge_cadence(movement, rate.verdict)
         return [rate] if cadence is None else [rate, cadence]
 
+    def _stopped_at(self, end: float) -> Cut | None:
+        """Why no message came to close a window that ended at ``end``: the feedback
+        stopped (at its last message), or None when messages came but dated late."""
+        last = self.samples.last
+        if last is not None and last.time >= end:
+            return None
+        return Cut("the feedback stopped", last.time if last is not None else end)
+
+    def _reference(self, t: float) -> Sample | None:
+        """The last sample at or before ``t`` not dated late (one measured when dated)."""
+        for sample in reversed(self.samples.between(t - LOOKBACK_S, t)):
+            if not sample.late:
+                return sample
+        return self.samples.before(t)
+
     def _judge_stop(self, stop: _StopCheck) -> list[Finding]:
-        end = stop.movement.stopped_at
-        after = self.samples.between(end + STOP_GRACE_S, stop.until)
-        found = judge_stop("gimbal_control", end, after, self.tolerance)
+        """Still once the stick came back and its grace is over, beyond what the
+        movement's commands, followed as late as its fit found, still explain?"""
+        movement = stop.movement
+        end = movement.stopped_at
+        # A message dated late (its segments came far apart) measured earlier: left out.
+        after = [s for s in self.samples.between(end + STOP_GRACE_S, stop.until) if not s.late]
+        follows = _follows(movement)
+        if follows is not None and movement.followed is not None:
+            # What the fit explains is taken out: from the last message before the grace
+            # ends, when it was surely measured after the gimbal followed the stop.
+            reference = self.samples.before(end + STOP_GRACE_S)
+            after_stop = end + movement.followed[0] + UNSEEN_LATE_S
+            if reference is not None and reference.time >= after_stop and not reference.late:
+                after = [reference, *after]
+        found = judge_stop("gimbal_control", end, after, self.tolerance, follows)
         return [] if found is None else [found]
+
+
+def _follows(movement: Movement) -> Callable[[str, float], float] | None:
+    """The angle (per feedback axis, at a time) the movement's commands explain, followed
+    with the lag and ratios its fit found; None without a fit."""
+    if movement.followed is None:
+        return None
+    lag, ratios = movement.followed
+    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    index = {MOTOR_YAW: 0, PITCH: 1}
+
+    def follows(axis: str, t: float) -> float:
+        i = index[axis]
+        if i not in ratios:
+            return 0.0
+        return ratios[i] * float(motion.axis_at(np.array([t - lag]), i)[0])
+
+    return follows

@@ -6,10 +6,17 @@ every command. A movement is a stretch of the stream with the stick off centre; 
 with a command of 0, 0 (many ground stations keep sending zeros while the stick is
 centred), with a pause that ends the stream, or when another motion command takes over.
 Each movement is judged once (``analyzer.analysis.rates``), the stream's cadence once.
+
+A late gimbal's motion belongs to the movement that caused it, across every boundary:
+a movement carries the stream's commands from just before it (``prior``: the previous
+movement's end may still be turning the gimbal), takes the commands that follow it
+until it is judged, and when another motion command takes over, its feedback window
+reaches on by the longest lag (``free_until`` says when the other command came).
 """
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 
 from analyzer.analysis.motion_fit import LAG_MAX_S, Command
@@ -24,6 +31,7 @@ SLOW_REPEAT_S = 2 * RECOMMENDED_REPEAT_S  # a mean interval above this is too sl
 PAUSE_STOP_S = HOLD_S  # a silence longer than the hold inside a movement: it stopped there
 MAX_MOVEMENT_S = 60.0  # a stick held off centre longer is judged in pieces this long
 TAIL_S = HOLD_S + LAG_MAX_S  # the feedback is watched this long after a movement ends
+PRIOR_S = HOLD_S + LAG_MAX_S  # commands this long before a movement may still turn the gimbal
 
 
 @dataclass(eq=False)
@@ -46,6 +54,13 @@ class Movement:
     ended_by: str = ""  # "zeros", "pause", "a later command", "the input ended", "length"
     window_end: float | None = None  # the feedback is judged up to here
     cut_short: str = ""  # what ended the window early, if anything
+    prior: list[Command] = field(default_factory=list)  # the stream's just before it
+    other_before: float | None = None  # the last other motion command before it
+    other_name: str = ""  # and its name
+    own_before: float | None = None  # the stream's newest speed older than ``prior``
+    free_from: float | None = None  # only the stream turns the gimbal from here (None: before)
+    free_until: float | None = None  # another motion command took over here
+    followed: tuple[float, dict[int, float]] | None = None  # its fit: lag, ratio per axis
 
     def add(self, command: Command) -> None:
         """A command of the stream while the movement is open or awaits its judgement."""
@@ -70,12 +85,15 @@ class Movement:
             self.window_end = end + TAIL_S
 
     def cut(self, t: float, why: str) -> None:
-        """Another motion command at ``t``: nothing after it answers this movement."""
+        """Another motion command at ``t``: the gimbal answers it, not this movement, from
+        ``t`` plus its lag; the window reaches on by the longest lag."""
         if self.end is None:
             self.close(min(t, self.last + HOLD_S), why)
         assert self.window_end is not None
-        if t < self.window_end:
-            self.window_end, self.cut_short = t, why
+        if t + LAG_MAX_S < self.window_end:
+            self.window_end, self.cut_short = t + LAG_MAX_S, why
+        if self.free_until is None or t < self.free_until:
+            self.free_until = t
 
     @property
     def interval_mean(self) -> float | None:
@@ -89,10 +107,18 @@ class Movement:
         return self.last
 
     def too_slow(self) -> bool:
-        """Repeated too slowly to keep the gimbal moving: sent once, a mean interval over
-        twice the document's, or a pause the gimbal stops in."""
+        """Repeated too slowly to keep the gimbal moving: sent once and then nothing for
+        longer than a command holds (a stick nudged and centred at once, or a command
+        another one followed, is no cadence problem), a mean interval over twice the
+        document's, or a pause the gimbal stops in."""
         mean = self.interval_mean
-        return mean is None or mean > SLOW_REPEAT_S or self.interval_max > PAUSE_STOP_S
+        if mean is None:
+            if self.ended_by == "pause":
+                return True
+            return (
+                self.ended_by == "zeros" and self.end is not None and self.end - self.last > HOLD_S
+            )
+        return mean > SLOW_REPEAT_S or self.interval_max > PAUSE_STOP_S
 
 
 @dataclass(eq=False)
@@ -116,6 +142,10 @@ class Streams:
     def __init__(self) -> None:
         self.open: dict[str, StickStream] = {}
         self.waiting: list[Movement] = []  # closed, their window still open
+        self.other_at: float | None = None  # the last other motion command
+        self.other_name = ""
+        self.recent: dict[str, deque[Command]] = {}  # a component's commands of the last PRIOR_S
+        self.forgotten: dict[str, float] = {}  # the newest one off centre no longer kept
 
     def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
         """One gimbal_control; returns the movements it closed (their stop checks start)."""
@@ -129,6 +159,7 @@ class Streams:
             stream = self.open[component] = StickStream(component, t)
         else:
             stream.last = t
+        prior = self._remember(component, command)
         movement = stream.movement
         centred = pan == 0 and tilt == 0
         if movement is not None:
@@ -147,8 +178,22 @@ class Streams:
                 return closed
         if not centred:
             movement = stream.movement = Movement(component, t, stream)
+            movement.prior = prior
+            movement.other_before, movement.other_name = self.other_at, self.other_name
+            movement.own_before = self.forgotten.get(component)
             movement.add(command)
         return closed
+
+    def _remember(self, component: str, command: Command) -> list[Command]:
+        """Keep ``command`` among the component's recent ones; those before it."""
+        recent = self.recent.setdefault(component, deque())
+        while recent and recent[0].time < command.time - PRIOR_S:
+            old = recent.popleft()
+            if old.pan or old.tilt:
+                self.forgotten[component] = old.time
+        before = list(recent)
+        recent.append(command)
+        return before
 
     def end_quiet(self, t: float) -> list[Movement]:
         """End the streams whose last command is more than STREAM_GAP_S before ``t``."""
@@ -158,8 +203,11 @@ class Streams:
                 closed += self._end(component, None, "pause")
         return closed
 
-    def cut(self, t: float, why: str) -> list[Movement]:
-        """Another motion command at ``t``: every stream ends, every window stops at ``t``."""
+    def cut(self, t: float, name: str) -> list[Movement]:
+        """Another motion command ``name`` at ``t``: every stream ends, every window is
+        cut there."""
+        self.other_at, self.other_name = t, name
+        why = f"{name} came"
         closed: list[Movement] = []
         for component in list(self.open):
             closed += self._end(component, t, why)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from analyzer.analysis.findings import CHECK_TARGET, Finding, worst
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample
@@ -12,6 +12,13 @@ from analyzer.analysis.yaw_geometry import shortest_difference
 from analyzer.analysis.yaw_reference import YawCommand, choose_reference, wrong_frame
 
 LOOK_DOWN_DEG = -90.0
+
+
+class Tolerance(Protocol):
+    """The analysis' settings, as far as a target's tolerance goes."""
+
+    @property
+    def tolerance_deg(self) -> float: ...
 
 
 @dataclass
@@ -63,6 +70,18 @@ class TargetCheck:
             if abs(difference) > tolerance:
                 return False
         return True
+
+    def met(self, sample: Sample, settings: Tolerance) -> bool:
+        """``sample`` is within the tolerance of every target (a yaw one in either frame:
+        whichever it is judged in, it is met)."""
+        tolerance = settings.tolerance_deg
+        if self.yaw is not None:
+            target = self.yaw.target
+            return any(
+                abs(shortest_difference(target, sample.value(axis))) <= tolerance
+                for axis in (YAW, MOTOR_YAW)
+            )
+        return all(abs(goal.error(sample)) <= tolerance for goal in self.goals)
 
     def resent(self, t: float) -> None:
         """The same target sent again at ``t``."""

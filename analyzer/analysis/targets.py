@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN
+from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN, no_feedback_until
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, PITCH_LIMITS, Sample
 from analyzer.analysis.yaw_geometry import (
     angle_error,
@@ -78,7 +78,7 @@ def judge_axis(
     axis, target = goal.axis, goal.target
     if not samples:
         why = cut_short or f"within {allowed_s:g} s"
-        return AxisResult(goal, UNKNOWN, f"no attitude feedback came {_after(why)}")
+        return AxisResult(goal, UNKNOWN, no_feedback_until(why))
     start = before if before is not None else samples[0]
     start_value = start.value(axis)
     first_error = goal.error(start)
@@ -195,7 +195,3 @@ def _settled(travels: list[float], samples: list[Sample]) -> bool:
         if last_time - s.time >= SETTLED_S:
             return True
     return False
-
-
-def _after(why: str) -> str:
-    return why if why.startswith("within") else f"before {why}"

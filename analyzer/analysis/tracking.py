@@ -5,7 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.analysis.findings import CHECK_TRACKING, NOT_OBEYED, OBEYED, UNKNOWN, Finding
+from analyzer.analysis.findings import (
+    CHECK_TRACKING,
+    NOT_OBEYED,
+    OBEYED,
+    UNKNOWN,
+    Finding,
+    no_feedback_until,
+)
 from analyzer.analysis.samples import Sample
 
 
@@ -70,8 +77,8 @@ def judge_tracking(
         text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
         return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
     if not seen:
-        why = f"before {cut_short}" if cut_short else f"within {allowed_s:g} s"
-        text = f"no attitude feedback came {why}: the tracking flag could not be checked"
+        why = cut_short or f"within {allowed_s:g} s"
+        text = f"{no_feedback_until(why)}: the tracking flag could not be checked"
         return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
     extra["observed_at"] = seen[-1].time
     span = seen[-1].time - check.time

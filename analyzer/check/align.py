@@ -11,6 +11,7 @@ airframe's nose) or ``yaw`` (from north), each reached with one ``specified_angl
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -33,6 +34,7 @@ CENTRING: tuple[tuple[str, dict[str, Any]], ...] = (
 )
 CENTRE: Goals = ((PITCH, 0.0), (MOTOR_YAW, 0.0))
 MIN_SETTLE_WAIT_S = 1.5  # a move is not taken as over (the gimbal still) before this
+ATTEMPTS = 4  # the commands are sent this often at most, while the gimbal comes nearer
 LABELS = {PITCH: "pitch", MOTOR_YAW: "yaw motor", YAW: "yaw from north"}
 
 
@@ -150,16 +152,70 @@ def bring_to(
     tolerance_deg: float,
     timeout_s: float,
     clock: Clock = WALL_CLOCK,
+    attempts: int = ATTEMPTS,
+    max_turn_deg: float | None = None,
 ) -> Arrival:
     """Turn the gimbal to ``goals`` and wait until two feedback messages in a row show it
     within ``tolerance_deg`` of every goal: at most ``timeout_s`` after the commands, and
     no longer once it has stopped elsewhere (``stopped``).
 
     Sends nothing when the latest feedback (less than FRESH_S old) already shows it
-    there. Otherwise sends one ``specified_angle`` per goal; the Arrival's ``reason``
-    says what stood in the way: an angle no command can ask for or the motor cannot
-    reach, no feedback, or where the gimbal stopped instead.
+    there. Otherwise sends one ``specified_angle`` per goal, and again (``attempts`` in
+    all) while a gimbal that stopped short came nearer each time. A turn longer than
+    ``max_turn_deg`` is made in legs of equal length (the way the axis turns), each
+    waited for alike: so that each command asks for no more than the gimbal does within
+    the time a judgement of it allows. The Arrival's ``reason`` says what stood in the
+    way: an angle no command can ask for or the motor cannot reach, no feedback, or
+    where the gimbal stopped instead.
     """
+    samples = feedback.samples
+    ways = legs(goals, samples[-1] if samples else None, max_turn_deg)
+    arrival = Arrival(False, "", (), 0.0, None)
+    for way in ways:
+        leg = _arrive(sender, feedback, way, tolerance_deg, timeout_s, clock, attempts)
+        arrival = Arrival(
+            leg.reached,
+            leg.reason,
+            arrival.sent + leg.sent,
+            arrival.took_s + leg.took_s,
+            leg.sample,
+            leg.heard,
+        )
+        if not leg.reached:
+            break
+    return arrival
+
+
+def legs(goals: Goals, sample: Sample | None, max_turn_deg: float | None) -> list[Goals]:
+    """``goals`` and the goals on the way to them: a turn (along the way the axis turns)
+    longer than ``max_turn_deg`` in as many equal legs as it takes."""
+    if sample is None or not max_turn_deg:
+        return [goals]
+    turns = {axis: travel(axis, angle, sample) for axis, angle in goals}
+    count = max(math.ceil(abs(turn) / max_turn_deg - 1e-9) for turn in turns.values())
+    out: list[Goals] = []
+    for n in range(1, count):
+        share = n / count
+        way: list[tuple[str, float]] = []
+        for axis, turn in turns.items():
+            if axis == PITCH:
+                way.append((PITCH, round(sample.pitch + turn * share, 1)))
+            else:  # yaw either way: the motor turns
+                way.append((MOTOR_YAW, round(sample.motor_yaw + turn * share, 1)))
+        out.append(tuple(way))
+    return [*out, goals]
+
+
+def _arrive(
+    sender: Sender,
+    feedback: Feedback,
+    goals: Goals,
+    tolerance_deg: float,
+    timeout_s: float,
+    clock: Clock,
+    attempts: int,
+) -> Arrival:
+    """One leg of ``bring_to``."""
     began = clock.monotonic()
     samples = feedback.samples
     last = samples[-1] if samples else None
@@ -176,27 +232,46 @@ def bring_to(
             frames.append((command_words(name, params), encode_command(name, **params)))
         except EncodeError as exc:
             return Arrival(False, f"{describe(goals)} cannot be asked for: {exc}", (), 0.0, last)
-    sent = 0.0
-    for _, data in frames:
-        sent = sender.send(data)
-    said = tuple(text for text, _ in frames)
-
     axes = [axis for axis, _ in goals]
+    said: tuple[str, ...] = ()
+    seen: list[Sample] = []
+    for _ in range(attempts):
+        sent = 0.0
+        for _, data in frames:
+            sent = sender.send(data)
+        said += tuple(text for text, _ in frames)
+        begun = seen[-1] if seen else last
 
-    def after() -> list[Sample]:
-        return [s for s in feedback.samples if s.time > sent]
+        def after(since: float = sent) -> list[Sample]:
+            return [s for s in feedback.samples if s.time > since]
 
-    def over() -> bool:
+        def over(since: float = sent) -> bool:
+            seen = after(since)
+            return at_attitude(seen, goals, tolerance_deg) or stopped(
+                seen, axes, clock.time() - since
+            )
+
+        feedback.wait(over, clock.monotonic() + timeout_s)
         seen = after()
-        return at_attitude(seen, goals, tolerance_deg) or stopped(seen, axes, clock.time() - sent)
-
-    feedback.wait(over, clock.monotonic() + timeout_s)
-    seen = after()
+        if at_attitude(seen, goals, tolerance_deg):
+            return Arrival(True, "", said, clock.monotonic() - began, seen[-1])
+        if not seen or not _closer(goals, begun, seen[-1], tolerance_deg):
+            break  # no feedback, or it did not come nearer: asking again will not help
     took = clock.monotonic() - began
-    if at_attitude(seen, goals, tolerance_deg):
-        return Arrival(True, "", said, took, seen[-1])
     why = _why_not(goals, last, seen, took)
     return Arrival(False, why, said, took, seen[-1] if seen else last, bool(seen))
+
+
+def _closer(goals: Goals, before: Sample | None, now: Sample, tolerance: float) -> bool:
+    """``now`` is nearer every goal it is off than ``before`` by more than the tolerance
+    (a gimbal that stopped short on the way: asked again, it goes on)."""
+    if before is None:
+        return False
+    return all(
+        abs(angle_error(axis, angle, now)) <= tolerance
+        or abs(angle_error(axis, angle, before)) - abs(angle_error(axis, angle, now)) > tolerance
+        for axis, angle in goals
+    )
 
 
 def centre(

@@ -17,6 +17,7 @@ from analyzer.analysis.findings import (
     UNKNOWN,
     worst,
 )
+from analyzer.analysis.rates import LATE_S
 from analyzer.analysis.response import Settings
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample
 from analyzer.check.figures import (
@@ -87,9 +88,10 @@ class Evidence:
     findings: dict[int, list[dict[str, Any]]]  # index into ``judged`` -> its findings
 
 
-def required_check(action: Send | Hold) -> str:
-    """The check whose finding decides a judged action."""
-    return CHECK_RATE if isinstance(action, Hold) else action.check
+def required_checks(action: Send | Hold) -> tuple[str, ...]:
+    """The checks whose findings decide a judged action: a speed held, its rate and that
+    it stopped when the commands did."""
+    return (CHECK_RATE, CHECK_STOP) if isinstance(action, Hold) else (action.check,)
 
 
 def judge_feedback(evidence: Evidence) -> tuple[str, str, dict[str, Any]]:
@@ -132,27 +134,46 @@ def _move_axis(plan: Plan, findings: list[dict[str, Any]]) -> str:
     return plan.axis
 
 
-def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[str]]:
+@dataclass
+class Measured:
+    """A step's figures, how they miss the pass limits (``problems``), and those the
+    feedback did not allow to be measured (``unmeasured``)."""
+
+    figures: dict[str, Any] = field(default_factory=dict)
+    problems: list[str] = field(default_factory=list)
+    unmeasured: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # said, but no failure (a late start)
+
+
+def measure(evidence: Evidence, limits: Limits) -> Measured:
     """The figures of a step's judged commands, and how they miss the pass limits."""
     plan = evidence.plan
-    figures: dict[str, Any] = {}
+    measured = Measured()
+    figures = measured.figures
     tolerance = limits.settings.tolerance_deg
-    problems: list[str] = []
+    problems = measured.problems
     for number, (action, first, last) in enumerate(evidence.judged):
         found = evidence.findings.get(number, [])
-        during = [s for s in evidence.samples if first < s.time <= evidence.ended_at]
+        # A message dated late (its segments came far apart) measured earlier: left out.
+        samples = [s for s in evidence.samples if not s.late]
+        during = [s for s in samples if first < s.time <= evidence.ended_at]
         before = None
-        for s in evidence.samples:
+        for s in samples:
             if s.time <= first:
                 before = s
         if isinstance(action, Hold):
             axis = MOTOR_YAW if action.pan_dps else PITCH
             asked = action.pan_dps or action.tilt_dps
+            # The analysis' measured rate (its ratio of the speed asked, late motion and
+            # all); without its verdict, the slope of the feedback while the speed held.
+            key = f"measured_{'pan' if action.pan_dps else 'tilt'}_dps"
+            rates = [f[key] for f in found if isinstance(f.get(key), (int, float))]
             inside = [s for s in during if s.time <= last + 0.05]
-            rate = rate_figure(axis, ([before] if before else []) + inside, tolerance)
+            points = ([before] if before else []) + inside
+            rate = rates[0] if rates else rate_figure(axis, points, tolerance)
             figures["asked_dps"] = asked
             if rate is None:
-                problems.append("the rate could not be measured: too little feedback")
+                measured.unmeasured.append("the rate could not be measured: too little feedback")
             else:
                 figures["rate_dps"] = rate
                 off = abs(rate - asked) / abs(asked)
@@ -173,8 +194,10 @@ def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[st
             figures.update(move.as_dict())
             figures["axis"] = axis
             figures["target_deg"] = plan.target
+            if move.latency_s is not None and move.latency_s >= LATE_S:
+                measured.notes.append(f"it began to move about {move.latency_s:.1f} s late")
             if move.slew_dps is None:
-                problems.append(
+                measured.unmeasured.append(
                     "the slew rate could not be measured: fewer than 2 feedback samples in "
                     "the moving part"
                 )
@@ -183,44 +206,67 @@ def measure(evidence: Evidence, limits: Limits) -> tuple[dict[str, Any], list[st
                     f"moved at {move.slew_dps:.1f} deg/s, slower than the minimum "
                     f"{limits.min_slew_dps:g} deg/s"
                 )
-    return figures, problems
+    return measured
 
 
-def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
-    """Verdict, detail, figures and finding lines of a step that sends judged commands."""
-    figures, problems = measure(evidence, limits)
-    lines = [_finding_line(f) for fs in evidence.findings.values() for f in fs]
+def _pairs(evidence: Evidence) -> list[tuple[str, str]]:
+    """(verdict, detail) of every deciding finding; unknown for a judged command the
+    analysis gave no verdict on."""
+    pairs: list[tuple[str, str]] = []
+    for number, (action, _, _) in enumerate(evidence.judged):
+        found = [f for f in evidence.findings.get(number, []) if f.get("check") in JUDGED_CHECKS]
+        name = action.name if isinstance(action, Send) else "gimbal_control"
+        given = {f.get("check") for f in found}
+        if not set(required_checks(action)) <= given:
+            missing = ", ".join(c for c in required_checks(action) if c not in given)
+            pairs.append((UNKNOWN, f"{name}: the analysis gave no verdict ({missing})"))
+            continue
+        pairs += [(str(f.get("verdict")), str(f.get("detail"))) for f in found]
+    return pairs
+
+
+def undecided(evidence: Evidence, measured: Measured, pairs: list[tuple[str, str]]) -> str:
+    """Why the feedback did not allow the step to be judged ('' when it did): a judged
+    command the analysis found unknown, or a figure it could not measure; said as the
+    silence when the feedback stopped during the step."""
+    unknown = [d for v, d in pairs if v == UNKNOWN]
+    if not (unknown or measured.unmeasured):
+        return ""
     silence, since = longest_silence(
         evidence.feedback_times, evidence.started_at, evidence.ended_at
     )
     if silence > GAP_THRESHOLD_S:
         return (
-            FAIL,
             f"no feedback for {silence:.1f} s during the step (from {format_clock(since)}): "
-            "it cannot be judged",
-            figures,
-            lines,
+            "it cannot be judged"
         )
-    pairs: list[tuple[str, str]] = []  # (verdict, detail) of every deciding finding
-    for number, (action, _, _) in enumerate(evidence.judged):
-        found = [f for f in evidence.findings.get(number, []) if f.get("check") in JUDGED_CHECKS]
-        name = action.name if isinstance(action, Send) else "gimbal_control"
-        if not any(f.get("check") == required_check(action) for f in found):
-            pairs.append((UNKNOWN, f"{name}: the analysis gave no verdict"))
-            continue
-        pairs += [(str(f.get("verdict")), str(f.get("detail"))) for f in found]
+    text = "; ".join(unknown + measured.unmeasured)
+    if "no attitude feedback" in text or "no feedback" in text:
+        text = "no feedback: " + text
+    return text
+
+
+def judge_motion(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:
+    """Verdict, detail, figures and finding lines of a step that sends judged commands.
+
+    A step the gimbal did not obey fails with the analysis' words; one the feedback did
+    not allow to be judged fails as such (``undecided``: messages lost during it change
+    nothing when the verdicts and figures could be had)."""
+    measured = measure(evidence, limits)
+    figures, problems = measured.figures, measured.problems
+    lines = [_finding_line(f) for fs in evidence.findings.values() for f in fs]
+    pairs = _pairs(evidence)
     verdict = worst(*(v for v, _ in pairs)) if pairs else UNKNOWN
-    bad = [d for v, d in pairs if v != OBEYED]
+    bad = [d for v, d in pairs if v not in (OBEYED, UNKNOWN)]
     if verdict in (PARTIAL, NOT_OBEYED):
         return FAIL, "; ".join(bad + problems), figures, lines
-    if verdict == UNKNOWN:
-        text = "; ".join(bad)
-        if "no attitude feedback" in text or "no feedback" in text:
-            text = "no feedback: " + text
-        return FAIL, text, figures, lines
+    why = undecided(evidence, measured, pairs)
+    if why:
+        return FAIL, why, figures, lines
+    said = list(dict.fromkeys(d for _, d in pairs)) + measured.notes
     if problems:
-        return FAIL, "; ".join(problems + list(dict.fromkeys(d for _, d in pairs))), figures, lines
-    return PASS, "; ".join(dict.fromkeys(d for _, d in pairs)), figures, lines
+        return FAIL, "; ".join(problems + said), figures, lines
+    return PASS, "; ".join(said), figures, lines
 
 
 def judge(evidence: Evidence, limits: Limits) -> tuple[str, str, dict[str, Any], list[str]]:

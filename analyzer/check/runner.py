@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from analyzer.analysis.findings import OBEYED, UNKNOWN
 from analyzer.analysis.samples import Sample
 from analyzer.analysis.yaw_geometry import psi_offset
 from analyzer.check.align import (
@@ -19,15 +20,28 @@ from analyzer.check.align import (
     stopped,
     time_needed,
 )
-from analyzer.check.judge import Evidence, Limits, StepResult, judge, required_check
+from analyzer.check.figures import longest_silence
+from analyzer.check.judge import (
+    Evidence,
+    Limits,
+    StepResult,
+    judge,
+    measure,
+    required_checks,
+    undecided,
+)
 from analyzer.check.observer import Observer
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Plan, Send, Step
 from analyzer.protocol.check_fields import FAIL
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.response_fields import CHECK_PICTURE
 from analyzer.protocol.types import TOPIC_CHECK_STEPS, Event
+from analyzer.tally import GAP_THRESHOLD_S
 
 FIRST_FEEDBACK_WAIT_S = 2.0  # before the first step: wait this long for the gimbal to speak
+# A step the feedback did not allow to be judged (messages lost during it) is run again,
+# from its start, at most this many times in all.
+MAX_TRIES = 3
 AFTER_DEADLINE_S = 0.8  # a verdict comes with the first feedback after the time allowed
 # A verdict from the picture comes later: the camera's frames reach the recorder after the
 # telemetry, and a zoom is judged once it could have settled.
@@ -54,6 +68,7 @@ class _Running:
     ended_at: float = 0.0
     judged: list[tuple[Send | Hold, float, float]] = field(default_factory=list)
     failed: str = ""  # why the step failed before its judged commands (its start)
+    before: list[str] = field(default_factory=list)  # why the tries before it were not judged
 
 
 def encode(name: str, params: dict[str, Any]) -> bytes:
@@ -108,24 +123,66 @@ class CheckRunner:
                 "link and powered? The steps go on and fail as 'no feedback'"
             )
         for index, step in enumerate(steps, 1):
-            plan = step.plan(self.attitude(), self.options)
-            running = _Running(index, step, plan, clock.time())
-            running.failed = self._start(plan.start)
-            self._flush(force=False)  # an earlier step decided by the start's commands
-            running.started_at = clock.time()
-            for action in () if running.failed else plan.actions:
-                self._act(action, running)
-                self._flush(force=False)  # an earlier step decided by this action's command
-            running.ended_at = clock.time()
+            before: list[str] = []  # why the tries before could not be judged
+            while True:
+                running = self._try(index, step)
+                why = self._undecided(running) if len(before) + 1 < MAX_TRIES else ""
+                if not why:
+                    break
+                before.append(why)
+            running.before = before
             self._pending.append(running)
             self._flush(force=False)
         self.centre(wait=True)
         deadline = clock.monotonic() + self.allowed_s + AFTER_DEADLINE_S
-        if any(required_check(a) == CHECK_PICTURE for r in self._pending for a, _, _ in r.judged):
+        if any(CHECK_PICTURE in required_checks(a) for r in self._pending for a, _, _ in r.judged):
             deadline += PICTURE_WAIT_S
         self.observer.wait(self._all_decided, deadline)
         self._flush(force=True)
         return self.results
+
+    def _try(self, index: int, step: Step) -> _Running:
+        """One run of ``step``: to its start, then its actions."""
+        clock = self.clock
+        plan = step.plan(self.attitude(), self.options)
+        running = _Running(index, step, plan, clock.time())
+        running.failed = self._start(plan.start)
+        self._flush(force=False)  # an earlier step decided by the start's commands
+        running.started_at = clock.time()
+        for action in () if running.failed else plan.actions:
+            self._act(action, running)
+            self._flush(force=False)  # an earlier step decided by this action's command
+        running.ended_at = clock.time()
+        return running
+
+    def _undecided(self, running: _Running) -> str:
+        """Why feedback lost or damaged during the step did not allow it to be judged, as
+        far as can be told now ('' when it did, or nothing was lost: a gimbal that did not
+        obey is not run again). The findings of targets still to come count as they will
+        be: obeyed when the gimbal reached them."""
+        if running.failed:
+            return running.failed if running.failed.startswith("no feedback") else ""
+        if running.plan.skipped or not running.judged:
+            return ""
+        start, end = running.started_at, running.ended_at
+        heard = self.observer.feedback_in(start, end)
+        silence, _ = longest_silence(heard, start, end)
+        if silence <= GAP_THRESHOLD_S and not self.observer.damaged_in(start, end):
+            return ""
+        evidence = self._evidence(running)
+        pairs: list[tuple[str, str]] = []
+        for number, (action, first, _) in enumerate(running.judged):
+            found = evidence.findings[number]
+            name = action.name if isinstance(action, Send) else "gimbal_control"
+            if set(required_checks(action)) <= {f.get("check") for f in found}:
+                pairs += [(str(f.get("verdict")), str(f.get("detail"))) for f in found]
+            elif not (isinstance(action, Send) and action.goals):
+                pairs.append((UNKNOWN, name))
+            elif self._reached(action.goals, first):
+                pairs.append((OBEYED, ""))
+            elif longest_silence(heard, first, end)[0] > GAP_THRESHOLD_S:
+                pairs.append((UNKNOWN, name))  # where it went in the silence is not known
+        return undecided(evidence, measure(evidence, self.limits), pairs)
 
     def attitude(self) -> Attitude:
         sample = self.observer.latest()
@@ -149,7 +206,8 @@ class CheckRunner:
         """Bring the gimbal to a step's start: '' when it is there, else why it is not.
 
         It has the time a gimbal at the slowest slew that passes (--min-slew) needs for
-        the turn, and the time allowed on top."""
+        the turn, and the time allowed on top; a longer turn than such a gimbal makes in
+        the time allowed goes in legs (each command is judged by the analysis too)."""
         if not goals:
             return ""
         tolerance = self.limits.settings.tolerance_deg
@@ -161,6 +219,8 @@ class CheckRunner:
             tolerance_deg=tolerance,
             timeout_s=needed + self.allowed_s,
             clock=self.clock,
+            # what a gimbal at its slowest slew that passes turns in the time allowed
+            max_turn_deg=self.limits.min_slew_dps * self.allowed_s,
         )
         if arrival.reached:
             return ""
@@ -241,8 +301,8 @@ class CheckRunner:
             return False
         action, first, last = running.judged[number]
         name = action.name if isinstance(action, Send) else "gimbal_control"
-        wanted = required_check(action)
-        return any(f.get("check") == wanted for f in self.observer.findings_for(name, first, last))
+        given = {f.get("check") for f in self.observer.findings_for(name, first, last)}
+        return set(required_checks(action)) <= given
 
     def _all_decided(self) -> bool:
         return all(self._decided(r, n) for r in self._pending for n in range(len(r.judged)))
@@ -258,14 +318,15 @@ class CheckRunner:
             self._pending.pop(0)
             self._finish(running)
 
-    def _finish(self, running: _Running) -> None:
+    def _evidence(self, running: _Running) -> Evidence:
+        """What the step sent and the feedback showed, with the findings come so far."""
         observer = self.observer
         findings = {}
         for number, (action, first, last) in enumerate(running.judged):
             name = action.name if isinstance(action, Send) else "gimbal_control"
             findings[number] = observer.findings_for(name, first, last)
         start, end = running.started_at, running.ended_at
-        evidence = Evidence(
+        return Evidence(
             plan=running.plan,
             started_at=start,
             ended_at=end,
@@ -275,12 +336,22 @@ class CheckRunner:
             damaged=observer.damaged_in(start, end),
             findings=findings,
         )
+
+    def _finish(self, running: _Running) -> None:
+        start, end = running.started_at, running.ended_at
         figures: dict[str, Any] = {}
         lines: list[str] = []
         if running.failed:
             verdict, detail = FAIL, running.failed
         else:
-            verdict, detail, figures, lines = judge(evidence, self.limits)
+            verdict, detail, figures, lines = judge(self._evidence(running), self.limits)
+        if running.before:
+            tries = len(running.before) + 1
+            figures["tries"] = tries
+            detail += (
+                f"; on try {tries} of {MAX_TRIES}: the feedback did not allow a judgement "
+                f"before ({'; '.join(running.before)})"
+            )
         result = StepResult(
             running.step.name,
             verdict,

@@ -16,6 +16,8 @@ IMAGE_CENTRE = 4096  # tracking box centre: the middle of the 0..8191 image coor
 ZOOM_IN_S = 1.0
 ZOOM_BACK_S = 2.5  # zoom_1x: back to 1x and still a while before the gimbal moves on
 ZOOM_PITCH = -45.0  # the zoom step looks this far down
+MIXED_UP_REACH = 160.0  # a yaw target read in the wrong frame stays this far from the back
+GEODETIC_TURN = 150.0  # the yaw_geodetic step's turn of the motor
 
 
 @dataclass(frozen=True)
@@ -112,8 +114,10 @@ def _pitch(target: float) -> Send:
 # Where the steps start. Every step names the attitude (of the axes it moves) it starts
 # from, and the gimbal is brought there first: a step does the same from wherever the
 # gimbal was left.
-FORWARD_FROM: Goals = ((PITCH, -45.0), (MOTOR_YAW, 120.0))  # off centre: a move to measure
-LEVEL: Goals = ((PITCH, 0.0),)
+FORWARD_FROM: Goals = ((PITCH, -45.0), (MOTOR_YAW, 150.0))  # off centre: a move to measure
+# Moves of 135 deg and more: at 60 deg/s they pass four feedback messages on their way,
+# so the slew is measured even when one of them is lost and another is a ranging one.
+LOOKING_UP: Goals = ((PITCH, 45.0),)
 NOSE: Goals = ((MOTOR_YAW, 0.0),)
 
 
@@ -126,7 +130,7 @@ def _forward(now: Attitude, options: Options) -> Plan:
 def _pitch_angle(now: Attitude, options: Options) -> Plan:
     target = -90.0
     end = Attitude(target, now.motor_yaw, now.heading)
-    return Plan((_pitch(target),), end, PITCH, target, start=LEVEL)
+    return Plan((_pitch(target),), end, PITCH, target, start=LOOKING_UP)
 
 
 def _yaw_airframe(now: Attitude, options: Options) -> Plan:
@@ -137,10 +141,20 @@ def _yaw_airframe(now: Attitude, options: Options) -> Plan:
 
 
 def geodetic_target(start: Attitude) -> tuple[float, float]:
-    """(yaw from north to ask for, the motor angle that points there): 120 deg of travel
-    from where the motor is, toward the middle of its range, so it can always get there."""
-    motor = start.motor_yaw - 120.0 if start.motor_yaw >= -50.0 else start.motor_yaw + 120.0
-    motor = round(motor, 1)
+    """(yaw from north to ask for, the motor angle that points there): 150 deg of travel
+    from where the motor is, toward the middle of its range, so it can always get there.
+    From the nose, either way: the one whose angle from north, taken as an angle from the
+    nose (DATA4 mixed up), the motor could reach too, so that such a mix-up shows."""
+    ways = [-GEODETIC_TURN, GEODETIC_TURN]
+    if start.motor_yaw < -20.0:
+        ways.reverse()
+    if abs(start.motor_yaw) < 20.0:  # at the nose: either way stays in the range
+        for way in ways:
+            north = (start.heading + start.motor_yaw + way) % 360.0
+            if abs((north + 180.0) % 360.0 - 180.0) <= MIXED_UP_REACH:
+                ways = [way]
+                break
+    motor = round(start.motor_yaw + ways[0], 1)
     return round((start.heading + motor) % 360.0, 1), motor
 
 
@@ -177,7 +191,7 @@ def _tilt_speed(now: Attitude, options: Options) -> Plan:
 def _look_down(now: Attitude, options: Options) -> Plan:
     judged = Send("look_down", {}, ((PITCH, -90.0),), True, "target")
     end = Attitude(-90.0, now.motor_yaw, now.heading)
-    return Plan((judged,), end, PITCH, -90.0, start=LEVEL)
+    return Plan((judged,), end, PITCH, -90.0, start=LOOKING_UP)
 
 
 def _zoom(now: Attitude, options: Options) -> Plan:
@@ -219,17 +233,17 @@ def _feedback(now: Attitude, options: Options) -> Plan:
 
 STEPS: tuple[Step, ...] = (
     Step("feedback", "listen: feedback period, lost messages, CRC errors", _feedback),
-    Step("forward", "from pitch -45 / yaw motor 120 back to the centre (forward)", _forward),
-    Step("pitch_angle", "specified_angle pitch 0 -> -90", _pitch_angle),
+    Step("forward", "from pitch -45 / yaw motor 150 back to the centre (forward)", _forward),
+    Step("pitch_angle", "specified_angle pitch 45 -> -90", _pitch_angle),
     Step(
         "yaw_airframe",
         "specified_angle yaw motor 0 -> 150 from the nose (DATA4 = 1)",
         _yaw_airframe,
     ),
-    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> -120", _yaw_geodetic),
+    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> +-150", _yaw_geodetic),
     Step("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
     Step("tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed),
-    Step("look_down", "look_down: pitch 0 -> -90", _look_down),
+    Step("look_down", "look_down: pitch 45 -> -90", _look_down),
     Step("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
     Step("tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking),
 )

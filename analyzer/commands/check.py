@@ -37,16 +37,16 @@ specified_angle) and waits until the feedback shows it there, so a step does the
 same wherever the gimbal was left; a gimbal that cannot get there fails the step,
 with the reason:
   feedback      listen a few seconds: feedback period, lost messages, CRC errors
-  forward       [pitch -45, yaw motor 120] back to the centre with `forward`
-  pitch_angle   [pitch 0] specified_angle pitch -90
+  forward       [pitch -45, yaw motor 150] back to the centre with `forward`
+  pitch_angle   [pitch 45] specified_angle pitch -90
   yaw_airframe  [yaw motor 0] specified_angle yaw 150 deg from the nose (DATA4 = 1)
   yaw_geodetic  [yaw motor 0] specified_angle yaw from north: the aircraft's heading
                 is taken from the feedback (psi minus the motor's yaw), the target
-                is 120 deg of motor travel (the motor at -120)
+                is 150 deg of motor travel (the motor at -150 or 150)
   pan_speed     [yaw motor left of the nose] gimbal_control pan at --speed every 50 ms
                 for --speed-for, then 0: the turn is centred on the nose
   tilt_speed    [pitch above -25] the same on tilt, downward, centred on -25
-  look_down     [pitch 0] look_down: pitch to -90
+  look_down     [pitch 45] look_down: pitch to -90
   zoom          zoom in, stop, zoom 1x: the feedback does not report the zoom, so
                 with --video the step is judged from the camera's picture (the scale
                 measured, see docs/explanation/camera.md; [pitch -45]), without it
@@ -54,9 +54,12 @@ with the reason:
   tracking      tracking at the image centre (flag on), tracking_stop (flag off)
 A move passes when the analysis finds it obeyed and its measured slew rate is at
 least --min-slew; a speed step when the rate is within --speed-tolerance of the
-speed asked; a step during which the feedback stopped fails as "no feedback".
-Each step waits for the gimbal to settle, at most --time-allowed; to reach its start
-it has the time a turn at --min-slew takes, and --time-allowed on top.
+speed asked and the gimbal stopped when the commands did. A step the feedback did
+not allow to be judged (messages lost or damaged during it) is run again from its
+start, 3 times at most, then fails as "no feedback"; a lost message that changes
+nothing fails nothing. Each step waits for the gimbal to settle, at most
+--time-allowed; to reach its start it has the time a turn at --min-slew takes, and
+--time-allowed on top (asked again while it stops short of it and comes nearer).
 
 Safety: without --to nothing is sent (exit 2). Frames go to the one link given and
 nowhere else. At the end, on a failure and on Ctrl-C the gimbal is stopped (speeds

@@ -39,8 +39,8 @@ UI on a terminal (q quits), plain decoded lines otherwise or with --no-tui
 
 The simulator injects a few faults by default (dropped, corrupted, repeated and
 late feedback segments) so the diagnostics have something to show; --clean
-turns them off. --sluggish, --fall-short, --ignore, --drift, --lag and
---geodetic-as-airframe make a gimbal that does not always obey, for
+turns them off. --sluggish, --fall-short, --ignore, --drift, --lag,
+--wrong-way and --geodetic-as-airframe make a gimbal that does not always obey, for
 `gimbal-analyzer analyze` and `report` to find. --heading 30 keeps the
 aircraft's nose at 30 deg while it flies, so the gimbal's yaw from north
 (psi) is 30 deg more than its yaw motor angle. --stick makes the ground

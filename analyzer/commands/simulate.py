@@ -25,6 +25,7 @@ attitude feedback every 500 ms as four 8-byte segments with a correct CRC.
   gimbal-analyzer simulate --on tcp:2000 --drop 0.05 --corrupt 0.02 --seed 1
   gimbal-analyzer simulate --stop-feedback-at 10 --stop-feedback-for 3
   gimbal-analyzer simulate --sluggish 0.4 --ignore tracking --drift 2
+  gimbal-analyzer simulate --sluggish 0 --start-pitch -45 --start-yaw 120   frozen, off centre
   gimbal-analyzer simulate --heading 30 --geodetic-as-airframe
 
 Then, in another terminal, e.g.:
@@ -155,7 +156,7 @@ def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
         type=seconds_value,
         default=0.0,
         metavar="S",
-        help="keep turning S seconds after gimbal_control commands stop",
+        help="keep turning S seconds after gimbal_control commands stop or ask for 0, 0",
     )
     group.add_argument(
         "--lag",
@@ -163,6 +164,11 @@ def add_behaviour_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         metavar="S",
         help="act on every command S seconds after it came (e.g. 0.3)",
+    )
+    group.add_argument(
+        "--wrong-way",
+        action="store_true",
+        help="turn the other way for gimbal_control speeds (pan and tilt reversed)",
     )
     group.add_argument(
         "--geodetic-as-airframe",
@@ -187,6 +193,7 @@ def behaviour(args: argparse.Namespace) -> Behaviour:
         drift_s=args.drift,
         geodetic_as_airframe=args.geodetic_as_airframe,
         lag_s=args.lag,
+        wrong_way=args.wrong_way,
     )
 
 

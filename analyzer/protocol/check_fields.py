@@ -33,7 +33,12 @@ FIGURES: dict[str, tuple[str, str]] = {
         "speed of a move to an angle, deg/s, fitted to the feedback samples in the moving "
         "part (not the end points)",
     ),
-    "rate_dps": ("number", "speed-control steps: the rate measured from the feedback, deg/s"),
+    "rate_dps": (
+        "number",
+        "speed-control steps: the rate the gimbal turned at, deg/s: the response analysis' "
+        "(its measured share of the speed asked, late motion included), else fitted to the "
+        "feedback while the speed held",
+    ),
     "asked_dps": ("number", "speed-control steps: the speed the commands asked for, deg/s"),
     "overshoot_deg": ("number", "how far the angle went past the target, degrees"),
     "settle_s": (
@@ -48,6 +53,12 @@ FIGURES: dict[str, tuple[str, str]] = {
     "lost": ("integer", "feedback step: feedback messages missing from the 500 ms rhythm"),
     "crc_errors": ("integer", "feedback step: CRC errors and incomplete feedback messages"),
     "messages": ("integer", "feedback step: feedback messages received"),
+    "tries": (
+        "integer",
+        "how many times the step ran, when more than once: a step the feedback did not allow "
+        "to be judged (messages lost or damaged during it) is run again from its start, at "
+        "most 3 times",
+    ),
     "scale": (
         "number",
         "zoom step: the picture's scale after the zoom in over before it (> 1: zoomed in), "

@@ -1,4 +1,5 @@
-"""How the simulated gimbal disobeys: sluggish, short, ignoring, drifting, late, wrong yaw frame."""
+"""How the simulated gimbal disobeys: sluggish, short, ignoring, drifting, late, the wrong way,
+the wrong yaw frame."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ class Behaviour:
     drift_s: float = 0.0  # keeps turning this much longer after gimbal_control stops
     geodetic_as_airframe: bool = False  # takes geodetic yaw targets from the airframe's nose
     lag_s: float = 0.0  # acts on each command this much later than it came
+    wrong_way: bool = False  # turns the other way for gimbal_control speeds
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.speed <= 10.0:
@@ -32,7 +34,9 @@ class Behaviour:
 
     def describe(self) -> str:
         parts = []
-        if self.speed != 1.0:
+        if self.speed == 0.0:
+            parts.append("does not move at all (frozen)")
+        elif self.speed != 1.0:
             parts.append(f"moves at {self.speed * 100:g}% of the asked speed")
         if self.reach != 1.0:
             parts.append(f"stops {self.reach * 100:g}% of the way to a target")
@@ -44,4 +48,6 @@ class Behaviour:
             parts.append("takes geodetic yaw targets from the airframe's nose")
         if self.lag_s:
             parts.append(f"acts on each command {self.lag_s:g} s late")
+        if self.wrong_way:
+            parts.append("turns the other way for gimbal_control speeds")
         return "; ".join(parts) or "obeys"

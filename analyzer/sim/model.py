@@ -241,9 +241,16 @@ class GimbalModel:
         )
 
     def _gimbal_control(self, f: dict[str, Any], now: float) -> None:
-        self._pan_dps = float(f.get("pan_speed_dps", 0.0))
-        self._tilt_dps = float(f.get("tilt_speed_dps", 0.0))
-        self._speed_until = now + HOLD_S + self.behaviour.drift_s
+        way = -1.0 if self.behaviour.wrong_way else 1.0
+        pan = way * float(f.get("pan_speed_dps", 0.0))
+        tilt = way * float(f.get("tilt_speed_dps", 0.0))
+        drift = self.behaviour.drift_s
+        if pan == 0 and tilt == 0 and drift and self._speed_until > now:
+            # told to stop while turning: it turns on a while (however often it is told)
+            self._speed_until = min(self._speed_until, now + drift)
+        else:
+            self._pan_dps, self._tilt_dps = pan, tilt
+            self._speed_until = now + HOLD_S + drift
         self._pitch_target = self._yaw_target = self._yaw_geodetic = None
         self.control_mode = FULL_LOCK
 
