@@ -334,7 +334,7 @@ def test_two_check_recordings_are_compared_step_by_step(tmp_path: Path) -> None:
     by_step = {p["command"]: p for p in pairs}
     assert by_step["pitch_angle"]["verdict_b"] == "fail"
     assert "slew 60.0 | 24.0 deg/s: B is 40 % of A" in by_step["pitch_angle"]["why"]
-    assert "rate 19.6 | 7.8 deg/s: B is 40 % of A, outside 75-125 %" in by_step["pan_speed"]["why"]
+    assert "rate 20.0 | 8.0 deg/s: B is 40 % of A, outside 75-125 %" in by_step["pan_speed"]["why"]
     assert not by_step["tracking"]["differs"]
 
 
