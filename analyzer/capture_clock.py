@@ -19,6 +19,7 @@ from dataclasses import replace
 from operator import attrgetter
 from typing import Any
 
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import (
     BAD_FRAME,
     TOPIC_DIAGNOSTICS,
@@ -39,12 +40,16 @@ _TIME = attrgetter("time")
 def _time(item: Any) -> float:
     if type(item) is FrameRun:
         return min(item.time)
+    if type(item) is FrameColumns:
+        return float(item.time.min())
     return float(item.time)
 
 
 def _latest(item: Any) -> float:
     if type(item) is FrameRun:
         return max(item.time)
+    if type(item) is FrameColumns:
+        return float(item.time.max())
     return float(item.time)
 
 
@@ -90,7 +95,8 @@ class CaptureClock:
             return self._start(chunk)
         if not chunk:
             return chunk
-        if FrameRun in set(map(type, chunk)):
+        kinds = set(map(type, chunk))
+        if FrameRun in kinds or FrameColumns in kinds:
             earliest = min(_time(item) for item in chunk)
             latest = max(_latest(item) for item in chunk)
         else:
@@ -109,6 +115,8 @@ class CaptureClock:
         for item in chunk:
             if type(item) is FrameRun:
                 times += item.time
+            elif type(item) is FrameColumns:
+                times += item.time.tolist()
             elif _timed(item):
                 times.append(float(item.time))
         if not times:
@@ -130,6 +138,9 @@ class CaptureClock:
             if type(item) is FrameRun and self._too_early(min(item.time)):
                 for frame in item.frames():
                     out.append(self._checked(frame))
+                continue
+            if type(item) is FrameColumns and self._too_early(_time(item)):
+                out += [self._checked(frame) for frame in item.frames()]
                 continue
             out.append(self._checked(item))
         return out

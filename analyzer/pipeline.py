@@ -22,11 +22,13 @@ from typing import Any, Protocol, runtime_checkable
 
 from analyzer.capture_clock import CaptureClock
 from analyzer.progress import Progress
+from analyzer.protocol.event_columns import ColumnSlots, EventColumns
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
 from analyzer.tally import Tally
 
 RawItem = CanFrame | StreamChunk
-Item = CanFrame | StreamChunk | Event | FrameRun  # what readers and sources deliver
+Item = CanFrame | StreamChunk | Event | FrameRun | FrameColumns  # what readers deliver
 
 BATCH_ITEMS = 2000  # file commands hand a batch to the sinks after this many items
 
@@ -44,13 +46,38 @@ class Batch:
     items: list[RawItem] = field(default_factory=list)
     events: list[Event] = field(default_factory=list)
     wall_time: float = 0.0
-    # Frames read as runs (only when no sink keeps raw items): counted, never in ``items``.
-    runs: list[FrameRun] = field(default_factory=list)
+    # Frames read as runs or columns (only when no sink keeps raw items): counted, never
+    # in ``items``.
+    runs: list[FrameRun | FrameColumns] = field(default_factory=list)
+    # The events of blocks decoded in vectors, not yet made into Events, each with its
+    # place in ``events`` (``materialize`` puts them there; see ``segments``).
+    columns: ColumnSlots = field(default_factory=list)
     # The pipeline's counters once this batch is counted, and how many batches it
     # delivered before this one: a sink that got every batch from the first may take the
     # counters as its own instead of counting each batch a second time.
     counted: Tally | None = None
     sequence: int = 0
+
+    def segments(self) -> Iterator[list[Event] | EventColumns]:
+        """The events in order: lists of Events and blocks of column events between them."""
+        start = 0
+        for place, block in self.columns:
+            if place > start:
+                yield self.events[start:place]
+            yield block
+            start = place
+        if start < len(self.events):
+            yield self.events[start:]
+
+    def materialize(self) -> list[Event]:
+        """Make every column event an Event, in its place in ``events``; returns them."""
+        if self.columns:
+            events: list[Event] = []
+            for segment in self.segments():
+                events += segment if isinstance(segment, list) else segment.events()
+            self.events[:] = events
+            self.columns.clear()
+        return self.events
 
 
 class Sink(Protocol):
@@ -58,6 +85,9 @@ class Sink(Protocol):
 
     A sink that never looks at ``Batch.items`` says so with a ``keeps_items = False``
     attribute; then a file reader may hand on frames as runs nobody builds one by one.
+    A sink that reads the events through ``Batch.segments`` says so with
+    ``takes_columns = True``: the events of blocks decoded in vectors then reach it as
+    columns; every other sink gets them as Events (``Batch.materialize``).
     """
 
     def handle(self, batch: Batch) -> None: ...
@@ -85,7 +115,11 @@ class Decoding(Protocol):
     def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
 
     def feed_batch(
-        self, items: Iterable[object], raw: list[RawItem], events: list[Event]
+        self,
+        items: Iterable[object],
+        raw: list[RawItem],
+        events: list[Event],
+        columns: ColumnSlots | None = None,
     ) -> None: ...
 
     def tick(self, now: float) -> list[Event]: ...
@@ -150,9 +184,9 @@ class Pipeline:
     def feed(self, items: Iterable[Item]) -> None:
         """Decode items into the open batch; ready-made events go in as they are."""
         batch = self.batch
-        self.decoder.feed_batch(items, batch.items, batch.events)
+        self.decoder.feed_batch(items, batch.items, batch.events, batch.columns)
         if self.frame_runs:
-            batch.runs.extend([i for i in items if isinstance(i, FrameRun)])
+            batch.runs.extend([i for i in items if isinstance(i, (FrameRun, FrameColumns))])
 
     @property
     def keeps_items(self) -> bool:
@@ -183,6 +217,10 @@ class Pipeline:
         batch.wall_time = wall_time
         batch.counted, batch.sequence = self.tally, self.delivered
         self.delivered += 1
+        if batch.columns and (
+            self.stages or not all(getattr(s, "takes_columns", False) for s in self.sinks)
+        ):
+            batch.materialize()
         events = batch.events
         for stage in self.stages:
             extra = stage.process(events)
@@ -193,7 +231,14 @@ class Pipeline:
         with self.lock:
             self.tally.add_items(batch.items)
             self.tally.add_runs(batch.runs)
-            self.tally.add_events(events)
+            if batch.columns:
+                for segment in batch.segments():
+                    if isinstance(segment, list):
+                        self.tally.add_events(segment)
+                    else:
+                        self.tally.add_columns(segment)
+            else:
+                self.tally.add_events(events)
         failed = {id(f.sink) for f in self.failures}
         for sink in self.sinks:
             if id(sink) in failed:
@@ -290,6 +335,8 @@ def delivered_batches(
     """
     if not pipeline.keeps_items and hasattr(items, "frame_runs"):
         items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
+        if hasattr(pipeline.decoder, "keep_column_frames"):
+            pipeline.decoder.keep_column_frames = False
     if isinstance(items, BatchedItems):
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:

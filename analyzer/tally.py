@@ -18,6 +18,8 @@ from operator import attrgetter, itemgetter
 from typing import Any
 
 from analyzer.bus_figures import BusFigures
+from analyzer.protocol.event_columns import EventColumns
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import (
     BUS_ERROR,
@@ -87,7 +89,8 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
-_PLACE_EXTENDED = itemgetter(2)  # of a FrameRun's (channel, CAN ID, extended)
+_PLACE_EXTENDED = itemgetter(2)
+_FIRST = itemgetter(0)  # of a FrameRun's (channel, CAN ID, extended)
 
 
 @dataclass
@@ -233,11 +236,14 @@ class Tally:
         times = list(map(_TIME, items))
         self.widen(min(times), max(times))
 
-    def add_runs(self, runs: Iterable[FrameRun]) -> None:
+    def add_runs(self, runs: Iterable[FrameRun | FrameColumns]) -> None:
         """Count runs of plain CAN frames as ``add_items`` counts the same frames."""
         for run in runs:
             frames = len(run)
             if not frames:
+                continue
+            if isinstance(run, FrameColumns):
+                self._add_columns(run)
                 continue
             size = sum(map(len, run.data))
             bits = CAN_BITS_STANDARD * frames + 8 * size
@@ -247,6 +253,46 @@ class Tally:
             self.bytes += size
             self.bits += bits
             self.widen(min(run.time), max(run.time))
+
+    def add_columns(self, block: EventColumns) -> None:
+        """Count the events of a block decoded in vectors as ``add_events`` counts them
+        (its groups have no warnings and no feedback: counted by topic and command)."""
+        firsts = [(int(g.rows[0]), str(g.name)) for g in block.groups if g.topic == TOPIC_COMMAND]
+        if firsts:  # new names in the order they first came, as one by one
+            firsts += [
+                (row, str(e.fields.get("name", "unknown")))
+                for row, e in zip(block.single_rows, block.singles, strict=True)
+                if e.topic == TOPIC_COMMAND
+            ]
+            for _, name in sorted(firsts, key=_FIRST):
+                if name not in self.commands:
+                    self.commands[name] = 0
+        for group in block.groups:
+            n = len(group)
+            self.events += n
+            self.topics[group.topic] += n
+            if group.topic == TOPIC_COMMAND:
+                self.commands[str(group.name)] += n
+            self.widen(float(group.times.min()), float(group.times.max()))
+        if block.singles:
+            self.add_events(
+                [
+                    e
+                    for _, e in sorted(
+                        zip(block.single_rows, block.singles, strict=True), key=_FIRST
+                    )
+                ]
+            )
+
+    def _add_columns(self, run: FrameColumns) -> None:
+        frames = len(run)
+        size = int(run.length.sum())
+        extended = int(run.extended.sum())
+        self.frames += frames
+        self.bytes += size
+        self.bits += CAN_BITS_STANDARD * frames + 8 * size
+        self.bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+        self.widen(float(run.time.min()), float(run.time.max()))
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.
@@ -275,7 +321,7 @@ class Tally:
         if TOPIC_COMMAND in present:
             names = [e.fields.get("name", "unknown") for e in events if e.topic == TOPIC_COMMAND]
             commands = self.commands
-            for name in set(names):
+            for name in dict.fromkeys(names):  # in the order they came: ties stay put
                 commands[str(name)] += names.count(name)
         if TOPIC_DIAGNOSTICS in present:
             kinds = [

@@ -6,6 +6,8 @@ from collections.abc import Iterable
 from typing import Any, Protocol
 
 from analyzer.protocol.command_decoders import COMMAND_DECODERS
+from analyzer.protocol.event_columns import ColumnSlots
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
 from analyzer.protocol.reassembly import FeedbackReassembler, Message
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, Event, FrameRun, StreamChunk
@@ -22,6 +24,7 @@ class BatchDecoder(Protocol):
     frames: int
     protocol_frames: int
     last_time: float
+    keep_column_frames: bool
     _recent: FeedbackReassembler | None
     _recent_source: str | None
     _given_up: list[Event]
@@ -44,9 +47,15 @@ def feed_batch(
     items: Iterable[object],
     raw: list[CanFrame | StreamChunk],
     events: list[Event],
+    columns: ColumnSlots | None = None,
 ) -> None:
     """Decode a batch in order: frames and chunks go to ``raw``, what they give to
     ``events``; ready-made events (diagnostics of a reader) go to ``events`` as they are.
+
+    A block of frames as columns (``FrameColumns``) is decoded in vectors
+    (``vector_decode``); its events go to ``columns`` with their place in ``events``
+    (made into Events at once when ``columns`` is None), its frames to ``raw`` only when
+    the decoder's ``keep_column_frames`` says so.
 
     The usual frame of a protocol ID (extended, no flags; 8 bytes of a command whose
     decoder was made or of a status frame) is decoded right here; any other goes
@@ -114,7 +123,15 @@ def feed_batch(
             events.extend(decoder._can_any(frame, frame.channel or "can", NO_EXTRA))
         else:
             mixed = True
-            if type(item) is FrameRun:
+            if type(item) is FrameColumns:
+                from analyzer.protocol.vector_decode import decode_columns
+
+                decoded = decode_columns(decoder, item)  # type: ignore[arg-type]
+                if columns is None:
+                    events.extend(decoded.events())
+                else:
+                    columns.append((len(events), decoded))
+            elif type(item) is FrameRun:
                 feed_run(decoder, item, events)
             elif type(item) is StreamChunk:
                 events.extend(decoder.feed_stream(item))
@@ -123,6 +140,13 @@ def feed_batch(
     if mixed:
         raw_items = [i for i in items if type(i) is CanFrame or type(i) is StreamChunk]
         frames = sum(1 for i in raw_items if type(i) is CanFrame)
+        if decoder.keep_column_frames and any(type(i) is FrameColumns for i in items):
+            raw_items = []
+            for i in items:
+                if type(i) is CanFrame or type(i) is StreamChunk:
+                    raw_items.append(i)
+                elif type(i) is FrameColumns:
+                    raw_items.extend(i.frames())
     else:
         raw_items, frames = items, len(items)  # type: ignore[assignment]
     raw.extend(raw_items)
@@ -136,6 +160,8 @@ def feed_batch(
         for item in reversed(items):
             if type(item) is FrameRun and len(item):
                 decoder.last_time = item.time[-1]
+            if type(item) is FrameColumns and len(item):
+                decoder.last_time = float(item.time[-1])
             if type(item) is not Event:
                 break
 

@@ -74,6 +74,8 @@ class Decoder:
         self.other_frames = 0
         self.chunks = 0
         self.last_time = 0.0
+        # Frames that come as columns go to the batch's raw items too (a sink keeps them).
+        self.keep_column_frames = True
 
     # -- input ---------------------------------------------------------------------------------
 

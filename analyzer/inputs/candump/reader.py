@@ -61,6 +61,8 @@ class CandumpParser(CandumpLineParser):
         self._mixed = False  # the last block had lines for the line parser
         self.frame_runs = False  # hand on the scanned frames as FrameRuns
         self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
+        # Read blocks as arrays (``columns``); else with the scan pattern, frame by frame.
+        self.columnar = False
 
     # -- the block scan --------------------------------------------------------------------
 
@@ -96,6 +98,8 @@ class CandumpParser(CandumpLineParser):
         scan = self._scan
         if scan is None:
             out = self._parse_lines(block)
+        elif self.columnar:
+            out = self._parse_columns(block)
         elif self._mixed:
             out = self._parse_matches(block, scan)
         else:
@@ -150,6 +154,13 @@ class CandumpParser(CandumpLineParser):
         self._mixed = mixed
         return out
 
+    def _parse_columns(self, block: bytes) -> list[InputItem]:
+        """The block read as arrays (``columns``): runs of plain frame lines become
+        FrameColumns, every other line goes to the line parser, in its place."""
+        from analyzer.inputs.candump.column_runs import parse_columns
+
+        return parse_columns(self, block)
+
     def _count_scanned(self, block: bytes, mark: int, pos: int, taken: int) -> None:
         """Account for the lines the scan took between ``mark`` and ``pos``, ``taken`` of
         them wanted frames (handed on) and the rest skipped frames."""
@@ -193,6 +204,7 @@ class CandumpReader(InputReader):
         raw = self._raw
         problems = self.problems
         parser.frame_runs = self.frame_runs
+        parser.columnar = self.columnar
         reported = 0
         for block in line_blocks(self._blocks, self.block_size):
             items = parser.parse_block(block)
@@ -201,7 +213,7 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 items.append(self._damage(problems[reported]))
                 reported += 1
-            if self.frame_runs and items:
+            if (self.frame_runs or self.columnar) and items:
                 yield from by_frames(items, size)
             elif len(items) <= size:
                 yield items  # also when empty: the caller's progress moves on

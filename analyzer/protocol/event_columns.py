@@ -1,0 +1,146 @@
+"""The events of a block of frames, kept as columns until someone needs them one by one.
+
+The columnar decoder (``vector_decode``) gives, for each layout it decoded in vectors
+(a command, a status frame), a ``EventGroup``: the rows it came from, times, sources
+and each field's values as lists. Everything decoded one at a time (feedback messages,
+frames with a warning, text, other devices) is a list of ready ``Event`` objects with
+their rows. ``EventColumns`` keeps both: ``events()`` makes the Events in frame order
+(what every sink would have got), ``json_lines()`` writes what ``decode --json`` prints
+for each of them without making them, and the counters take the groups as counts.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from itertools import repeat
+from typing import Any
+
+from analyzer.protocol.types import Event
+
+# Where blocks' events stand among a batch's other events: (the index in the batch's
+# event list before which they come, the block's events).
+ColumnSlots = list[tuple[int, "EventColumns"]]
+
+
+@dataclass(slots=True)
+class EventGroup:
+    """Events of one layout, one per row, none with a warning.
+
+    ``rows`` and ``times`` are arrays; ``values`` makes each field's values (lists, by
+    key) when the events are wanted one by one; ``constants`` are the keys whose value
+    is the same in every event."""
+
+    topic: str
+    rows: Any
+    times: Any
+    sources: list[str]
+    keys: tuple[str, ...]
+    constants: dict[str, Any]
+    values: Callable[[], dict[str, list[Any]]]
+    name: str | None = None  # the command's name (commands only)
+
+    def __len__(self) -> int:
+        return int(self.rows.shape[0])
+
+    def events(self) -> list[Event]:
+        keys = self.keys
+        constants, values = self.constants, self.values()
+        columns = [repeat(constants[k]) if k in constants else values[k] for k in keys]
+        topic = self.topic
+        return [
+            Event(topic, time, source, dict(zip(keys, row, strict=False)), [])
+            for time, source, row in zip(
+                self.times.tolist(), self.sources, zip(*columns), strict=False
+            )
+        ]
+
+    def json_lines(self) -> list[str]:
+        """What ``json.dumps(event.to_dict(), default=str)`` gives for each event."""
+        parts = [f'{{"topic": {_dumps(self.topic)}, "time": %s, "source": %s, "warnings": []']
+        sources = self.sources
+        unique = set(sources)
+        if len(unique) == 1:
+            text = _dumps(sources[0])
+            source_column = [text] * len(sources)
+        else:
+            texts = {s: _dumps(s) for s in unique}
+            source_column = [texts[s] for s in sources]
+        columns: list[list[str]] = [list(map(float.__repr__, self.times.tolist())), source_column]
+        values = self.values()
+        for key in self.keys:
+            name = _dumps(key)
+            if key in self.constants:
+                parts.append(f"{name}: {_percent(_dumps(self.constants[key]))}")
+                continue
+            parts.append(f"{name}: %s")
+            columns.append(_json_column(values[key]))
+        template = ", ".join(parts) + "}"
+        return [template % row for row in zip(*columns, strict=True)]
+
+
+def _json_column(values: list[Any]) -> list[str]:
+    if not values:
+        return []
+    first = values[0]
+    if isinstance(first, bool):
+        return ["true" if v else "false" for v in values]
+    if isinstance(first, int):
+        return list(map(int.__repr__, values))
+    if isinstance(first, float):  # finite: json writes float.__repr__
+        return list(map(float.__repr__, values))
+    return [_dumps(v) for v in values]
+
+
+def _dumps(value: Any) -> str:
+    return json.dumps(value, default=str)
+
+
+def _percent(text: str) -> str:
+    return text.replace("%", "%%")
+
+
+@dataclass(slots=True)
+class EventColumns:
+    """The events of one block of frames: groups decoded in vectors and single events,
+    each at the row of the frame that gave it."""
+
+    groups: list[EventGroup] = field(default_factory=list)
+    single_rows: list[int] = field(default_factory=list)
+    singles: list[Event] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return sum(map(len, self.groups)) + len(self.singles)
+
+    def add(self, row: int, events: list[Event]) -> None:
+        """Events decoded one by one from the frame at ``row``."""
+        if events:
+            self.single_rows.extend([row] * len(events))
+            self.singles.extend(events)
+
+    def _ordered(self, make: Callable[[EventGroup], list[Any]], singles: list[Any]) -> list[Any]:
+        if not self.groups:
+            return singles
+        rows: list[int] = []
+        items: list[Any] = []
+        for group in self.groups:
+            rows += group.rows.tolist()
+            items += make(group)
+        rows += self.single_rows
+        items += singles
+        import numpy as np
+
+        order = np.argsort(np.array(rows, np.int64), kind="stable").tolist()
+        return [items[i] for i in order]
+
+    def events(self) -> list[Event]:
+        """Every event, in the order of the frames that gave them."""
+        return self._ordered(EventGroup.events, self.singles)
+
+    def json_lines(self, wanted: Callable[[Event], bool] | None = None) -> list[str]:
+        """The ``decode --json`` line of every event (that ``wanted`` takes), in order."""
+        if wanted is not None:
+            return [_dumps(e.to_dict()) for e in self.events() if wanted(e)]
+        singles = [_dumps(e.to_dict()) for e in self.singles]
+        return self._ordered(EventGroup.json_lines, singles)
