@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -124,6 +125,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; every failure ends as one line on stderr and an exit code from
     the table in ``analyzer.errors`` (no tracebacks for the user's mistakes or the OS's)."""
+    # numpy's OpenBLAS starts a thread per core when numpy is imported; no command does
+    # matrix algebra big enough to gain from them, and starting them costs every run.
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     with guarded_stdout(), sigterm_as_interrupt():
         name = "gimbal-analyzer"
         try:

@@ -52,7 +52,7 @@ class EventGroup:
         return [
             Event(topic, time, source, dict(zip(keys, row, strict=False)), [])
             for time, source, row in zip(
-                self.times.tolist(), self.sources, zip(*columns), strict=False
+                self.times.tolist(), self.sources, zip(*columns, strict=False), strict=False
             )
         ]
 

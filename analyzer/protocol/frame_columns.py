@@ -88,7 +88,7 @@ class FrameColumns:
             for i in range(len(times))
         ]
 
-    def take(self, rows: Array) -> FrameColumns:
+    def take(self, rows: Array | slice) -> FrameColumns:
         """The frames at ``rows`` (a slice, index array or mask), as columns."""
         return FrameColumns(
             self.time[rows],

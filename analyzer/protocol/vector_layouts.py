@@ -150,7 +150,7 @@ def _command_layout(row: Command, fields: Sequence[Field]) -> VectorLayout:
     return VectorLayout(TOPIC_COMMAND, keys, constants, tuple(fields), unused, row.name)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def command_layouts(key: int) -> dict[int | None, VectorLayout] | None:
     """The layouts of the command ``S_ID << 8 | CMD``: by selector value (None: the one
     layout of a command without selector); None for a command the table does not have,
@@ -167,7 +167,7 @@ def command_layouts(key: int) -> dict[int | None, VectorLayout] | None:
     }
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def status_layout(can_id: int) -> VectorLayout:
     """The layout of a UAV status frame of 8 data bytes."""
     status = STATUS_FRAMES[can_id]

@@ -76,6 +76,7 @@ def read_lines(block: bytes, channel_name: Any) -> LineTable:
     key = ((lengths * WIDTH + c) * WIDTH + h) * 4 + long_id * 2 + direction
     frames = _blank(n)
     fast = np.zeros(n, bool)
+    lines = Lines(block, starts, lengths + 1)
     todo = np.flatnonzero(ok)
     keys = key[todo]
     shapes = 0
@@ -86,9 +87,8 @@ def read_lines(block: bytes, channel_name: Any) -> LineTable:
         shapes += 1
         i = int(rows[0])
         _read_shape(
-            buf,
+            lines,
             rows,
-            starts[rows],
             int(lengths[i]),
             int(c[i]),
             int(h[i]),
@@ -125,9 +125,8 @@ def _blank(n: int) -> FrameColumns:
 
 
 def _read_shape(
-    buf: Array,
+    lines: Lines,
     rows: Array,
-    starts: Array,
     length: int,
     close: int,
     hash_at: int,
@@ -137,90 +136,192 @@ def _read_shape(
     fast: Array,
     channel_name: Any,
 ) -> None:
-    """Check and read the lines at ``rows`` that all have one shape."""
+    """Check and read the lines at ``rows`` that all have one shape, 8 bytes at a time
+    (each 8-byte word of a line as one uint64: SWAR, SIMD within a register)."""
     data_end = length - 2 if direction else length
     digits = data_end - hash_at - 1
     point = close - 7  # six digits after the point
     space = hash_at - id_digits - 1  # between channel and ID
-    stamp_digits = close - 2
-    if digits % 2 or digits > 16 or point < 2 or stamp_digits > MAX_STAMP_DIGITS:
+    whole = point - 1  # digits before the point
+    if digits % 2 or digits > 16 or whole < 1 or close - 2 > MAX_STAMP_DIGITS:
         return
     if space <= close + 2:  # no channel name
         return
-    lines = _lines(buf, rows, starts, length)
-    good = _digits(lines[:, 1:point]) & _digits(lines[:, point + 1 : close])
-    good &= lines[:, point] == 46
-    good &= (lines[:, close + 1] == 32) & (lines[:, space] == 32)
-    good &= (lines[:, close + 2 : space] > 32).all(axis=1)
-    good &= _hex(lines[:, space + 1 : hash_at]) & _hex(lines[:, hash_at + 1 : data_end])
+    at = lines.at(rows)
+    good = (at.byte(point) == 46) & (at.byte(close + 1) == 32) & (at.byte(space) == 32)
+    fraction = at.right(point + 1, 6)
+    good &= _all_digits(fraction)
+    micros = _decimal(fraction)
+    high = max(0, whole - 8)
+    low = at.right(1 + high, whole - high)
+    good &= _all_digits(low)
+    seconds = _decimal(low)
+    if high:
+        top = at.right(1, high)
+        good &= _all_digits(top)
+        seconds += _decimal(top) * np.uint64(10**8)
+    micros += seconds * np.uint64(10**6)
+    channel = [at.left(c, min(8, space - c), 0x21) for c in range(close + 2, space, 8)]
+    for word in channel:
+        good &= _all_solid(word)
+    ident = at.left(space + 1, id_digits)
+    good &= _all_hex(ident)
     if id_digits == 8:
-        good &= lines[:, space + 1] <= ord("1")
+        good &= at.byte(space + 1) <= ord("1")
+        can_id = _pack(_nibbles(ident))
+        can_id = (
+            (can_id & 0xFF) << 24
+            | (can_id >> 8 & 0xFF) << 16
+            | (can_id >> 16 & 0xFF) << 8
+            | (can_id >> 24)
+        )
+    else:
+        nib = _nibbles(ident)
+        can_id = (nib & 0xF) << 8 | (nib >> 8 & 0xF) << 4 | (nib >> 16 & 0xF)
+    data = np.zeros(rows.shape[0], np.uint64)
+    for half in range(0, digits, 8):
+        word = at.left(hash_at + 1 + half, min(8, digits - half))
+        good &= _all_hex(word)
+        data |= _pack(_nibbles(word)) << np.uint64(4 * half)
+    times = micros.astype(np.float64)
+    good &= times < _BIG
     if not good.all():
-        rows, lines = rows[good], lines[good]
+        rows, times, can_id, data = rows[good], times[good], can_id[good], data[good]
+        channel = [word[good] for word in channel]
+        at = lines.at(rows)
     if not rows.shape[0]:
         return
-    micros = np.zeros(rows.shape[0], np.int64)
-    for column in (*range(1, point), *range(point + 1, close)):
-        micros *= 10
-        micros += lines[:, column] - 48
-    times = micros.astype(np.float64)
-    exact = times < _BIG
-    if not exact.all():
-        rows, lines, times = rows[exact], lines[exact], times[exact]
-    can_id = np.zeros(rows.shape[0], np.int64)
-    for column in range(space + 1, hash_at):
-        can_id <<= 4
-        can_id |= _nibbles(lines[:, column])
-    size = digits // 2
-    if size:
-        hexes = _nibbles(lines[:, hash_at + 1 : data_end])
-        frames.data[rows, :size] = hexes[:, 0::2] << 4 | hexes[:, 1::2]
     frames.time[rows] = times / 1e6
-    frames.can_id[rows] = can_id
+    frames.can_id[rows] = can_id.astype(np.int64)
     frames.extended[rows] = id_digits == 8
-    frames.length[rows] = size
+    frames.length[rows] = digits // 2
+    frames.data[rows] = data.view(np.uint8).reshape(-1, 8)
     if direction:
-        frames.direction[rows] = _DIRECTION[lines[:, length - 1]]
-    names = lines[:, close + 2 : space]
-    frames.channel[rows] = _channel_numbers(names, frames.channels, channel_name)
+        frames.direction[rows] = _DIRECTION[at.byte(length - 1)]
+    frames.channel[rows] = _channel_numbers(
+        channel, space - close - 2, frames.channels, channel_name
+    )
     fast[rows] = True
 
 
-def _lines(buf: Array, rows: Array, starts: Array, length: int) -> Array:
-    """The lines at ``rows`` as an (n, length) array: a view when they follow each other."""
-    n = rows.shape[0]
-    first = int(starts[0])
-    if int(rows[-1]) - int(rows[0]) == n - 1 and first + n * (length + 1) <= buf.shape[0]:
-        view = np.lib.stride_tricks.as_strided(
-            buf[first:], shape=(n, length), strides=(length + 1, 1), writeable=False
-        )
-        return view
-    return buf[starts[:, None] + np.arange(length)]
+_H = np.uint64(0x8080808080808080)
+_ONES = 0x0101010101010101
 
 
-def _digits(part: Array) -> Array:
-    return ((part - 48) <= 9).all(axis=1)
+def _u(byte: int) -> np.uint64:
+    """``byte`` in every byte of a word."""
+    return np.uint64(byte * _ONES)
 
 
-def _hex(part: Array) -> Array:
-    return (((part - 48) <= 9) | (((part | 32) - 97) <= 5)).all(axis=1)
+def _digit_bits(w: Array) -> Array:
+    """The top bit of each byte set where that byte is an ASCII digit (for bytes < 0x80)."""
+    return ~(w + _u(0x46)) & ((w | _H) - _u(0x30)) & _H
 
 
-def _nibbles(part: Array) -> Array:
-    """Hex digits (already checked) as their values."""
-    return (part & 15) + 9 * (part >> 6)
+def _all_digits(w: Array) -> Array:
+    return (_digit_bits(w) == _H) & ((w & _H) == 0)
 
 
-def _channel_numbers(names: Array, channels: list[str], channel_name: Any) -> Array | int:
-    """Each row's channel as an index into ``channels`` (names added as they come)."""
-    first = names[0]
-    if (names == first).all():
-        return _number(channels, channel_name(first.tobytes()))
-    width = names.shape[1]
-    keys = np.ascontiguousarray(names).view(f"V{width}").ravel()
-    unique, inverse = np.unique(keys, return_inverse=True)
-    numbers = np.array([_number(channels, channel_name(u.tobytes())) for u in unique])
+def _all_hex(w: Array) -> Array:
+    lower = w | _u(0x20)
+    letters = ~(lower + _u(0x19)) & ((lower | _H) - _u(0x61)) & _H
+    return ((_digit_bits(w) | letters) == _H) & ((w & _H) == 0)
+
+
+def _all_solid(w: Array) -> Array:
+    """Every byte above 0x20 (no white space, no control byte)."""
+    return (((w & _u(0x7F)) + _u(0x5F)) | w) & _H == _H
+
+
+def _decimal(w: Array) -> Array:
+    """8 ASCII digits (the first the most significant) as their number."""
+    v = w - _u(0x30)
+    v = (v * np.uint64(10) + (v >> np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
+    v = (v * np.uint64(100) + (v >> np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
+    return (v * np.uint64(10000) + (v >> np.uint64(32))) & np.uint64(0xFFFFFFFF)
+
+
+def _nibbles(w: Array) -> Array:
+    """Each hex digit byte as its value."""
+    return (w & _u(0x0F)) + np.uint64(9) * ((w >> np.uint64(6)) & _u(0x01))
+
+
+def _pack(n: Array) -> Array:
+    """8 nibbles (one a byte) as 4 bytes, the first pair in the lowest byte."""
+    v = ((n << np.uint64(4)) | (n >> np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
+    v = (v | (v >> np.uint64(8))) & np.uint64(0x0000FFFF0000FFFF)
+    return (v | (v >> np.uint64(16))) & np.uint64(0xFFFFFFFF)
+
+
+class Lines:
+    """A block with 8 spare bytes before and after, read 8 bytes at a time."""
+
+    def __init__(self, block: bytes, starts: Array, length_plus_one: Array) -> None:
+        self.padded = bytes(8) + block + bytes(8)
+        self.bytes = np.frombuffer(self.padded, np.uint8)
+        self.words = np.ndarray((len(self.padded) - 7, 8), np.uint8, self.padded, 0, (1, 1))
+        self.starts = starts + 8
+        self.step = length_plus_one
+
+    def at(self, rows: Array) -> Row:
+        return Row(self, rows)
+
+
+class Row:
+    """The lines at some rows: bytes and words at a column of each."""
+
+    def __init__(self, lines: Lines, rows: Array) -> None:
+        self.lines = lines
+        self.offsets = lines.starts[rows]
+        n = rows.shape[0]
+        step = int(lines.step[rows[0]]) if n else 0
+        self.step = step if n and int(self.offsets[-1] - self.offsets[0]) == (n - 1) * step else 0
+        self.n = n
+
+    def _load(self, col: int) -> Array:
+        first = int(self.offsets[0]) + col if self.n else 0
+        if self.step:
+            return np.ndarray((self.n,), "<u8", self.lines.padded, first, (self.step,))
+        return self.lines.words[self.offsets + col].view("<u8").ravel()
+
+    def byte(self, col: int) -> Array:
+        if self.step:
+            first = int(self.offsets[0]) + col
+            return np.ndarray((self.n,), np.uint8, self.lines.padded, first, (self.step,))
+        return self.lines.bytes[self.offsets + col]
+
+    def left(self, col: int, width: int, fill: int = 0x30) -> Array:
+        """Bytes ``col`` to ``col + width`` (at most 8) in the low bytes; ``fill`` above."""
+        w = self._load(col)
+        if width == 8:
+            return w
+        keep = np.uint64((1 << (8 * width)) - 1)
+        return (w & keep) | (_u(fill) & ~keep)
+
+    def right(self, col: int, width: int) -> Array:
+        """Bytes ``col`` to ``col + width`` (at most 8) in the high bytes; '0' below."""
+        w = self._load(col + width - 8)
+        if width == 8:
+            return w
+        keep = ~np.uint64((1 << (8 * (8 - width))) - 1)
+        return (w & keep) | (_u(0x30) & ~keep)
+
+
+def _channel_numbers(
+    words: list[Array], width: int, channels: list[str], channel_name: Any
+) -> Array | int:
+    """Each row's channel (``width`` bytes in ``words``) as an index into ``channels``
+    (names added as they come)."""
+    names = np.stack(words, axis=1) if len(words) > 1 else words[0][:, None]
+    if (names == names[0]).all():
+        return _number(channels, channel_name(_text(names[0], width)))
+    unique, inverse = np.unique(names, axis=0, return_inverse=True)
+    numbers = np.array([_number(channels, channel_name(_text(u, width))) for u in unique])
     return numbers[inverse.ravel()]
+
+
+def _text(words: Array, width: int) -> bytes:
+    return np.ascontiguousarray(words).astype("<u8").tobytes()[:width]
 
 
 def _number(channels: list[str], name: str) -> int:
