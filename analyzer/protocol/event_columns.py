@@ -121,7 +121,11 @@ class EventColumns:
 
     def _ordered(self, make: Callable[[EventGroup], list[Any]], singles: list[Any]) -> list[Any]:
         if not self.groups:
-            return singles
+            rows = self.single_rows
+            if all(a <= b for a, b in zip(rows, rows[1:], strict=False)):
+                return singles
+            order = sorted(range(len(rows)), key=rows.__getitem__)
+            return [singles[i] for i in order]
         rows: list[int] = []
         items: list[Any] = []
         for group in self.groups:
