@@ -6,7 +6,7 @@ from collections.abc import Iterable
 from typing import Any, Protocol
 
 from analyzer.protocol.command_decoders import COMMAND_DECODERS
-from analyzer.protocol.event_columns import ColumnSlots
+from analyzer.protocol.event_columns import ColumnSlots, EventColumns
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
 from analyzer.protocol.reassembly import FeedbackReassembler, Message
@@ -39,6 +39,7 @@ class BatchDecoder(Protocol):
         warnings: list[str] | None = None,
     ) -> list[Event]: ...
     def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]: ...
+    def decode_columns(self, frames: FrameColumns) -> EventColumns: ...
     def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
 
 
@@ -124,9 +125,7 @@ def feed_batch(
         else:
             mixed = True
             if type(item) is FrameColumns:
-                from analyzer.protocol.vector_decode import decode_columns
-
-                decoded = decode_columns(decoder, item)  # type: ignore[arg-type]
+                decoded = decoder.decode_columns(item)
                 if columns is None:
                     events.extend(decoded.events())
                 else:

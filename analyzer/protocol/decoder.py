@@ -8,7 +8,9 @@ from analyzer.protocol.bus_state import BusState
 from analyzer.protocol.can_error import decode_error_frame
 from analyzer.protocol.codec import decode_command
 from analyzer.protocol.decode_batch import STATUS_TOPICS, feed_batch
+from analyzer.protocol.event_columns import EventColumns
 from analyzer.protocol.feedback import decode_feedback
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.ids import (
     CONTROL_ID,
@@ -92,6 +94,12 @@ class Decoder:
 
     # The batch path, the hot one, lives in ``decode_batch`` (a method: no extra call).
     feed_batch = feed_batch
+
+    def decode_columns(self, frames: FrameColumns) -> EventColumns:
+        """A block of frames as columns, decoded in vectors (``vector_decode``)."""
+        from analyzer.protocol.vector_decode import decode_columns
+
+        return decode_columns(self, frames)
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         """Decode bytes read from a TCP / UART stream."""

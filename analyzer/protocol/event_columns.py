@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from itertools import repeat
+from itertools import pairwise, repeat
 from typing import Any
 
 from analyzer.protocol.types import Event
@@ -121,11 +121,10 @@ class EventColumns:
 
     def _ordered(self, make: Callable[[EventGroup], list[Any]], singles: list[Any]) -> list[Any]:
         if not self.groups:
-            rows = self.single_rows
-            if all(a <= b for a, b in zip(rows, rows[1:], strict=False)):
+            at = self.single_rows
+            if all(a <= b for a, b in pairwise(at)):
                 return singles
-            order = sorted(range(len(rows)), key=rows.__getitem__)
-            return [singles[i] for i in order]
+            return [singles[i] for i in sorted(range(len(at)), key=at.__getitem__)]
         rows: list[int] = []
         items: list[Any] = []
         for group in self.groups:

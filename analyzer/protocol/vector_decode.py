@@ -15,7 +15,7 @@ come out in the order and with the contents the frame-by-frame decoder gives.
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -30,7 +30,27 @@ from analyzer.protocol.uav import STATUS_FRAMES
 from analyzer.protocol.vector_layouts import VectorLayout, command_layouts, status_layout
 
 if TYPE_CHECKING:
-    from analyzer.protocol.decoder import Decoder
+    from analyzer.protocol.lru import LruTable
+    from analyzer.protocol.reassembly import FeedbackReassembler
+    from analyzer.protocol.types import CanFrame, Event
+
+
+class Decoder(Protocol):
+    """The decoder whose state the columnar path moves on (``protocol.decoder.Decoder``)."""
+
+    frames: int
+    protocol_frames: int
+    last_time: float
+    max_sources: int
+    _reassemblers: LruTable[str, FeedbackReassembler]
+    _given_up: list[Event]
+
+    def feed_batch(self, items: Any, raw: list[Any], events: list[Event]) -> None: ...
+    def _reassembler(self, source: str) -> FeedbackReassembler: ...
+    def _take_given_up(self) -> list[Event]: ...
+    def _feedback(self, source: str, results: list[Any], extra: dict[str, Any]) -> list[Event]: ...
+    def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]: ...
+
 
 Array = npt.NDArray[Any]
 

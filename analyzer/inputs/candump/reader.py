@@ -22,6 +22,7 @@ from analyzer.inputs.candump.scan import (
 )
 from analyzer.inputs.candump.times import DECIDE_AFTER
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
 # Frames in one FrameRun: a batch's frames and events then stay few enough to be in the
@@ -195,8 +196,13 @@ class CandumpReader(InputReader):
         self.parser = CandumpParser(self.source, wanted_ids=wanted_ids)
 
     def __iter__(self) -> Iterator[InputItem]:
+        """Frames and diagnostics one by one (blocks read as columns come as CanFrames)."""
         for items in self.batches(self.block_size):
-            yield from items
+            for item in items:
+                if type(item) is FrameColumns:
+                    yield from item.frames()
+                else:
+                    yield item
 
     def batches(self, size: int) -> Iterator[list[InputItem]]:
         """The items of each block of lines (in lists of at most ``size``)."""
