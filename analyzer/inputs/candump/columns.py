@@ -253,11 +253,21 @@ def _pack(n: Array) -> Array:
     return (v | (v >> np.uint64(16))) & np.uint64(0xFFFFFFFF)
 
 
+_SPARE = bytearray(16)
+
+
 class Lines:
-    """A block with 8 spare bytes before and after, read 8 bytes at a time."""
+    """A block with 8 spare bytes before and after, read 8 bytes at a time (the arrays
+    made of it are copies: the buffer is used again for the next block)."""
 
     def __init__(self, block: bytes, starts: Array, length_plus_one: Array) -> None:
-        self.padded = bytes(8) + block + bytes(8)
+        global _SPARE
+        size = len(block) + 16
+        if len(_SPARE) < size:  # one buffer, reused: no fresh pages for every block
+            _SPARE = bytearray(max(size, 2 * len(_SPARE)))
+        _SPARE[8 : 8 + len(block)] = block
+        _SPARE[8 + len(block) : size] = bytes(8)
+        self.padded = memoryview(_SPARE)[:size]
         self.bytes = np.frombuffer(self.padded, np.uint8)
         self.words = np.ndarray((len(self.padded) - 7, 8), np.uint8, self.padded, 0, (1, 1))
         self.starts = starts + 8
