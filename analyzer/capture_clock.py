@@ -25,7 +25,6 @@ from analyzer.protocol.types import (
     TOPIC_DIAGNOSTICS,
     CanFrame,
     Event,
-    FrameRun,
     StreamChunk,
     diagnostic,
 )
@@ -38,24 +37,20 @@ _TIME = attrgetter("time")
 
 
 def _time(item: Any) -> float:
-    if type(item) is FrameRun:
-        return min(item.time)
     if type(item) is FrameColumns:
         return float(item.time.min())
     return float(item.time)
 
 
 def _latest(item: Any) -> float:
-    if type(item) is FrameRun:
-        return max(item.time)
     if type(item) is FrameColumns:
         return float(item.time.max())
     return float(item.time)
 
 
 def _timed(item: Any) -> bool:
-    """Frames, stream chunks, runs and decoded events give the capture its time; readers'
-    diagnostics follow it."""
+    """Frames, stream chunks, columns of frames and decoded events give the capture its
+    time; readers' diagnostics follow it."""
     return not (type(item) is Event and item.topic == TOPIC_DIAGNOSTICS)
 
 
@@ -96,7 +91,7 @@ class CaptureClock:
         if not chunk:
             return chunk
         kinds = set(map(type, chunk))
-        if FrameRun in kinds or FrameColumns in kinds:
+        if FrameColumns in kinds:
             earliest = min(_time(item) for item in chunk)
             latest = max(_latest(item) for item in chunk)
         else:
@@ -113,9 +108,7 @@ class CaptureClock:
     def _start(self, chunk: list[Any]) -> list[Any]:
         times: list[float] = []
         for item in chunk:
-            if type(item) is FrameRun:
-                times += item.time
-            elif type(item) is FrameColumns:
+            if type(item) is FrameColumns:
                 times += item.time.tolist()
             elif _timed(item):
                 times.append(float(item.time))
@@ -135,10 +128,6 @@ class CaptureClock:
     def _sorted_out(self, chunk: list[Any]) -> list[Any]:
         out: list[Any] = []
         for item in chunk:
-            if type(item) is FrameRun and self._too_early(min(item.time)):
-                for frame in item.frames():
-                    out.append(self._checked(frame))
-                continue
             if type(item) is FrameColumns and self._too_early(_time(item)):
                 out += [self._checked(frame) for frame in item.frames()]
                 continue

@@ -18,17 +18,18 @@ import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import islice
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, cast, runtime_checkable
 
 from analyzer.capture_clock import CaptureClock
 from analyzer.progress import Progress
 from analyzer.protocol.event_columns import ColumnSlots, EventColumns
 from analyzer.protocol.frame_columns import FrameColumns
-from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
 from analyzer.tally import Tally
 
 RawItem = CanFrame | StreamChunk
-Item = CanFrame | StreamChunk | Event | FrameRun | FrameColumns  # what readers deliver
+Item = CanFrame | StreamChunk | Event | FrameColumns  # what readers deliver
+_RAW_KINDS = frozenset({CanFrame, StreamChunk})
 
 BATCH_ITEMS = 2000  # file commands hand a batch to the sinks after this many items
 
@@ -39,16 +40,16 @@ class Batch:
 
     ``items`` are the raw frames / stream chunks as read (lossless), ``events`` the
     decoded events and diagnostics they gave (link-state diagnostics and events of the
-    stages included). ``runs`` holds the frames a reader handed on as FrameRuns, which
-    happens only when no sink keeps raw items (``Pipeline.keeps_items``).
+    stages included). ``runs`` holds the frames a reader read as columns
+    (``FrameColumns``) when no sink keeps raw items (``Pipeline.keeps_items``); else they
+    are in ``items`` as CanFrames.
     """
 
     items: list[RawItem] = field(default_factory=list)
     events: list[Event] = field(default_factory=list)
     wall_time: float = 0.0
-    # Frames read as runs or columns (only when no sink keeps raw items): counted, never
-    # in ``items``.
-    runs: list[FrameRun | FrameColumns] = field(default_factory=list)
+    # Frames read as columns that no sink keeps: counted, never in ``items``.
+    runs: list[FrameColumns] = field(default_factory=list)
     # The events of blocks decoded in vectors, not yet made into Events, each with its
     # place in ``events`` (``materialize`` puts them there; see ``segments``).
     columns: ColumnSlots = field(default_factory=list)
@@ -84,7 +85,7 @@ class Sink(Protocol):
     """Anything that consumes batches: MCAP writer, text printer, TUI bridge.
 
     A sink that never looks at ``Batch.items`` says so with a ``keeps_items = False``
-    attribute; then a file reader may hand on frames as runs nobody builds one by one.
+    attribute; then frames a reader read as columns are never built one by one.
     A sink that reads the events through ``Batch.segments`` says so with
     ``takes_columns = True``: the events of blocks decoded in vectors then reach it as
     columns; every other sink gets them as Events (``Batch.materialize``).
@@ -117,7 +118,6 @@ class Decoding(Protocol):
     def feed_batch(
         self,
         items: Iterable[object],
-        raw: list[RawItem],
         events: list[Event],
         columns: ColumnSlots | None = None,
     ) -> None: ...
@@ -175,22 +175,35 @@ class Pipeline:
         self.batch = Batch()
         self.delivered = 0  # batches handed to the sinks
         self.finished = False
-        self.frame_runs = False  # the input may hold FrameRuns (set by ``run_items``)
         # A file's items dated by its capture (set by ``run_items``): see capture_clock.
         self.clock = CaptureClock()
 
     # -- input -------------------------------------------------------------------------------
 
     def feed(self, items: Iterable[Item]) -> None:
-        """Decode items into the open batch; ready-made events go in as they are."""
+        """Decode items into the open batch; ready-made events go in as they are.
+
+        The raw items go to the batch as they are; frames read as columns go there as
+        CanFrames when a sink keeps raw items, else they are counted as columns."""
+        items = items if type(items) is list else list(items)
         batch = self.batch
-        self.decoder.feed_batch(items, batch.items, batch.events, batch.columns)
-        if self.frame_runs:
-            batch.runs.extend([i for i in items if isinstance(i, (FrameRun, FrameColumns))])
+        self.decoder.feed_batch(items, batch.events, batch.columns)
+        if set(map(type, items)) <= _RAW_KINDS:  # the usual batch
+            batch.items += cast(list[RawItem], items)
+            return
+        keep = self.keeps_items
+        for item in items:
+            if isinstance(item, (CanFrame, StreamChunk)):
+                batch.items.append(item)
+            elif isinstance(item, FrameColumns):
+                if keep:
+                    batch.items += item.frames()
+                else:
+                    batch.runs.append(item)
 
     @property
     def keeps_items(self) -> bool:
-        """Whether a sink looks at raw items (else the input may come as FrameRuns)."""
+        """Whether a sink looks at raw items (else frames read as columns stay columns)."""
         return any(getattr(sink, "keeps_items", True) for sink in self.sinks)
 
     def add_events(self, events: Iterable[Event]) -> None:
@@ -296,7 +309,7 @@ def run_items(
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
-    ``delivered_batches`` does the work (see there: batches, FrameRuns, an early stop
+    ``delivered_batches`` does the work (see there: batches, an early stop
     when a sink fails, exceptions of the reader); ``after_batch`` runs after each batch
     but the last, the one ``finish`` delivers. ``progress``
     (``analyzer.progress.Progress.maybe``) is drawn after each batch and cleared at the
@@ -325,18 +338,13 @@ def delivered_batches(
 
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
-    input, so each line shows at once). When no sink keeps raw items, a reader that can
-    hands its frames on as FrameRuns. The items are dated by the capture's own time
+    input, so each line shows at once). The items are dated by the capture's own time
     (``analyzer.capture_clock``) on the way. Stops early (then finishes) when a sink fails. An
     exception of the reader (Ctrl-C, unreadable input) propagates without ``finish``:
     the caller decides whether what was read counts (``decode`` of live input finishes,
     ``convert`` throws its output away). ``run_items`` (the commands) and the Python
     API's ``read`` and ``analyze`` are this one loop.
     """
-    if not pipeline.keeps_items and hasattr(items, "frame_runs"):
-        items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
-        if hasattr(pipeline.decoder, "keep_column_frames"):
-            pipeline.decoder.keep_column_frames = False
     if isinstance(items, BatchedItems):
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:

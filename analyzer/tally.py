@@ -31,7 +31,6 @@ from analyzer.protocol.types import (
     TOPIC_GIMBAL_RANGING,
     CanFrame,
     Event,
-    FrameRun,
     StreamChunk,
 )
 
@@ -70,6 +69,11 @@ def feedback_stream(event: Event) -> str:
     return f"{event.source} {direction}" if direction else event.source
 
 
+def _damaged_feedback(event: Event) -> bool:
+    """A diagnostic of a feedback message that came damaged (it ends a silence)."""
+    return event.topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_FEEDBACK
+
+
 def lost_messages(silence_s: float, period_s: float = FEEDBACK_PERIOD_S) -> int:
     """Feedback messages lost in a silence between two messages, counted in periods.
 
@@ -89,8 +93,7 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
-_PLACE_EXTENDED = itemgetter(2)
-_FIRST = itemgetter(0)  # of a FrameRun's (channel, CAN ID, extended)
+_FIRST = itemgetter(0)
 
 
 @dataclass
@@ -236,63 +239,60 @@ class Tally:
         times = list(map(_TIME, items))
         self.widen(min(times), max(times))
 
-    def add_runs(self, runs: Iterable[FrameRun | FrameColumns]) -> None:
-        """Count runs of plain CAN frames as ``add_items`` counts the same frames."""
+    def add_runs(self, runs: Iterable[FrameColumns]) -> None:
+        """Count frames read as columns as ``add_items`` counts the same frames."""
         for run in runs:
             frames = len(run)
             if not frames:
                 continue
-            if isinstance(run, FrameColumns):
-                self._add_columns(run)
-                continue
-            size = sum(map(len, run.data))
-            bits = CAN_BITS_STANDARD * frames + 8 * size
-            extended = sum(map(_PLACE_EXTENDED, run.place))
-            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+            size = int(run.length.sum())
+            extended = int(run.extended.sum())
             self.frames += frames
             self.bytes += size
-            self.bits += bits
-            self.widen(min(run.time), max(run.time))
+            self.bits += CAN_BITS_STANDARD * frames + 8 * size
+            self.bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+            self.widen(float(run.time.min()), float(run.time.max()))
 
     def add_columns(self, block: EventColumns) -> None:
-        """Count the events of a block decoded in vectors as ``add_events`` counts them
-        (its groups have no warnings and no feedback: counted by topic and command)."""
+        """Count the events of a block decoded in vectors as ``add_events`` counts them:
+        its groups have no warnings and are counted by topic and command at once; the
+        feedback messages of its groups are timed in frame order with its single events."""
+        singles = block.single_events()
         firsts = [(int(g.rows[0]), str(g.name)) for g in block.groups if g.topic == TOPIC_COMMAND]
         if firsts:  # new names in the order they first came, as one by one
             firsts += [
                 (row, str(e.fields.get("name", "unknown")))
-                for row, e in zip(block.single_rows, block.singles, strict=True)
+                for row, e in singles
                 if e.topic == TOPIC_COMMAND
             ]
             for _, name in sorted(firsts, key=_FIRST):
                 if name not in self.commands:
                     self.commands[name] = 0
+        timed: list[tuple[int, float, str, bool]] = []
         for group in block.groups:
             n = len(group)
             self.events += n
             self.topics[group.topic] += n
             if group.topic == TOPIC_COMMAND:
                 self.commands[str(group.name)] += n
+            elif group.topic in FEEDBACK_TOPICS:
+                rows, times = group.rows.tolist(), group.times.tolist()
+                timed += zip(rows, times, group.sources, [False] * n, strict=True)
             self.widen(float(group.times.min()), float(group.times.max()))
-        if block.singles:
-            self.add_events(
-                [
-                    e
-                    for _, e in sorted(
-                        zip(block.single_rows, block.singles, strict=True), key=_FIRST
-                    )
+        if singles:
+            events = [e for _, e in singles]
+            self._count(events)
+            if timed:
+                timed += [
+                    (row, e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
+                    for row, e in singles
+                    if e.topic in FEEDBACK_TOPICS or _damaged_feedback(e)
                 ]
-            )
-
-    def _add_columns(self, run: FrameColumns) -> None:
-        frames = len(run)
-        size = int(run.length.sum())
-        extended = int(run.extended.sum())
-        self.frames += frames
-        self.bytes += size
-        self.bits += CAN_BITS_STANDARD * frames + 8 * size
-        self.bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
-        self.widen(float(run.time.min()), float(run.time.max()))
+            else:
+                self._time_feedback(events)
+                return
+        timed.sort(key=_FIRST)
+        self._time_points([(t, key, damaged) for _, t, key, damaged in timed])
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.
@@ -301,14 +301,16 @@ class Tally:
         every command reports the same figures for the same input, stage or no stage.
         """
         events = events if isinstance(events, list) else list(events)
+        if any(e.topic == TOPIC_ANALYSIS_RESPONSE for e in events):
+            events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
+        if events:
+            self._count(events)
+            self._time_feedback(events)
+
+    def _count(self, events: list[Event]) -> None:
+        """Every count of ``add_events`` but the feedback's timing."""
         topics = list(map(_TOPIC, events))
         present = set(topics)
-        if TOPIC_ANALYSIS_RESPONSE in present:
-            events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
-            topics = list(map(_TOPIC, events))
-            present.discard(TOPIC_ANALYSIS_RESPONSE)
-        if not events:
-            return
         # A batch holds few topics: each is counted in one C pass. The figures below pick
         # their events with a comprehension each, which beats chains of C iterators here.
         self.events += len(events)
@@ -332,9 +334,6 @@ class Tally:
             self.crc_errors += kinds.count(CRC_MISMATCH)
             if BUS_ERROR in kinds:
                 self.bus.add_events(events)
-            damaged = not DAMAGED_FEEDBACK.isdisjoint(kinds)
-        else:
-            damaged = False
         streamed = [e for e in events if "transport" in e.fields]  # read from a stream
         if streamed:
             self.crc_checked += sum(
@@ -345,32 +344,35 @@ class Tally:
                 and e.fields["transport"] == "stream"
                 and e.fields.get("crc_set", True)
             )
-        if damaged:
-            # In the order they came: a damaged message ends the silence before it.
-            for event in events:
-                if event.topic in FEEDBACK_TOPICS:
-                    self._add_feedback(event, event.fields)
-                elif event.topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in (
-                    DAMAGED_FEEDBACK
-                ):
-                    track = self.feedback.get(feedback_stream(event))
-                    if track is not None:
-                        track.damaged(event.time)
-        elif not FEEDBACK_TOPICS.isdisjoint(present):
-            for event in [e for e in events if e.topic in FEEDBACK_TOPICS]:
-                self._add_feedback(event, event.fields)
 
-    def _add_feedback(self, event: Event, fields: dict[str, Any]) -> None:
-        """One feedback message: its stream's timing, and one CRC checked."""
-        self.crc_checked += 1
-        key = feedback_stream(event)
-        track = self.feedback.get(key)
-        if track is None:
-            if len(self.feedback) >= MAX_FEEDBACK_SOURCES:
-                self.feedback_untracked += 1
-                return
-            track = self.feedback[key] = FeedbackTrack()
-        track.add(event.time)
+    def _time_feedback(self, events: list[Event]) -> None:
+        """The feedback messages of ``events`` timed, and damaged ones, in order: a
+        damaged message ends the silence before it."""
+        self._time_points(
+            [
+                (e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
+                for e in events
+                if e.topic in FEEDBACK_TOPICS or _damaged_feedback(e)
+            ]
+        )
+
+    def _time_points(self, points: list[tuple[float, str, bool]]) -> None:
+        """Feedback messages (time, stream, damaged) in the order they came."""
+        feedback = self.feedback
+        for t, key, damaged in points:
+            if damaged:
+                track = feedback.get(key)
+                if track is not None:
+                    track.damaged(t)
+                continue
+            self.crc_checked += 1
+            track = feedback.get(key)
+            if track is None:
+                if len(feedback) >= MAX_FEEDBACK_SOURCES:
+                    self.feedback_untracked += 1
+                    continue
+                track = feedback[key] = FeedbackTrack()
+            track.add(t)
 
     def widen(self, first: float | None, last: float | None) -> None:
         """Take a time span the input saw (frames the reader skipped, for instance) into account."""

@@ -64,9 +64,8 @@ def decoded(
     columns: bool = True,
 ) -> tuple[list[str], dict[str, Any]]:
     reader = CandumpReader(
-        str(path), wanted_ids=None if raw else PROTOCOL_IDS, block_size=block_size
+        str(path), wanted_ids=None if raw else PROTOCOL_IDS, block_size=block_size, scan=columnar
     )
-    reader.columnar = columnar
     sink = Lines(columns)
     pipeline = Pipeline([sink], decoder=Decoder(emit_other=raw))
     run_items(reader, pipeline, batch_items=2000)

@@ -11,10 +11,10 @@ from typing import IO, Any
 
 from analyzer.errors import UsageError
 from analyzer.protocol.frame_columns import FrameColumns
-from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
 
-# FrameRun only from a reader whose ``frame_runs`` was set.
-InputItem = CanFrame | StreamChunk | Event | FrameRun | FrameColumns
+# FrameColumns: classic data frames a reader read in a block as arrays.
+InputItem = CanFrame | StreamChunk | Event | FrameColumns
 # Frame times are seconds since 1970 or since a log's start: a number beyond 2**33 s
 # (the year 2242) is no time but a damaged field, and later steps cannot date it.
 LATEST_TIME = float(2**33)
@@ -38,13 +38,6 @@ class InputReader:
     """
 
     format_name = "unknown"
-    # Set by a driver whose sinks keep no raw frames: a reader that can then hands on runs
-    # of plain frames as ``FrameRun`` items (the candump reader does), others ignore it.
-    frame_runs = False
-    # A reader that can reads blocks as arrays (``FrameColumns``) and the decoder decodes
-    # them in vectors; GIMBAL_ANALYZER_COLUMNAR=0 reads frame by frame as before (the
-    # reference that the benchmarks and the differential test compare with).
-    columnar = os.environ.get("GIMBAL_ANALYZER_COLUMNAR", "1") != "0"
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -114,12 +107,12 @@ def open_binary(path: str) -> IO[bytes]:
 
 
 def by_frames(items: list[InputItem], size: int) -> Iterator[list[InputItem]]:
-    """``items`` in lists of at most ``size`` frames (a FrameRun counts its frames), in
+    """``items`` in lists of at most ``size`` frames (FrameColumns count their frames), in
     order; a run of more frames than that is a list of its own."""
     chunk: list[InputItem] = []
     weight = 0
     for item in items:
-        frames = len(item) if type(item) is FrameRun or type(item) is FrameColumns else 1
+        frames = len(item) if type(item) is FrameColumns else 1
         if chunk and weight + frames > size:
             yield chunk
             chunk, weight = [], 0

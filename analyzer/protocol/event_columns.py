@@ -1,12 +1,13 @@
 """The events of a block of frames, kept as columns until someone needs them one by one.
 
 The columnar decoder (``vector_decode``) gives, for each layout it decoded in vectors
-(a command, a status frame), a ``EventGroup``: the rows it came from, times, sources
-and each field's values as lists. Everything decoded one at a time (feedback messages,
-frames with a warning, text, other devices) is a list of ready ``Event`` objects with
-their rows. ``EventColumns`` keeps both: ``events()`` makes the Events in frame order
-(what every sink would have got), ``json_lines()`` writes what ``decode --json`` prints
-for each of them without making them, and the counters take the groups as counts.
+(a command, a status frame, a feedback message, other devices' frames), an
+``EventGroup``: the rows it came from, times, sources and each field's values as lists.
+Everything decoded one at a time (frames and messages with a warning, text,
+diagnostics) is a list of ready ``Event`` objects with their rows. ``EventColumns``
+keeps both: ``events()`` makes the Events in frame order (what every sink would have
+got), ``json_lines()`` writes what ``decode --json`` prints for each of them without
+making them, and the counters take the groups as counts.
 """
 
 from __future__ import annotations
@@ -15,9 +16,12 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import pairwise, repeat
+from operator import itemgetter
 from typing import Any
 
 from analyzer.protocol.types import Event
+
+_ROW = itemgetter(0)
 
 # Where blocks' events stand among a batch's other events: (the index in the batch's
 # event list before which they come, the block's events).
@@ -118,6 +122,13 @@ class EventColumns:
         if events:
             self.single_rows.extend([row] * len(events))
             self.singles.extend(events)
+
+    def single_events(self) -> list[tuple[int, Event]]:
+        """The events decoded one by one, with their rows, in frame order."""
+        pairs = list(zip(self.single_rows, self.singles, strict=True))
+        if any(a > b for a, b in pairwise(self.single_rows)):
+            pairs.sort(key=_ROW)
+        return pairs
 
     def _ordered(self, make: Callable[[EventGroup], list[Any]], singles: list[Any]) -> list[Any]:
         if not self.groups:

@@ -1,56 +1,43 @@
 """The decoder's columnar path: a block of frames (``FrameColumns``) decoded in vectors.
 
-Commands and UAV status frames are grouped by layout and decoded a column at a time
-(``vector_layouts``); a row that would give a warning is decoded by the scalar decoder.
-The 4-segment feedback of each channel is grouped in vectors too: a message whose four
-segments follow each other with a header, a CRC-16/MODBUS that checks and no late
-segment is taken whole while the reassembler is idle; any other segment goes through
-the channel's reassembler, in order, so that reordered, missing, repeated and damaged
-segments give the diagnostics they always give. Every other frame (text, standard IDs
-on protocol IDs, other devices) goes through the scalar decoder in frame order. Each
-event is placed at the row of the frame that gave it (``EventColumns``), so the events
-come out in the order and with the contents the frame-by-frame decoder gives.
+Stateless: ``plan_columns`` routes each row by the decoder's routing table (``routes``)
+and decodes what needs no state in vectors: commands and UAV status frames grouped by
+layout (``vector_layouts``; a row that would give a warning is left to the one
+frame-by-frame dispatch, which says what is wrong), and the frames of other devices
+(counted, or one group of ``/can/other`` events). The feedback segments of each channel
+are grouped, and ``clean_messages`` marks where four segments in a row make a message
+with a header, a CRC-16/MODBUS that checks and no late segment; the decoder's
+reassembler takes those whole (``FeedbackReassembler.feed_segments``) and
+``feedback_groups`` decodes them in vectors. Every other row (text, protocol IDs sent
+as standard frames, odd lengths) goes to the frame-by-frame dispatch, in frame order.
+Each event keeps the row of the frame that gave it (``EventColumns``), so the events
+come out in the order and with the contents frame by frame decoding gives.
 """
 
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING, Any, Protocol
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from analyzer.protocol.crc import _TABLE
-from analyzer.protocol.event_columns import EventColumns, EventGroup
+from analyzer.protocol.event_columns import EventGroup
 from analyzer.protocol.feedback import FRAME_SIZES
 from analyzer.protocol.frame_columns import FrameColumns
-from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, HEADER
-from analyzer.protocol.reassembly import SEGMENTS_PER_MESSAGE, Message
-from analyzer.protocol.uav import STATUS_FRAMES
-from analyzer.protocol.vector_layouts import VectorLayout, command_layouts, status_layout
-
-if TYPE_CHECKING:
-    from analyzer.protocol.lru import LruTable
-    from analyzer.protocol.reassembly import FeedbackReassembler
-    from analyzer.protocol.types import CanFrame, Event
-
-
-class Decoder(Protocol):
-    """The decoder whose state the columnar path moves on (``protocol.decoder.Decoder``)."""
-
-    frames: int
-    protocol_frames: int
-    last_time: float
-    max_sources: int
-    _reassemblers: LruTable[str, FeedbackReassembler]
-    _given_up: list[Event]
-
-    def feed_batch(self, items: Any, raw: list[Any], events: list[Event]) -> None: ...
-    def _reassembler(self, source: str) -> FeedbackReassembler: ...
-    def _take_given_up(self) -> list[Event]: ...
-    def _feedback(self, source: str, results: list[Any], extra: dict[str, Any]) -> list[Event]: ...
-    def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]: ...
-
+from analyzer.protocol.ids import HEADER
+from analyzer.protocol.reassembly import LATE_AFTER_S, SEGMENTS_PER_MESSAGE, Message
+from analyzer.protocol.routes import COMMAND, FEEDBACK, ROUTES, STATUS, ids_of
+from analyzer.protocol.types import TOPIC_CAN_OTHER
+from analyzer.protocol.vector_layouts import (
+    VectorLayout,
+    command_layouts,
+    feedback_layout,
+    hex_rows,
+    status_layout,
+)
 
 Array = npt.NDArray[Any]
 
@@ -58,84 +45,136 @@ _CRC = np.array(_TABLE, np.int64)
 _SIZES = np.zeros(256, np.int64)  # message size by length byte (0: no feedback layout)
 for _k, _v in FRAME_SIZES.items():
     _SIZES[_k] = _v
-_NO_EXTRA: dict[str, Any] = {}
+_ROUTED = np.array(sorted(ROUTES), np.int64)
+_OTHER_KEYS = ("can_id", "extended", "dlc", "data", "remote")
 
 
-def decode_columns(decoder: Decoder, frames: FrameColumns) -> EventColumns:
-    """Decode ``frames`` into events; the decoder's state and counters move on as if it
-    had been given each frame in turn."""
-    out = EventColumns()
+@dataclass(slots=True)
+class ColumnPlan:
+    """A block routed: ``groups`` decoded in vectors; per channel with feedback its
+    source, rows and which rows start a clean message; the rows for the frame-by-frame
+    dispatch (ascending); how many rows were protocol frames taken here (groups and
+    feedback) and frames of other devices; the channels with feedback, the one whose
+    last segment came first first."""
+
+    groups: list[EventGroup] = field(default_factory=list)
+    feedback: list[tuple[str, Array, list[bool]]] = field(default_factory=list)
+    scalar: Array = field(default_factory=lambda: np.zeros(0, np.int64))
+    protocol_rows: int = 0
+    other_rows: int = 0
+    feedback_order: list[str] = field(default_factory=list)
+
+
+def plan_columns(frames: FrameColumns, *, crowded: bool, emit_other: bool) -> ColumnPlan:
+    """Route the rows of ``frames`` and decode the stateless ones (see the module
+    docstring). ``crowded``: the decoder could give up a source's state in this block,
+    so every row goes frame by frame, where each eviction happens in its place."""
+    plan = ColumnPlan()
     n = len(frames)
-    if not n:
-        return out
+    if crowded:
+        plan.scalar = np.arange(n)
+        return plan
     can_id, extended, length = frames.can_id, frames.extended, frames.length
     eight = extended & (length == 8)
-    command = eight & (can_id == CONTROL_ID)
-    feedback = extended & (can_id == FEEDBACK_ID)
-    status = eight & np.isin(can_id, np.fromiter(STATUS_FRAMES, np.int64))
-    single = ~(command | feedback | status)
-    if decoder.max_sources <= len(frames.channels) + len(decoder._reassemblers):
-        single[:] = True  # channels beyond the limit: the scalar decoder gives some up
-        command[:] = feedback[:] = status[:] = False
+    command = eight & np.isin(can_id, ids_of(COMMAND))
+    feedback = extended & np.isin(can_id, ids_of(FEEDBACK))
+    status = eight & np.isin(can_id, ids_of(STATUS))
+    other = ~np.isin(can_id, _ROUTED)
+    left = [np.flatnonzero(~(command | feedback | status | other))]
     if command.any():
-        _commands(decoder, frames, np.flatnonzero(command), out)
+        left += _commands(frames, np.flatnonzero(command), plan.groups)
     if status.any():
-        _statuses(decoder, frames, np.flatnonzero(status), out)
+        ids = can_id[status]
+        rows = np.flatnonzero(status)
+        for value in np.unique(ids).tolist():
+            left.append(_group(status_layout(value), frames, rows[ids == value], plan.groups))
     if feedback.any():
+        last_rows: list[tuple[int, str]] = []
         for channel in np.unique(frames.channel[feedback]).tolist():
             rows = np.flatnonzero(feedback & (frames.channel == channel))
-            _feedback(decoder, frames, rows, frames.channels[channel], out)
-    for row in np.flatnonzero(single).tolist():
-        frame = frames.frame(row)
-        decoder.last_time = frame.time
-        out.add(row, decoder._can_any(frame, frame.channel or "can", _NO_EXTRA))
-    decoder.frames += n
-    decoder.protocol_frames += int(np.count_nonzero(~single))
-    decoder.last_time = float(frames.time[-1])
-    return out
+            whole = clean_messages(frames.time[rows], frames.data[rows], frames.length[rows])
+            source = frames.channels[channel] or "can"
+            plan.feedback.append((source, rows, whole.tolist()))
+            last_rows.append((int(rows[-1]), source))
+        plan.feedback_order = [source for _, source in sorted(last_rows)]
+    plan.other_rows = int(np.count_nonzero(other))
+    if emit_other and plan.other_rows:
+        plan.groups.append(_other_group(frames, np.flatnonzero(other)))
+    plan.scalar = np.sort(np.concatenate(left))
+    plan.protocol_rows = n - plan.other_rows - int(plan.scalar.shape[0])
+    return plan
 
 
-def _scalar(decoder: Decoder, frames: FrameColumns, rows: Array, out: EventColumns) -> None:
-    """Rows decoded one by one (they give warnings): as the scalar decoder decodes them."""
-    for row in rows.tolist():
-        frame = frames.frame(row)
-        events: list[Any] = []
-        decoder.feed_batch((frame,), [], events)
-        decoder.frames -= 1  # counted with the block
-        decoder.protocol_frames -= 1
-        out.add(row, events)
+def feedback_groups(
+    frames: FrameColumns, rows: Array, taken: list[int], source: str
+) -> tuple[list[EventGroup], list[tuple[int, Message]]]:
+    """The messages the reassembler took whole (they start at ``rows[taken]``), decoded
+    in vectors; those that would give a warning come back as Messages at their last
+    segment's row, for the scalar decoder."""
+    if not taken:
+        return [], []
+    first = np.array(taken, np.int64)
+    ends = rows[first + SEGMENTS_PER_MESSAGE - 1]
+    parts = [frames.data[rows[first + k]] for k in range(SEGMENTS_PER_MESSAGE)]
+    messages = np.concatenate(parts, axis=1)
+    groups: list[EventGroup] = []
+    left: list[tuple[int, Message]] = []
+    kinds = messages[:, 2]
+    for length_byte in np.unique(kinds).tolist():
+        mine = np.flatnonzero(kinds == length_byte)
+        layout = feedback_layout(length_byte)
+        data = messages[mine]
+        clean = layout.clean(data)
+        if clean.any():
+            done = mine[clean]
+            groups.append(_event_group(layout, data[clean], ends[done], frames, [source]))
+        times = frames.time[ends]
+        for i in mine[~clean].tolist():
+            message = messages[i].tobytes()
+            left.append((int(ends[i]), Message(float(times[i]), message, ())))
+    return groups, left
 
 
-def _group(layout: VectorLayout, frames: FrameColumns, rows: Array, out: EventColumns) -> Array:
+def _event_group(
+    layout: VectorLayout, data: Array, rows: Array, frames: FrameColumns, sources: list[str]
+) -> EventGroup:
+    """The events of clean ``data`` at ``rows`` (``sources``: one for all, or one a row)."""
+    if len(sources) == 1:
+        sources = sources * int(rows.shape[0])
+    return EventGroup(
+        layout.topic,
+        rows,
+        frames.time[rows],
+        sources,
+        layout.keys,
+        layout.constants,
+        functools.partial(layout.values, data),
+        layout.name,
+    )
+
+
+def _sources(frames: FrameColumns, rows: Array) -> list[str]:
+    """The source of each of ``rows``: its channel's name, or ``can`` for none."""
+    names = frames.channels
+    channel = frames.channel[rows]
+    first = int(channel[0])
+    if (channel == first).all():
+        return [names[first] or "can"] * int(rows.shape[0])
+    return [names[c] or "can" for c in channel.tolist()]
+
+
+def _group(layout: VectorLayout, frames: FrameColumns, rows: Array, out: list[EventGroup]) -> Array:
     """Decode the clean ``rows`` of ``layout`` in vectors; the rows left (with warnings)."""
     data = frames.data[rows]
     clean = layout.clean(data)
     taken = rows[clean]
     if taken.shape[0]:
-        names = frames.channels
-        channel = frames.channel[taken]
-        first = int(channel[0])
-        if (channel == first).all():
-            sources = [names[first] or "can"] * int(taken.shape[0])
-        else:
-            sources = [names[c] or "can" for c in channel.tolist()]
-        clean_data = data[clean]
-        out.groups.append(
-            EventGroup(
-                layout.topic,
-                taken,
-                frames.time[taken],
-                sources,
-                layout.keys,
-                layout.constants,
-                functools.partial(layout.values, clean_data),
-                layout.name,
-            )
-        )
+        out.append(_event_group(layout, data[clean], taken, frames, _sources(frames, taken)))
     return rows[~clean]
 
 
-def _commands(decoder: Decoder, frames: FrameColumns, rows: Array, out: EventColumns) -> None:
+def _commands(frames: FrameColumns, rows: Array, out: list[EventGroup]) -> list[Array]:
+    """The command rows grouped by command and selector value; the rows left."""
     data = frames.data[rows]
     keys = data[:, 0].astype(np.int64) << 8 | data[:, 1]
     left: list[Array] = []
@@ -148,25 +187,38 @@ def _commands(decoder: Decoder, frames: FrameColumns, rows: Array, out: EventCol
         if None in layouts:
             left.append(_group(layouts[None], frames, mine, out))
             continue
-        row = next(iter(layouts.values())).fields[0]  # the selector
-        selectors = frames.data[mine, row.offset]
-        for value in np.unique(selectors).tolist():
-            same = mine[selectors == value]
+        selector = next(iter(layouts.values())).fields[0]
+        values = frames.data[mine, selector.offset]
+        for value in np.unique(values).tolist():
+            same = mine[values == value]
             layout = layouts.get(value)
             left.append(same if layout is None else _group(layout, frames, same, out))
-    if left:
-        _scalar(decoder, frames, np.sort(np.concatenate(left)), out)
+    return left
 
 
-def _statuses(decoder: Decoder, frames: FrameColumns, rows: Array, out: EventColumns) -> None:
-    ids = frames.can_id[rows]
-    left = [
-        _group(status_layout(can_id), frames, rows[ids == can_id], out)
-        for can_id in np.unique(ids).tolist()
-    ]
-    rest = np.concatenate(left)
-    if rest.shape[0]:
-        _scalar(decoder, frames, np.sort(rest), out)
+def _other_group(frames: FrameColumns, rows: Array) -> EventGroup:
+    """The frames of other devices as ``/can/other`` events (``--raw``)."""
+    lengths = frames.length[rows]
+
+    def values() -> dict[str, list[Any]]:
+        text = hex_rows(frames.data[rows])
+        sizes = (3 * lengths.astype(np.int64) - 1).clip(0).tolist()
+        return {
+            "can_id": frames.can_id[rows].tolist(),
+            "extended": frames.extended[rows].tolist(),
+            "dlc": lengths.tolist(),
+            "data": [t[:s] for t, s in zip(text, sizes, strict=True)],
+        }
+
+    return EventGroup(
+        TOPIC_CAN_OTHER,
+        rows,
+        frames.time[rows],
+        _sources(frames, rows),
+        _OTHER_KEYS,
+        {"remote": False},
+        values,
+    )
 
 
 def crc16_rows(messages: Array, sizes: Array) -> Array:
@@ -178,7 +230,9 @@ def crc16_rows(messages: Array, sizes: Array) -> Array:
     return crc
 
 
-def clean_messages(times: Array, data: Array, lengths: Array, late_after: float) -> Array:
+def clean_messages(
+    times: Array, data: Array, lengths: Array, late_after: float = LATE_AFTER_S
+) -> Array:
     """Which segments start a message the reassembler takes whole, with no warning: four
     8-byte segments in a row, a header first, no gap over ``late_after``, the CRC right."""
     n = data.shape[0]
@@ -202,50 +256,3 @@ def clean_messages(times: Array, data: Array, lengths: Array, late_after: float)
         wire = message[rows, sizes - 2] | message[rows, sizes - 1] << 8
         starts[candidates[crc == wire]] = True
     return starts
-
-
-def _feedback(
-    decoder: Decoder, frames: FrameColumns, rows: Array, channel: str, out: EventColumns
-) -> None:
-    """The feedback segments of one channel, in order (see the module docstring)."""
-    source = channel or "can"
-    decoder.last_time = float(frames.time[rows[0]])
-    reassembler = decoder._reassembler(source)
-    if decoder._given_up:
-        out.add(int(rows[0]), decoder._take_given_up())
-    times = frames.time[rows]
-    data = frames.data[rows]
-    late = reassembler.late_after
-    clean = clean_messages(times, data, frames.length[rows], late).tolist()
-    time_list = times.tolist()
-    row_list = rows.tolist()
-    blob = data.tobytes()
-    sizes = frames.length[rows].tolist()
-    feed = reassembler.feed
-    j, n = 0, len(row_list)
-    while j < n:
-        t = time_list[j]
-        if (
-            clean[j]
-            and not reassembler._pending
-            and not (
-                reassembler._last_tail
-                and t - reassembler._last_tail_time <= late
-                and blob[8 * j : 8 * j + 8] == reassembler._last_tail
-            )
-        ):
-            end = j + SEGMENTS_PER_MESSAGE - 1
-            message = blob[8 * j : 8 * end + 8]
-            reassembler.bytes_fed += 32
-            reassembler.bytes_framed += 32
-            reassembler._last_tail = message[24:]
-            reassembler._last_tail_time = time_list[end]
-            done = Message(time_list[end], message, ())
-            out.add(row_list[end], decoder._feedback(source, [done], _NO_EXTRA))
-            j = end + 1
-            continue
-        decoder.last_time = t
-        results = feed(blob[8 * j : 8 * j + sizes[j]], t)
-        if results:
-            out.add(row_list[j], decoder._feedback(source, results, _NO_EXTRA))
-        j += 1

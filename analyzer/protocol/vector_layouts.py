@@ -1,19 +1,21 @@
-"""Fixed layouts read from arrays of frames: every command of the table, the UAV status frames.
+"""Fixed layouts read from arrays of frames: every command, the UAV status frames, the feedback.
 
 Made from the same tables as the generated scalar decoders (``command_decoders``,
-``uav``): for each command (each selector value of a command with variants) and each
-status frame, the fields in the order the scalar decoder fills them. ``read`` gives, for
-an (n, 8) array of frames, which rows decode without a single warning (every label
-known, every flag 0 or 1, every number in range, unused bytes zero) and, for those
-rows, each field's values as Python lists: exactly the numbers the scalar decoder makes
-(a scaled value is the same integer product and the same correctly rounded division).
-Rows with a warning are left to the scalar decoder, which says what is wrong.
+``uav``, ``feedback``): for each command (each selector value of a command with
+variants), each status frame and each feedback message, the fields in the order the
+scalar decoder fills them. ``clean`` tells, for an (n, width) array of frames or
+messages, which rows decode without a single warning (every label known, every flag 0
+or 1, every number in range, unused and reserved bytes zero, fixed bytes as the
+document prescribes) and ``values`` gives, for those rows, each field's values as
+Python lists: exactly the numbers the scalar decoder makes (a scaled value is the same
+integer product and the same correctly rounded division). Rows with a warning are left
+to the scalar decoder, which says what is wrong.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,8 +24,15 @@ import numpy.typing as npt
 
 from analyzer.protocol.command_decoders import CAN_DATA_SIZE, compile_command
 from analyzer.protocol.command_table import BY_CODE, Command
+from analyzer.protocol.feedback import (
+    ATTITUDE,
+    FEEDBACK_ID_BYTES,
+    LAYOUTS,
+    MOTOR_YAW_LIMIT,
+    WIDE_MOTOR_YAW_TYPES,
+)
 from analyzer.protocol.fields import Field
-from analyzer.protocol.ids import COMPONENT_NAMES
+from analyzer.protocol.ids import COMPONENT_NAMES, FEEDBACK_MESSAGE_SIZE
 from analyzer.protocol.types import TOPIC_COMMAND
 from analyzer.protocol.uav import STATUS_FRAMES, USED_BYTES
 
@@ -35,8 +44,10 @@ _HEX3 = np.frombuffer(b"".join(b"%02X " % b for b in range(256)), np.uint8).resh
 
 @dataclass(frozen=True)
 class VectorLayout:
-    """One layout of 8 data bytes: its topic, its result's keys in order, their constant
-    values, the fields read, the bytes that must be zero."""
+    """One layout of a frame's data bytes or of a feedback message: its topic, its
+    result's keys in order, their constant values, the fields read, the bytes that must
+    be zero, bytes the document fixes (offset, value) and a rule across fields (the rows
+    it gives no warning)."""
 
     topic: str
     keys: tuple[str, ...]
@@ -44,14 +55,21 @@ class VectorLayout:
     fields: tuple[Field, ...]
     zero_bytes: tuple[int, ...]
     name: str | None = None  # the command's name (commands only)
+    fixed: tuple[tuple[int, bytes], ...] = ()
+    rule: Callable[[Array], Array] | None = None
 
     def clean(self, data: Array) -> Array:
-        """Which rows of ``data`` (n, 8) decode without a warning."""
+        """Which rows of ``data`` decode without a warning."""
         ok = np.ones(data.shape[0], bool)
         for f in self.fields:
             ok &= _field_clean(f, _raw(data, f))
         if self.zero_bytes:
             ok &= ~data[:, list(self.zero_bytes)].any(axis=1)
+        for offset, value in self.fixed:
+            expected = np.frombuffer(value, np.uint8)
+            ok &= (data[:, offset : offset + len(value)] == expected).all(axis=1)
+        if self.rule is not None:
+            ok &= self.rule(data)
         return ok
 
     def values(self, data: Array) -> dict[str, list[Any]]:
@@ -174,3 +192,32 @@ def status_layout(can_id: int) -> VectorLayout:
     fields = tuple(status.layout.fields)
     zeros = tuple(range(USED_BYTES[can_id], 8))
     return VectorLayout(status.topic, (*_items(fields), "raw"), {}, fields, zeros)
+
+
+def _motor_yaw_in_range(data: Array) -> Array:
+    """The attitude's rule across fields: a motor yaw beyond +-170 deg only on the models
+    that turn further (``feedback.WIDE_MOTOR_YAW_TYPES``)."""
+    names = [f.name for f in ATTITUDE.layout.fields]
+    fields = ATTITUDE.layout.fields
+    motor = _raw(data, fields[names.index("motor_yaw_deg")])
+    kind = _raw(data, fields[names.index("gimbal_type")])
+    wide = np.isin(kind, np.fromiter(WIDE_MOTOR_YAW_TYPES, np.int64))
+    return (np.abs(motor) <= MOTOR_YAW_LIMIT) | wide
+
+
+@functools.cache
+def feedback_layout(length_byte: int) -> VectorLayout:
+    """The layout of a whole feedback message (32 bytes) of this length byte."""
+    layout = LAYOUTS[length_byte]
+    fields = tuple(layout.layout.fields)
+    zeros = (*range(3, 12), *range(layout.frame_size, FEEDBACK_MESSAGE_SIZE))
+    rule = _motor_yaw_in_range if layout is ATTITUDE else None
+    return VectorLayout(
+        layout.topic,
+        (*_items(fields), "raw"),
+        {},
+        fields,
+        zeros,
+        fixed=((12, FEEDBACK_ID_BYTES),),
+        rule=rule,
+    )

@@ -10,13 +10,13 @@ from analyzer.inputs.base import InputItem, InputReader, by_frames
 from analyzer.inputs.candump.line import LineError
 from analyzer.inputs.candump.linewise import MAX_CACHED_IDS, CandumpLineParser
 from analyzer.inputs.candump.scan import (
+    DENSE,
     OTHER,
     WHERE,
     Found,
     Place,
     Scan,
     can_frames,
-    frame_run,
     scanner,
     stamp_at,
 )
@@ -24,10 +24,6 @@ from analyzer.inputs.candump.times import DECIDE_AFTER
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
-
-# Frames in one FrameRun: a batch's frames and events then stay few enough to be in the
-# processor's caches while the decoder and the counters go over them.
-RUN_FRAMES = 2048
 
 _OTHER = itemgetter(OTHER)
 
@@ -46,7 +42,10 @@ class CandumpParser(CandumpLineParser):
     (``frames_skipped``) but not returned, which keeps decoding a busy bus cheap; error
     frames are always returned. ``clock`` gives the time of lines without a timestamp
     (live input); without it they get 0.0. ``scan=False`` looks at every line with the
-    line parser (the reference the fast scan is tested against).
+    line parser (the reference the fast ways are tested against). ``columnar``: blocks
+    dense with wanted frames are read as arrays (``columns``) and their plain frames
+    handed on as FrameColumns (a file reader sets it; one line at a time has no use
+    for it).
     """
 
     def __init__(
@@ -56,14 +55,16 @@ class CandumpParser(CandumpLineParser):
         wanted_ids: Iterable[int] | None = None,
         clock: Callable[[], float] | None = None,
         scan: bool = True,
+        columnar: bool = False,
     ) -> None:
         super().__init__(source, wanted_ids=wanted_ids, clock=clock)
         self._scan = scanner(self.wanted_ids) if scan else None
         self._mixed = False  # the last block had lines for the line parser
-        self.frame_runs = False  # hand on the scanned frames as FrameRuns
         self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
-        # Read blocks as arrays (``columns``); else with the scan pattern, frame by frame.
-        self.columnar = False
+        self.columnar = columnar and scan
+        # Whether the last block was dense with wanted frames (see DENSE): the next one is
+        # read as arrays. Every frame is wanted when no IDs are chosen.
+        self.dense = self.wanted_ids is None
 
     # -- the block scan --------------------------------------------------------------------
 
@@ -88,7 +89,8 @@ class CandumpParser(CandumpLineParser):
     def parse_block(self, block: bytes) -> list[InputItem]:
         """Parse whole lines, each ending with ``\\n``; returns frames and diagnostics.
 
-        The scan goes over the block in one pass. When it met frame lines only (the usual
+        A block of a file dense with wanted frames is read as arrays (``columnar``).
+        Otherwise the scan goes over the block in one pass. When it met frame lines only (the usual
         block), the wanted frames are built a column at a time and the skipped ones are
         counted by line ends; otherwise the block is gone through match by match, and
         each line that is no well-formed frame goes to the line parser. After a block
@@ -97,9 +99,10 @@ class CandumpParser(CandumpLineParser):
         if block[-1:] != b"\n":
             block += b"\n"
         scan = self._scan
+        lines, taken = self.lines, self.frames - self.frames_skipped
         if scan is None:
             out = self._parse_lines(block)
-        elif self.columnar:
+        elif self.columnar and self.dense:
             out = self._parse_columns(block)
         elif self._mixed:
             out = self._parse_matches(block, scan)
@@ -112,19 +115,16 @@ class CandumpParser(CandumpLineParser):
             else:
                 out = self._frames(found)
                 self._count_scanned(block, 0, len(block), len(found))
+        if self.columnar and self.lines > lines:
+            taken = self.frames - self.frames_skipped - taken
+            self.dense = self.wanted_ids is None or taken >= DENSE * (self.lines - lines)
         if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
         return out
 
     def _frames(self, found: list[Found]) -> list[InputItem]:
-        """The CanFrames of the wanted frames the scan found (one FrameRun of them all
-        when ``frame_runs`` is set)."""
-        if self.frame_runs:
-            return [
-                frame_run(found[start : start + RUN_FRAMES], self._places.get, self._place)
-                for start in range(0, len(found), RUN_FRAMES)
-            ]
+        """The CanFrames of the wanted frames the scan found."""
         return list(can_frames(found, self._places.get, self._place))
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
@@ -188,12 +188,15 @@ class CandumpReader(InputReader):
         *,
         wanted_ids: Iterable[int] | None = None,
         block_size: int = BLOCK_SIZE,
+        scan: bool = True,
     ) -> None:
         super().__init__(path)
         self.block_size = block_size
         self._raw = self._open_binary()
         self._blocks, self.problems = open_lines(self._raw, block_size)
-        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids)
+        # ``scan=False``: every line through the line parser, every frame a CanFrame (the
+        # reference the fast ways are held to).
+        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids, scan=scan, columnar=True)
 
     def __iter__(self) -> Iterator[InputItem]:
         """Frames and diagnostics one by one (blocks read as columns come as CanFrames)."""
@@ -209,8 +212,6 @@ class CandumpReader(InputReader):
         parser = self.parser
         raw = self._raw
         problems = self.problems
-        parser.frame_runs = self.frame_runs
-        parser.columnar = self.columnar
         reported = 0
         for block in line_blocks(self._blocks, self.block_size):
             items = parser.parse_block(block)
@@ -219,13 +220,10 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 items.append(self._damage(problems[reported]))
                 reported += 1
-            if (self.frame_runs or self.columnar) and items:
+            if items:
                 yield from by_frames(items, size)
-            elif len(items) <= size:
-                yield items  # also when empty: the caller's progress moves on
             else:
-                for start in range(0, len(items), size):
-                    yield items[start : start + size]
+                yield items  # also when empty: the caller's progress moves on
         items = parser.finish()
         self.first_time, self.last_time = parser.first_time, parser.last_time
         self.time_base = parser.base_of_times()
