@@ -18,7 +18,7 @@ from operator import attrgetter, itemgetter
 from typing import Any
 
 from analyzer.bus_figures import BusFigures
-from analyzer.protocol.event_columns import EventColumns
+from analyzer.protocol.event_columns import EventColumns, EventGroup
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import (
@@ -55,6 +55,7 @@ CAN_BITS_EXTENDED = 67
 CAN_BITS_STANDARD = 47
 
 _US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie exactly
+_MANY = 64  # messages timed at once with numpy (only columns bring that many)
 
 
 def silence_s(previous: float, t: float) -> float:
@@ -118,12 +119,41 @@ class FeedbackTrack:
     _arrival: float | None = field(default=None, repr=False)
 
     def add(self, t: float) -> None:
-        if self.last is None:
-            self.first = t
+        self.add_times([t])
+
+    def add_times(self, times: list[float]) -> None:
+        """Messages at ``times``, one after the other (``add`` of each, in one loop)."""
+        if not times:
+            return
+        previous = self._arrival if self._arrival is not None else self.last
+        if previous is None:
+            self.first = previous = times[0]
+            times = times[1:]
+            self.count += 1
+        if len(times) > _MANY:
+            self._silences(previous, times)
+            previous = times[-1]
         else:
-            self._silence_until(t)
-        self.count += 1
-        self.last = self._arrival = t
+            previous_us = round(previous * _US)
+            silence = self._silence
+            for t in times:
+                t_us = round(t * _US)
+                silence(previous, t_us - previous_us, t)
+                previous, previous_us = t, t_us
+        self.count += len(times)
+        self.last = self._arrival = previous
+
+    def _silences(self, previous: float, times: list[float]) -> None:
+        """``_silence`` between each two messages of ``previous`` and ``times``, at once:
+        only the longest and those over the threshold need a closer look."""
+        import numpy as np  # only for many messages at once: those of columns
+
+        at = np.array([previous, *times])
+        gaps = np.diff(np.rint(at * _US).astype(np.int64))
+        longest = int(np.argmax(gaps))  # the first of the longest
+        self._longest(float(at[longest]), int(gaps[longest]), float(at[longest + 1]))
+        for gap_us in gaps[gaps / _US >= GAP_THRESHOLD_S].tolist():
+            self._lost(gap_us)
 
     def damaged(self, t: float) -> None:
         """A message with a bad CRC came at ``t``: the silence before it ends there, and
@@ -131,16 +161,20 @@ class FeedbackTrack:
         arrival = self._arrival if self._arrival is not None else self.last
         if arrival is None or t <= arrival:
             return
-        self._silence_until(t)
+        self._silence(arrival, round(t * _US) - round(arrival * _US), t)
         self._arrival = t
 
-    def _silence_until(self, t: float) -> None:
-        last = self._arrival if self._arrival is not None else self.last
-        assert last is not None
-        gap_us = round(t * _US) - round(last * _US)
+    def _silence(self, last: float, gap_us: int, t: float) -> None:
+        """The silence between messages at ``last`` and ``t`` (``gap_us`` microseconds)."""
+        self._longest(last, gap_us, t)
+        self._lost(gap_us)
+
+    def _longest(self, last: float, gap_us: int, t: float) -> None:
         if gap_us > self._longest_us:
             self._longest_us = gap_us
             self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
+
+    def _lost(self, gap_us: int) -> None:
         lost = lost_messages(gap_us / _US)
         if lost:
             self.gaps_over_threshold += 1
@@ -268,7 +302,7 @@ class Tally:
             for _, name in sorted(firsts, key=_FIRST):
                 if name not in self.commands:
                     self.commands[name] = 0
-        timed: list[tuple[int, float, str, bool]] = []
+        feedback: list[EventGroup] = []
         for group in block.groups:
             n = len(group)
             self.events += n
@@ -276,21 +310,31 @@ class Tally:
             if group.topic == TOPIC_COMMAND:
                 self.commands[str(group.name)] += n
             elif group.topic in FEEDBACK_TOPICS:
-                rows, times = group.rows.tolist(), group.times.tolist()
-                timed += zip(rows, times, group.sources, [False] * n, strict=True)
+                feedback.append(group)
             self.widen(float(group.times.min()), float(group.times.max()))
-        if singles:
-            events = [e for _, e in singles]
+        events = [e for _, e in singles]
+        if events:
             self._count(events)
-            if timed:
-                timed += [
-                    (row, e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
-                    for row, e in singles
-                    if e.topic in FEEDBACK_TOPICS or _damaged_feedback(e)
-                ]
-            else:
-                self._time_feedback(events)
-                return
+        if not feedback:
+            self._time_feedback(events)
+            return
+        timed = [
+            (row, e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
+            for row, e in singles
+            if e.topic in FEEDBACK_TOPICS or _damaged_feedback(e)
+        ]
+        streams = {s for g in feedback for s in (g.sources[0], g.sources[-1])}
+        if not timed and len(streams) == 1 and all(len(set(g.sources)) == 1 for g in feedback):
+            import numpy as np  # the groups' rows and times are arrays already
+
+            rows = np.concatenate([g.rows for g in feedback])
+            times = np.concatenate([g.times for g in feedback])[np.argsort(rows, kind="stable")]
+            key = streams.pop()
+            self._time_points([(t, key, False) for t in times.tolist()])
+            return
+        for group in feedback:
+            rows, times = group.rows.tolist(), group.times.tolist()
+            timed += zip(rows, times, group.sources, [False] * len(rows), strict=True)
         timed.sort(key=_FIRST)
         self._time_points([(t, key, damaged) for _, t, key, damaged in timed])
 
@@ -357,22 +401,31 @@ class Tally:
         )
 
     def _time_points(self, points: list[tuple[float, str, bool]]) -> None:
-        """Feedback messages (time, stream, damaged) in the order they came."""
+        """Feedback messages (time, stream, damaged) in the order they came; a run of
+        whole messages of one stream is timed in one go."""
         feedback = self.feedback
-        for t, key, damaged in points:
+        i, n = 0, len(points)
+        while i < n:
+            t, key, damaged = points[i]
             if damaged:
                 track = feedback.get(key)
                 if track is not None:
                     track.damaged(t)
+                i += 1
                 continue
-            self.crc_checked += 1
+            end = i + 1
+            while end < n and points[end][1] == key and not points[end][2]:
+                end += 1
+            self.crc_checked += end - i
             track = feedback.get(key)
             if track is None:
                 if len(feedback) >= MAX_FEEDBACK_SOURCES:
-                    self.feedback_untracked += 1
+                    self.feedback_untracked += end - i
+                    i = end
                     continue
                 track = feedback[key] = FeedbackTrack()
-            track.add(t)
+            track.add_times([p[0] for p in points[i:end]])
+            i = end
 
     def widen(self, first: float | None, last: float | None) -> None:
         """Take a time span the input saw (frames the reader skipped, for instance) into account."""

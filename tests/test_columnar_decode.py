@@ -25,7 +25,7 @@ from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.crc import crc16
 from analyzer.protocol.decoder import Decoder
-from analyzer.protocol.event_columns import EventColumns
+from analyzer.protocol.event_columns import EventColumns, _json_column
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.protocol.vector_decode import crc16_rows
 from benchmarks.decode_speed import dense_lines, traffic_lines
@@ -246,3 +246,17 @@ def test_crc_of_many_messages_at_once(messages: list[bytes]) -> None:
     sizes = np.array([25 + (m[0] & 4) for m in messages])
     got = crc16_rows(array, sizes).tolist()
     assert got == [crc16(m[:s]) for m, s in zip(messages, sizes.tolist(), strict=True)]
+
+
+@given(
+    st.one_of(
+        st.lists(st.text(), min_size=1),
+        st.lists(st.text(alphabet="0123456789ABCDEF "), min_size=1),
+        st.lists(st.sampled_from(["full_lock", "35x zoom 2MP / 30x zoom 4K", 'a "b"']), min_size=1),
+        st.lists(st.integers(-(2**40), 2**40), min_size=1),
+        st.lists(st.floats(allow_nan=False, allow_infinity=False), min_size=1),
+        st.lists(st.booleans(), min_size=1),
+    )
+)
+def test_a_column_is_written_as_json_writes_each_value(values: list[Any]) -> None:
+    assert _json_column(values) == [json.dumps(v) for v in values]

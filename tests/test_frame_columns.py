@@ -9,6 +9,7 @@ whose sink keeps raw frames and one whose sink does not.
 from __future__ import annotations
 
 import dataclasses
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -242,3 +243,59 @@ def test_columns_go_to_the_pipeline_in_lists_of_at_most_a_batch_of_frames(
         weight = sum(len(i) if isinstance(i, FrameColumns) else 1 for i in chunk)
         assert weight <= size or len(chunk) == 1
     assert all(chunks) or chunks == [[]]
+
+
+@st.composite
+def feedback_stream(draw: st.DrawFn) -> list[CanFrame]:
+    """Feedback as a gimbal sends it, with what goes wrong on a bus: whole messages one
+    after the other, a last segment sent twice, a segment lost or late, a damaged byte."""
+    out: list[CanFrame] = []
+    time = 1e9
+    for _ in range(draw(st.integers(0, 12))):
+        message = draw(st.sampled_from(MESSAGES))
+        parts = [bytes(p) for p in segments(message)]
+        fault = draw(st.sampled_from(["none"] * 6 + ["repeat", "lose", "late", "flip"]))
+        if fault == "repeat":
+            parts.append(parts[-1])
+        elif fault == "lose":
+            del parts[draw(st.integers(0, 3))]
+        elif fault == "flip":
+            at = draw(st.integers(0, len(parts) - 1))
+            parts[at] = bytes([parts[at][0] ^ 0x40]) + parts[at][1:]
+        for part in parts:
+            time += 0.3 if fault == "late" and draw(st.booleans()) else 0.001
+            out.append(CanFrame(time, FEEDBACK_ID, part, True, draw(st.sampled_from(CHANNELS))))
+        time += draw(st.sampled_from([0.001, 0.1, 0.5]))
+    return out
+
+
+MESSAGES = [
+    encode_attitude(pitch_deg=-30.0, yaw_deg=12.5, motor_yaw_deg=3.0),
+    encode_attitude(pitch_deg=-31.0, yaw_deg=12.5, motor_yaw_deg=3.0),
+    encode_ranging(distance_m=120.0, height_m=80.0, latitude_deg=31.1, longitude_deg=118.1),
+]
+CHANNELS = ["can0", "can0", "can0", "can1"]
+
+
+@settings(max_examples=300, deadline=None)
+@given(feedback_stream(), st.lists(st.integers(0, 60), max_size=3))
+def test_feedback_in_columns_is_reassembled_as_segment_by_segment(
+    frames: list[CanFrame], cuts: list[int]
+) -> None:
+    """Messages taken whole in vectors, and everything around them, as the reassembler
+    takes one segment at a time, wherever the blocks end."""
+    short, long = Decoder(), Decoder()
+    short_events: list[Event] = []
+    long_events: list[Event] = []
+    edges = sorted({0, len(frames), *(c for c in cuts if c < len(frames))})
+    for start, end in pairwise(edges):
+        short.feed_batch([as_columns(frames[start:end])], short_events)
+        long.feed_batch(frames[start:end], long_events)
+    short_events += short.close()
+    long_events += long.close()
+    assert [e.to_dict() for e in short_events] == [e.to_dict() for e in long_events]
+    assert short.stats == long.stats
+    short_tally, long_tally = Tally(), Tally()
+    short_tally.add_events(short_events)
+    long_tally.add_events(long_events)
+    assert dataclasses.asdict(short_tally) == dataclasses.asdict(long_tally)

@@ -7,6 +7,7 @@ properties hold them to the plain code they stand in for.
 
 from __future__ import annotations
 
+import dataclasses
 from collections import Counter
 from typing import Any
 
@@ -40,7 +41,7 @@ from analyzer.protocol.types import (
     StreamChunk,
 )
 from analyzer.protocol.uav import encode_gps
-from analyzer.tally import CAN_BITS_EXTENDED, CAN_BITS_STANDARD, Tally
+from analyzer.tally import CAN_BITS_EXTENDED, CAN_BITS_STANDARD, FeedbackTrack, Tally
 
 ATTITUDE = encode_attitude(pitch_deg=-30, yaw_deg=12, motor_yaw_deg=0)
 RANGING = encode_ranging(distance_m=150, height_m=80, latitude_deg=31.1, longitude_deg=118.1)
@@ -256,3 +257,30 @@ def test_tally_folds_a_batch_as_the_figures_define(items: list[Any], events: lis
     assert (tally.crc_checked, tally.crc_errors) == want["crc"]
     feedback = [e for e in events if e.topic in (TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING)]
     assert sum(t.count for t in tally.feedback.values()) == len(feedback)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.sampled_from([0.0, 0.000_000_5, 0.5, 0.499_999_5, 0.75, 1.0, 1.25, 1.5, 3.0, 7.7]),
+        min_size=0,
+        max_size=300,
+    ),
+    st.floats(0, 2e9),
+    st.integers(0, 4),
+)
+def test_many_feedback_messages_are_timed_as_one_by_one(
+    steps: list[float], start: float, damaged_first: int
+) -> None:
+    """The counters time a feedback group's messages at once (``add_times``): the same
+    longest gap (the first of the longest), the same silences and lost messages."""
+    times = [start + sum(steps[: i + 1]) for i in range(len(steps))]
+    one, many = FeedbackTrack(), FeedbackTrack()
+    for track in (one, many):
+        if damaged_first:
+            track.add(start - 10)
+            track.damaged(start - 10 + damaged_first)
+    for t in times:
+        one.add(t)
+    many.add_times(times)
+    assert dataclasses.asdict(many) == dataclasses.asdict(one)

@@ -130,7 +130,7 @@ class Decoder:
         crowded = self._crowded(len(frames.channels))
         plan = plan_columns(frames, crowded=crowded, emit_other=self.emit_other)
         out.groups += plan.groups
-        for source, rows, whole in plan.feedback:
+        for source, rows, whole, regular in plan.feedback:
             self.last_time = float(frames.time[rows[0]])
             reassembler = self._reassembler(source)
             taken, fed = reassembler.feed_segments(
@@ -138,6 +138,7 @@ class Decoder:
                 frames.data[rows].tobytes(),
                 frames.length[rows].tolist(),
                 whole,
+                regular,
             )
             groups, messages = feedback_groups(frames, rows, taken, source)
             out.groups += groups

@@ -13,7 +13,8 @@ making them, and the counters take the groups as counts.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from itertools import pairwise, repeat
 from operator import itemgetter
@@ -62,26 +63,32 @@ class EventGroup:
 
     def json_lines(self) -> list[str]:
         """What ``json.dumps(event.to_dict(), default=str)`` gives for each event."""
-        parts = [f'{{"topic": {_dumps(self.topic)}, "time": %s, "source": %s, "warnings": []']
+        # The constant text between the values: each line is the parts and the values,
+        # one after the other.
+        parts = [f'{{"topic": {_dumps(self.topic)}, "time": ', ', "source": ', ', "warnings": []']
         sources = self.sources
         unique = set(sources)
         if len(unique) == 1:
             text = _dumps(sources[0])
             source_column = [text] * len(sources)
         else:
-            texts = {s: _dumps(s) for s in unique}
-            source_column = [texts[s] for s in sources]
+            names = {s: _dumps(s) for s in unique}
+            source_column = [names[s] for s in sources]
         columns: list[list[str]] = [list(map(float.__repr__, self.times.tolist())), source_column]
         values = self.values()
         for key in self.keys:
-            name = _dumps(key)
+            item = f", {_dumps(key)}: "
             if key in self.constants:
-                parts.append(f"{name}: {_percent(_dumps(self.constants[key]))}")
+                parts[-1] += item + _dumps(self.constants[key])
                 continue
-            parts.append(f"{name}: %s")
+            parts[-1] += item
+            parts.append("")
             columns.append(_json_column(values[key]))
-        template = ", ".join(parts) + "}"
-        return [template % row for row in zip(*columns, strict=True)]
+        parts[-1] += "}"
+        texts: list[Iterable[str]] = [repeat(parts[0])]
+        for column, part in zip(columns, parts[1:], strict=True):
+            texts += [column, repeat(part)]
+        return list(map("".join, zip(*texts, strict=False)))  # the parts repeat for ever
 
 
 def _json_column(values: list[Any]) -> list[str]:
@@ -94,15 +101,24 @@ def _json_column(values: list[Any]) -> list[str]:
         return list(map(int.__repr__, values))
     if isinstance(first, float):  # finite: json writes float.__repr__
         return list(map(float.__repr__, values))
-    return [_dumps(v) for v in values]
+    if isinstance(first, str):
+        try:
+            escaped = _ESCAPED.search("".join(values)) is not None
+        except TypeError:  # not text only
+            escaped = True
+        if not escaped:
+            return [f'"{v}"' for v in values]  # what json writes for text it need not escape
+    known: dict[Any, str] = {}
+    return [known[v] if v in known else known.setdefault(v, _dumps(v)) for v in values]
+
+
+# What ``json.dumps`` escapes in a string: control characters, quotes, backslashes and,
+# as it ensures ASCII, anything beyond.
+_ESCAPED = re.compile(r"[^ !#-\[\]-~]")
 
 
 def _dumps(value: Any) -> str:
     return json.dumps(value, default=str)
-
-
-def _percent(text: str) -> str:
-    return text.replace("%", "%%")
 
 
 @dataclass(slots=True)

@@ -119,20 +119,34 @@ class FeedbackReassembler:
         return out
 
     def feed_segments(
-        self, times: list[float], blob: bytes, sizes: list[int], whole: list[bool]
+        self,
+        times: list[float],
+        blob: bytes,
+        sizes: list[int],
+        whole: list[bool],
+        regular: int = 0,
     ) -> tuple[list[int], list[tuple[int, list[Message | Event]]]]:
         """Segments in a row, as ``feed`` takes them one by one: segment ``j`` is
         ``blob[8 * j : 8 * j + sizes[j]]`` at ``times[j]``.
 
         ``whole[j]`` says that segments ``j`` to ``j + 3`` are a message with nothing to
         remark (8 bytes each, a header first, the CRC right, no segment late): it is taken
-        whole when nothing is pending and it repeats no segment. Returns where the
-        messages taken whole start (the caller decodes them), and what ``feed`` gave for
-        the other segments, by index."""
+        whole when nothing is pending and it repeats no segment. ``regular``: the first
+        that many messages are such messages, one after the other, none starting with the
+        segment that ends the one before (taken at once). Returns where the messages taken
+        whole start (the caller decodes them), and what ``feed`` gave for the other
+        segments, by index."""
         taken: list[int] = []
         fed: list[tuple[int, list[Message | Event]]] = []
         size = 8 * SEGMENTS_PER_MESSAGE
         j, n = 0, len(times)
+        if regular and not self._pending and not self._repeats_tail(blob[:8], times[0]):
+            j = regular * SEGMENTS_PER_MESSAGE
+            taken = list(range(0, j, SEGMENTS_PER_MESSAGE))
+            self.bytes_fed += regular * size
+            self.bytes_framed += regular * size
+            self._last_tail = blob[8 * j - 8 : 8 * j]
+            self._last_tail_time = times[j - 1]
         while j < n:
             if whole[j] and not self._pending:
                 start = 8 * j

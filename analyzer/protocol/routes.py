@@ -24,8 +24,3 @@ ROUTES: dict[int, str] = {
 }
 
 STATUS_TOPICS: dict[int, str] = {can_id: status.topic for can_id, status in STATUS_FRAMES.items()}
-
-
-def ids_of(route: str) -> list[int]:
-    """The CAN IDs whose frames take ``route``."""
-    return [can_id for can_id, where in ROUTES.items() if where == route]

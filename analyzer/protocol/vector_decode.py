@@ -29,7 +29,7 @@ from analyzer.protocol.feedback import FRAME_SIZES
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.ids import HEADER
 from analyzer.protocol.reassembly import LATE_AFTER_S, SEGMENTS_PER_MESSAGE, Message
-from analyzer.protocol.routes import COMMAND, FEEDBACK, ROUTES, STATUS, ids_of
+from analyzer.protocol.routes import COMMAND, FEEDBACK, ROUTES, STATUS
 from analyzer.protocol.types import TOPIC_CAN_OTHER
 from analyzer.protocol.vector_layouts import (
     VectorLayout,
@@ -46,19 +46,22 @@ _SIZES = np.zeros(256, np.int64)  # message size by length byte (0: no feedback 
 for _k, _v in FRAME_SIZES.items():
     _SIZES[_k] = _v
 _ROUTED = np.array(sorted(ROUTES), np.int64)
+_ROUTE_NAMES = sorted(set(ROUTES.values()))
+_ROUTE_OF = np.array([_ROUTE_NAMES.index(ROUTES[i]) for i in sorted(ROUTES)], np.int8)
 _OTHER_KEYS = ("can_id", "extended", "dlc", "data", "remote")
 
 
 @dataclass(slots=True)
 class ColumnPlan:
     """A block routed: ``groups`` decoded in vectors; per channel with feedback its
-    source, rows and which rows start a clean message; the rows for the frame-by-frame
+    source, rows, which rows start a clean message and how many clean messages come one
+    after the other from the first row (``regular_messages``); the rows for the frame-by-frame
     dispatch (ascending); how many rows were protocol frames taken here (groups and
     feedback) and frames of other devices; the channels with feedback, the one whose
     last segment came first first."""
 
     groups: list[EventGroup] = field(default_factory=list)
-    feedback: list[tuple[str, Array, list[bool]]] = field(default_factory=list)
+    feedback: list[tuple[str, Array, list[bool], int]] = field(default_factory=list)
     scalar: Array = field(default_factory=lambda: np.zeros(0, np.int64))
     protocol_rows: int = 0
     other_rows: int = 0
@@ -75,11 +78,15 @@ def plan_columns(frames: FrameColumns, *, crowded: bool, emit_other: bool) -> Co
         plan.scalar = np.arange(n)
         return plan
     can_id, extended, length = frames.can_id, frames.extended, frames.length
+    # Each row's route (an index into _ROUTE_NAMES; -1: other devices), in two passes.
+    route = np.full(n, -1, np.int8)
+    routed = np.isin(can_id, _ROUTED)
+    route[routed] = _ROUTE_OF[np.searchsorted(_ROUTED, can_id[routed])]
     eight = extended & (length == 8)
-    command = eight & np.isin(can_id, ids_of(COMMAND))
-    feedback = extended & np.isin(can_id, ids_of(FEEDBACK))
-    status = eight & np.isin(can_id, ids_of(STATUS))
-    other = ~np.isin(can_id, _ROUTED)
+    command = eight & (route == _ROUTE_NAMES.index(COMMAND))
+    feedback = extended & (route == _ROUTE_NAMES.index(FEEDBACK))
+    status = eight & (route == _ROUTE_NAMES.index(STATUS))
+    other = ~routed
     left = [np.flatnonzero(~(command | feedback | status | other))]
     if command.any():
         left += _commands(frames, np.flatnonzero(command), plan.groups)
@@ -92,9 +99,11 @@ def plan_columns(frames: FrameColumns, *, crowded: bool, emit_other: bool) -> Co
         last_rows: list[tuple[int, str]] = []
         for channel in np.unique(frames.channel[feedback]).tolist():
             rows = np.flatnonzero(feedback & (frames.channel == channel))
-            whole = clean_messages(frames.time[rows], frames.data[rows], frames.length[rows])
+            times, data = frames.time[rows], frames.data[rows]
+            whole = clean_messages(times, data, frames.length[rows])
             source = frames.channels[channel] or "can"
-            plan.feedback.append((source, rows, whole.tolist()))
+            regular = regular_messages(whole, data, times)
+            plan.feedback.append((source, rows, whole.tolist(), regular))
             last_rows.append((int(rows[-1]), source))
         plan.feedback_order = [source for _, source in sorted(last_rows)]
     plan.other_rows = int(np.count_nonzero(other))
@@ -221,13 +230,50 @@ def _other_group(frames: FrameColumns, rows: Array) -> EventGroup:
     )
 
 
+def regular_messages(
+    whole: Array, data: Array, times: Array, late_after: float = LATE_AFTER_S
+) -> int:
+    """How many clean messages (``clean_messages``) follow each other from segment 0, no
+    one starting with a repeat of the segment that ends the one before (a segment equal
+    to it within ``late_after``, which the reassembler reports as repeated)."""
+    starts = whole[::SEGMENTS_PER_MESSAGE][: whole.shape[0] // SEGMENTS_PER_MESSAGE].copy()
+    m = starts.shape[0]
+    if m > 1:
+        words = np.ascontiguousarray(data).view("<u8").ravel()
+        first = slice(SEGMENTS_PER_MESSAGE, SEGMENTS_PER_MESSAGE * m, SEGMENTS_PER_MESSAGE)
+        last = slice(SEGMENTS_PER_MESSAGE - 1, SEGMENTS_PER_MESSAGE * m - 1, SEGMENTS_PER_MESSAGE)
+        repeats = (words[first] == words[last]) & (times[first] - times[last] <= late_after)
+        starts[1:] &= ~repeats
+    return m if starts.all() else int(np.argmin(starts))
+
+
 def crc16_rows(messages: Array, sizes: Array) -> Array:
     """CRC-16/MODBUS of each row of ``messages`` over its first ``sizes`` bytes."""
     crc = np.full(messages.shape[0], 0xFFFF, np.int64)
-    for column in range(int(sizes.max(initial=0))):
-        step = (crc >> 8) ^ _CRC[(crc ^ messages[:, column]) & 0xFF]
-        crc = np.where(column < sizes, step, crc)
+    for size in np.unique(sizes).tolist():
+        rows = np.flatnonzero(sizes == size)
+        crc[rows] = _crc16(messages[rows], size)
     return crc
+
+
+def _crc16(messages: Array, size: int) -> Array:
+    """CRC-16/MODBUS of the first ``size`` bytes of each row, two bytes a step: the
+    register is 16 bits wide, so two bytes at once are one look-up of their XOR."""
+    crc = np.full(messages.shape[0], 0xFFFF, np.int64)
+    table = _crc_pairs()
+    for column in range(0, size - 1, 2):
+        crc = table[crc ^ messages[:, column] ^ (messages[:, column + 1] << 8)]
+    if size % 2:
+        crc = (crc >> 8) ^ _CRC[(crc ^ messages[:, size - 1]) & 0xFF]
+    return crc
+
+
+@functools.cache
+def _crc_pairs() -> Array:
+    """The CRC register after two bytes, by the register XOR those bytes."""
+    value = np.arange(1 << 16, dtype=np.int64)
+    low = (value >> 8) ^ _CRC[value & 0xFF]
+    return (low >> 8) ^ _CRC[low & 0xFF]
 
 
 def clean_messages(

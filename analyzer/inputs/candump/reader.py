@@ -12,11 +12,13 @@ from analyzer.inputs.candump.linewise import MAX_CACHED_IDS, CandumpLineParser
 from analyzer.inputs.candump.scan import (
     DENSE,
     OTHER,
+    SAMPLE,
     WHERE,
     Found,
     Place,
     Scan,
     can_frames,
+    id_texts,
     scanner,
     stamp_at,
 )
@@ -63,8 +65,9 @@ class CandumpParser(CandumpLineParser):
         self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
         self.columnar = columnar and scan
         # Whether the last block was dense with wanted frames (see DENSE): the next one is
-        # read as arrays. Every frame is wanted when no IDs are chosen.
-        self.dense = self.wanted_ids is None
+        # read as arrays. Every frame is wanted when no IDs are chosen; before the first
+        # block, its start tells.
+        self.dense: bool | None = True if self.wanted_ids is None else None
 
     # -- the block scan --------------------------------------------------------------------
 
@@ -102,7 +105,7 @@ class CandumpParser(CandumpLineParser):
         lines, taken = self.lines, self.frames - self.frames_skipped
         if scan is None:
             out = self._parse_lines(block)
-        elif self.columnar and self.dense:
+        elif self.columnar and (self.dense or (self.dense is None and self._dense_start(block))):
             out = self._parse_columns(block)
         elif self._mixed:
             out = self._parse_matches(block, scan)
@@ -122,6 +125,14 @@ class CandumpParser(CandumpLineParser):
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
         return out
+
+    def _dense_start(self, block: bytes) -> bool:
+        """Whether the start of ``block`` is dense with wanted frames (``DENSE``), by the
+        ID texts candump writes for them."""
+        sample = block[:SAMPLE]
+        texts = [b" " + text.encode() + b"#" for text in id_texts(self.wanted_ids or ())]
+        wanted = sum(map(sample.count, texts))
+        return wanted >= DENSE * sample.count(b"\n")
 
     def _frames(self, found: list[Found]) -> list[InputItem]:
         """The CanFrames of the wanted frames the scan found."""

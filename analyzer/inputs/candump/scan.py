@@ -48,8 +48,10 @@ STAMP, WHERE, DATA, DIRECTION, OTHER = range(5)
 # A file's block whose lines are at least this fraction of wanted frames is read as arrays
 # (``columns``) and decoded in vectors; in a sparser one (a busy drone bus where a few
 # frames in a hundred are the gimbal's) this scan skips the other frames at C speed and
-# the few wanted become CanFrames. The last block decides for the next.
+# the few wanted become CanFrames. The last block decides for the next; the first 64 KiB
+# of the first block for itself.
 DENSE = 0.1
+SAMPLE = 1 << 16
 
 
 @dataclass(frozen=True)
