@@ -13,7 +13,6 @@ capture. Frames in time order pass through untouched, a batch at a time.
 
 from __future__ import annotations
 
-import statistics
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from operator import attrgetter
@@ -117,7 +116,7 @@ class CaptureClock:
             return []
         # The capture's time is where most of its first frames are: one damaged first
         # frame does not set it.
-        reference = statistics.median_low(times)
+        reference = sorted(times)[(len(times) - 1) // 2]  # the lower median
         good = [t for t in times if t >= reference - self.max_back_s]
         self.first = self.latest = min(good)
         held, self._held = self._held, []

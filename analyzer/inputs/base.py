@@ -15,6 +15,10 @@ from analyzer.protocol.types import CanFrame, Event, StreamChunk
 
 # FrameColumns: classic data frames a reader read in a block as arrays.
 InputItem = CanFrame | StreamChunk | Event | FrameColumns
+# Time bases (``InputReader.time_base``): how a file's times were written.
+ABSOLUTE = "absolute"
+RELATIVE_TO_START = "relative to the start of the recording"
+DELTA = "time since the previous frame (accumulated)"
 # Frame times are seconds since 1970 or since a log's start: a number beyond 2**33 s
 # (the year 2242) is no time but a damaged field, and later steps cannot date it.
 LATEST_TIME = float(2**33)
@@ -46,9 +50,8 @@ class InputReader:
         self.position_bytes = 0
         self.first_time: float | None = None  # time of the first frame read (skipped ones too)
         self.last_time: float | None = None
-        # How the file's times were written, when it is worth saying: "absolute",
-        # "relative to the start of the recording" or "time since the previous frame
-        # (accumulated)" (see analyzer.inputs.python_can.text_logs); None when not known.
+        # How the file's times were written, when it is worth saying: ABSOLUTE,
+        # RELATIVE_TO_START or DELTA; None when not known.
         self.time_base: str | None = None
         # Facts about the input for the user that are no protocol diagnostic, known once
         # it has been read (e.g. "no TCP traffic on port 2000; ports seen: ...").

@@ -7,8 +7,11 @@ import re
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import open_binary
-from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
 from analyzer.inputs.textlines import GZIP_MAGIC, TolerantGunzip
+
+# The start of the header line SavvyCAN writes into its CSV files (lower case).
+SAVVYCAN_HEADER_START = b"time stamp,id,extended,"
+
 
 # --format values and what they read.
 FORMATS: dict[str, str] = {

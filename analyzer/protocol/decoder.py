@@ -3,18 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from analyzer.protocol.bus_state import BusState
 from analyzer.protocol.can_error import decode_error_frame
 from analyzer.protocol.codec import decode_command
 from analyzer.protocol.event_columns import ColumnSlots, EventColumns
 from analyzer.protocol.frame_columns import FrameColumns
-from analyzer.protocol.framing import RawFrame, StreamFramer
 from analyzer.protocol.lru import MAX_SOURCES, LruTable
 from analyzer.protocol.reassembly import FeedbackReassembler, message_events
 from analyzer.protocol.routes import COMMAND, FEEDBACK, ROUTES, STATUS_TOPICS, TEXT
-from analyzer.protocol.stream_frames import stream_frame_events
 from analyzer.protocol.types import (
     BAD_FRAME,
     BUS_ERROR,
@@ -29,6 +27,9 @@ from analyzer.protocol.types import (
     hexstr,
 )
 from analyzer.protocol.uav import TextAssembler, decode_status
+
+if TYPE_CHECKING:  # streams are framed by modules imported when one comes
+    from analyzer.protocol.framing import RawFrame, StreamFramer
 
 __all__ = ["STATUS_TOPICS", "Decoder"]
 
@@ -165,6 +166,8 @@ class Decoder:
         key = (chunk.source, chunk.direction)
         framer = self._framers.get(key)
         if framer is None:
+            from analyzer.protocol.framing import StreamFramer
+
             framer = self._framers.add(key, StreamFramer(chunk.source, chunk.direction))
             if self._given_up:
                 return self._take_given_up() + self._framed(
@@ -369,6 +372,8 @@ class Decoder:
     # -- streams ---------------------------------------------------------------------------------
 
     def _framed(self, framer: StreamFramer, results: list[RawFrame | Event]) -> list[Event]:
+        from analyzer.protocol.stream_frames import stream_frame_events
+
         out: list[Event] = []
         extra: dict[str, Any] = {"direction": framer.direction} if framer.direction else {}
         source = framer.source

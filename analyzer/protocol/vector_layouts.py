@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from analyzer.protocol.command_decoders import CAN_DATA_SIZE, compile_command
+from analyzer.protocol.command_decoders import CAN_DATA_SIZE, command_fits
 from analyzer.protocol.command_table import BY_CODE, Command
 from analyzer.protocol.feedback import (
     ATTITUDE,
@@ -174,7 +174,7 @@ def command_layouts(key: int) -> dict[int | None, VectorLayout] | None:
     layout of a command without selector); None for a command the table does not have,
     or whose layout has no generated decoder (the scalar decoder takes those)."""
     row = BY_CODE.get((key >> 8, key & 0xFF))
-    if row is None or compile_command(row) is None:
+    if row is None or not command_fits(row):
         return None
     if row.selector is None:
         return {None: _command_layout(row, row.params)}

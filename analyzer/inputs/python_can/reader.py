@@ -8,9 +8,9 @@ from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.inputs.base import InputItem, InputReader, time_problem
+from analyzer.inputs.base import DELTA, InputItem, InputReader, time_problem
 from analyzer.inputs.python_can.library_log import LibraryLog, library_log
-from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
+from analyzer.inputs.python_can.text_logs import LineFeed, TextLogReading, text_lines
 from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
