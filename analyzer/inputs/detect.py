@@ -17,7 +17,7 @@ SAVVYCAN_HEADER_START = b"time stamp,id,extended,"
 FORMATS: dict[str, str] = {
     "candump": "candump -L log or candump screen output (.log; '-' = standard input)",
     "asc": "Vector ASC (.asc) through python-can",
-    "blf": "Vector BLF (.blf) through python-can",
+    "blf": "Vector BLF (.blf)",
     "trc": "PCAN-View TRC (.trc) through python-can",
     "csv": "python-can CSV (.csv)",
     "mf4": "ASAM MDF4 (.mf4) through python-can (needs asammdf)",

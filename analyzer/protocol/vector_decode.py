@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from analyzer.protocol.arrays import distinct
 from analyzer.protocol.crc import _TABLE
 from analyzer.protocol.event_columns import EventGroup
 from analyzer.protocol.feedback import FRAME_SIZES
@@ -93,11 +94,11 @@ def plan_columns(frames: FrameColumns, *, crowded: bool, emit_other: bool) -> Co
     if status.any():
         ids = can_id[status]
         rows = np.flatnonzero(status)
-        for value in np.unique(ids).tolist():
+        for value in distinct(ids).tolist():
             left.append(_group(status_layout(value), frames, rows[ids == value], plan.groups))
     if feedback.any():
         last_rows: list[tuple[int, str]] = []
-        for channel in np.unique(frames.channel[feedback]).tolist():
+        for channel in distinct(frames.channel[feedback]).tolist():
             rows = np.flatnonzero(feedback & (frames.channel == channel))
             times, data = frames.time[rows], frames.data[rows]
             whole = clean_messages(times, data, frames.length[rows])
@@ -129,7 +130,7 @@ def feedback_groups(
     groups: list[EventGroup] = []
     left: list[tuple[int, Message]] = []
     kinds = messages[:, 2]
-    for length_byte in np.unique(kinds).tolist():
+    for length_byte in distinct(kinds).tolist():
         mine = np.flatnonzero(kinds == length_byte)
         layout = feedback_layout(length_byte)
         data = messages[mine]
@@ -187,7 +188,7 @@ def _commands(frames: FrameColumns, rows: Array, out: list[EventGroup]) -> list[
     data = frames.data[rows]
     keys = data[:, 0].astype(np.int64) << 8 | data[:, 1]
     left: list[Array] = []
-    for key in np.unique(keys).tolist():
+    for key in distinct(keys).tolist():
         mine = rows[keys == key]
         layouts = command_layouts(key)
         if layouts is None:
@@ -198,7 +199,7 @@ def _commands(frames: FrameColumns, rows: Array, out: list[EventGroup]) -> list[
             continue
         selector = next(iter(layouts.values())).fields[0]
         values = frames.data[mine, selector.offset]
-        for value in np.unique(values).tolist():
+        for value in distinct(values).tolist():
             same = mine[values == value]
             layout = layouts.get(value)
             left.append(same if layout is None else _group(layout, frames, same, out))
@@ -250,7 +251,7 @@ def regular_messages(
 def crc16_rows(messages: Array, sizes: Array) -> Array:
     """CRC-16/MODBUS of each row of ``messages`` over its first ``sizes`` bytes."""
     crc = np.full(messages.shape[0], 0xFFFF, np.int64)
-    for size in np.unique(sizes).tolist():
+    for size in distinct(sizes).tolist():
         rows = np.flatnonzero(sizes == size)
         crc[rows] = _crc16(messages[rows], size)
     return crc
