@@ -90,7 +90,9 @@ class Containers:
                 if len(rest) < size - BASE_HEADER.size:
                     return  # the stream says where its object was cut
             else:
-                yield Skipped("objects", f"an object at byte {at:,} claims {size:,} bytes")
+                yield Skipped(
+                    "objects", f"an object at byte {at:,} claiming {size:,} bytes skipped"
+                )
                 yield from self._resync(head[4:], at + 4)
                 continue
             self._read(size % 4)  # padding
@@ -115,7 +117,7 @@ class Containers:
         else:
             yield Skipped(
                 "log containers",
-                f"a log container at byte {at:,} compressed with method {method}, "
+                f"a log container at byte {at:,} skipped: compressed with method {method}, "
                 "which Vector does not document",
             )
             self._drop(left)
@@ -136,7 +138,9 @@ class Containers:
                     yield inflate.decompress(piece, PIECE)
                     piece = inflate.unconsumed_tail
             except zlib.error as exc:
-                yield Skipped("log containers", f"the log container at byte {at:,}: {exc}")
+                yield Skipped(
+                    "log containers", f"the rest of the log container at byte {at:,} skipped: {exc}"
+                )
                 self._drop(left)
                 return
             if inflate.eof:
@@ -172,7 +176,7 @@ class Containers:
                 break
             tail = tail[-keep:] + more
         if skipped and not zeros:
-            yield Skipped("bytes", f"{skipped:,} bytes at byte {at:,} skipped (no object there)")
+            yield Skipped("bytes", f"{skipped:,} bytes at byte {at:,} skipped: no object there")
 
     def _read(self, count: int) -> bytes:
         """Up to ``count`` bytes (fewer only at the end of the file)."""

@@ -70,7 +70,7 @@ def read_object(data: bytes, at: int, start_time: float) -> CanFrame | Skipped:
     _, header_size, version, size, kind = BASE_HEADER.unpack_from(data, at)
     problem = header_problem(header_size, version, size)
     if problem:
-        return Skipped(kind_of(kind), problem)
+        return Skipped(kind_of(kind), f"an object of type {kind} with {problem} skipped")
     if version == 2:
         flags, _, _, stamp, _ = OBJECT_HEADER_2.unpack_from(data, at + BASE_HEADER.size)
     else:
@@ -116,7 +116,7 @@ def read_object(data: bytes, at: int, start_time: float) -> CanFrame | Skipped:
         channel = layout.unpack_from(data, body)[0]
         return CanFrame(time, 0, b"", False, str(channel - 1), is_error=True, direction="rx")
     if kind == LOG_CONTAINER:
-        return Skipped("log containers", "a log container inside the log data")
+        return Skipped("log containers", "a log container inside another skipped")
     return Skipped(kind_of(kind))
 
 
@@ -170,4 +170,6 @@ def _fd_length(dlc: int) -> int:
 
 
 def _short(what: str, room: int) -> Skipped:
-    return Skipped(what + "s", f"{room} bytes after its header, too few for a {what}")
+    return Skipped(
+        what + "s", f"an object of {room} bytes after its header skipped: too few for a {what}"
+    )

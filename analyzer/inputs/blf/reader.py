@@ -96,7 +96,17 @@ class BlfReader(InputReader):
 
     def _items(self, records: list[CanFrame | FrameColumns | Skipped]) -> list[InputItem]:
         out: list[InputItem] = []
-        for record in records:
+        repeats = 0  # the same damage again, right after the last
+        for index, record in enumerate(records):
+            if isinstance(record, Skipped) and record.damage is not None:
+                following = records[index + 1] if index + 1 < len(records) else None
+                if isinstance(following, Skipped) and following.damage == record.damage:
+                    repeats += 1
+                    continue
+                times = f" ({repeats + 1:,} times in a row)" if repeats else ""
+                out.append(self._damage(f"after frame {self.frames:,}: {record.damage}{times}"))
+                repeats = 0
+                continue
             if isinstance(record, FrameColumns):
                 if self.first_time is None:
                     self.first_time = float(record.time[0])
@@ -113,10 +123,8 @@ class BlfReader(InputReader):
                 self.last_time = record.time
                 self.frames += 1
                 out.append(record)
-            elif record.damage is None:
-                self.skipped[record.kind] += 1
             else:
-                out.append(self._damage(f"after frame {self.frames:,}: {record.damage}, skipped"))
+                self.skipped[record.kind] += 1
         return out
 
     def _ends(self) -> list[Event]:

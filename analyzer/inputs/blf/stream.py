@@ -17,7 +17,7 @@ object one at a time (``objects``). It never stands still and never grows withou
 from __future__ import annotations
 
 from analyzer.inputs.blf.columns import Chain, chain, message_columns
-from analyzer.inputs.blf.layout import BASE_HEADER, OBJECT_SIGNATURE, kind_of
+from analyzer.inputs.blf.layout import BASE_HEADER, OBJECT_SIGNATURE
 from analyzer.inputs.blf.objects import Skipped, header_problem, read_object
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import CanFrame
@@ -88,9 +88,9 @@ class ObjectStream:
         problem = header_problem(header_size, version, length)
         if problem is None and length > MAX_OBJECT:
             problem = f"a size of {length:,} bytes, more than any object of a CAN log"
-        if problem is not None:
-            out.append(Skipped(kind_of(kind), f"an object with {problem}"))
-            return self._skip(data, at + 4, final, out, "the rest of that object")
+        if problem is not None:  # skipped with what follows it up to the next object
+            self._gap += 4
+            return self._skip(data, at + 4, final, out, f"an object of type {kind} with {problem}")
         if at + length > size:
             return self._end(data, at, final, out)
         out.append(read_object(data, at, self.start_time))
@@ -115,7 +115,7 @@ class ObjectStream:
 
     def _say_gap(self, out: list[Record]) -> None:
         if self._gap:
-            out.append(Skipped("bytes", f"{self._gap:,} bytes skipped ({self._gap_why})"))
+            out.append(Skipped("bytes", f"{self._gap:,} bytes skipped: {self._gap_why}"))
         self._gap, self._gap_why = 0, ""
 
     def _end(self, data: bytes, at: int, final: bool, out: list[Record]) -> int | None:
