@@ -58,6 +58,9 @@ class Batch:
     # counters as its own instead of counting each batch a second time.
     counted: Tally | None = None
     sequence: int = 0
+    # Every event as an Event, in order, made once for the stages while the columns stay
+    # for the sinks that take them (see ``merged``).
+    _merged: list[Event] | None = field(default=None, repr=False)
 
     def segments(self) -> Iterator[list[Event] | EventColumns]:
         """The events in order: lists of Events and blocks of column events between them."""
@@ -70,14 +73,30 @@ class Batch:
         if start < len(self.events):
             yield self.events[start:]
 
-    def materialize(self) -> list[Event]:
-        """Make every column event an Event, in its place in ``events``; returns them."""
-        if self.columns:
+    def merged(self) -> list[Event]:
+        """Every event in order as an Event (the column events made into Events once),
+        the columns kept for the sinks that take them."""
+        if not self.columns:
+            return self.events
+        if self._merged is None:
             events: list[Event] = []
             for segment in self.segments():
                 events += segment if isinstance(segment, list) else segment.events()
-            self.events[:] = events
+            self._merged = events
+        return self._merged
+
+    def add(self, events: list[Event]) -> None:
+        """Events made after decoding (a stage's findings): after every other event."""
+        self.events.extend(events)
+        if self._merged is not None:
+            self._merged.extend(events)
+
+    def materialize(self) -> list[Event]:
+        """Make every column event an Event, in its place in ``events``; returns them."""
+        if self.columns:
+            self.events[:] = self.merged()
             self.columns.clear()
+            self._merged = None
         return self.events
 
 
@@ -106,6 +125,15 @@ class Stage(Protocol):
     def process(self, events: list[Event]) -> list[Event]: ...
 
     def close(self) -> list[Event]: ...
+
+
+@runtime_checkable
+class ColumnStage(Protocol):
+    """A stage that takes a batch's events as the pipeline holds them (``Batch.segments``):
+    lists of Events and blocks decoded in vectors, of which it makes Events itself only
+    where it reads their fields (``analyzer.analysis.response.ResponseAnalyzer``)."""
+
+    def process_segments(self, segments: Iterable[list[Event] | EventColumns]) -> list[Event]: ...
 
 
 class Decoding(Protocol):
@@ -230,17 +258,17 @@ class Pipeline:
         batch.wall_time = wall_time
         batch.counted, batch.sequence = self.tally, self.delivered
         self.delivered += 1
-        if batch.columns and (
-            self.stages or not all(getattr(s, "takes_columns", False) for s in self.sinks)
-        ):
-            batch.materialize()
-        events = batch.events
+        # The stages see every event as an Event (a column stage makes those it reads);
+        # the sinks that take columns get the columns still, the others Events.
         for stage in self.stages:
-            extra = stage.process(events)
+            if batch.columns and isinstance(stage, ColumnStage):
+                extra = stage.process_segments(batch.segments())
+            else:
+                extra = stage.process(batch.merged())
             if extra:
-                events.extend(extra)
+                batch.add(extra)
             if closing:
-                events.extend(stage.close())
+                batch.add(stage.close())
         with self.lock:
             self.tally.add_items(batch.items)
             self.tally.add_runs(batch.runs)
@@ -251,7 +279,9 @@ class Pipeline:
                     else:
                         self.tally.add_columns(segment)
             else:
-                self.tally.add_events(events)
+                self.tally.add_events(batch.events)
+        if batch.columns and not all(getattr(s, "takes_columns", False) for s in self.sinks):
+            batch.materialize()
         failed = {id(f.sink) for f in self.failures}
         for sink in self.sinks:
             if id(sink) in failed:

@@ -20,6 +20,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from analyzer.analysis.response import ResponseAnalyzer, Settings
+from analyzer.fleet.column_sink import CollectedTables, ColumnSink
 from analyzer.inputs.candump.columns import _all_digits, _all_hex, _decimal, _nibbles, _pack
 from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.pipeline import Batch, Pipeline, run_items
@@ -62,12 +64,21 @@ def decoded(
     block_size: int = 1 << 20,
     raw: bool = False,
     columns: bool = True,
+    analysis: bool = False,
 ) -> tuple[list[str], dict[str, Any]]:
+    """``decode --json`` lines and every figure; with ``analysis`` the response analysis
+    as a stage (its findings among the lines) and the fleet tables as ``table`` makes them
+    (row groups of 500 rows)."""
     reader = CandumpReader(
         str(path), wanted_ids=None if raw else PROTOCOL_IDS, block_size=block_size, scan=columnar
     )
     sink = Lines(columns)
-    pipeline = Pipeline([sink], decoder=Decoder(emit_other=raw))
+    kept = CollectedTables()
+    fleet = ColumnSink(kept, "r", "h", group_rows=500)
+    fleet.takes_columns = columns
+    stages = [ResponseAnalyzer(Settings())] if analysis else []
+    sinks: list[Any] = [sink, fleet] if analysis else [sink]
+    pipeline = Pipeline(sinks, decoder=Decoder(emit_other=raw), stages=stages)
     run_items(reader, pipeline, batch_items=2000)
     reader.close()
     figures = {
@@ -79,25 +90,53 @@ def decoded(
         "reader": (reader.first_time, reader.last_time, reader.time_base, reader.notes),
         "commands": list(pipeline.tally.commands),
     }
+    if analysis:
+        figures["tables"] = {name: t.to_pylist() for name, t in kept.tables().items()}
+        figures["verdicts"] = (dict(fleet.verdicts), dict(fleet.health), fleet.rows)
     return sink.lines, figures
 
 
 def assert_same(path: Path, **options: Any) -> list[str]:
     """Both paths on ``path``; returns the events' lines."""
     block = options.pop("block_size", 1 << 20)
-    want = decoded(path, columnar=False, **options)
-    got = decoded(path, columnar=True, block_size=block, **options)
+    want = in_order(decoded(path, columnar=False, **options))
+    got = in_order(decoded(path, columnar=True, block_size=block, **options))
     assert got[0] == want[0]
     assert got[1] == want[1]
     materialized = decoded(path, columnar=True, block_size=block, columns=False, **options)
-    assert materialized == want
+    assert in_order(materialized) == want
     return want[0]
+
+
+def in_order(result: tuple[list[str], dict[str, Any]]) -> tuple[list[str], dict[str, Any]]:
+    """The lines with the analysis' findings after the rest: a stage adds its findings at
+    the end of each batch, and the batches of blocks read as arrays end elsewhere than
+    those of lines read one by one (the findings come in the same order all the same)."""
+    lines, figures = result
+    finding = '{"topic": "/analysis/response"'
+    findings = [line for line in lines if line.startswith(finding)]
+    return [line for line in lines if not line.startswith(finding)] + findings, figures
 
 
 @pytest.mark.parametrize("raw", [False, True])
 @pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
 def test_every_sample_decodes_the_same(path: Path, raw: bool) -> None:
     assert assert_same(path, raw=raw)
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_the_analysis_and_its_fleet_tables_are_the_same(path: Path) -> None:
+    """What ``analyze`` and ``table`` make of a file: the analysis takes the blocks as
+    columns (Events only of what it reads), the fleet tables their rows a column at a
+    time, in frame order, row groups cut where they were."""
+    lines = assert_same(path, analysis=True)
+    assert any('"/analysis/response"' in line for line in lines)
+
+
+def test_the_analysis_of_a_pilot_s_stick_on_a_dense_bus(tmp_path: Path) -> None:
+    path = _dense(tmp_path, 40_000)
+    lines = assert_same(path, analysis=True, block_size=65536)
+    assert sum('"/analysis/response"' in line for line in lines) > 5
 
 
 @pytest.mark.parametrize("seed", [22, 5, 77])

@@ -73,7 +73,9 @@ class StickJudge:
         out: list[Finding] = []
         streams = self.streams
         if streams.open:
-            self._stopped(streams.end_quiet(t))
+            closed = streams.end_quiet(t)
+            if closed:
+                self._stopped(closed)
         late = 0.0 if sample is not None else self.late
         if streams.waiting:
             waiting: list[Movement] = []

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable
 from dataclasses import dataclass, field
 from itertools import pairwise, repeat
 from operator import itemgetter
@@ -33,9 +33,10 @@ ColumnSlots = list[tuple[int, "EventColumns"]]
 class EventGroup:
     """Events of one layout, one per row, none with a warning.
 
-    ``rows`` and ``times`` are arrays; ``values`` makes each field's values (lists, by
-    key) when the events are wanted one by one; ``constants`` are the keys whose value
-    is the same in every event."""
+    ``rows`` and ``times`` are arrays; ``values()`` gives each field's values (lists, by
+    key), made by ``make`` when first wanted (the events one by one, their JSON, a
+    table's columns); ``constants`` are the keys whose value is the same in every
+    event."""
 
     topic: str
     rows: Any
@@ -43,8 +44,14 @@ class EventGroup:
     sources: list[str]
     keys: tuple[str, ...]
     constants: dict[str, Any]
-    values: Callable[[], dict[str, list[Any]]]
+    make: Callable[[], dict[str, list[Any]]]
     name: str | None = None  # the command's name (commands only)
+    _values: dict[str, list[Any]] | None = field(default=None, repr=False)
+
+    def values(self) -> dict[str, list[Any]]:
+        if self._values is None:
+            self._values = self.make()
+        return self._values
 
     def __len__(self) -> int:
         return int(self.rows.shape[0])
@@ -167,6 +174,17 @@ class EventColumns:
     def events(self) -> list[Event]:
         """Every event, in the order of the frames that gave them."""
         return self._ordered(EventGroup.events, self.singles)
+
+    def moments(self, wanted: Collection[str]) -> list[Event | tuple[float, str]]:
+        """Every event in frame order: an Event when its topic is ``wanted``, else only
+        its time and topic (nothing made of its fields)."""
+
+        def make(group: EventGroup) -> list[Any]:
+            if group.topic in wanted:
+                return group.events()
+            return list(zip(group.times.tolist(), repeat(group.topic)))
+
+        return self._ordered(make, self.singles)
 
     def json_lines(self, wanted: Callable[[Event], bool] | None = None) -> list[str]:
         """The ``decode --json`` line of every event (that ``wanted`` takes), in order."""
