@@ -14,6 +14,7 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from analyzer.feedback_track import FeedbackTrack
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.crc import crc_bytes
 from analyzer.protocol.decoder import Decoder
@@ -41,7 +42,7 @@ from analyzer.protocol.types import (
     StreamChunk,
 )
 from analyzer.protocol.uav import encode_gps
-from analyzer.tally import CAN_BITS_EXTENDED, CAN_BITS_STANDARD, FeedbackTrack, Tally
+from analyzer.tally import CAN_BITS_EXTENDED, CAN_BITS_STANDARD, Tally
 
 ATTITUDE = encode_attitude(pitch_deg=-30, yaw_deg=12, motor_yaw_deg=0)
 RANGING = encode_ranging(distance_m=150, height_m=80, latitude_deg=31.1, longitude_deg=118.1)

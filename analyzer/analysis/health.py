@@ -14,9 +14,14 @@ from analyzer.analysis.findings import (
     UNKNOWN,
     Finding,
 )
-from analyzer.tally import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
-from analyzer.tally import FEEDBACK_PERIOD_S, MAX_FEEDBACK_SOURCES, lost_messages, silence_s
-from analyzer.tally import FEEDBACK_TOLERANCE as RATE_TOLERANCE
+from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
+from analyzer.feedback_track import (
+    FEEDBACK_PERIOD_S,
+    MAX_FEEDBACK_SOURCES,
+    lost_messages,
+    silence_s,
+)
+from analyzer.feedback_track import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 
 WINDOW_S = 60.0
 MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement only if it has data

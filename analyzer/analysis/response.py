@@ -28,6 +28,7 @@ from analyzer.analysis.tracking import (
     judge_tracking,
     nothing_to_stop,
 )
+from analyzer.feedback_track import DAMAGED_FEEDBACK, EXPECTED_FEEDBACK_HZ, feedback_stream
 from analyzer.protocol.event_columns import EventColumns
 from analyzer.protocol.types import (
     CRC_MISMATCH,
@@ -40,7 +41,6 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import DAMAGED_FEEDBACK, EXPECTED_FEEDBACK_HZ, feedback_stream
 
 # The topics whose fields the analysis reads; of every other event only the time counts.
 FIELD_TOPICS = frozenset(

@@ -6,7 +6,7 @@ import contextlib
 import itertools
 import math
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
@@ -107,6 +107,17 @@ def open_binary(path: str) -> IO[bytes]:
         raise UsageError(f"cannot read {path}: permission denied") from None
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
+
+
+def one_by_one(batches: Iterable[list[InputItem]]) -> Iterator[InputItem]:
+    """The items of ``batches`` one by one, frames read as columns as CanFrames (what a
+    reader that reads in blocks gives when iterated)."""
+    for items in batches:
+        for item in items:
+            if type(item) is FrameColumns:
+                yield from item.frames()
+            else:
+                yield item
 
 
 def by_frames(items: list[InputItem], size: int) -> Iterator[list[InputItem]]:

@@ -19,7 +19,7 @@ from collections.abc import Iterator
 from typing import IO
 
 from analyzer.errors import UsageError
-from analyzer.inputs.base import InputItem, InputReader, by_frames, time_problem
+from analyzer.inputs.base import InputItem, InputReader, by_frames, one_by_one, time_problem
 from analyzer.inputs.blf.containers import Containers, read_header
 from analyzer.inputs.blf.objects import Skipped
 from analyzer.inputs.blf.stream import ObjectStream
@@ -61,12 +61,7 @@ class BlfReader(InputReader):
 
     def __iter__(self) -> Iterator[InputItem]:
         """Frames and diagnostics one by one (frames read as columns come as CanFrames)."""
-        for items in self.batches(BLOCK):
-            for item in items:
-                if type(item) is FrameColumns:
-                    yield from item.frames()
-                else:
-                    yield item
+        return one_by_one(self.batches(BLOCK))
 
     def batches(self, size: int) -> Iterator[list[InputItem]]:
         """The items of each block of log data (in lists of at most ``size`` frames)."""

@@ -6,7 +6,7 @@ from collections.abc import Callable, Iterable, Iterator
 from operator import itemgetter
 from typing import cast
 
-from analyzer.inputs.base import InputItem, InputReader, by_frames
+from analyzer.inputs.base import InputItem, InputReader, by_frames, one_by_one
 from analyzer.inputs.candump.line import LineError
 from analyzer.inputs.candump.linewise import MAX_CACHED_IDS, CandumpLineParser
 from analyzer.inputs.candump.scan import (
@@ -24,7 +24,6 @@ from analyzer.inputs.candump.scan import (
 )
 from analyzer.inputs.candump.times import DECIDE_AFTER
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
-from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
 _OTHER = itemgetter(OTHER)
@@ -211,12 +210,7 @@ class CandumpReader(InputReader):
 
     def __iter__(self) -> Iterator[InputItem]:
         """Frames and diagnostics one by one (blocks read as columns come as CanFrames)."""
-        for items in self.batches(self.block_size):
-            for item in items:
-                if type(item) is FrameColumns:
-                    yield from item.frames()
-                else:
-                    yield item
+        return one_by_one(self.batches(self.block_size))
 
     def batches(self, size: int) -> Iterator[list[InputItem]]:
         """The items of each block of lines (in lists of at most ``size``)."""
