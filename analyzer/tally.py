@@ -2,9 +2,10 @@
 
 Raw items (frames, chunks, bytes) and events (per topic, diagnostic kind, command),
 the gimbal's feedback timing (rate, longest gap, gaps over a limit; each stream's a
-``feedback_track.FeedbackTrack``) and the CRC error rate are defined here once. ``decode --summary``, ``convert``, ``record``,
-``demo``, the monitor and ``info`` (from the record an MCAP sink writes at the end,
-or from a scan of the recorded events) all read these figures.
+``feedback_track.FeedbackTrack``) and the CRC error rate are defined here once.
+``decode --summary``, ``convert``, ``record``, ``demo``, the monitor and ``info``
+(from the record an MCAP sink writes at the end, or from a scan of the recorded
+events) all read these figures.
 """
 
 from __future__ import annotations

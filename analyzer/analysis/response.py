@@ -42,10 +42,10 @@ from analyzer.protocol.types import (
     Event,
 )
 
-# The topics whose fields the analysis reads; of every other event only the time counts.
-FIELD_TOPICS = frozenset(
-    {TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS, TOPIC_COMMAND}
-)
+# The topics whose events the analysis reads whole, those whose fields it reads (the
+# commands); of every other event only the time counts.
+EVENT_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS})
+FIELD_TOPICS = frozenset({TOPIC_COMMAND})
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
@@ -132,15 +132,11 @@ class ResponseAnalyzer:
             out += self.health.error(t, feedback_stream(event), ends_silence=damaged)
             out += self._settle(t, None)
         else:  # the most frequent: time passes, perhaps a command (no list made for nothing)
-            out = self._time_passes(t, topic)
-            if topic == TOPIC_COMMAND:
-                more = self._command(t, event.fields)
-                if more:
-                    out += more
+            out = self._moment(t, topic, event.fields)
         return self._emit(out) if out else []
 
-    def _time_passes(self, t: float, topic: str) -> list[Finding]:
-        """An event whose fields this does not read (and every command): its time."""
+    def _moment(self, t: float, topic: str, fields: dict[str, Any] | None) -> list[Finding]:
+        """Any event but feedback and damage: its time passes; a command is judged."""
         out = self.health.tick(t)
         if self._targets or self._tracking or self._sticks.active:
             settled = self._settle(t, None)
@@ -148,6 +144,10 @@ class ResponseAnalyzer:
                 out += settled
         if topic == TOPIC_UAV_ATTITUDE:
             self._fc_attitude = t
+        elif topic == TOPIC_COMMAND and fields is not None:
+            more = self._command(t, fields)
+            if more:
+                out += more
         return out
 
     def process(self, events: list[Event]) -> list[Event]:
@@ -173,9 +173,9 @@ class ResponseAnalyzer:
             if isinstance(segment, list):
                 out += self.process(segment)
                 continue
-            for item in segment.moments(FIELD_TOPICS):
+            for item in segment.moments(EVENT_TOPICS, FIELD_TOPICS):
                 if isinstance(item, tuple):
-                    found = self._time_passes(*item)
+                    found = self._moment(*item)
                     if found:
                         out += self._emit(found)
                 elif item.topic != TOPIC_ANALYSIS_RESPONSE:

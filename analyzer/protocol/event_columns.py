@@ -57,16 +57,20 @@ class EventGroup:
         return int(self.rows.shape[0])
 
     def events(self) -> list[Event]:
+        topic = self.topic
+        return [
+            Event(topic, time, source, fields, [])
+            for time, source, fields in zip(
+                self.times.tolist(), self.sources, self.fields(), strict=True
+            )
+        ]
+
+    def fields(self) -> list[dict[str, Any]]:
+        """Each event's fields, as its Event holds them."""
         keys = self.keys
         constants, values = self.constants, self.values()
         columns = [repeat(constants[k]) if k in constants else values[k] for k in keys]
-        topic = self.topic
-        return [
-            Event(topic, time, source, dict(zip(keys, row, strict=False)), [])
-            for time, source, row in zip(
-                self.times.tolist(), self.sources, zip(*columns, strict=False), strict=False
-            )
-        ]
+        return list(map(dict, map(zip, repeat(keys), zip(*columns, strict=False))))
 
     def json_lines(self) -> list[str]:
         """What ``json.dumps(event.to_dict(), default=str)`` gives for each event."""
@@ -175,14 +179,19 @@ class EventColumns:
         """Every event, in the order of the frames that gave them."""
         return self._ordered(EventGroup.events, self.singles)
 
-    def moments(self, wanted: Collection[str]) -> list[Event | tuple[float, str]]:
-        """Every event in frame order: an Event when its topic is ``wanted``, else only
-        its time and topic (nothing made of its fields)."""
+    def moments(
+        self, events: Collection[str], fields: Collection[str]
+    ) -> list[Event | tuple[float, str, dict[str, Any] | None]]:
+        """Every event in frame order: an Event when its topic is in ``events``, else its
+        time, topic and fields when its topic is in ``fields``, else its time and topic
+        (None for fields: nothing made of them)."""
 
         def make(group: EventGroup) -> list[Any]:
-            if group.topic in wanted:
+            topic = group.topic
+            if topic in events:
                 return group.events()
-            return list(zip(group.times.tolist(), repeat(group.topic)))
+            made = group.fields() if topic in fields else repeat(None)
+            return list(zip(group.times.tolist(), repeat(topic), made))
 
         return self._ordered(make, self.singles)
 
