@@ -13,18 +13,17 @@ capture. Frames in time order pass through untouched, a batch at a time.
 
 from __future__ import annotations
 
-import statistics
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from operator import attrgetter
 from typing import Any
 
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import (
     BAD_FRAME,
     TOPIC_DIAGNOSTICS,
     CanFrame,
     Event,
-    FrameRun,
     StreamChunk,
     diagnostic,
 )
@@ -37,20 +36,20 @@ _TIME = attrgetter("time")
 
 
 def _time(item: Any) -> float:
-    if type(item) is FrameRun:
-        return min(item.time)
+    if type(item) is FrameColumns:
+        return float(item.time.min())
     return float(item.time)
 
 
 def _latest(item: Any) -> float:
-    if type(item) is FrameRun:
-        return max(item.time)
+    if type(item) is FrameColumns:
+        return float(item.time.max())
     return float(item.time)
 
 
 def _timed(item: Any) -> bool:
-    """Frames, stream chunks, runs and decoded events give the capture its time; readers'
-    diagnostics follow it."""
+    """Frames, stream chunks, columns of frames and decoded events give the capture its
+    time; readers' diagnostics follow it."""
     return not (type(item) is Event and item.topic == TOPIC_DIAGNOSTICS)
 
 
@@ -90,7 +89,8 @@ class CaptureClock:
             return self._start(chunk)
         if not chunk:
             return chunk
-        if FrameRun in set(map(type, chunk)):
+        kinds = set(map(type, chunk))
+        if FrameColumns in kinds:
             earliest = min(_time(item) for item in chunk)
             latest = max(_latest(item) for item in chunk)
         else:
@@ -107,8 +107,8 @@ class CaptureClock:
     def _start(self, chunk: list[Any]) -> list[Any]:
         times: list[float] = []
         for item in chunk:
-            if type(item) is FrameRun:
-                times += item.time
+            if type(item) is FrameColumns:
+                times += item.time.tolist()
             elif _timed(item):
                 times.append(float(item.time))
         if not times:
@@ -116,7 +116,7 @@ class CaptureClock:
             return []
         # The capture's time is where most of its first frames are: one damaged first
         # frame does not set it.
-        reference = statistics.median_low(times)
+        reference = sorted(times)[(len(times) - 1) // 2]  # the lower median
         good = [t for t in times if t >= reference - self.max_back_s]
         self.first = self.latest = min(good)
         held, self._held = self._held, []
@@ -127,9 +127,8 @@ class CaptureClock:
     def _sorted_out(self, chunk: list[Any]) -> list[Any]:
         out: list[Any] = []
         for item in chunk:
-            if type(item) is FrameRun and self._too_early(min(item.time)):
-                for frame in item.frames():
-                    out.append(self._checked(frame))
+            if type(item) is FrameColumns and self._too_early(_time(item)):
+                out += [self._checked(frame) for frame in item.frames()]
                 continue
             out.append(self._checked(item))
         return out

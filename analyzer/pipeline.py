@@ -18,15 +18,18 @@ import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import islice
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, cast, runtime_checkable
 
 from analyzer.capture_clock import CaptureClock
 from analyzer.progress import Progress
-from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
+from analyzer.protocol.event_columns import ColumnSlots, EventColumns
+from analyzer.protocol.frame_columns import FrameColumns
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
 from analyzer.tally import Tally
 
 RawItem = CanFrame | StreamChunk
-Item = CanFrame | StreamChunk | Event | FrameRun  # what readers and sources deliver
+Item = CanFrame | StreamChunk | Event | FrameColumns  # what readers deliver
+_RAW_KINDS = frozenset({CanFrame, StreamChunk})
 
 BATCH_ITEMS = 2000  # file commands hand a batch to the sinks after this many items
 
@@ -37,27 +40,74 @@ class Batch:
 
     ``items`` are the raw frames / stream chunks as read (lossless), ``events`` the
     decoded events and diagnostics they gave (link-state diagnostics and events of the
-    stages included). ``runs`` holds the frames a reader handed on as FrameRuns, which
-    happens only when no sink keeps raw items (``Pipeline.keeps_items``).
+    stages included). ``runs`` holds the frames a reader read as columns
+    (``FrameColumns``) when no sink keeps raw items (``Pipeline.keeps_items``); else they
+    are in ``items`` as CanFrames.
     """
 
     items: list[RawItem] = field(default_factory=list)
     events: list[Event] = field(default_factory=list)
     wall_time: float = 0.0
-    # Frames read as runs (only when no sink keeps raw items): counted, never in ``items``.
-    runs: list[FrameRun] = field(default_factory=list)
+    # Frames read as columns that no sink keeps: counted, never in ``items``.
+    runs: list[FrameColumns] = field(default_factory=list)
+    # The events of blocks decoded in vectors, not yet made into Events, each with its
+    # place in ``events`` (``materialize`` puts them there; see ``segments``).
+    columns: ColumnSlots = field(default_factory=list)
     # The pipeline's counters once this batch is counted, and how many batches it
     # delivered before this one: a sink that got every batch from the first may take the
     # counters as its own instead of counting each batch a second time.
     counted: Tally | None = None
     sequence: int = 0
+    # Every event as an Event, in order, made once for the stages while the columns stay
+    # for the sinks that take them (see ``merged``).
+    _merged: list[Event] | None = field(default=None, repr=False)
+
+    def segments(self) -> Iterator[list[Event] | EventColumns]:
+        """The events in order: lists of Events and blocks of column events between them."""
+        start = 0
+        for place, block in self.columns:
+            if place > start:
+                yield self.events[start:place]
+            yield block
+            start = place
+        if start < len(self.events):
+            yield self.events[start:]
+
+    def merged(self) -> list[Event]:
+        """Every event in order as an Event (the column events made into Events once),
+        the columns kept for the sinks that take them."""
+        if not self.columns:
+            return self.events
+        if self._merged is None:
+            events: list[Event] = []
+            for segment in self.segments():
+                events += segment if isinstance(segment, list) else segment.events()
+            self._merged = events
+        return self._merged
+
+    def add(self, events: list[Event]) -> None:
+        """Events made after decoding (a stage's findings): after every other event."""
+        self.events.extend(events)
+        if self._merged is not None:
+            self._merged.extend(events)
+
+    def materialize(self) -> list[Event]:
+        """Make every column event an Event, in its place in ``events``; returns them."""
+        if self.columns:
+            self.events[:] = self.merged()
+            self.columns.clear()
+            self._merged = None
+        return self.events
 
 
 class Sink(Protocol):
     """Anything that consumes batches: MCAP writer, text printer, TUI bridge.
 
     A sink that never looks at ``Batch.items`` says so with a ``keeps_items = False``
-    attribute; then a file reader may hand on frames as runs nobody builds one by one.
+    attribute; then frames a reader read as columns are never built one by one.
+    A sink that reads the events through ``Batch.segments`` says so with
+    ``takes_columns = True``: the events of blocks decoded in vectors then reach it as
+    columns; every other sink gets them as Events (``Batch.materialize``).
     """
 
     def handle(self, batch: Batch) -> None: ...
@@ -77,6 +127,15 @@ class Stage(Protocol):
     def close(self) -> list[Event]: ...
 
 
+@runtime_checkable
+class ColumnStage(Protocol):
+    """A stage that takes a batch's events as the pipeline holds them (``Batch.segments``):
+    lists of Events and blocks decoded in vectors, of which it makes Events itself only
+    where it reads their fields (``analyzer.analysis.response.ResponseAnalyzer``)."""
+
+    def process_segments(self, segments: Iterable[list[Event] | EventColumns]) -> list[Event]: ...
+
+
 class Decoding(Protocol):
     """What the pipeline needs of a decoder (``analyzer.protocol.decoder.Decoder``)."""
 
@@ -85,7 +144,10 @@ class Decoding(Protocol):
     def feed_stream(self, chunk: StreamChunk) -> list[Event]: ...
 
     def feed_batch(
-        self, items: Iterable[object], raw: list[RawItem], events: list[Event]
+        self,
+        items: Iterable[object],
+        events: list[Event],
+        columns: ColumnSlots | None = None,
     ) -> None: ...
 
     def tick(self, now: float) -> list[Event]: ...
@@ -141,22 +203,35 @@ class Pipeline:
         self.batch = Batch()
         self.delivered = 0  # batches handed to the sinks
         self.finished = False
-        self.frame_runs = False  # the input may hold FrameRuns (set by ``run_items``)
         # A file's items dated by its capture (set by ``run_items``): see capture_clock.
         self.clock = CaptureClock()
 
     # -- input -------------------------------------------------------------------------------
 
     def feed(self, items: Iterable[Item]) -> None:
-        """Decode items into the open batch; ready-made events go in as they are."""
+        """Decode items into the open batch; ready-made events go in as they are.
+
+        The raw items go to the batch as they are; frames read as columns go there as
+        CanFrames when a sink keeps raw items, else they are counted as columns."""
+        items = items if type(items) is list else list(items)
         batch = self.batch
-        self.decoder.feed_batch(items, batch.items, batch.events)
-        if self.frame_runs:
-            batch.runs.extend([i for i in items if isinstance(i, FrameRun)])
+        self.decoder.feed_batch(items, batch.events, batch.columns)
+        if set(map(type, items)) <= _RAW_KINDS:  # the usual batch
+            batch.items += cast(list[RawItem], items)
+            return
+        keep = self.keeps_items
+        for item in items:
+            if isinstance(item, (CanFrame, StreamChunk)):
+                batch.items.append(item)
+            elif isinstance(item, FrameColumns):
+                if keep:
+                    batch.items += item.frames()
+                else:
+                    batch.runs.append(item)
 
     @property
     def keeps_items(self) -> bool:
-        """Whether a sink looks at raw items (else the input may come as FrameRuns)."""
+        """Whether a sink looks at raw items (else frames read as columns stay columns)."""
         return any(getattr(sink, "keeps_items", True) for sink in self.sinks)
 
     def add_events(self, events: Iterable[Event]) -> None:
@@ -183,17 +258,30 @@ class Pipeline:
         batch.wall_time = wall_time
         batch.counted, batch.sequence = self.tally, self.delivered
         self.delivered += 1
-        events = batch.events
+        # The stages see every event as an Event (a column stage makes those it reads);
+        # the sinks that take columns get the columns still, the others Events.
         for stage in self.stages:
-            extra = stage.process(events)
+            if batch.columns and isinstance(stage, ColumnStage):
+                extra = stage.process_segments(batch.segments())
+            else:
+                extra = stage.process(batch.merged())
             if extra:
-                events.extend(extra)
+                batch.add(extra)
             if closing:
-                events.extend(stage.close())
+                batch.add(stage.close())
         with self.lock:
             self.tally.add_items(batch.items)
             self.tally.add_runs(batch.runs)
-            self.tally.add_events(events)
+            if batch.columns:
+                for segment in batch.segments():
+                    if isinstance(segment, list):
+                        self.tally.add_events(segment)
+                    else:
+                        self.tally.add_columns(segment)
+            else:
+                self.tally.add_events(batch.events)
+        if batch.columns and not all(getattr(s, "takes_columns", False) for s in self.sinks):
+            batch.materialize()
         failed = {id(f.sink) for f in self.failures}
         for sink in self.sinks:
             if id(sink) in failed:
@@ -251,7 +339,7 @@ def run_items(
 ) -> None:
     """Drive ``pipeline`` with everything ``items`` yields (a file reader), then finish it.
 
-    ``delivered_batches`` does the work (see there: batches, FrameRuns, an early stop
+    ``delivered_batches`` does the work (see there: batches, an early stop
     when a sink fails, exceptions of the reader); ``after_batch`` runs after each batch
     but the last, the one ``finish`` delivers. ``progress``
     (``analyzer.progress.Progress.maybe``) is drawn after each batch and cleared at the
@@ -280,16 +368,13 @@ def delivered_batches(
 
     A batch of at most ``batch_items`` items goes to the sinks at a time (a reader that
     reads in blocks hands on a block's items at once; 1 for live input such as standard
-    input, so each line shows at once). When no sink keeps raw items, a reader that can
-    hands its frames on as FrameRuns. The items are dated by the capture's own time
+    input, so each line shows at once). The items are dated by the capture's own time
     (``analyzer.capture_clock``) on the way. Stops early (then finishes) when a sink fails. An
     exception of the reader (Ctrl-C, unreadable input) propagates without ``finish``:
     the caller decides whether what was read counts (``decode`` of live input finishes,
     ``convert`` throws its output away). ``run_items`` (the commands) and the Python
     API's ``read`` and ``analyze`` are this one loop.
     """
-    if not pipeline.keeps_items and hasattr(items, "frame_runs"):
-        items.frame_runs = pipeline.frame_runs = True  # frames nobody keeps, not built
     if isinstance(items, BatchedItems):
         chunks: Iterator[list[Any]] = items.batches(batch_items)
     else:

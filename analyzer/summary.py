@@ -6,16 +6,16 @@ from collections.abc import Callable
 from typing import Any
 
 from analyzer.bus_hints import bus_hints
-from analyzer.protocol.lru import MAX_SOURCES
-from analyzer.protocol.types import Event
-from analyzer.tally import (
+from analyzer.feedback_track import (
     EXPECTED_FEEDBACK_HZ,
     FEEDBACK_TOLERANCE,
     GAP_PERIODS,
     MAX_FEEDBACK_SOURCES,
     FeedbackTrack,
-    Tally,
 )
+from analyzer.protocol.lru import MAX_SOURCES
+from analyzer.protocol.types import Event
+from analyzer.tally import Tally
 from analyzer.terminal_text import printable
 from analyzer.timefmt import format_datetime
 

@@ -1,16 +1,16 @@
 """The one set of counters of a run: what every command reports about the same input.
 
 Raw items (frames, chunks, bytes) and events (per topic, diagnostic kind, command),
-the gimbal's feedback timing (rate, longest gap, gaps over a limit) and the CRC
-error rate are defined here once. ``decode --summary``, ``convert``, ``record``,
-``demo``, the monitor and ``info`` (from the record an MCAP sink writes at the end,
-or from a scan of the recorded events) all read these figures.
+the gimbal's feedback timing (rate, longest gap, gaps over a limit; each stream's a
+``feedback_track.FeedbackTrack``) and the CRC error rate are defined here once.
+``decode --summary``, ``convert``, ``record``, ``demo``, the monitor and ``info``
+(from the record an MCAP sink writes at the end, or from a scan of the recorded
+events) all read these figures.
 """
 
 from __future__ import annotations
 
 import json
-import math
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
@@ -18,68 +18,32 @@ from operator import attrgetter, itemgetter
 from typing import Any
 
 from analyzer.bus_figures import BusFigures
-from analyzer.protocol.lru import MAX_SOURCES
+from analyzer.feedback_track import (
+    FEEDBACK_TOPICS,
+    MAX_FEEDBACK_SOURCES,
+    FeedbackTrack,
+    damaged_feedback,
+    feedback_stream,
+    optional_float,
+    round_figure,
+)
+from analyzer.protocol.event_columns import EventColumns, EventGroup
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import (
     BUS_ERROR,
     CRC_MISMATCH,
     TOPIC_ANALYSIS_RESPONSE,
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
-    TOPIC_GIMBAL_ATTITUDE,
-    TOPIC_GIMBAL_RANGING,
     CanFrame,
     Event,
-    FrameRun,
     StreamChunk,
 )
 
-# A feedback message that came with a bad CRC ends the silence before it: it is counted
-# as damaged, not also as lost. (An incomplete one lost a segment: it is reported when
-# the next message comes, and its silence counts.)
-DAMAGED_FEEDBACK = frozenset({CRC_MISMATCH})
-# The gimbal answers with one feedback message (attitude or ranging) about every 500 ms.
-EXPECTED_FEEDBACK_HZ = 2.0
-FEEDBACK_TOLERANCE = 0.25  # a rate further off than this fraction is flagged
-FEEDBACK_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING})
-FEEDBACK_PERIOD_S = 1 / EXPECTED_FEEDBACK_HZ
-# A silence of this many feedback periods or more has lost at least one message.
-GAP_PERIODS = 1.5
-GAP_THRESHOLD_S = GAP_PERIODS * FEEDBACK_PERIOD_S  # 0.75 s at 2 Hz
-# Streams whose feedback is timed one by one; a file naming millions of channels must not
-# grow the tally (nor the stats record written into a recording) without limit.
-MAX_FEEDBACK_SOURCES = MAX_SOURCES
 # Bits of a CAN 2.0 frame without stuffing, besides the data: SOF, arbitration, control,
 # CRC, ACK, EOF and the 3-bit intermission (131 bits for an extended 8-byte frame).
 CAN_BITS_EXTENDED = 67
 CAN_BITS_STANDARD = 47
-
-_US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie exactly
-
-
-def silence_s(previous: float, t: float) -> float:
-    """The time between two messages in whole microseconds (a recording's nanosecond times
-    and the file it was made from give the same silence)."""
-    return (round(t * _US) - round(previous * _US)) / _US
-
-
-def feedback_stream(event: Event) -> str:
-    """The stream a feedback message belongs to: its source, and direction if any."""
-    direction = event.fields.get("direction")
-    return f"{event.source} {direction}" if direction else event.source
-
-
-def lost_messages(silence_s: float, period_s: float = FEEDBACK_PERIOD_S) -> int:
-    """Feedback messages lost in a silence between two messages, counted in periods.
-
-    A silence of ``GAP_PERIODS`` (1.5) periods or more has lost at least one message; it
-    lost round(silence / period) - 1 of them. A message a fraction of a millisecond early
-    or late changes nothing: one lost message at 2 Hz leaves about 1.0 s (0.75..1.25 s
-    counts one), two leave about 1.5 s. decode --summary, info, analyze, report and
-    table all count with this one function.
-    """
-    if not silence_s >= GAP_PERIODS * period_s:  # also False for NaN
-        return 0
-    return max(1, math.floor(silence_s / period_s + 0.5) - 1)
 
 
 _DATA = attrgetter("data")
@@ -87,98 +51,7 @@ _EXTENDED = attrgetter("extended")
 _TOPIC = attrgetter("topic")
 _TIME = attrgetter("time")
 _WARNINGS = attrgetter("warnings")
-_PLACE_EXTENDED = itemgetter(2)  # of a FrameRun's (channel, CAN ID, extended)
-
-
-@dataclass
-class FeedbackTrack:
-    """The feedback messages of one stream (source and direction), one time at a time.
-
-    The longest gap is the first of the longest silences between two messages; times are
-    compared in whole microseconds, so a recording (nanosecond times) and the file it was
-    made from name the same gap.
-    """
-
-    count: int = 0
-    first: float | None = None
-    last: float | None = None
-    longest_gap: float = 0.0
-    gap_start: float | None = None  # the message before the longest gap
-    gap_end: float | None = None  # the message that ended it
-    gaps_over_threshold: int = 0  # silences that lost messages (see lost_messages)
-    lost_messages: int = 0  # feedback messages lost in them
-    _longest_us: int = field(default=0, repr=False)
-    # The last message that came, whole or damaged: a silence ends with either.
-    _arrival: float | None = field(default=None, repr=False)
-
-    def add(self, t: float) -> None:
-        if self.last is None:
-            self.first = t
-        else:
-            self._silence_until(t)
-        self.count += 1
-        self.last = self._arrival = t
-
-    def damaged(self, t: float) -> None:
-        """A message with a bad CRC came at ``t``: the silence before it ends there, and
-        what it ends is counted; the message itself is damaged, not lost."""
-        arrival = self._arrival if self._arrival is not None else self.last
-        if arrival is None or t <= arrival:
-            return
-        self._silence_until(t)
-        self._arrival = t
-
-    def _silence_until(self, t: float) -> None:
-        last = self._arrival if self._arrival is not None else self.last
-        assert last is not None
-        gap_us = round(t * _US) - round(last * _US)
-        if gap_us > self._longest_us:
-            self._longest_us = gap_us
-            self.longest_gap, self.gap_start, self.gap_end = gap_us / _US, last, t
-        lost = lost_messages(gap_us / _US)
-        if lost:
-            self.gaps_over_threshold += 1
-            self.lost_messages += lost
-
-    @property
-    def rate_hz(self) -> float | None:
-        if self.count < 2 or self.first is None or self.last is None:
-            return None
-        span = self.last - self.first
-        return (self.count - 1) / span if span > 0 else None
-
-    def figures(self) -> dict[str, Any]:
-        """JSON-ready figures (rounded to microseconds)."""
-        gap = self.count > 1
-        return {
-            "messages": self.count,
-            "first": self.first,
-            "last": self.last,
-            "rate_hz": _round(self.rate_hz),
-            "expected_hz": EXPECTED_FEEDBACK_HZ,
-            "longest_gap_s": round(self.longest_gap, 6) if gap else None,
-            "longest_gap_start": self.gap_start if gap else None,
-            "longest_gap_end": self.gap_end if gap else None,
-            "gap_threshold_s": GAP_THRESHOLD_S,
-            "gaps_over_threshold": self.gaps_over_threshold,
-            "lost_messages": self.lost_messages,
-        }
-
-    @classmethod
-    def from_figures(cls, data: dict[str, Any]) -> FeedbackTrack:
-        gap = data.get("longest_gap_s")
-        track = cls(
-            count=int(data["messages"]),
-            first=_opt_float(data.get("first")),
-            last=_opt_float(data.get("last")),
-            longest_gap=float(gap or 0.0),
-            gap_start=_opt_float(data.get("longest_gap_start")),
-            gap_end=_opt_float(data.get("longest_gap_end")),
-            gaps_over_threshold=int(data.get("gaps_over_threshold", 0)),
-            lost_messages=int(data.get("lost_messages", 0)),
-        )
-        track._longest_us = round(track.longest_gap * _US)
-        return track
+_FIRST = itemgetter(0)
 
 
 @dataclass
@@ -233,20 +106,70 @@ class Tally:
         times = list(map(_TIME, items))
         self.widen(min(times), max(times))
 
-    def add_runs(self, runs: Iterable[FrameRun]) -> None:
-        """Count runs of plain CAN frames as ``add_items`` counts the same frames."""
+    def add_runs(self, runs: Iterable[FrameColumns]) -> None:
+        """Count frames read as columns as ``add_items`` counts the same frames."""
         for run in runs:
             frames = len(run)
             if not frames:
                 continue
-            size = sum(map(len, run.data))
-            bits = CAN_BITS_STANDARD * frames + 8 * size
-            extended = sum(map(_PLACE_EXTENDED, run.place))
-            bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+            size = int(run.length.sum())
+            extended = int(run.extended.sum())
             self.frames += frames
             self.bytes += size
-            self.bits += bits
-            self.widen(min(run.time), max(run.time))
+            self.bits += CAN_BITS_STANDARD * frames + 8 * size
+            self.bits += (CAN_BITS_EXTENDED - CAN_BITS_STANDARD) * extended
+            self.widen(float(run.time.min()), float(run.time.max()))
+
+    def add_columns(self, block: EventColumns) -> None:
+        """Count the events of a block decoded in vectors as ``add_events`` counts them:
+        its groups have no warnings and are counted by topic and command at once; the
+        feedback messages of its groups are timed in frame order with its single events."""
+        singles = block.single_events()
+        firsts = [(int(g.rows[0]), str(g.name)) for g in block.groups if g.topic == TOPIC_COMMAND]
+        if firsts:  # new names in the order they first came, as one by one
+            firsts += [
+                (row, str(e.fields.get("name", "unknown")))
+                for row, e in singles
+                if e.topic == TOPIC_COMMAND
+            ]
+            for _, name in sorted(firsts, key=_FIRST):
+                if name not in self.commands:
+                    self.commands[name] = 0
+        feedback: list[EventGroup] = []
+        for group in block.groups:
+            n = len(group)
+            self.events += n
+            self.topics[group.topic] += n
+            if group.topic == TOPIC_COMMAND:
+                self.commands[str(group.name)] += n
+            elif group.topic in FEEDBACK_TOPICS:
+                feedback.append(group)
+            self.widen(float(group.times.min()), float(group.times.max()))
+        events = [e for _, e in singles]
+        if events:
+            self._count(events)
+        if not feedback:
+            self._time_feedback(events)
+            return
+        timed = [
+            (row, e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
+            for row, e in singles
+            if e.topic in FEEDBACK_TOPICS or damaged_feedback(e)
+        ]
+        streams = {s for g in feedback for s in (g.sources[0], g.sources[-1])}
+        if not timed and len(streams) == 1 and all(len(set(g.sources)) == 1 for g in feedback):
+            import numpy as np  # the groups' rows and times are arrays already
+
+            rows = np.concatenate([g.rows for g in feedback])
+            times = np.concatenate([g.times for g in feedback])[np.argsort(rows, kind="stable")]
+            key = streams.pop()
+            self._time_points([(t, key, False) for t in times.tolist()])
+            return
+        for group in feedback:
+            rows, times = group.rows.tolist(), group.times.tolist()
+            timed += zip(rows, times, group.sources, [False] * len(rows), strict=True)
+        timed.sort(key=_FIRST)
+        self._time_points([(t, key, damaged) for _, t, key, damaged in timed])
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Count events: per topic, diagnostic kind and command; feedback timing; CRCs.
@@ -255,14 +178,16 @@ class Tally:
         every command reports the same figures for the same input, stage or no stage.
         """
         events = events if isinstance(events, list) else list(events)
+        if any(e.topic == TOPIC_ANALYSIS_RESPONSE for e in events):
+            events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
+        if events:
+            self._count(events)
+            self._time_feedback(events)
+
+    def _count(self, events: list[Event]) -> None:
+        """Every count of ``add_events`` but the feedback's timing."""
         topics = list(map(_TOPIC, events))
         present = set(topics)
-        if TOPIC_ANALYSIS_RESPONSE in present:
-            events = [e for e in events if e.topic != TOPIC_ANALYSIS_RESPONSE]
-            topics = list(map(_TOPIC, events))
-            present.discard(TOPIC_ANALYSIS_RESPONSE)
-        if not events:
-            return
         # A batch holds few topics: each is counted in one C pass. The figures below pick
         # their events with a comprehension each, which beats chains of C iterators here.
         self.events += len(events)
@@ -275,7 +200,7 @@ class Tally:
         if TOPIC_COMMAND in present:
             names = [e.fields.get("name", "unknown") for e in events if e.topic == TOPIC_COMMAND]
             commands = self.commands
-            for name in set(names):
+            for name in dict.fromkeys(names):  # in the order they came: ties stay put
                 commands[str(name)] += names.count(name)
         if TOPIC_DIAGNOSTICS in present:
             kinds = [
@@ -286,9 +211,6 @@ class Tally:
             self.crc_errors += kinds.count(CRC_MISMATCH)
             if BUS_ERROR in kinds:
                 self.bus.add_events(events)
-            damaged = not DAMAGED_FEEDBACK.isdisjoint(kinds)
-        else:
-            damaged = False
         streamed = [e for e in events if "transport" in e.fields]  # read from a stream
         if streamed:
             self.crc_checked += sum(
@@ -299,32 +221,44 @@ class Tally:
                 and e.fields["transport"] == "stream"
                 and e.fields.get("crc_set", True)
             )
-        if damaged:
-            # In the order they came: a damaged message ends the silence before it.
-            for event in events:
-                if event.topic in FEEDBACK_TOPICS:
-                    self._add_feedback(event, event.fields)
-                elif event.topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in (
-                    DAMAGED_FEEDBACK
-                ):
-                    track = self.feedback.get(feedback_stream(event))
-                    if track is not None:
-                        track.damaged(event.time)
-        elif not FEEDBACK_TOPICS.isdisjoint(present):
-            for event in [e for e in events if e.topic in FEEDBACK_TOPICS]:
-                self._add_feedback(event, event.fields)
 
-    def _add_feedback(self, event: Event, fields: dict[str, Any]) -> None:
-        """One feedback message: its stream's timing, and one CRC checked."""
-        self.crc_checked += 1
-        key = feedback_stream(event)
-        track = self.feedback.get(key)
-        if track is None:
-            if len(self.feedback) >= MAX_FEEDBACK_SOURCES:
-                self.feedback_untracked += 1
-                return
-            track = self.feedback[key] = FeedbackTrack()
-        track.add(event.time)
+    def _time_feedback(self, events: list[Event]) -> None:
+        """The feedback messages of ``events`` timed, and damaged ones, in order: a
+        damaged message ends the silence before it."""
+        self._time_points(
+            [
+                (e.time, feedback_stream(e), e.topic == TOPIC_DIAGNOSTICS)
+                for e in events
+                if e.topic in FEEDBACK_TOPICS or damaged_feedback(e)
+            ]
+        )
+
+    def _time_points(self, points: list[tuple[float, str, bool]]) -> None:
+        """Feedback messages (time, stream, damaged) in the order they came; a run of
+        whole messages of one stream is timed in one go."""
+        feedback = self.feedback
+        i, n = 0, len(points)
+        while i < n:
+            t, key, damaged = points[i]
+            if damaged:
+                track = feedback.get(key)
+                if track is not None:
+                    track.damaged(t)
+                i += 1
+                continue
+            end = i + 1
+            while end < n and points[end][1] == key and not points[end][2]:
+                end += 1
+            self.crc_checked += end - i
+            track = feedback.get(key)
+            if track is None:
+                if len(feedback) >= MAX_FEEDBACK_SOURCES:
+                    self.feedback_untracked += end - i
+                    i = end
+                    continue
+                track = feedback[key] = FeedbackTrack()
+            track.add_times([p[0] for p in points[i:end]])
+            i = end
 
     def widen(self, first: float | None, last: float | None) -> None:
         """Take a time span the input saw (frames the reader skipped, for instance) into account."""
@@ -358,7 +292,7 @@ class Tally:
             "feedback": {k: t.figures() for k, t in sorted(self.feedback.items())},
             "crc_checked": self.crc_checked,
             "crc_errors": self.crc_errors,
-            "crc_error_rate": _round(self.crc_error_rate),
+            "crc_error_rate": round_figure(self.crc_error_rate),
             **({"feedback_untracked": self.feedback_untracked} if self.feedback_untracked else {}),
             **({"bus": self.bus.figures()} if self.bus else {}),
         }
@@ -413,18 +347,8 @@ class Tally:
             feedback_untracked=int(figures.get("feedback_untracked", 0)),
             crc_checked=int(figures["crc_checked"]),
             crc_errors=int(figures["crc_errors"]),
-            first_time=_opt_float(data.get("first_time")),
-            last_time=_opt_float(data.get("last_time")),
+            first_time=optional_float(data.get("first_time")),
+            last_time=optional_float(data.get("last_time")),
             bus=BusFigures.from_figures(figures.get("bus") or {}),
         )
         return tally
-
-
-def _round(value: float | None) -> float | None:
-    return None if value is None else round(value, 6)
-
-
-def _opt_float(value: Any) -> float | None:
-    if value is None or value == "":
-        return None
-    return float(value)

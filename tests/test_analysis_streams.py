@@ -14,7 +14,11 @@ from collections import Counter
 from typing import Any
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
+from analyzer.analysis.motion_fit import Command, CommandedMotion
+from analyzer.analysis.streams import HOLD_S
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.ground import Step
 from analyzer.sim.pilot import Stick
@@ -276,3 +280,52 @@ def test_feedback_that_comes_late_or_not_at_all_does_not_bend_the_ratio() -> Non
     short = (Step(1.0, "gimbal_control", {"pan_speed_dps": 25}, until=1.6),)
     (rate,) = rates(session(short, 7.0, faults=FaultConfig(stop_at=1.7, stop_for=3.0)))
     assert "lag_s" not in rate and rate["verdict"] == "obeyed"
+
+
+def _corners_one_by_one(
+    commands: list[Command], hold: float
+) -> tuple[list[float], list[float], list[float]]:
+    """The commanded motion's corners as a running total makes them, command by command."""
+    times: list[float] = []
+    pans: list[float] = []
+    tilts: list[float] = []
+    pan = tilt = 0.0
+    for n, this in enumerate(commands):
+        until = this.time + hold
+        if n + 1 < len(commands):
+            until = min(until, commands[n + 1].time)
+        times.append(this.time)
+        pans.append(pan)
+        tilts.append(tilt)
+        span = max(0.0, until - this.time)
+        pan += this.pan * span
+        tilt += this.tilt * span
+        times.append(max(until, this.time))
+        pans.append(pan)
+        tilts.append(tilt)
+    return times, pans, tilts
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from([0.0, 0.01, 0.05, 0.3, 0.5, -0.01]),
+            st.floats(-100, 100),
+            st.floats(-100, 100),
+        ),
+        max_size=40,
+    ),
+    st.floats(0, 2e9),
+)
+def test_the_commanded_motion_is_the_running_total_of_the_commands(
+    steps: list[tuple[float, float, float]], start: float
+) -> None:
+    """Its corners are made for all commands at once: the same floats as a running total."""
+    commands, t = [], start
+    for step, pan, tilt in steps:
+        t += step
+        commands.append(Command(t, pan, tilt))
+    motion = CommandedMotion(commands, HOLD_S)
+    times, pans, tilts = _corners_one_by_one(commands, HOLD_S)
+    assert motion.times.tolist() == times
+    assert [a.tolist() for a in motion._axes] == [pans, tilts]

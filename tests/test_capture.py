@@ -99,10 +99,8 @@ class SpyDecoder:
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         return self.inner.feed_stream(chunk)
 
-    def feed_batch(
-        self, items: Iterable[object], raw: list[CanFrame | StreamChunk], events: list[Event]
-    ) -> None:
-        self.inner.feed_batch(items, raw, events)
+    def feed_batch(self, items: Iterable[object], events: list[Event], columns: Any = None) -> None:
+        self.inner.feed_batch(items, events, columns)
 
     def tick(self, now: float) -> list[Event]:
         self.ticks.append(now)

@@ -13,9 +13,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.capture_clock import MAX_BACK_S, CaptureClock
-from analyzer.protocol.types import BAD_LINE, CanFrame, Event, FrameRun, diagnostic
+from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 from tests.fleet_flights import cli_output as cli
 from tests.log_makers import flight_frames, python_can_log, savvycan_csv
+from tests.test_frame_columns import as_columns
 
 FRAMES = flight_frames()[:60]
 FIRST = FRAMES[0].time
@@ -181,8 +182,8 @@ def test_a_clock_set_back_by_an_hour_is_no_damage() -> None:
     assert out == chunks
 
 
-def test_runs_of_frames_are_looked_into() -> None:
-    run = FrameRun([1e9, 5.0, 1e9 + 1], [("can0", 0xF01, True)] * 3, [bytes(8)] * 3, [""] * 3)
+def test_columns_of_frames_are_looked_into() -> None:
+    run = as_columns([frame(1e9), frame(5.0), frame(1e9 + 1)])
     (chunk,) = CaptureClock().batches([[run]])
     assert [i.time for i in chunk] == [1e9, 1e9, 1e9 + 1]
     assert isinstance(chunk[1], Event)

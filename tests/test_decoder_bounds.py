@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import tracemalloc
 
+from analyzer.feedback_track import MAX_FEEDBACK_SOURCES
 from analyzer.protocol.decoder import Decoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.framing import wrap_control
@@ -20,7 +21,6 @@ from analyzer.protocol.types import (
 )
 from analyzer.protocol.uav import encode_text
 from analyzer.summary import Summary
-from analyzer.tally import MAX_FEEDBACK_SOURCES
 
 MESSAGE = encode_attitude(pitch_deg=-10.0, yaw_deg=20.0)
 SEGMENTS = segments(MESSAGE)

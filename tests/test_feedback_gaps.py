@@ -15,8 +15,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
+from analyzer.feedback_track import GAP_PERIODS, lost_messages
 from analyzer.protocol.feedback import encode_attitude, segments
-from analyzer.tally import GAP_PERIODS, lost_messages
 from tests.fleet_flights import cli_output as cli
 
 T0 = 1_700_000_000.0

@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 
 from analyzer.cli import main
 from analyzer.inputs import open_input
+from analyzer.inputs.base import ABSOLUTE, DELTA, RELATIVE_TO_START
 from analyzer.inputs.candump.reader import DECIDE_AFTER
-from analyzer.inputs.python_can.text_logs import ABSOLUTE, DELTA, RELATIVE_TO_START
 from analyzer.inputs.stdin import StdinCandumpReader
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.types import CanFrame

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs import InputReader, detect_format, open_input
-from analyzer.inputs.python_can.text_logs import ABSOLUTE, RELATIVE_TO_START
+from analyzer.inputs.base import ABSOLUTE, RELATIVE_TO_START
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event
 from tests.log_makers import flight_frames, python_can_log, savvycan_csv
 

@@ -29,6 +29,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "output_file",
             "bus_figures",
             "bus_hints",
+            "feedback_track",
             "tally",
             "progress",
             "capture_clock",

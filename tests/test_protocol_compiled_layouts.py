@@ -16,13 +16,13 @@ from analyzer.protocol.command_table import COMMANDS
 from analyzer.protocol.feedback import (
     ATTITUDE,
     FEEDBACK_ID_BYTES,
-    MESSAGE_DECODERS,
     RANGING,
     FeedbackLayout,
     decode_feedback_fields,
+    message_decoder,
 )
 from analyzer.protocol.layout import Layout
-from analyzer.protocol.uav import EIGHT_BYTE_DECODERS, STATUS_FRAMES, USED_BYTES
+from analyzer.protocol.uav import STATUS_FRAMES, USED_BYTES, eight_byte_decoder
 
 LAYOUTS: list[Layout] = [
     ATTITUDE.layout,
@@ -61,7 +61,7 @@ def test_compiled_decoding_equals_field_by_field(layout: Layout, data: bytes) ->
 def test_eight_byte_status_frames_decode_in_one_call_as_field_by_field(
     can_id: int, data: bytes
 ) -> None:
-    fields, warnings = EIGHT_BYTE_DECODERS[can_id](data)
+    fields, warnings = eight_byte_decoder(can_id)(data)
     slow, slow_warnings = field_by_field(STATUS_FRAMES[can_id].layout, data)
     used = USED_BYTES[can_id]
     if any(data[used:]):
@@ -123,7 +123,7 @@ def test_generated_feedback_decoders_equal_field_by_field(
     message[3 : 3 + len(zeros)] = zeros
     if zeros:
         message[12:16] = FEEDBACK_ID_BYTES
-    fast = MESSAGE_DECODERS[layout.length_byte](bytes(message))
+    fast = message_decoder(layout.length_byte)(bytes(message))
     found, *slow = decode_feedback_fields(bytes(message))
     assert found is layout
     assert_same(fast, (slow[0], slow[1]))

@@ -1,13 +1,13 @@
 """Every short way of the hot path gives what the long way gives, for any input.
 
-The decoder's batch loop (the usual frame of each protocol ID decoded in place), the
-feedback reassembler's usual case and
-the counters' batch folding exist only for speed; these properties hold them to the
-plain code they stand in for.
+The decoder's batch loop (every kind of item in one loop, counted once), the feedback
+reassembler's usual case and the counters' batch folding exist only for speed; these
+properties hold them to the plain code they stand in for.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import Counter
 from typing import Any
 
@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from analyzer.feedback_track import FeedbackTrack
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.crc import crc_bytes
 from analyzer.protocol.decoder import Decoder
@@ -121,21 +122,19 @@ def test_feed_batch_is_the_general_path_item_by_item(
         if isinstance(item, CanFrame):  # the long way: the general path for every frame
             one.frames += 1
             one.last_time = item.time
-            slow += one._can_any(item, item.channel or "can", {})
+            slow += one._frame(item, item.channel or "can", {})
         elif isinstance(item, StreamChunk):
             slow += one.feed_stream(item)
         else:
             slow.append(item)
     slow += one.close()
     two = Decoder(emit_other=other, max_sources=sources)
-    raw: list[CanFrame | StreamChunk] = []
     fast: list[Event] = []
     half = len(batch) // 2
-    two.feed_batch(batch[:half], raw, fast)
-    two.feed_batch(batch[half:], raw, fast)
+    two.feed_batch(batch[:half], fast)
+    two.feed_batch(batch[half:], fast)
     fast += two.close()
     assert as_dicts(fast) == as_dicts(slow)
-    assert raw == [i for i in batch if not isinstance(i, Event)]
     assert two.stats == one.stats
     assert two.last_time == one.last_time
 
@@ -262,3 +261,30 @@ def test_tally_folds_a_batch_as_the_figures_define(items: list[Any], events: lis
     assert (tally.crc_checked, tally.crc_errors) == want["crc"]
     feedback = [e for e in events if e.topic in (TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING)]
     assert sum(t.count for t in tally.feedback.values()) == len(feedback)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.sampled_from([0.0, 0.000_000_5, 0.5, 0.499_999_5, 0.75, 1.0, 1.25, 1.5, 3.0, 7.7]),
+        min_size=0,
+        max_size=300,
+    ),
+    st.floats(0, 2e9),
+    st.integers(0, 4),
+)
+def test_many_feedback_messages_are_timed_as_one_by_one(
+    steps: list[float], start: float, damaged_first: int
+) -> None:
+    """The counters time a feedback group's messages at once (``add_times``): the same
+    longest gap (the first of the longest), the same silences and lost messages."""
+    times = [start + sum(steps[: i + 1]) for i in range(len(steps))]
+    one, many = FeedbackTrack(), FeedbackTrack()
+    for track in (one, many):
+        if damaged_first:
+            track.add(start - 10)
+            track.damaged(start - 10 + damaged_first)
+    for t in times:
+        one.add(t)
+    many.add_times(times)
+    assert dataclasses.asdict(many) == dataclasses.asdict(one)

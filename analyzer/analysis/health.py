@@ -14,9 +14,14 @@ from analyzer.analysis.findings import (
     UNKNOWN,
     Finding,
 )
-from analyzer.tally import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
-from analyzer.tally import FEEDBACK_PERIOD_S, MAX_FEEDBACK_SOURCES, lost_messages, silence_s
-from analyzer.tally import FEEDBACK_TOLERANCE as RATE_TOLERANCE
+from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
+from analyzer.feedback_track import (
+    FEEDBACK_PERIOD_S,
+    MAX_FEEDBACK_SOURCES,
+    lost_messages,
+    silence_s,
+)
+from analyzer.feedback_track import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 
 WINDOW_S = 60.0
 MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement only if it has data
@@ -42,24 +47,21 @@ class FeedbackHealth:
         self.gaps = 0
         self.lost = 0
 
-    def _window_of(self, t: float) -> int:
-        assert self.first is not None
-        return int((t - self.first) // WINDOW_S)
-
     def tick(self, t: float) -> list[Finding]:
         """Any event's time: closes the minute windows that ended before ``t``."""
-        if self.first is None:
-            self.first = t
+        first = self.first
+        if first is None:
+            first = self.first = t
         if self.last is None or t > self.last:
             self.last = t
-        out: list[Finding] = []
-        window = self._window_of(t)
+        window = int((t - first) // WINDOW_S)  # the minute window of ``t``
         if window > self._window:
             # One judgement for the window that ended; empty windows in between (a long
             # silence, or a clock that jumps by years) are not listed one by one.
-            out.append(self._judge_window(WINDOW_S))
+            found = [self._judge_window(WINDOW_S)]
             self._window = window
-        return out
+            return found
+        return []
 
     def feedback(self, t: float, stream: str = "") -> list[Finding]:
         """One feedback message at ``t`` of ``stream``; a finding when it ends a silence

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +29,13 @@ from analyzer.analysis.tracking import (
     judge_tracking,
     nothing_to_stop,
 )
+from analyzer.feedback_track import (
+    DAMAGED_FEEDBACK,
+    EXPECTED_FEEDBACK_HZ,
+    GAP_THRESHOLD_S,
+    feedback_stream,
+)
+from analyzer.protocol.event_columns import EventColumns
 from analyzer.protocol.types import (
     CRC_MISMATCH,
     INCOMPLETE,
@@ -39,12 +47,11 @@ from analyzer.protocol.types import (
     TOPIC_UAV_ATTITUDE,
     Event,
 )
-from analyzer.tally import (
-    DAMAGED_FEEDBACK,
-    EXPECTED_FEEDBACK_HZ,
-    GAP_THRESHOLD_S,
-    feedback_stream,
-)
+
+# The topics whose events the analysis reads whole, those whose fields it reads (the
+# commands); of every other event only the time counts.
+EVENT_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS})
+FIELD_TOPICS = frozenset({TOPIC_COMMAND})
 
 DEFAULT_TOLERANCE_DEG = 1.0
 DEFAULT_TIME_ALLOWED_S = 5.0
@@ -131,14 +138,24 @@ class ResponseAnalyzer:
             damaged = event.fields.get("kind") in DAMAGED_FEEDBACK
             out += self.health.error(t, feedback_stream(event), ends_silence=damaged)
             out += self._settle(t, None)
-        else:
-            out += self.health.tick(t)
-            out += self._settle(t, None)
-            if topic == TOPIC_UAV_ATTITUDE:
-                self._fc_attitude = t
-            elif topic == TOPIC_COMMAND:
-                out += self._command(t, event.fields)
+        else:  # the most frequent: time passes, perhaps a command (no list made for nothing)
+            out = self._moment(t, topic, event.fields)
         return self._emit(out) if out else []
+
+    def _moment(self, t: float, topic: str, fields: dict[str, Any] | None) -> list[Finding]:
+        """Any event but feedback and damage: its time passes; a command is judged."""
+        out = self.health.tick(t)
+        if self._targets or self._tracking or self._sticks.active:
+            settled = self._settle(t, None)
+            if settled:
+                out += settled
+        if topic == TOPIC_UAV_ATTITUDE:
+            self._fc_attitude = t
+        elif topic == TOPIC_COMMAND and fields is not None:
+            more = self._command(t, fields)
+            if more:
+                out += more
+        return out
 
     def process(self, events: list[Event]) -> list[Event]:
         """As a pipeline stage (``analyzer.pipeline.Stage``): the findings of a batch.
@@ -152,6 +169,24 @@ class ResponseAnalyzer:
                 found = feed(event)
                 if found:
                     out += found
+        return out
+
+    def process_segments(self, segments: Iterable[list[Event] | EventColumns]) -> list[Event]:
+        """``process`` of a batch's events as the pipeline holds them (``Batch.segments``):
+        of the events decoded in vectors, only those whose fields this reads are made
+        into Events; the others are moments (their time and topic)."""
+        out: list[Event] = []
+        for segment in segments:
+            if isinstance(segment, list):
+                out += self.process(segment)
+                continue
+            for item in segment.moments(EVENT_TOPICS, FIELD_TOPICS):
+                if isinstance(item, tuple):
+                    found = self._moment(*item)
+                    if found:
+                        out += self._emit(found)
+                elif item.topic != TOPIC_ANALYSIS_RESPONSE:
+                    out += self.feed(item)
         return out
 
     def close(self) -> list[Event]:
@@ -240,9 +275,9 @@ class ResponseAnalyzer:
 
     def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[Finding]:
         """One command of a stick stream: targets end at a speed, movements open and close."""
-        pan, tilt = _speed(fields, "pan_speed_dps"), _speed(fields, "tilt_speed_dps")
+        pan, tilt = _speeds(fields)
         out: list[Finding] = []
-        if pan != 0 or tilt != 0:
+        if (pan != 0 or tilt != 0) and self._targets:
             # A speed takes over both axes; zeros (a centred stick) leave targets alone.
             out += self._end_targets(t, "gimbal_control", BOTH)
         component = str(fields.get("component") or "gimbal")
@@ -282,31 +317,33 @@ class ResponseAnalyzer:
     def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
         out: list[Finding] = []
-        if not (self._targets or self._tracking or self._sticks.active):
-            return out
         late = FEEDBACK_WAIT_S
-        keep: list[TargetCheck] = []
-        for check in self._targets:
-            if check.finding is None and t > check.deadline + (0.0 if sample is not None else late):
-                cut = "" if sample is not None else self._cut(check.time, check.deadline)
-                self._judge_target(check, cut, check.deadline)
-            if check.finding is not None and (
-                t - check.last_sent > RESEND_GAP_S or t - check.deadline > RESEND_HOLD_S
-            ):
-                out.append(check.release())
-            else:
-                keep.append(check)
-        self._targets = keep
-        still: list[TrackingCheck] = []
-        for tracking in self._tracking:
-            if sample is not None and sample.tracking == tracking.want and t > tracking.time:
-                out.append(self._judge_tracking(tracking, sample, ""))
-            elif t > tracking.deadline + (0.0 if sample is not None else late):
-                cut = "" if sample is not None else self._cut(tracking.time, tracking.deadline)
-                out.append(self._judge_tracking(tracking, None, cut))
-            else:
-                still.append(tracking)
-        self._tracking = still
+        if self._targets:
+            keep: list[TargetCheck] = []
+            for check in self._targets:
+                if check.finding is None and t > check.deadline + (
+                    0.0 if sample is not None else late
+                ):
+                    cut = "" if sample is not None else self._cut(check.time, check.deadline)
+                    self._judge_target(check, cut, check.deadline)
+                if check.finding is not None and (
+                    t - check.last_sent > RESEND_GAP_S or t - check.deadline > RESEND_HOLD_S
+                ):
+                    out.append(check.release())
+                else:
+                    keep.append(check)
+            self._targets = keep
+        if self._tracking:
+            still: list[TrackingCheck] = []
+            for tracking in self._tracking:
+                if sample is not None and sample.tracking == tracking.want and t > tracking.time:
+                    out.append(self._judge_tracking(tracking, sample, ""))
+                elif t > tracking.deadline + (0.0 if sample is not None else late):
+                    cut = "" if sample is not None else self._cut(tracking.time, tracking.deadline)
+                    out.append(self._judge_tracking(tracking, None, cut))
+                else:
+                    still.append(tracking)
+            self._tracking = still
         if self._sticks.active:
             out += self._sticks.settle(t, sample)
         return out
@@ -395,9 +432,13 @@ class ResponseAnalyzer:
         return out
 
 
-def _speed(fields: dict[str, Any], name: str) -> float:
-    value = fields.get(name, 0.0)
-    return float(value) if isinstance(value, (int, float)) else 0.0
+def _speeds(fields: dict[str, Any]) -> tuple[float, float]:
+    """A gimbal_control's pan and tilt speeds (0 for a value that is no number)."""
+    pan, tilt = fields.get("pan_speed_dps", 0.0), fields.get("tilt_speed_dps", 0.0)
+    return (
+        float(pan) if isinstance(pan, (int, float)) else 0.0,
+        float(tilt) if isinstance(tilt, (int, float)) else 0.0,
+    )
 
 
 __all__ = ["NOT_OBEYED", "OBEYED", "PARTIAL", "UNKNOWN", "ResponseAnalyzer", "Settings"]

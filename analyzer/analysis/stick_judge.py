@@ -15,7 +15,7 @@ from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.streams import HOLD_S, Movement, Streams
 from analyzer.analysis.targets import STILL_DEG
-from analyzer.tally import FEEDBACK_PERIOD_S
+from analyzer.feedback_track import FEEDBACK_PERIOD_S
 
 STOP_GRACE_S = 0.5  # the gimbal may coast this long after the last gimbal_control
 STOP_OBSERVE_S = 2.0  # then it is watched this long for movement
@@ -120,7 +120,9 @@ class StickJudge:
         out: list[Finding] = []
         streams = self.streams
         if streams.open:
-            self._stopped(streams.end_quiet(t))
+            closed = streams.end_quiet(t)
+            if closed:
+                self._stopped(closed)
         late = 0.0 if sample is not None else self.late
         if streams.waiting:
             waiting: list[Movement] = []

@@ -198,9 +198,14 @@ class Streams:
     def end_quiet(self, t: float) -> list[Movement]:
         """End the streams whose last command is more than STREAM_GAP_S before ``t``."""
         closed: list[Movement] = []
-        for component, stream in list(self.open.items()):
+        for stream in self.open.values():
             if t - stream.last > STREAM_GAP_S:
-                closed += self._end(component, None, "pause")
+                break
+        else:
+            return closed  # the usual answer, for every event while a stick moves
+        quiet = [c for c, stream in self.open.items() if t - stream.last > STREAM_GAP_S]
+        for component in quiet:
+            closed += self._end(component, None, "pause")
         return closed
 
     def cut(self, t: float, name: str) -> list[Movement]:

@@ -92,7 +92,7 @@ def decoded_events(decoding: Decoding, path: Path) -> Iterator[Event]:
     try:
         with input_errors(path):
             for batch in delivered_batches(reader, pipeline, batch_items=decoding.batch_items):
-                yield from batch.events
+                yield from batch.materialize()
     finally:
         reader.close()
 

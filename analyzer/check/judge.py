@@ -27,9 +27,9 @@ from analyzer.check.figures import (
     rate_figure,
 )
 from analyzer.check.steps import Hold, Listen, Plan, Send
+from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ, FEEDBACK_TOLERANCE, GAP_THRESHOLD_S
 from analyzer.protocol.check_fields import FAIL, PASS, SKIPPED
 from analyzer.protocol.response_fields import CHECK_PICTURE, REFERENCE_AIRFRAME
-from analyzer.tally import EXPECTED_FEEDBACK_HZ, FEEDBACK_TOLERANCE, GAP_THRESHOLD_S
 from analyzer.timefmt import format_clock
 
 JUDGED_CHECKS = frozenset(

@@ -32,11 +32,11 @@ from analyzer.check.judge import (
 )
 from analyzer.check.observer import Observer
 from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Plan, Send, Step
+from analyzer.feedback_track import GAP_THRESHOLD_S
 from analyzer.protocol.check_fields import FAIL
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.response_fields import CHECK_PICTURE
 from analyzer.protocol.types import TOPIC_CHECK_STEPS, Event
-from analyzer.tally import GAP_THRESHOLD_S
 
 FIRST_FEEDBACK_WAIT_S = 2.0  # before the first step: wait this long for the gimbal to speak
 # A step the feedback did not allow to be judged (messages lost during it) is run again,

@@ -86,6 +86,7 @@ class LinePrinter:
     """Sink writing the events of each batch that pass the filter, as lines or JSON lines."""
 
     keeps_items = False  # events only: frames may come as runs
+    takes_columns = True  # blocks decoded in vectors are written as JSON from their columns
 
     def __init__(
         self,
@@ -94,19 +95,30 @@ class LinePrinter:
         wanted: Callable[[Any], bool] | None,
         *,
         flush_each: bool,
+        as_json: bool = False,
     ) -> None:
         self.out = out
         self.render = render
         self.wanted = wanted
         self.flush_each = flush_each  # live input: every batch is shown at once
+        self.as_json = as_json  # ``render`` writes ``decode --json`` lines
 
     def handle(self, batch: Any) -> None:
+        lines: list[str] = []
+        for segment in batch.segments():
+            if isinstance(segment, list):
+                lines += self._lines(segment)
+            elif self.as_json:
+                lines += segment.json_lines(self.wanted)
+            else:
+                lines += self._lines(segment.events())
+        _write(self.out, lines, flush=self.flush_each)
+
+    def _lines(self, events: list[Any]) -> list[str]:
         render, wanted = self.render, self.wanted
         if wanted is None:
-            lines = [render(event) for event in batch.events]
-        else:
-            lines = [render(event) for event in batch.events if wanted(event)]
-        _write(self.out, lines, flush=self.flush_each)
+            return [render(event) for event in events]
+        return [render(event) for event in events if wanted(event)]
 
     def close(self) -> None:
         self.out.flush()
@@ -131,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     # With --summary only the summary is printed (as one JSON object with --json).
     if not args.summary:
         printer = make_printer(args.json, color)
-        pipeline.sinks.append(LinePrinter(out, printer, wanted, flush_each=live))
+        pipeline.sinks.append(LinePrinter(out, printer, wanted, flush_each=live, as_json=args.json))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
     interrupted = False
     try:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from analyzer.analysis.camera.verdicts import TOLERANCE as SCALE_TOLERANCE
 from analyzer.analysis.rates import LATE_S, RATE_OK
 from analyzer.check.judge import Limits
-from analyzer.tally import FEEDBACK_PERIOD_S, FEEDBACK_TOLERANCE
+from analyzer.feedback_track import FEEDBACK_PERIOD_S, FEEDBACK_TOLERANCE
 
 SAME_COMMAND = 0.005  # the same command asks for the same (target, speed) to this
 

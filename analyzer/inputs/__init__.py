@@ -84,6 +84,10 @@ def open_input(
         from analyzer.inputs.mcap import McapReader
 
         return McapReader(path, stored=stored)
+    if name == "blf":
+        from analyzer.inputs.blf.reader import BlfReader
+
+        return BlfReader(path)
     if name == "rosbag":
         from analyzer.inputs.rosbag import RosbagReader
 

@@ -6,14 +6,19 @@ import contextlib
 import itertools
 import math
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.protocol.types import CanFrame, Event, FrameRun, StreamChunk
+from analyzer.protocol.frame_columns import FrameColumns
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
 
-# FrameRun only from a reader whose ``frame_runs`` was set.
-InputItem = CanFrame | StreamChunk | Event | FrameRun
+# FrameColumns: classic data frames a reader read in a block as arrays.
+InputItem = CanFrame | StreamChunk | Event | FrameColumns
+# Time bases (``InputReader.time_base``): how a file's times were written.
+ABSOLUTE = "absolute"
+RELATIVE_TO_START = "relative to the start of the recording"
+DELTA = "time since the previous frame (accumulated)"
 # Frame times are seconds since 1970 or since a log's start: a number beyond 2**33 s
 # (the year 2242) is no time but a damaged field, and later steps cannot date it.
 LATEST_TIME = float(2**33)
@@ -37,9 +42,6 @@ class InputReader:
     """
 
     format_name = "unknown"
-    # Set by a driver whose sinks keep no raw frames: a reader that can then hands on runs
-    # of plain frames as ``FrameRun`` items (the candump reader does), others ignore it.
-    frame_runs = False
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -48,9 +50,8 @@ class InputReader:
         self.position_bytes = 0
         self.first_time: float | None = None  # time of the first frame read (skipped ones too)
         self.last_time: float | None = None
-        # How the file's times were written, when it is worth saying: "absolute",
-        # "relative to the start of the recording" or "time since the previous frame
-        # (accumulated)" (see analyzer.inputs.python_can.text_logs); None when not known.
+        # How the file's times were written, when it is worth saying: ABSOLUTE,
+        # RELATIVE_TO_START or DELTA; None when not known.
         self.time_base: str | None = None
         # Facts about the input for the user that are no protocol diagnostic, known once
         # it has been read (e.g. "no TCP traffic on port 2000; ports seen: ...").
@@ -108,13 +109,24 @@ def open_binary(path: str) -> IO[bytes]:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
 
 
+def one_by_one(batches: Iterable[list[InputItem]]) -> Iterator[InputItem]:
+    """The items of ``batches`` one by one, frames read as columns as CanFrames (what a
+    reader that reads in blocks gives when iterated)."""
+    for items in batches:
+        for item in items:
+            if type(item) is FrameColumns:
+                yield from item.frames()
+            else:
+                yield item
+
+
 def by_frames(items: list[InputItem], size: int) -> Iterator[list[InputItem]]:
-    """``items`` in lists of at most ``size`` frames (a FrameRun counts its frames), in
+    """``items`` in lists of at most ``size`` frames (FrameColumns count their frames), in
     order; a run of more frames than that is a list of its own."""
     chunk: list[InputItem] = []
     weight = 0
     for item in items:
-        frames = len(item) if type(item) is FrameRun else 1
+        frames = len(item) if type(item) is FrameColumns else 1
         if chunk and weight + frames > size:
             yield chunk
             chunk, weight = [], 0

@@ -7,14 +7,17 @@ import re
 
 from analyzer.errors import UsageError
 from analyzer.inputs.base import open_binary
-from analyzer.inputs.savvycan import SAVVYCAN_HEADER_START
 from analyzer.inputs.textlines import GZIP_MAGIC, TolerantGunzip
+
+# The start of the header line SavvyCAN writes into its CSV files (lower case).
+SAVVYCAN_HEADER_START = b"time stamp,id,extended,"
+
 
 # --format values and what they read.
 FORMATS: dict[str, str] = {
     "candump": "candump -L log or candump screen output (.log; '-' = standard input)",
     "asc": "Vector ASC (.asc) through python-can",
-    "blf": "Vector BLF (.blf) through python-can",
+    "blf": "Vector BLF (.blf)",
     "trc": "PCAN-View TRC (.trc) through python-can",
     "csv": "python-can CSV (.csv)",
     "mf4": "ASAM MDF4 (.mf4) through python-can (needs asammdf)",

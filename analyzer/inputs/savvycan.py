@@ -12,11 +12,10 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from analyzer.inputs.base import InputItem, InputReader, time_problem
-from analyzer.inputs.python_can.text_logs import ABSOLUTE, RAW_LIMIT, RELATIVE_TO_START, text_lines
+from analyzer.inputs.base import ABSOLUTE, RELATIVE_TO_START, InputItem, InputReader, time_problem
+from analyzer.inputs.python_can.text_logs import RAW_LIMIT, text_lines
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
-SAVVYCAN_HEADER_START = b"time stamp,id,extended,"
 ABSOLUTE_FROM_US = 10**15  # a microsecond count this large is a date (after 2001)
 MAX_DATA = 64  # a CAN FD frame written with more data columns than the header names
 

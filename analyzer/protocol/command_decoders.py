@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from operator import attrgetter
 from typing import Any
 
 from analyzer.protocol.command_table import BY_CODE, Command
-from analyzer.protocol.compiled import Code
+from analyzer.protocol.compiled import Code, layout_struct
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import COMPONENT_NAMES
 
@@ -55,26 +56,41 @@ def _decoder(row: Command, fields: Sequence[Field], variant: int | None) -> Comm
     return decode
 
 
+def command_fits(row: Command) -> bool:
+    """Whether ``row`` has a generated decoder: a one-byte selector, if any, and in every
+    layout fields that fit in the 8 data bytes without overlapping."""
+    if row.selector is None:
+        return _fits(row.params)
+    base = (row.selector, *row.params)
+    variants = row.variants.values()
+    return row.selector.kind == "u8" and _fits(base) and all(_fits((*base, *v)) for v in variants)
+
+
+def _fits(fields: Sequence[Field]) -> bool:
+    whole = layout_struct(sorted(fields, key=_OFFSET))
+    return whole is not None and whole.size <= CAN_DATA_SIZE
+
+
+_OFFSET = attrgetter("offset")
+
+
 def compile_command(row: Command) -> CommandDecoder | None:
     """The decoder of ``row`` for 8 data bytes; None for a layout this cannot generate."""
-    try:
-        if row.selector is None:
-            return _decoder(row, row.params, None)
-        selector = row.selector
-        if selector.kind != "u8":
-            return None
-        other = _decoder(row, (selector, *row.params), None)
-        by_value = [other] * 256
-        for raw, variant in row.variants.items():
-            by_value[raw] = _decoder(row, (selector, *row.params, *variant), raw)
-        code = Code()
-        table = code.constant(tuple(by_value))
-        dispatch: CommandDecoder = code.define(
-            "decode(data)", [f"    return {table}[data[{selector.offset}]](data)"]
-        )
-        return dispatch
-    except ValueError:  # fields overlap or do not fit in 8 bytes
+    if not command_fits(row):
         return None
+    if row.selector is None:
+        return _decoder(row, row.params, None)
+    selector = row.selector
+    other = _decoder(row, (selector, *row.params), None)
+    by_value = [other] * 256
+    for raw, variant in row.variants.items():
+        by_value[raw] = _decoder(row, (selector, *row.params, *variant), raw)
+    code = Code()
+    table = code.constant(tuple(by_value))
+    dispatch: CommandDecoder = code.define(
+        "decode(data)", [f"    return {table}[data[{selector.offset}]](data)"]
+    )
+    return dispatch
 
 
 # Decoders by ``S_ID << 8 | CMD`` (the first two data bytes), for exactly 8 data bytes.

@@ -2,23 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
 
 from analyzer.protocol.bus_state import BusState
 from analyzer.protocol.can_error import decode_error_frame
 from analyzer.protocol.codec import decode_command
-from analyzer.protocol.decode_batch import STATUS_TOPICS, feed_batch
-from analyzer.protocol.feedback import decode_feedback
-from analyzer.protocol.framing import RawFrame, StreamFramer
-from analyzer.protocol.ids import (
-    CONTROL_ID,
-    FEEDBACK_ID,
-    TEXT_END_ID,
-    TEXT_ID,
-)
+from analyzer.protocol.event_columns import ColumnSlots, EventColumns
+from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.lru import MAX_SOURCES, LruTable
-from analyzer.protocol.reassembly import FeedbackReassembler, Message
-from analyzer.protocol.stream_frames import stream_frame_events
+from analyzer.protocol.reassembly import FeedbackReassembler, message_events
+from analyzer.protocol.routes import COMMAND, FEEDBACK, ROUTES, STATUS_TOPICS, TEXT
 from analyzer.protocol.types import (
     BAD_FRAME,
     BUS_ERROR,
@@ -32,9 +26,15 @@ from analyzer.protocol.types import (
     diagnostic,
     hexstr,
 )
-from analyzer.protocol.uav import STATUS_FRAMES, TextAssembler, decode_status
+from analyzer.protocol.uav import TextAssembler, decode_status
+
+if TYPE_CHECKING:  # streams are framed by modules imported when one comes
+    from analyzer.protocol.framing import RawFrame, StreamFramer
 
 __all__ = ["STATUS_TOPICS", "Decoder"]
+
+# The extra fields of a plain CAN frame: none. Shared and never written to.
+NO_EXTRA: dict[str, Any] = {}
 
 
 class Decoder:
@@ -85,11 +85,79 @@ class Decoder:
     def feed_can(self, frame: CanFrame) -> list[Event]:
         """Decode one CAN frame (from a bus or a log)."""
         events: list[Event] = []
-        self.feed_batch((frame,), [], events)
+        self.feed_batch((frame,), events)
         return events
 
-    # The batch path, the hot one, lives in ``decode_batch`` (a method: no extra call).
-    feed_batch = feed_batch
+    def feed_batch(
+        self,
+        items: Iterable[object],
+        events: list[Event],
+        columns: ColumnSlots | None = None,
+    ) -> None:
+        """Decode a batch in order: what frames and chunks give goes to ``events``, and
+        ready-made events (diagnostics of a reader) go there as they are.
+
+        Every CAN frame goes through the one dispatch (``_frame``). A block of frames as
+        columns (``FrameColumns``) is decoded in vectors (``decode_columns``); its events
+        go to ``columns`` with their place in ``events`` (made into Events at once when
+        ``columns`` is None).
+        """
+        frame_events = self._frame
+        extend = events.extend
+        for item in items:
+            if isinstance(item, CanFrame):
+                self.frames += 1
+                self.last_time = item.time
+                extend(frame_events(item, item.channel or "can", NO_EXTRA))
+            elif isinstance(item, FrameColumns):
+                decoded = self.decode_columns(item)
+                if columns is None:
+                    extend(decoded.events())
+                else:
+                    columns.append((len(events), decoded))
+            elif isinstance(item, StreamChunk):
+                extend(self.feed_stream(item))
+            elif isinstance(item, Event):
+                events.append(item)
+
+    def decode_columns(self, frames: FrameColumns) -> EventColumns:
+        """A block of frames as columns, decoded in vectors (``vector_decode``): the same
+        events, and the same state and counters after it, as frame by frame."""
+        from analyzer.protocol.vector_decode import feedback_groups, plan_columns
+
+        out = EventColumns()
+        if not len(frames):
+            return out
+        crowded = self._crowded(len(frames.channels))
+        plan = plan_columns(frames, crowded=crowded, emit_other=self.emit_other)
+        out.groups += plan.groups
+        for source, rows, whole, regular in plan.feedback:
+            self.last_time = float(frames.time[rows[0]])
+            reassembler = self._reassembler(source)
+            taken, fed = reassembler.feed_segments(
+                frames.time[rows].tolist(),
+                frames.data[rows].tobytes(),
+                frames.length[rows].tolist(),
+                whole,
+                regular,
+            )
+            groups, messages = feedback_groups(frames, rows, taken, source)
+            out.groups += groups
+            for row, message in messages:  # messages the vectors left (with a warning)
+                out.add(row, message_events(source, [message], NO_EXTRA))
+            for index, results in fed:
+                out.add(int(rows[index]), message_events(source, results, NO_EXTRA))
+        for source in plan.feedback_order:  # the least recently used first, as frame by frame
+            self._reassembler(source)
+        for row in plan.scalar.tolist():
+            frame = frames.frame(row)
+            self.last_time = frame.time
+            out.add(row, self._frame(frame, frame.channel or "can", NO_EXTRA))
+        self.frames += len(frames)
+        self.protocol_frames += plan.protocol_rows
+        self.other_frames += plan.other_rows
+        self.last_time = float(frames.time[-1])
+        return out
 
     def feed_stream(self, chunk: StreamChunk) -> list[Event]:
         """Decode bytes read from a TCP / UART stream."""
@@ -98,6 +166,8 @@ class Decoder:
         key = (chunk.source, chunk.direction)
         framer = self._framers.get(key)
         if framer is None:
+            from analyzer.protocol.framing import StreamFramer
+
             framer = self._framers.add(key, StreamFramer(chunk.source, chunk.direction))
             if self._given_up:
                 return self._take_given_up() + self._framed(
@@ -109,7 +179,7 @@ class Decoder:
         """Live use: report partial messages that waited too long."""
         out: list[Event] = []
         for reassembler in self._reassemblers.values():
-            out.extend(self._feedback(reassembler.source, reassembler.tick(now), {}))
+            out.extend(message_events(reassembler.source, reassembler.tick(now), {}))
         for text in self._texts.values():
             out.extend(text.tick(now))
         for framer in self._framers.values():
@@ -123,7 +193,7 @@ class Decoder:
         for framer in self._framers.values():
             out.extend(self._framed(framer, framer.close(when)))
         for reassembler in self._reassemblers.values():
-            out.extend(self._feedback(reassembler.source, reassembler.close(when), {}))
+            out.extend(message_events(reassembler.source, reassembler.close(when), {}))
         for text in self._texts.values():
             out.extend(text.close(when))
         return out
@@ -171,7 +241,7 @@ class Decoder:
         retired["bytes_discarded"] += part.bytes_discarded
 
     def _evict_reassembler(self, source: str, reassembler: FeedbackReassembler) -> None:
-        self._give_up(self._feedback(source, reassembler.close(self.last_time), {}))
+        self._give_up(message_events(source, reassembler.close(self.last_time), {}))
         self._retire(reassembler)
 
     def _evict_text(self, source: str, text: TextAssembler) -> None:
@@ -183,6 +253,12 @@ class Decoder:
 
     # -- CAN -------------------------------------------------------------------------------------
 
+    def _crowded(self, new_sources: int) -> bool:
+        """Whether ``new_sources`` more sources could make a table give one up (then a block
+        of columns goes frame by frame, where each eviction happens in its place)."""
+        tables = (len(self._reassemblers), len(self._texts), len(self._buses))
+        return max(tables) + new_sources >= self.max_sources
+
     def _reassembler(self, source: str) -> FeedbackReassembler:
         if source == self._recent_source and self._recent is not None:
             return self._recent  # still the most recently used: no reordering needed
@@ -192,12 +268,15 @@ class Decoder:
         self._recent_source, self._recent = source, reassembler
         return reassembler
 
-    def _can_any(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
-        """Any CAN frame: flags, standard IDs, other devices, text, extra fields."""
-        can_id = frame.can_id
+    def _frame(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
+        """The one dispatch of a CAN frame (``routes``): error frames, other devices,
+        commands, feedback segments, text and status frames; ``extra`` fields go into
+        every event (a stream's transport and direction)."""
         if frame.is_error:
             return self._bus_error(frame, source, extra)
-        if can_id not in _HANDLED:
+        can_id = frame.can_id
+        route = ROUTES.get(can_id)
+        if route is None:
             self.other_frames += 1
             if not self.emit_other:
                 return []
@@ -236,15 +315,18 @@ class Decoder:
             )
         if frame.is_fd:
             warnings.append("CAN FD frame; the protocol uses classic CAN")
-        if can_id == CONTROL_ID:
+        if route == COMMAND:
             fields, more = decode_command(frame.data)
-            fields.update(extra)
+            if extra:
+                fields.update(extra)
             return [Event(TOPIC_COMMAND, frame.time, source, fields, warnings + more)]
-        if can_id == FEEDBACK_ID:
+        if route == FEEDBACK:
             results = self._reassembler(source).feed(frame.data, frame.time)
             dropped = self._take_given_up() if self._given_up else []
-            return dropped + self._feedback(source, results, extra, warnings)
-        if can_id in (TEXT_ID, TEXT_END_ID):
+            if not results:
+                return dropped
+            return dropped + message_events(source, results, extra, warnings)
+        if route == TEXT:
             text = self._texts.get(source)
             given_up: list[Event] = []
             if text is None:
@@ -257,7 +339,8 @@ class Decoder:
             return given_up + events if given_up else events
         fields, more = decode_status(can_id, frame.data)
         fields["raw"] = hexstr(frame.data)
-        fields.update(extra)
+        if extra:
+            fields.update(extra)
         return [Event(STATUS_TOPICS[can_id], frame.time, source, fields, warnings + more)]
 
     def _bus_error(self, frame: CanFrame, source: str, extra: dict[str, Any]) -> list[Event]:
@@ -286,32 +369,11 @@ class Decoder:
             events.append(Event(TOPIC_CAN_BUS_STATE, frame.time, source, bus.message()))
         return events
 
-    def _feedback(
-        self,
-        source: str,
-        results: list[Message | Event],
-        extra: dict[str, Any],
-        warnings: list[str] | None = None,
-    ) -> list[Event]:
-        out: list[Event] = []
-        for result in results:
-            if isinstance(result, Event):
-                result.fields.update(extra)
-                out.append(result)
-                continue
-            layout, fields, more = decode_feedback(result.data)
-            assert layout is not None  # the reassembler only passes CRC-checked messages
-            fields["raw"] = result.data.hex(" ").upper()
-            if extra:
-                fields.update(extra)
-            if warnings or result.warnings:
-                more = [*(warnings or []), *result.warnings, *more]
-            out.append(Event(layout.topic, result.time, source, fields, more))
-        return out
-
     # -- streams ---------------------------------------------------------------------------------
 
     def _framed(self, framer: StreamFramer, results: list[RawFrame | Event]) -> list[Event]:
+        from analyzer.protocol.stream_frames import stream_frame_events
+
         out: list[Event] = []
         extra: dict[str, Any] = {"direction": framer.direction} if framer.direction else {}
         source = framer.source
@@ -319,12 +381,9 @@ class Decoder:
             if isinstance(result, Event):
                 out.append(result)
             else:
-                out.extend(stream_frame_events(result, source, extra, self._can_any))
+                out.extend(stream_frame_events(result, source, extra, self._frame))
         return out
 
 
 def _forget(source: str, bus: BusState) -> None:
     """A channel's bus state given up for a newer channel: nothing is pending in it."""
-
-
-_HANDLED = frozenset({CONTROL_ID, FEEDBACK_ID, TEXT_ID, TEXT_END_ID, *STATUS_FRAMES})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -163,9 +164,12 @@ LAYOUTS: dict[int, FeedbackLayout] = {ATTITUDE.length_byte: ATTITUDE, RANGING.le
 FRAME_SIZES: dict[int, int] = {k: v.frame_size for k, v in LAYOUTS.items()}
 
 
-def _message_decoder(layout: FeedbackLayout) -> MessageDecoder:
-    """A 32-byte message of ``layout`` -> (fields, warnings) in one generated function,
-    with the checks of ``decode_feedback_fields`` in the same order."""
+@functools.cache
+def message_decoder(length_byte: int) -> MessageDecoder:
+    """A 32-byte message of the layout of ``length_byte`` -> (fields, warnings) in one
+    generated function, with the checks of ``decode_feedback_fields`` in the same order
+    (made on first use)."""
+    layout = LAYOUTS[length_byte]
     code = Code()
     code.lines.append("    warnings = []")
     fields = layout.layout.fields
@@ -215,23 +219,15 @@ def _motor_note(raw_motor: int) -> str:
     )
 
 
-# The usual message: 32 bytes, padding included. By the length byte.
-MESSAGE_DECODERS: dict[int, MessageDecoder] = {
-    length: _message_decoder(layout) for length, layout in LAYOUTS.items()
-}
-
-
 def decode_feedback(message: bytes) -> tuple[FeedbackLayout | None, dict[str, Any], list[str]]:
     """A CRC-checked feedback message (27 / 31 bytes, padding optional) -> fields.
 
     Returns a new dict and list on every call (callers add fields of their own). The usual
     message (32 bytes) goes through its layout's generated decoder, any other through
     ``decode_feedback_fields``, with the same result."""
-    if len(message) == FEEDBACK_MESSAGE_SIZE:
-        decode = MESSAGE_DECODERS.get(message[2])
-        if decode is not None:
-            fields, warnings = decode(message)
-            return LAYOUTS[message[2]], fields, warnings
+    if len(message) == FEEDBACK_MESSAGE_SIZE and message[2] in LAYOUTS:
+        fields, warnings = message_decoder(message[2])(message)
+        return LAYOUTS[message[2]], fields, warnings
     return decode_feedback_fields(message)
 
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 import struct
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from analyzer.protocol.compiled import compile_decoder, layout_struct
+from analyzer.protocol.compiled import LayoutDecoder, compile_decoder, layout_struct
 from analyzer.protocol.fields import Field
 
 
@@ -22,14 +23,18 @@ class Layout:
     def __post_init__(self) -> None:
         whole = layout_struct(self.fields)
         object.__setattr__(self, "_struct", whole)
-        object.__setattr__(self, "_decode", compile_decoder(self.fields))
+
+    @functools.cached_property
+    def _decode(self) -> LayoutDecoder | None:
+        """The decoder made for this layout, on first use."""
+        return compile_decoder(self.fields)
 
     def decode(self, data: bytes, warnings: list[str]) -> dict[str, Any]:
         whole: struct.Struct | None = self._struct  # type: ignore[attr-defined]
-        if whole is not None and len(data) >= whole.size:
+        decode = self._decode
+        if whole is not None and decode is not None and len(data) >= whole.size:
             # One precompiled struct.Struct and a decoder made for this layout.
-            decoded: dict[str, Any] = self._decode(data, warnings)  # type: ignore[attr-defined]
-            return decoded
+            return decode(data, warnings)
         out: dict[str, Any] = {}
         for f in self.fields:
             f.decode_into(data, out, warnings)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from analyzer.protocol.crc import crc16
-from analyzer.protocol.feedback import FRAME_SIZES
+from analyzer.protocol.feedback import FRAME_SIZES, decode_feedback
 from analyzer.protocol.ids import HEADER
 from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, diagnostic
 
@@ -16,6 +16,7 @@ from analyzer.protocol.types import CRC_MISMATCH, DUPLICATE, INCOMPLETE, Event, 
 LATE_SEGMENT = "late segment"
 
 SEGMENTS_PER_MESSAGE = 4
+LATE_AFTER_S = 0.2  # a gap between segments of one message worth a warning
 
 
 class Segment(NamedTuple):
@@ -64,7 +65,7 @@ class FeedbackReassembler:
         self,
         source: str,
         *,
-        late_after: float = 0.2,
+        late_after: float = LATE_AFTER_S,
         stale_after: float = 1.0,
         fast: bool = True,
     ) -> None:
@@ -116,6 +117,53 @@ class FeedbackReassembler:
         pending.append(Segment(time, bytes(data)))
         self._resolve(out, final=False, time=time)
         return out
+
+    def feed_segments(
+        self,
+        times: list[float],
+        blob: bytes,
+        sizes: list[int],
+        whole: list[bool],
+        regular: int = 0,
+    ) -> tuple[list[int], list[tuple[int, list[Message | Event]]]]:
+        """Segments in a row, as ``feed`` takes them one by one: segment ``j`` is
+        ``blob[8 * j : 8 * j + sizes[j]]`` at ``times[j]``.
+
+        ``whole[j]`` says that segments ``j`` to ``j + 3`` are a message with nothing to
+        remark (8 bytes each, a header first, the CRC right, no segment late): it is taken
+        whole when nothing is pending and it repeats no segment. ``regular``: the first
+        that many messages are such messages, one after the other, none starting with the
+        segment that ends the one before (taken at once). Returns where the messages taken
+        whole start (the caller decodes them), and what ``feed`` gave for the other
+        segments, by index."""
+        taken: list[int] = []
+        fed: list[tuple[int, list[Message | Event]]] = []
+        size = 8 * SEGMENTS_PER_MESSAGE
+        j, n = 0, len(times)
+        if regular and not self._pending and not self._repeats_tail(blob[:8], times[0]):
+            j = regular * SEGMENTS_PER_MESSAGE
+            taken = list(range(0, j, SEGMENTS_PER_MESSAGE))
+            self.bytes_fed += regular * size
+            self.bytes_framed += regular * size
+            self._last_tail = blob[8 * j - 8 : 8 * j]
+            self._last_tail_time = times[j - 1]
+        while j < n:
+            if whole[j] and not self._pending:
+                start = 8 * j
+                if not self._repeats_tail(blob[start : start + 8], times[j]):
+                    end = j + SEGMENTS_PER_MESSAGE - 1
+                    self.bytes_fed += size
+                    self.bytes_framed += size
+                    self._last_tail = blob[start + size - 8 : start + size]
+                    self._last_tail_time = times[end]
+                    taken.append(j)
+                    j = end + 1
+                    continue
+            results = self.feed(blob[8 * j : 8 * j + sizes[j]], times[j])
+            if results:
+                fed.append((j, results))
+            j += 1
+        return taken, fed
 
     def _repeats_tail(self, data: bytes, time: float) -> bool:
         """Whether a segment repeats the last segment of the message just before it."""
@@ -272,3 +320,28 @@ def _crc_detail(data: bytes) -> str:
         f"feedback message type 0x{data[2]:02X}: CRC {got.hex(' ').upper()} on the wire, "
         f"{want.hex(' ').upper()} computed"
     )
+
+
+def message_events(
+    source: str,
+    results: list[Message | Event],
+    extra: dict[str, Any],
+    warnings: list[str] | None = None,
+) -> list[Event]:
+    """What the reassembler gave, as events: each message decoded (``extra`` fields and
+    the frame's ``warnings`` added), each diagnostic as it is (``extra`` added)."""
+    out: list[Event] = []
+    for result in results:
+        if isinstance(result, Event):
+            result.fields.update(extra)
+            out.append(result)
+            continue
+        layout, fields, more = decode_feedback(result.data)
+        assert layout is not None  # the reassembler only passes CRC-checked messages
+        fields["raw"] = result.data.hex(" ").upper()
+        if extra:
+            fields.update(extra)
+        if warnings or result.warnings:
+            more = [*(warnings or []), *result.warnings, *more]
+        out.append(Event(layout.topic, result.time, source, fields, more))
+    return out

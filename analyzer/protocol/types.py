@@ -89,34 +89,6 @@ class CanFrame:
 
 
 @dataclass(slots=True)
-class FrameRun:
-    """Classic data frames read in a row, as columns: no remote, error or CAN FD frame.
-
-    A reader hands frames on like this only when asked to (``InputReader.frame_runs``,
-    set when no sink keeps raw frames): the decoder and the counters take the columns
-    as they are, and no CanFrame is built for a frame nobody keeps. ``place`` holds
-    (channel, CAN ID, extended) of each frame, the same tuple for every frame of one ID
-    on one channel. ``frames()`` gives the same frames as CanFrames.
-    """
-
-    time: list[float]
-    place: list[tuple[str, int, bool]]
-    data: list[bytes]
-    direction: list[str]
-
-    def __len__(self) -> int:
-        return len(self.time)
-
-    def frames(self) -> list[CanFrame]:
-        return [
-            CanFrame(time, can_id, data, extended, channel, False, False, False, direction)
-            for time, (channel, can_id, extended), data, direction in zip(
-                self.time, self.place, self.data, self.direction, strict=True
-            )
-        ]
-
-
-@dataclass(slots=True)
 class StreamChunk:
     """Bytes read from a TCP or UART stream in one go."""
 

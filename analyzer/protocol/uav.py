@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -93,8 +94,10 @@ USED_BYTES = {cid: max(f.end for f in s.layout.fields) for cid, s in STATUS_FRAM
 StatusDecoder = Callable[[bytes], tuple[dict[str, Any], list[str]]]
 
 
-def _eight_byte_decoder(can_id: int) -> StatusDecoder:
-    """Fields and warnings of 8 data bytes, in one compiled function."""
+@functools.cache
+def eight_byte_decoder(can_id: int) -> StatusDecoder:
+    """Fields and warnings of 8 data bytes, in one compiled function (the usual frame of
+    each ID), made on first use."""
     layout = STATUS_FRAMES[can_id].layout
     used = USED_BYTES[can_id]
 
@@ -104,16 +107,10 @@ def _eight_byte_decoder(can_id: int) -> StatusDecoder:
     return compile_frame_decoder(layout.fields, used, 8, unused_not_zero)
 
 
-# The usual frame of each ID: exactly 8 data bytes.
-EIGHT_BYTE_DECODERS: dict[int, StatusDecoder] = {
-    can_id: _eight_byte_decoder(can_id) for can_id in STATUS_FRAMES
-}
-
-
 def decode_status(can_id: int, data: bytes) -> tuple[dict[str, Any], list[str]]:
     """Data of a GPS / altitude / attitude frame -> fields, warnings. Never raises."""
     if len(data) == 8:  # the usual case
-        return EIGHT_BYTE_DECODERS[can_id](data)
+        return eight_byte_decoder(can_id)(data)
     return _decode_odd_status(STATUS_FRAMES[can_id], can_id, data)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from analyzer.inputs.base import InputItem
+from analyzer.inputs.base import ABSOLUTE, RELATIVE_TO_START, InputItem
 from analyzer.inputs.candump.line import (
     RELATIVE_LIMIT,
     IdInfo,
@@ -15,7 +15,6 @@ from analyzer.inputs.candump.line import (
 )
 from analyzer.inputs.candump.times import ScreenTimes
 from analyzer.inputs.detect import FORMATS, sniff_format
-from analyzer.inputs.python_can.text_logs import ABSOLUTE, RELATIVE_TO_START
 from analyzer.inputs.textlines import MAX_LINE
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 

@@ -6,27 +6,25 @@ from collections.abc import Callable, Iterable, Iterator
 from operator import itemgetter
 from typing import cast
 
-from analyzer.inputs.base import InputItem, InputReader, by_frames
+from analyzer.inputs.base import InputItem, InputReader, by_frames, one_by_one
 from analyzer.inputs.candump.line import LineError
 from analyzer.inputs.candump.linewise import MAX_CACHED_IDS, CandumpLineParser
 from analyzer.inputs.candump.scan import (
+    DENSE,
     OTHER,
+    SAMPLE,
     WHERE,
     Found,
     Place,
     Scan,
     can_frames,
-    frame_run,
+    id_texts,
     scanner,
     stamp_at,
 )
 from analyzer.inputs.candump.times import DECIDE_AFTER
 from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
-
-# Frames in one FrameRun: a batch's frames and events then stay few enough to be in the
-# processor's caches while the decoder and the counters go over them.
-RUN_FRAMES = 2048
 
 _OTHER = itemgetter(OTHER)
 
@@ -45,7 +43,10 @@ class CandumpParser(CandumpLineParser):
     (``frames_skipped``) but not returned, which keeps decoding a busy bus cheap; error
     frames are always returned. ``clock`` gives the time of lines without a timestamp
     (live input); without it they get 0.0. ``scan=False`` looks at every line with the
-    line parser (the reference the fast scan is tested against).
+    line parser (the reference the fast ways are tested against). ``columnar``: blocks
+    dense with wanted frames are read as arrays (``columns``) and their plain frames
+    handed on as FrameColumns (a file reader sets it; one line at a time has no use
+    for it).
     """
 
     def __init__(
@@ -55,12 +56,17 @@ class CandumpParser(CandumpLineParser):
         wanted_ids: Iterable[int] | None = None,
         clock: Callable[[], float] | None = None,
         scan: bool = True,
+        columnar: bool = False,
     ) -> None:
         super().__init__(source, wanted_ids=wanted_ids, clock=clock)
         self._scan = scanner(self.wanted_ids) if scan else None
         self._mixed = False  # the last block had lines for the line parser
-        self.frame_runs = False  # hand on the scanned frames as FrameRuns
         self._places: dict[bytes, Place] = {}  # by the scan's ``channel ID`` texts
+        self.columnar = columnar and scan
+        # Whether the last block was dense with wanted frames (see DENSE): the next one is
+        # read as arrays. Every frame is wanted when no IDs are chosen; before the first
+        # block, its start tells.
+        self.dense: bool | None = True if self.wanted_ids is None else None
 
     # -- the block scan --------------------------------------------------------------------
 
@@ -85,7 +91,8 @@ class CandumpParser(CandumpLineParser):
     def parse_block(self, block: bytes) -> list[InputItem]:
         """Parse whole lines, each ending with ``\\n``; returns frames and diagnostics.
 
-        The scan goes over the block in one pass. When it met frame lines only (the usual
+        A block of a file dense with wanted frames is read as arrays (``columnar``).
+        Otherwise the scan goes over the block in one pass. When it met frame lines only (the usual
         block), the wanted frames are built a column at a time and the skipped ones are
         counted by line ends; otherwise the block is gone through match by match, and
         each line that is no well-formed frame goes to the line parser. After a block
@@ -94,8 +101,11 @@ class CandumpParser(CandumpLineParser):
         if block[-1:] != b"\n":
             block += b"\n"
         scan = self._scan
+        lines, taken = self.lines, self.frames - self.frames_skipped
         if scan is None:
             out = self._parse_lines(block)
+        elif self.columnar and (self.dense or (self.dense is None and self._dense_start(block))):
+            out = self._parse_columns(block)
         elif self._mixed:
             out = self._parse_matches(block, scan)
         else:
@@ -107,19 +117,24 @@ class CandumpParser(CandumpLineParser):
             else:
                 out = self._frames(found)
                 self._count_scanned(block, 0, len(block), len(found))
+        if self.columnar and self.lines > lines:
+            taken = self.frames - self.frames_skipped - taken
+            self.dense = self.wanted_ids is None or taken >= DENSE * (self.lines - lines)
         if self._held or self._times.waiting:  # frames wait for their time base (-tz / -td)
             self._held.extend(out)
             return self._release() if self.time_base is not None else []
         return out
 
+    def _dense_start(self, block: bytes) -> bool:
+        """Whether the start of ``block`` is dense with wanted frames (``DENSE``), by the
+        ID texts candump writes for them."""
+        sample = block[:SAMPLE]
+        texts = [b" " + text.encode() + b"#" for text in id_texts(self.wanted_ids or ())]
+        wanted = sum(map(sample.count, texts))
+        return wanted >= DENSE * sample.count(b"\n")
+
     def _frames(self, found: list[Found]) -> list[InputItem]:
-        """The CanFrames of the wanted frames the scan found (one FrameRun of them all
-        when ``frame_runs`` is set)."""
-        if self.frame_runs:
-            return [
-                frame_run(found[start : start + RUN_FRAMES], self._places.get, self._place)
-                for start in range(0, len(found), RUN_FRAMES)
-            ]
+        """The CanFrames of the wanted frames the scan found."""
         return list(can_frames(found, self._places.get, self._place))
 
     def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
@@ -150,6 +165,13 @@ class CandumpParser(CandumpLineParser):
         self._mixed = mixed
         return out
 
+    def _parse_columns(self, block: bytes) -> list[InputItem]:
+        """The block read as arrays (``columns``): runs of plain frame lines become
+        FrameColumns, every other line goes to the line parser, in its place."""
+        from analyzer.inputs.candump.column_runs import parse_columns
+
+        return parse_columns(self, block)
+
     def _count_scanned(self, block: bytes, mark: int, pos: int, taken: int) -> None:
         """Account for the lines the scan took between ``mark`` and ``pos``, ``taken`` of
         them wanted frames (handed on) and the rest skipped frames."""
@@ -176,23 +198,25 @@ class CandumpReader(InputReader):
         *,
         wanted_ids: Iterable[int] | None = None,
         block_size: int = BLOCK_SIZE,
+        scan: bool = True,
     ) -> None:
         super().__init__(path)
         self.block_size = block_size
         self._raw = self._open_binary()
         self._blocks, self.problems = open_lines(self._raw, block_size)
-        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids)
+        # ``scan=False``: every line through the line parser, every frame a CanFrame (the
+        # reference the fast ways are held to).
+        self.parser = CandumpParser(self.source, wanted_ids=wanted_ids, scan=scan, columnar=True)
 
     def __iter__(self) -> Iterator[InputItem]:
-        for items in self.batches(self.block_size):
-            yield from items
+        """Frames and diagnostics one by one (blocks read as columns come as CanFrames)."""
+        return one_by_one(self.batches(self.block_size))
 
     def batches(self, size: int) -> Iterator[list[InputItem]]:
         """The items of each block of lines (in lists of at most ``size``)."""
         parser = self.parser
         raw = self._raw
         problems = self.problems
-        parser.frame_runs = self.frame_runs
         reported = 0
         for block in line_blocks(self._blocks, self.block_size):
             items = parser.parse_block(block)
@@ -201,13 +225,10 @@ class CandumpReader(InputReader):
             while reported < len(problems):
                 items.append(self._damage(problems[reported]))
                 reported += 1
-            if self.frame_runs and items:
+            if items:
                 yield from by_frames(items, size)
-            elif len(items) <= size:
-                yield items  # also when empty: the caller's progress moves on
             else:
-                for start in range(0, len(items), size):
-                    yield items[start : start + size]
+                yield items  # also when empty: the caller's progress moves on
         items = parser.finish()
         self.first_time, self.last_time = parser.first_time, parser.last_time
         self.time_base = parser.base_of_times()

@@ -9,7 +9,7 @@ parser (damaged lines, remote, CAN FD and error frames, the screen layout, unusu
 widths), which says what is wrong; or the end of the block. So the matches follow each
 other from the block's start to its end, and the scan changes speed, never results
 (``tests/test_inputs_candump_scan.py`` checks that). The wanted frames found become
-CanFrames or one FrameRun here (``can_frames``, ``frame_run``).
+CanFrames here (``can_frames``).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from operator import itemgetter, truediv
 from typing import cast
 
 from analyzer.inputs.candump.line import DIRECTIONS
-from analyzer.protocol.types import CanFrame, FrameRun
+from analyzer.protocol.types import CanFrame
 
 # Possessive quantifiers (Python 3.11 on) never give back what they took: no time is lost
 # trying. A block is whole lines, and each part of the pattern ends where the next cannot
@@ -49,6 +49,14 @@ _DATA = "(?:" + "|".join(f"{_HEX}{{{n}}}" for n in range(16, 0, -2)) + "|)"
 # and one look-up a frame.
 Found = tuple[bytes, bytes, bytes, bytes, bytes]
 STAMP, WHERE, DATA, DIRECTION, OTHER = range(5)
+
+# A file's block whose lines are at least this fraction of wanted frames is read as arrays
+# (``columns``) and decoded in vectors; in a sparser one (a busy drone bus where a few
+# frames in a hundred are the gimbal's) this scan skips the other frames at C speed and
+# the few wanted become CanFrames. The last block decides for the next; the first 64 KiB
+# of the first block for itself.
+DENSE = 0.1
+SAMPLE = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -115,29 +123,13 @@ _STAMP_TEXT = itemgetter(STAMP)
 _DIRECTION_OF = {b"": "", **DIRECTIONS}
 
 
-def frame_run(
-    found: list[Found],
-    cached: Callable[[bytes], Place | None],
-    place: Callable[[bytes], Place],
-) -> FrameRun:
-    """The wanted frames the scan found (at least one), as one FrameRun. ``cached`` gives
-    the place of a ``channel ID`` text seen before (else None), ``place`` works it out."""
-    stamps, wheres, datas, directions, _ = zip(*found, strict=True)
-    direction_of = _DIRECTION_OF
-    return FrameRun(
-        stamp_times(stamps),
-        [cached(where) or place(where) for where in wheres],
-        list(map(unhexlify, datas)),
-        list(map(direction_of.__getitem__, directions)),
-    )
-
-
 def can_frames(
     found: list[Found],
     cached: Callable[[bytes], Place | None],
     place: Callable[[bytes], Place],
 ) -> list[CanFrame]:
-    """The wanted frames the scan found, as CanFrames (see ``frame_run``)."""
+    """The wanted frames the scan found, as CanFrames. ``cached`` gives the place of a
+    ``channel ID`` text seen before (else None), ``place`` works it out."""
     direction_of = _DIRECTION_OF
     times = stamp_times(map(_STAMP_TEXT, found))
     return [

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import itertools
 
-from analyzer.inputs.python_can.text_logs import DELTA, RELATIVE_TO_START
+from analyzer.inputs.base import DELTA, RELATIVE_TO_START
 from analyzer.protocol.types import CanFrame
 
 DECIDE_AFTER = 50  # relative times looked at before -tz and -td are told apart by rate

@@ -1,1 +1,1 @@
-"""Log formats read through python-can: ASC, BLF, TRC, CSV and MF4, damaged lines reported."""
+"""Log formats read through python-can: ASC, TRC, CSV and MF4, damaged lines reported."""

@@ -1,29 +1,25 @@
-"""Log formats read through python-can: Vector ASC and BLF, PCAN TRC, python-can CSV, MF4."""
+"""Log formats read through python-can: Vector ASC, PCAN TRC, python-can CSV, MF4.
+
+(Vector BLF has a reader of its own: ``analyzer.inputs.blf``.)
+"""
 
 from __future__ import annotations
 
 import gzip
-import struct
 from collections.abc import Iterator
 from typing import IO, Any
 
 from analyzer.errors import UsageError
-from analyzer.inputs.base import InputItem, InputReader, time_problem
-from analyzer.inputs.python_can.blf_guard import guarded_blf_reader
-from analyzer.inputs.python_can.text_logs import DELTA, LineFeed, TextLogReading, text_lines
+from analyzer.inputs.base import DELTA, InputItem, InputReader, time_problem
+from analyzer.inputs.python_can.text_logs import LineFeed, TextLogReading, text_lines
 from analyzer.library_log import LibraryLog, library_log
 from analyzer.protocol.can_message import frame_from_message
 from analyzer.protocol.types import BAD_FRAME, BAD_LINE, CanFrame, Event, diagnostic
 
 # format -> (python-can reader class name, text file?)
-_BLF_OBJECT_HEADER = 16  # signature, header size and version, object size and type
-_BLF_FILE_HEADER = struct.Struct("<4sL")  # python-can's blf.py: "LOGG", header size
-_BLF_HEADER_MIN = 72  # python-can reads this much (its FILE_HEADER_STRUCT) before the rest
-_READ_PIECE = 1 << 20  # a larger read is made in pieces of this size
 
 READERS: dict[str, tuple[str, bool]] = {
     "asc": ("ASCReader", True),
-    "blf": ("BLFReader", False),
     "trc": ("TRCReader", True),
     "csv": ("CSVReader", True),
     "mf4": ("MF4Reader", False),
@@ -36,9 +32,7 @@ class PythonCanReader(InputReader):
     ASC, TRC and CSV are read line by line (``text_logs``): a damaged line becomes
     a ``bad_line`` diagnostic with its line number and reading goes on. An ASC file whose
     header says ``timestamps relative`` holds the time since the previous frame: those
-    are added up from the ``date`` in the header, as can-utils' ``asc2log`` does. A BLF
-    file cut off inside an object (a logger that lost power) keeps every frame before
-    the cut and says so.
+    are added up from the ``date`` in the header, as can-utils' ``asc2log`` does.
     """
 
     def __init__(self, path: str, fmt: str) -> None:
@@ -53,13 +47,10 @@ class PythonCanReader(InputReader):
             raise UsageError(f"reading .{fmt} files needs python-can") from None
         self._can = can
         self._reader_class = getattr(can, class_name)
-        if fmt == "blf":  # python-can reads an object whose size is 0 for ever
-            self._reader_class = guarded_blf_reader(self._reader_class)
         self._raw = self._open_binary()
         self._log = LibraryLog()
         self.frames = 0
         self._text: TextLogReading | None = None
-        self._watch: _ShortReads | None = None
         if text:
             self._damage: list[str] = []
             lines = text_lines(self._raw, self._damage)
@@ -74,24 +65,15 @@ class PythonCanReader(InputReader):
             handle = gzip.GzipFile(fileobj=self._raw, mode="rb")  # type: ignore[assignment]
             self._closers.append(handle)
         self._raw.seek(0)
-        if fmt == "blf":  # BLF objects are read one by one: a cut shows as a short read
-            if handle is self._raw:
-                try:
-                    _check_blf_header(handle, self.path, self.size_bytes)
-                except UsageError:
-                    self.close()
-                    raise
-            self._watch = _ShortReads(handle)
-        elif fmt == "mf4" and handle is self._raw and self.size_bytes:
+        if fmt == "mf4" and handle is self._raw and self.size_bytes:
             from analyzer.inputs.python_can.mf4_check import mf4_problem
 
             problem = mf4_problem(handle, self.size_bytes)
             if problem:
                 self.close()
                 raise UsageError(f"cannot read {self.path} as mf4: {problem}")
-        watched = self._watch if self._watch is not None else handle
         with library_log(self._log):
-            self._reader = self._check(lambda: self._reader_class(watched))
+            self._reader = self._check(lambda: self._reader_class(handle))
         self._closers.append(self._reader)
 
     def _check(self, make: Any) -> Any:
@@ -207,19 +189,6 @@ class PythonCanReader(InputReader):
                 )
                 continue
             yield from self._count(frame, raw)
-        cut = self._watch.cut_at if self._watch is not None else None
-        tail = getattr(self._reader, "_tail", b"")
-        if cut is not None or tail:
-            where = f" at byte {cut:,}" if cut is not None else ""
-            yield diagnostic(
-                self.last_time or 0.0,
-                self.source,
-                BAD_FRAME,
-                f"the {self.format_name.upper()} file is cut off inside an object{where} "
-                f"(as a logger that lost power leaves it): the {self.frames:,} frames "
-                "before the cut were read",
-                frames_read=self.frames,
-            )
 
     def _count(self, frame: CanFrame, raw: IO[bytes]) -> Iterator[CanFrame]:
         self.frames += 1
@@ -239,57 +208,6 @@ class PythonCanReader(InputReader):
             "frames": self.frames,
             "bad_lines": self._text.bad_lines,
         }
-
-
-def _check_blf_header(handle: IO[bytes], path: str, size: int | None) -> None:
-    """Refuse a BLF file whose header claims more bytes than the file has (python-can
-    would allocate what it claims before reading it)."""
-    head = handle.read(_BLF_FILE_HEADER.size)
-    handle.seek(0)
-    if len(head) < _BLF_FILE_HEADER.size or head[:4] != b"LOGG":
-        return  # python-can says what is wrong with it
-    _, header_size = _BLF_FILE_HEADER.unpack(head)
-    if header_size < _BLF_HEADER_MIN or (size is not None and header_size > size):
-        raise UsageError(
-            f"cannot read {path} as blf: its header claims to be {header_size:,} bytes long "
-            f"in a file of {size:,} bytes (a damaged or not a BLF file)"
-        )
-
-
-class _ShortReads:
-    """A binary file that notes where a read first came back shorter than asked, and
-    reads a large request in pieces (a damaged size field costs no memory it does not
-    fill)."""
-
-    def __init__(self, handle: IO[bytes]) -> None:
-        self._handle = handle
-        self.cut_at: int | None = None
-        self._offset = 0
-        self._after_header = False
-
-    def read(self, size: int = -1) -> bytes:
-        if size is None or size < 0:
-            data = self._handle.read()
-        elif size <= _READ_PIECE:
-            data = self._handle.read(size)
-        else:
-            pieces = []
-            left = size
-            while left and (piece := self._handle.read(min(left, _READ_PIECE))):
-                pieces.append(piece)
-                left -= len(piece)
-            data = b"".join(pieces)
-        # The end of the file is fine between objects (an empty read of the next header)
-        # and at the padding after the last one (under 4 bytes).
-        short = len(data) < size and (bool(data) or self._after_header) and size >= 4
-        if short and self.cut_at is None:
-            self.cut_at = self._offset + len(data)
-        self._after_header = size == _BLF_OBJECT_HEADER and len(data) == size
-        self._offset += len(data)
-        return data
-
-    def close(self) -> None:
-        self._handle.close()
 
 
 def _asc_start(can: Any, header: list[str]) -> float:

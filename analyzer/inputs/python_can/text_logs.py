@@ -17,6 +17,7 @@ import re
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from analyzer.inputs.base import ABSOLUTE, DELTA
 from analyzer.inputs.python_can.skipped_lines import SkippedLine, asc_problem, trc_checker
 from analyzer.inputs.textlines import MAX_LINE, open_lines, split_blocks
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
@@ -29,11 +30,6 @@ _ASC_END_OF_HEADER = "no internal events logged\n"  # ends python-can's header s
 # python-can's CSVReader skips the first line it is given as the header: a file without
 # one gets this in front, so that no frame line is taken for a header.
 _CSV_HEADER = "timestamp,arbitration_id,extended,remote,error,dlc,data\n"
-
-# Time bases (``InputReader.time_base``).
-ABSOLUTE = "absolute"
-RELATIVE_TO_START = "relative to the start of the recording"
-DELTA = "time since the previous frame (accumulated)"
 
 
 class LineFeed:

@@ -1,0 +1,1 @@
+"""Vector BLF files read by this tool: file header, log containers, every object header version."""
