@@ -114,7 +114,7 @@ def test_every_sample_as_python_can_writes_it(tmp_path: Path, path: Path) -> Non
 def test_the_fault_logs_in_every_container_layout(tmp_path: Path, options: dict[str, Any]) -> None:
     """Zlib containers, stored ones, and small containers that objects span."""
     log = tmp_path / "faults.log"
-    log.write_text("\n".join(candump_lines(5)) + "\n")
+    log.write_text("\n".join(candump_lines(5)) + "\n", encoding="utf-8")
     lines = assert_as_python_can(write_blf(tmp_path / "x.blf", messages_of(log), **options))
     assert any('"/diagnostics"' in line for line in lines)
 

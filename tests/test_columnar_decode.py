@@ -142,14 +142,14 @@ def test_the_analysis_of_a_pilot_s_stick_on_a_dense_bus(tmp_path: Path) -> None:
 @pytest.mark.parametrize("seed", [22, 5, 77])
 def test_the_fault_logs_decode_the_same(tmp_path: Path, seed: int) -> None:
     path = tmp_path / "faults.log"
-    path.write_text("\n".join(candump_lines(seed)) + "\n")
+    path.write_text("\n".join(candump_lines(seed)) + "\n", encoding="utf-8")
     for raw in (False, True):
         assert assert_same(path, raw=raw, block_size=3001)
 
 
 def _dense(tmp_path: Path, frames: int, name: str = "dense.log", **kinds: Any) -> Path:
     path = tmp_path / name
-    with path.open("w") as f:
+    with path.open("w", encoding="utf-8") as f:
         for batch in dense_lines(frames, **kinds):
             f.write("\n".join(batch) + "\n")
     return path
@@ -168,7 +168,7 @@ def test_blocks_that_end_inside_lines_and_feedback_messages(
 
 def test_a_busy_bus_of_many_line_widths_and_foreign_ids(tmp_path: Path) -> None:
     path = tmp_path / "busy.log"
-    with path.open("w") as f:
+    with path.open("w", encoding="utf-8") as f:
         for batch in traffic_lines(20_000):
             f.write("\n".join(batch) + "\n")
     assert_same(path, block_size=8192)
@@ -254,7 +254,7 @@ def test_random_damage_anywhere_in_a_block(tmp_path: Path, case: tuple[list[str]
     """Damage at the start, in the middle and at the end of blocks of any size."""
     lines, block_size = case
     path = tmp_path / "damaged.log"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     assert_same(path, block_size=block_size)
 
 

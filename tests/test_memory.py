@@ -73,6 +73,7 @@ def peak_mb(tmp_path: Path, *argv: str) -> int:
         text=True,
         check=True,
         cwd=tmp_path,
+        encoding="utf-8",
     )
     return int(proc.stderr.split()[-1])
 

@@ -53,7 +53,12 @@ print(json.dumps({"code": code, "modules": sorted(sys.modules), "threads": threa
 def loaded(*argv: str) -> dict[str, object]:
     env = {"PATH": "/usr/bin:/bin"}  # no OPENBLAS_NUM_THREADS from the caller
     proc = subprocess.run(
-        [sys.executable, "-c", PROBE, *argv], capture_output=True, text=True, env=env, check=True
+        [sys.executable, "-c", PROBE, *argv],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
+        encoding="utf-8",
     )
     result: dict[str, object] = json.loads(proc.stdout.splitlines()[-1])
     return result
