@@ -33,7 +33,7 @@ def test_the_outputs_the_page_shows_are_what_the_commands_print(page: Path) -> N
 def test_the_manual_is_checked_page_by_page_and_marks_outputs_of_every_kind() -> None:
     assert len(PAGES) > 20 and PAGES[0].name == "README.md"
     modes = {block.mode for page in PAGES for block in read_blocks(_lines(page))}
-    assert {"run", "exact", "lines", "parse"} <= modes
+    assert {"run", "exact", "lines", "parse", "real"} <= modes
 
 
 def test_a_real_run_shown_names_the_test_that_runs_and_compares_it() -> None:
