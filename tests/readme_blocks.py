@@ -12,19 +12,21 @@ import shlex
 from dataclasses import dataclass, field
 
 PROGRAMS = ("gimbal-analyzer",)
-MODES = ("run", "exact", "lines", "parse")
+MODES = ("run", "exact", "lines", "parse", "real")
 _MARKER = re.compile(r"^<!--\s*check:\s*(.*?)\s*-->\s*$")
 
 
 @dataclass
 class Block:
     """An indented code block: its lines in the page (``start`` is the 0-based index of
-    the first), the check asked for and the command lines it holds."""
+    the first), the check asked for (and the words after it: ``note``) and the command
+    lines it holds."""
 
     start: int
     lines: list[str]
     mode: str | None = None
     before: list[str] = field(default_factory=list)
+    note: str = ""
 
     @property
     def text(self) -> list[str]:
@@ -115,7 +117,7 @@ def read_blocks(lines: list[str], name: str = "README") -> list[Block]:
     """The indented code blocks of a page (``name`` in messages), with the check their
     marker asks for."""
     blocks: list[Block] = []
-    marker: tuple[str, list[str]] | None = None
+    marker: tuple[str, str, list[str]] | None = None
     index = 0
     while index < len(lines):
         line = lines[index]
@@ -136,8 +138,8 @@ def read_blocks(lines: list[str], name: str = "README") -> list[Block]:
             body = lines[start:index]
             while body and not body[-1].strip():
                 body.pop()
-            mode, before = marker if marker else (None, [])
-            blocks.append(Block(start, body, mode, before))
+            mode, note, before = marker if marker else (None, "", [])
+            blocks.append(Block(start, body, mode, before, note))
             marker = None
             continue
         if line.strip():  # prose between a marker and a block: the marker is for none
@@ -146,9 +148,9 @@ def read_blocks(lines: list[str], name: str = "README") -> list[Block]:
     return blocks
 
 
-def _parse_marker(text: str, where: str) -> tuple[str, list[str]]:
+def _parse_marker(text: str, where: str) -> tuple[str, str, list[str]]:
     parts = [part.strip() for part in text.split(";")]
-    mode = parts[0].split(" ", 1)[0]  # the words after it are a comment: why, for readers
+    mode, _, note = parts[0].partition(" ")  # the words after it are a comment: why, for readers
     if mode not in MODES:
         raise ValueError(f"{where}: unknown check {mode!r} (one of {MODES})")
     before = []
@@ -157,7 +159,7 @@ def _parse_marker(text: str, where: str) -> tuple[str, list[str]]:
         if key.strip() != "before" or not value.strip():
             raise ValueError(f"{where}: expected '; before: COMMAND', got {part!r}")
         before.append(value.strip())
-    return mode, before
+    return mode, note.strip(), before
 
 
 # -- shell words and our own parser --------------------------------------------------------

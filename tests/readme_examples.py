@@ -10,6 +10,10 @@ and compare say so in an HTML comment before them (blank lines may come between)
     <!-- check: exact -->          stdout is the block's output, line for line
     <!-- check: lines -->          each output line shown appears in stdout
     <!-- check: parse (why) -->    parse only (needs hardware, a camera, a long run)
+    <!-- check: real (tests/test_x.py) -->
+                                   a real run against the simulator on a loopback port,
+                                   which the test named runs and compares (the numbers
+                                   that vary from run to run masked); parse only here
 
 A block's command lines are those where ``gimbal-analyzer`` is followed by a command
 name or an option (``$ `` in front is allowed); the rest is the output. A block
@@ -182,7 +186,7 @@ def check_blocks(
         outputs: dict[int, list[str]] = {}  # block index -> stdout lines of its commands
         replacements: list[tuple[Block, list[str]]] = []
         for index, block in enumerate(blocks):
-            if block.mode in (None, "parse"):
+            if block.mode in (None, "parse", "real"):  # real: its own test runs it
                 continue
             where = f"{name} line {block.start + 1} ({block.mode})"
             for command in block.before:

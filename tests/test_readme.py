@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from tests.readme_blocks import parse_failures, read_blocks
-from tests.readme_examples import check_blocks, compare, documents, page_name, updated
+from tests.readme_examples import ROOT, check_blocks, compare, documents, page_name, updated
 
 HINT = "\n\nrefresh the shown outputs with: python -m tests.readme_examples --update"
 PAGES = documents()
@@ -33,7 +33,21 @@ def test_the_outputs_the_page_shows_are_what_the_commands_print(page: Path) -> N
 def test_the_manual_is_checked_page_by_page_and_marks_outputs_of_every_kind() -> None:
     assert len(PAGES) > 20 and PAGES[0].name == "README.md"
     modes = {block.mode for page in PAGES for block in read_blocks(_lines(page))}
-    assert {"run", "exact", "lines", "parse"} <= modes
+    assert {"run", "exact", "lines", "parse", "real"} <= modes
+
+
+def test_a_real_run_shown_names_the_test_that_runs_and_compares_it() -> None:
+    """A ``real`` block is not run by ``check_blocks``: the test its marker names must
+    exist and name the page."""
+    for page in PAGES:
+        for block in read_blocks(_lines(page), page_name(page)):
+            if block.mode != "real":
+                continue
+            where = f"{page_name(page)} line {block.start + 1}"
+            named = ROOT / block.note.strip("()")
+            assert named.parent.name == "tests" and named.is_file(), f"{where}: no {named}"
+            source = named.read_text(encoding="utf-8")
+            assert page.relative_to(ROOT).as_posix() in source, f"{where}: {named} does not name it"
 
 
 # -- the checker itself ----------------------------------------------------------------------

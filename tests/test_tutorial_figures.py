@@ -1,11 +1,12 @@
 """A tutorial's prose quotes no figure that its checked output does not show.
 
-The outputs of a tutorial's checked blocks (``exact`` and ``lines``) are compared with
-what the tool prints (``test_readme``); the sentences around them are not. So each figure
-written in digits in a tutorial's prose must appear in a checked output or a command line
-of the same page (the user's own settings), unless it is one of the protocol's or the
-tool's documented constants below; and a count written in words ("two messages") must be
-one the checked output shows for that noun ("1 message lost" does not make two).
+The outputs of a tutorial's checked blocks (``exact`` and ``lines``; ``real``: a real run
+that a test of its own compares) are compared with what the tool prints (``test_readme``);
+the sentences around them are not. So each figure written in digits in a tutorial's prose
+must appear in a checked output or a command line of the same page (the user's own
+settings), unless it is one of the protocol's or the tool's documented constants below;
+and a count written in words ("two messages") must be one the checked output shows for
+that noun ("1 message lost" does not make two).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import pytest
 from tests.readme_blocks import Block, read_blocks
 
 TUTORIALS = sorted((Path(__file__).resolve().parent.parent / "docs" / "tutorials").glob("*.md"))
-CHECKED = ("exact", "lines")
+CHECKED = ("exact", "lines", "real")
 
 # Figures that are the protocol's or the tool's constants, not measurements of a run.
 CONSTANTS = (
