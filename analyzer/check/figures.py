@@ -58,7 +58,8 @@ def move_figures(
 ) -> MoveFigures:
     """Figures of a move toward ``target`` on ``axis`` from the samples after the command.
 
-    The slew rate is the slope fitted to the samples in the moving part only (neither
+    The settling time and the final error are given only once the gimbal has come to
+    rest (two samples in a row within the tolerance). The slew rate is the slope fitted to the samples in the moving part only (neither
     within the tolerance of the start nor of the end), so the time the command took to
     act and the time spent still at the end do not lower it. The latency is extrapolated
     back from the first sample in motion at that slew rate.
@@ -69,11 +70,17 @@ def move_figures(
     values = [unwrapped(axis, start, s.value(axis)) for s in samples]
     final = values[-1]
     goal = unwrapped(axis, start, target)
-    error = angle_error(axis, target, samples[-1])
+    error: float | None = angle_error(axis, target, samples[-1])
     settled_at = len(values) - 1
     while settled_at > 0 and abs(values[settled_at - 1] - final) <= tolerance:
         settled_at -= 1
-    settle = samples[settled_at].time - command_time if abs(final - start) > tolerance else None
+    # Settled: at least the last two samples within the tolerance of each other. A gimbal
+    # still on its way at the last sample has no settling time and no final error.
+    settled = settled_at < len(values) - 1
+    moved = abs(final - start) > tolerance
+    settle = samples[settled_at].time - command_time if settled and moved else None
+    if not settled:
+        error = None
     # Without a sample from before the command the first one may already be under way.
     moving = [
         (s.time, v)
