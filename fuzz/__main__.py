@@ -115,9 +115,9 @@ def several(names: list[str], seconds: float, runs: int | None, jobs: int, md: b
         command += ["--runs", str(runs)] if runs is not None else []
         log = work / "log.txt"
         before = set(finds(work))
-        with log.open("w") as out:
+        with log.open("w", encoding="utf-8") as out:
             done = subprocess.run(command, cwd=REPO, stdout=out, stderr=subprocess.STDOUT)
-        figures = parse(name, log.read_text(errors="replace"))
+        figures = parse(name, log.read_text(encoding="utf-8", errors="replace"))
         figures.found = sorted(set(finds(work)) - before)
         figures.exit_code = done.returncode
         print(f"{name}: {figures.executions:,} inputs, {len(figures.found)} found", flush=True)
@@ -129,7 +129,7 @@ def several(names: list[str], seconds: float, runs: int | None, jobs: int, md: b
     found = [f"build/fuzz/{f.target}/{name}" for f in runs_done for name in f.found]
     for figures in runs_done:
         if not figures.ok:  # what the run said: the traceback, where the input is
-            log = (WORK / figures.target / "log.txt").read_text(errors="replace")
+            log = (WORK / figures.target / "log.txt").read_text(encoding="utf-8", errors="replace")
             print(f"-- {figures.target} (exit {figures.exit_code}):", flush=True)
             print(*log.splitlines()[-TAIL_LINES:], sep="\n")
     if found:

@@ -13,7 +13,7 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-CHECKED = ("analyzer", "tests", "benchmarks", "docs", ".ci")
+CHECKED = ("analyzer", "tests", "benchmarks", "docs", ".ci", "fuzz")
 _MODE = re.compile("[rwxabt+]+")
 
 
@@ -81,8 +81,8 @@ def findings() -> list[str]:
     found = []
     for top in CHECKED:
         for path in sorted((ROOT / top).rglob("*.py")):
-            if "venv" in path.parts:
-                continue
+            if any(part.startswith(("venv", ".venv")) for part in path.parts):
+                continue  # CI's virtual environments (.ci/venv, .ci/venv-3.10, ...)
             tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
             for node in ast.walk(tree):
                 if isinstance(node, ast.Call) and (what := unspecified(node)):
