@@ -59,9 +59,10 @@ def move_figures(
     """Figures of a move toward ``target`` on ``axis`` from the samples after the command.
 
     The settling time and the final error are given only once the gimbal has come to
-    rest (two samples in a row within the tolerance). The slew rate is the slope fitted to the samples in the moving part only (neither
-    within the tolerance of the start nor of the end), so the time the command took to
-    act and the time spent still at the end do not lower it. The latency is extrapolated
+    rest (two samples in a row within the tolerance). The slew rate is the slope fitted
+    to the samples in the moving part only (neither within the tolerance of the start
+    nor of the end), so the time the command took to act and the time spent still at
+    the end do not lower it. The latency is extrapolated
     back from the first sample in motion at that slew rate.
     """
     if not samples:
