@@ -62,8 +62,8 @@ def move_figures(
     rest (two samples in a row within the tolerance). The slew rate is the slope fitted
     to the samples in the moving part only (neither within the tolerance of the start
     nor of the end), so the time the command took to act and the time spent still at
-    the end do not lower it. The latency is extrapolated
-    back from the first sample in motion at that slew rate.
+    the end do not lower it. The latency is extrapolated back from the first sample in
+    motion at that slew rate.
     """
     if not samples:
         return MoveFigures(None, None, None, None, None, 0)
