@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import multiprocessing
 import os
 import socket
 import uuid
@@ -121,7 +122,12 @@ def run_local(works: Iterable[FileWork], workers: int, root: str) -> Iterator[Fi
         for work in works:
             yield rows_written(work, root)
         return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    # Not fork: this process has threads by now (pyarrow's, DuckDB's, the progress line's),
+    # and a child forked from them may deadlock on a lock one of them held (Python 3.12
+    # warns of it). A fork server starts clean workers, as Python 3.14 does by default.
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         # A few tasks ahead per worker, so no worker waits for the next one.
         pending: set[Future[FileRows]] = set()
         queue = iter(works)
