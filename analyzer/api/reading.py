@@ -15,7 +15,7 @@ from analyzer.pipeline import Pipeline, default_decoder, delivered_batches
 from analyzer.protocol.ids import PROTOCOL_IDS, TCP_PORT
 from analyzer.protocol.types import Event
 
-__all__ = ["Decoding", "decoded_events", "input_errors", "open_decoding", "read"]
+__all__ = ["Decoding", "FileEvents", "decoded_events", "input_errors", "open_decoding", "read"]
 
 FILE_BATCH = 2048  # items handed to the pipeline at a time (1 for standard input)
 Path = str | os.PathLike[str]
@@ -55,7 +55,7 @@ def read(
     *,
     port: int = TCP_PORT,
     other_frames: bool = False,
-) -> Iterator[Event]:
+) -> FileEvents:
     """Every event of a capture file, in order, as it is decoded (memory does not grow
     with the file): the events ``decode --json`` prints, one ``Event`` per line.
 
@@ -67,7 +67,8 @@ def read(
     TCP port in pcap files; ``other_frames``: also the frames of other devices
     (``decode --raw``). A missing file raises ``FileNotFoundError``; one that cannot be
     read or recognised, ``ValueError``. Damage inside a file is no error: it comes as
-    ``/diagnostics`` events.
+    ``/diagnostics`` events. The iterator knows its file (``path``): ``analyze`` of it
+    judges a recording's camera commands from its video, as ``analyze`` of the path does.
 
     >>> from analyzer import read
     >>> for event in read("samples/flight-candump.log"):
@@ -82,7 +83,25 @@ def read(
     """
     with input_errors(path):
         decoding = open_decoding(path, format, port=port, other_frames=other_frames)
-    return decoded_events(decoding, path)
+    return FileEvents(path, decoded_events(decoding, path))
+
+
+class FileEvents(Iterator[Event]):
+    """The events of a file as ``read`` gives them, one at a time; ``path`` is the file
+    (a recording's video stays there, for ``analyze`` to judge camera commands by)."""
+
+    def __init__(self, path: Path, events: Iterator[Event]) -> None:
+        self.path = path
+        self._events = events
+
+    def __next__(self) -> Event:
+        return next(self._events)
+
+    def close(self) -> None:
+        """Stop early: the file is closed."""
+        close = getattr(self._events, "close", None)
+        if close is not None:
+            close()
 
 
 def decoded_events(decoding: Decoding, path: Path) -> Iterator[Event]:

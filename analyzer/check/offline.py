@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from analyzer.analysis.stage import analysis_stages
+from analyzer.analysis.stage import Analysis
 from analyzer.check.judge import Limits, StepResult
 from analyzer.check.observer import Observer
 from analyzer.check.runner import CheckRunner
@@ -50,7 +50,7 @@ class SimulatedBench:
         self._decoder = Decoder()  # the gimbal's own, for the commands it receives
         self.limits = limits or Limits()
         self.observer = _Observer(self, keep_events=True)
-        self.pipeline = Pipeline([self.observer], stages=analysis_stages(self.limits.settings))
+        self.pipeline = Pipeline([self.observer], stages=Analysis(self.limits.settings).stages())
         self.frames: list[CanFrame] = []
 
     # -- the link --------------------------------------------------------------------------

@@ -211,7 +211,7 @@ def run(args: argparse.Namespace) -> int:
 def _run_check(
     args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
 ) -> int:
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
@@ -246,15 +246,15 @@ def _run_check(
         link.close()
         raise
     observer = Observer(keep_events=args.report is not None)
-    stages = analysis_stages(limits.settings)
+    analysis = Analysis(limits.settings)
     video = video_recorder(args, sink)
     if video is not None:  # the zoom judged from the picture, as the frames come in
         from analyzer.analysis.camera.live import LiveVideo  # PyAV, OpenCV: --video only
-        from analyzer.analysis.camera.stage import CameraJudge
 
         pictures = LiveVideo([s.spec.name for s in video.streams])
         video.taps.append(pictures.add)
-        stages += [video.stage, CameraJudge(pictures, limits.settings.time_allowed_s)]
+        analysis = Analysis(limits.settings, pictures)
+    stages = analysis.stages(before_camera=None if video is None else video.stage)
     sinks = [s for s in (video, sink, observer) if s is not None]
     capture = Capture(link, sinks, stages=stages)
     printer = JsonPrinter(sys.stdout) if args.json else TablePrinter(sys.stdout)

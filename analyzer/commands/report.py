@@ -57,8 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from analyzer.analysis.camera.hook import NOT_JUDGED, camera_judge, with_camera
-    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.analysis.stage import NOT_JUDGED, Analysis, WithCamera
     from analyzer.commands.analyze import open_reader, settings_from
     from analyzer.extras import VIDEO, installed
     from analyzer.output_file import OutputFile, check_output
@@ -75,16 +74,14 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     reader = open_reader(args)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    camera_stage = None
     left_out: list[str] = []  # what the missing video extra leaves out, in words
-    if reader.format_name == "mcap":  # a recording with video: camera commands judged by it
-        camera_stage = camera_judge(
-            args.file,
-            settings.time_allowed_s,
-            keep_pictures=True,
-            note=lambda _: left_out.append(NOT_JUDGED),
-        )
-    stage = FindingsInto(with_camera(ResponseAnalyzer(settings), camera_stage), data)
+    # A recording with video: camera commands judged by it.
+    recording = args.file if reader.format_name == "mcap" else None
+    analysis = Analysis.of_file(recording, settings, keep_pictures=True)
+    analysis.tell(lambda _: left_out.append(NOT_JUDGED))
+    judging = analysis.judging()
+    camera_stage = judging.camera if isinstance(judging, WithCamera) else None
+    stage = FindingsInto(judging, data)
     sinks = [EventsInto(data.add)]
     overlays = None
     if reader.format_name == "mcap":  # only a recording has camera pictures to draw over

@@ -66,7 +66,7 @@ def record_offline(
     after the start when the camera delivered nothing (the stream was lost). ``encoded``:
     the pictures are scaled to that size before encoding (a 1080p stream without rendering
     1080p), a keyframe every ``gop_s``. Returns the video frames written."""
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
     from analyzer.mcapio.write.sink import McapSink, recording_metadata
     from analyzer.mcapio.write.video import VIDEO_METADATA_KEY, annotations_topic
     from analyzer.pipeline import Pipeline
@@ -125,7 +125,7 @@ def record_offline(
         sink.add_overlay(
             annotations_topic(camera.name), camera.encoder.width, camera.encoder.height
         )
-    pipeline = Pipeline([sink], stages=analysis_stages())
+    pipeline = Pipeline([sink], stages=Analysis().stages())
     items.sort(key=lambda item: item.time)
     frames.sort(key=lambda frame: frame.time)
     item_at = frame_at = 0
