@@ -15,12 +15,7 @@ from analyzer.analysis.findings import (
     Finding,
 )
 from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
-from analyzer.feedback_track import (
-    FEEDBACK_PERIOD_S,
-    MAX_FEEDBACK_SOURCES,
-    lost_messages,
-    silence_s,
-)
+from analyzer.feedback_track import FEEDBACK_PERIOD_S, FeedbackClock, Silence
 from analyzer.feedback_track import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 
 WINDOW_S = 60.0
@@ -30,14 +25,14 @@ MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement on
 class FeedbackHealth:
     """Folds feedback times and feedback errors; findings per silence and per minute.
 
-    Silences are timed per stream (source and direction), as the tally times them, and
-    counted with the same ``lost_messages``: its gaps are the summary's gaps."""
+    Silences are timed per stream (source and direction) by a ``FeedbackClock``, the
+    tally's clock: its gaps are the summary's gaps."""
 
     def __init__(self) -> None:
         self.first: float | None = None  # first event of the input, feedback or not
         self.last: float | None = None
         self.last_feedback: float | None = None
-        self._last_of: dict[str, float] = {}  # stream -> its last feedback message
+        self.clock = FeedbackClock()  # when each stream's feedback last came
         self._window = 0
         self._window_messages = 0
         self._window_gaps = 0
@@ -70,7 +65,12 @@ class FeedbackHealth:
         self.messages += 1
         self._window_messages += 1
         self.last_feedback = t
-        return out + self._arrived(t, stream)
+        arrivals = self.clock.messages(stream, [t])
+        if arrivals is None:  # as the tally: streams beyond so many are counted, not timed
+            return out
+        for silence in arrivals:
+            out += self._ended(silence)
+        return out
 
     def error(self, t: float, stream: str = "", *, ends_silence: bool = True) -> list[Finding]:
         """A damaged feedback message (CRC error, incomplete) at ``t`` of ``stream``,
@@ -78,22 +78,15 @@ class FeedbackHealth:
         ends there, so it is not also lost (``ends_silence``; as the tally times it)."""
         out = self.tick(t)
         self._window_errors += 1
-        previous = self._last_of.get(stream)
-        if not ends_silence or previous is None or t <= previous:
-            return out  # no message of that stream timed yet: nothing lost to tell
-        return out + self._arrived(t, stream)
+        silence = self.clock.damaged(stream, t) if ends_silence else None
+        return out if silence is None else out + self._ended(silence)
 
-    def _arrived(self, t: float, stream: str) -> list[Finding]:
-        """A message (whole or damaged) of ``stream`` came at ``t``: the silence it ends."""
+    def _ended(self, silence: Silence) -> list[Finding]:
+        """A message (whole or damaged) ended ``silence``: a finding if it lost messages."""
         out: list[Finding] = []
-        previous = self._last_of.get(stream)
-        if previous is None and len(self._last_of) >= MAX_FEEDBACK_SOURCES:
-            return out  # as the tally: streams beyond so many are counted, not timed
-        self._last_of[stream] = t
-        if previous is None:
-            return out
+        previous, t = silence.start, silence.end
         gap = t - previous
-        lost = lost_messages(silence_s(previous, t))
+        lost = silence.lost
         if lost:
             self.gaps += 1
             self.lost += lost

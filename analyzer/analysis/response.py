@@ -30,9 +30,9 @@ from analyzer.analysis.tracking import (
     nothing_to_stop,
 )
 from analyzer.feedback_track import (
-    DAMAGED_FEEDBACK,
     EXPECTED_FEEDBACK_HZ,
     GAP_THRESHOLD_S,
+    damaged_feedback,
     feedback_stream,
 )
 from analyzer.protocol.event_columns import EventColumns
@@ -135,7 +135,7 @@ class ResponseAnalyzer:
             out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
         elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_KINDS:
-            damaged = event.fields.get("kind") in DAMAGED_FEEDBACK
+            damaged = damaged_feedback(event)  # a bad CRC: it ends the silence before it
             out += self.health.error(t, feedback_stream(event), ends_silence=damaged)
             out += self._settle(t, None)
         else:  # the most frequent: time passes, perhaps a command (no list made for nothing)
