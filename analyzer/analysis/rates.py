@@ -6,6 +6,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -28,7 +29,7 @@ from analyzer.analysis.motion_fit import (
     whole,
 )
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
-from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, Movement
+from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, EndedBy, Movement
 from analyzer.analysis.targets import STILL_DEG
 
 RATE_OK = (0.75, 1.33)  # measured / commanded motion within this range: obeyed
@@ -43,12 +44,22 @@ _SENT_ONCE = (
 )
 
 
+class CutBy(Enum):
+    """What ended the feedback before a movement's window was over (its value: the words)."""
+
+    INPUT_ENDED = "the input ended"
+    FEEDBACK_STOPPED = "the feedback stopped"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class Cut:
-    """The feedback ended before a movement's window was over: ``what`` ended ("the
-    input ended", "the feedback stopped") and ``at`` what time."""
+    """The feedback ended before a movement's window was over: ``what`` ended it and
+    ``at`` what time."""
 
-    what: str
+    what: CutBy
     at: float
 
 
@@ -183,7 +194,7 @@ def _cut_words(movement: Movement, cut: Cut, end: float) -> str:
     """'the input ended 0.4 s into the movement' or '... 0.6 s after it, before ...'."""
     if cut.at < movement.start:
         return f"{cut.what} {movement.start - cut.at:.1f} s before the movement"
-    if movement.ended_by == "the input ended" or cut.at < end:
+    if movement.ended_by is EndedBy.INPUT_ENDED or cut.at < end:
         return f"{cut.what} {max(0.0, cut.at - movement.start):.1f} s into the movement"
     return (
         f"{cut.what} {cut.at - end:.1f} s after it, before its last motion could be seen "
@@ -284,11 +295,11 @@ def judge_stop(
 
 def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
     """The stream repeated too slowly to keep the gimbal moving: said once per stream, at
-    the first movement it shows in (None when fast enough, or said already)."""
-    stream = movement.stream
-    if stream.cadence_said or movement.ended_by == "the input ended" or not movement.too_slow():
+    the first movement it shows in (None when fast enough, or said already: the caller
+    records that it was said)."""
+    said = movement.stream.cadence_said
+    if said or movement.ended_by is EndedBy.INPUT_ENDED or not movement.too_slow():
         return None  # (the input ended: what would have followed is not known)
-    stream.cadence_said = True
     verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
     extra: dict[str, Any] = {
         "component": movement.component,

@@ -10,7 +10,7 @@ import numpy as np
 
 from analyzer.analysis.findings import Finding
 from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion
-from analyzer.analysis.rates import Cut, judge_cadence, judge_movement, judge_stop
+from analyzer.analysis.rates import Cut, CutBy, judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.streams import HOLD_S, Movement, Streams
@@ -125,7 +125,7 @@ class StickJudge:
                 self._stopped(closed)
         late = 0.0 if sample is not None else self.late
         if streams.waiting:
-            waiting: list[Movement] = []
+            judged: list[Movement] = []
             for movement in streams.waiting:
                 end = movement.window_end
                 assert end is not None
@@ -134,8 +134,9 @@ class StickJudge:
                 elif t > end + self.late:  # no good message after the window
                     out += self._judge_movement(movement, None, self._stopped_at(end))
                 else:
-                    waiting.append(movement)
-            streams.waiting = waiting
+                    continue
+                judged.append(movement)
+            streams.judged(judged)
         if self._stops:
             watching: list[_StopCheck] = []
             for stop in self._stops:
@@ -156,13 +157,14 @@ class StickJudge:
         out: list[Finding] = []
         self._stopped(self.streams.end())
         last = self.samples.last
-        for movement in self.streams.waiting:
-            cut = Cut("the input ended", ended_at)
+        waiting = list(self.streams.waiting)
+        for movement in waiting:
+            cut = Cut(CutBy.INPUT_ENDED, ended_at)
             if last is None or last.time < max(ended_at - self.late, movement.start):
                 # the feedback had gone silent before: that is what cut it
-                cut = Cut("the feedback stopped", last.time if last is not None else ended_at)
+                cut = Cut(CutBy.FEEDBACK_STOPPED, last.time if last is not None else ended_at)
             out += self._judge_movement(movement, None, cut)
-        self.streams.waiting = []
+        self.streams.judged(waiting)
         for stop in self._stops:
             out += self._judge_stop(stop)
         self._stops = []
@@ -175,7 +177,7 @@ class StickJudge:
     def _stopped(self, movements: list[Movement]) -> None:
         """Movements the stick came back from: the gimbal must then hold still."""
         for movement in movements:
-            if movement.ended_by in ("zeros", "pause"):
+            if movement.ended_by is not None and movement.ended_by.centred:
                 until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
                 self._stops.append(_StopCheck(movement, until))
 
@@ -194,7 +196,10 @@ class StickJudge:
             movement, before, inside, self.tolerance, free_from=movement.free_from, cut=cut
         )
         cadence = judge_cadence(movement, rate.verdict)
-        return [rate] if cadence is None else [rate, cadence]
+        if cadence is None:
+            return [rate]
+        movement.stream.cadence_said = True  # a stream's cadence is said once
+        return [rate, cadence]
 
     def _stopped_at(self, end: float) -> Cut | None:
         """Why no message came to close a window that ended at ``end``: the feedback
@@ -202,7 +207,7 @@ class StickJudge:
         last = self.samples.last
         if last is not None and last.time >= end:
             return None
-        return Cut("the feedback stopped", last.time if last is not None else end)
+        return Cut(CutBy.FEEDBACK_STOPPED, last.time if last is not None else end)
 
     def _reference(self, t: float) -> Sample | None:
         """The last sample at or before ``t`` not dated late (one measured when dated)."""

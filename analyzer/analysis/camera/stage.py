@@ -176,7 +176,10 @@ class CameraJudge:
         else:
             seen = self._look(pending, stream, shown)
         already = wanted.kind == PALETTE and wanted.palette == self._palette
-        finding = judge(pending.command, pending.time, wanted, seen, zoom, already)
+        verdict = judge(pending.command, pending.time, wanted, seen, zoom, already)
+        finding = verdict.finding
+        if zoom is not None:
+            self._zoom = verdict.zoom  # what this command taught of the optical zoom
         if wanted.kind == PALETTE and finding.verdict == "obeyed":
             self._palette = wanted.palette
         if self.keep_pictures and len(self.judged) < MAX_PICTURES // 2:
