@@ -102,6 +102,7 @@ class Arrivals:
             previous = t
 
 
+@dataclass(slots=True)
 class FeedbackClock:
     """When each stream's feedback last came, and the silences new messages end: the rules
     the counters (``analyzer.tally``) and the feedback's health (``analysis.health``) both
@@ -118,10 +119,7 @@ class FeedbackClock:
     Sans-IO: times in, silences out.
     """
 
-    __slots__ = ("last_arrival",)
-
-    def __init__(self, last_arrival: dict[str, float] | None = None) -> None:
-        self.last_arrival: dict[str, float] = dict(last_arrival or {})
+    last_arrival: dict[str, float] = field(default_factory=dict)  # stream -> its last
 
     def messages(self, stream: str, times: list[float]) -> Arrivals | None:
         """Whole messages of ``stream`` at ``times`` (one or more, in order): the silences

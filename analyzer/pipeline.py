@@ -136,8 +136,8 @@ class ColumnStage(Protocol):
     def process_segments(self, segments: Iterable[list[Event] | EventColumns]) -> list[Event]: ...
 
 
-class Decoding(Protocol):
-    """What the pipeline needs of a decoder (``analyzer.protocol.decoder.Decoder``)."""
+class PipelineDecoder(Protocol):
+    """What the pipeline needs of a decoder (``analyzer.protocol.decoder.ProtocolDecoder``)."""
 
     def feed_can(self, frame: CanFrame) -> list[Event]: ...
 
@@ -171,10 +171,10 @@ class SinkFailure:
     closing: bool = False
 
 
-def default_decoder(*, emit_other: bool = False) -> Decoding:
-    from analyzer.protocol.decoder import Decoder
+def default_decoder(*, emit_other: bool = False) -> PipelineDecoder:
+    from analyzer.protocol.decoder import ProtocolDecoder
 
-    return Decoder(emit_other=emit_other)
+    return ProtocolDecoder(emit_other=emit_other)
 
 
 class Pipeline:
@@ -191,10 +191,10 @@ class Pipeline:
         self,
         sinks: Sequence[Sink] = (),
         *,
-        decoder: Decoding | None = None,
+        decoder: PipelineDecoder | None = None,
         stages: Sequence[Stage] = (),
     ) -> None:
-        self.decoder: Decoding = decoder if decoder is not None else default_decoder()
+        self.decoder: PipelineDecoder = decoder if decoder is not None else default_decoder()
         self.sinks: list[Sink] = list(sinks)
         self.stages: list[Stage] = list(stages)
         self.tally = Tally()

@@ -313,7 +313,7 @@ class Tally:
         twin.feedback = {
             k: FeedbackTrack.from_figures(t.figures()) for k, t in self.feedback.items()
         }
-        twin.clock = FeedbackClock(self.clock.last_arrival)
+        twin.clock = FeedbackClock(dict(self.clock.last_arrival))
         return twin
 
     # -- as an MCAP metadata record ----------------------------------------------------------

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from analyzer.feedback_track import FeedbackClock, FeedbackTrack
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.crc import crc_bytes
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.ids import (
     ALTITUDE_ID,
@@ -116,7 +116,7 @@ def as_dicts(events: list[Event]) -> list[dict[str, Any]]:
 def test_feed_batch_is_the_general_path_item_by_item(
     batch: list[Any], other: bool, sources: int
 ) -> None:
-    one = Decoder(emit_other=other, max_sources=sources)
+    one = ProtocolDecoder(emit_other=other, max_sources=sources)
     slow: list[Event] = []
     for item in batch:
         if isinstance(item, CanFrame):  # the long way: the general path for every frame
@@ -128,7 +128,7 @@ def test_feed_batch_is_the_general_path_item_by_item(
         else:
             slow.append(item)
     slow += one.close()
-    two = Decoder(emit_other=other, max_sources=sources)
+    two = ProtocolDecoder(emit_other=other, max_sources=sources)
     fast: list[Event] = []
     half = len(batch) // 2
     two.feed_batch(batch[:half], fast)

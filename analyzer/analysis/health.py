@@ -12,7 +12,7 @@ from analyzer.analysis.findings import (
     HEALTHY,
     LOST,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
 )
 from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
 from analyzer.feedback_track import FEEDBACK_PERIOD_S, FeedbackClock, Silence
@@ -42,7 +42,7 @@ class FeedbackHealth:
         self.gaps = 0
         self.lost = 0
 
-    def tick(self, t: float) -> list[Finding]:
+    def tick(self, t: float) -> list[ResponseFinding]:
         """Any event's time: closes the minute windows that ended before ``t``."""
         first = self.first
         if first is None:
@@ -58,7 +58,7 @@ class FeedbackHealth:
             return found
         return []
 
-    def feedback(self, t: float, stream: str = "") -> list[Finding]:
+    def feedback(self, t: float, stream: str = "") -> list[ResponseFinding]:
         """One feedback message at ``t`` of ``stream``; a finding when it ends a silence
         that lost messages."""
         out = self.tick(t)
@@ -72,7 +72,9 @@ class FeedbackHealth:
             out += self._ended(silence)
         return out
 
-    def error(self, t: float, stream: str = "", *, ends_silence: bool = True) -> list[Finding]:
+    def error(
+        self, t: float, stream: str = "", *, ends_silence: bool = True
+    ) -> list[ResponseFinding]:
         """A damaged feedback message (CRC error, incomplete) at ``t`` of ``stream``,
         counted as damaged. A message with a bad CRC came whole: the silence before it
         ends there, so it is not also lost (``ends_silence``; as the tally times it)."""
@@ -81,9 +83,9 @@ class FeedbackHealth:
         silence = self.clock.damaged(stream, t) if ends_silence else None
         return out if silence is None else out + self._ended(silence)
 
-    def _ended(self, silence: Silence) -> list[Finding]:
+    def _ended(self, silence: Silence) -> list[ResponseFinding]:
         """A message (whole or damaged) ended ``silence``: a finding if it lost messages."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         previous, t = silence.start, silence.end
         gap = t - previous
         lost = silence.lost
@@ -98,7 +100,9 @@ class FeedbackHealth:
                 f"(expected every {FEEDBACK_PERIOD_S:g} s)"
             )
             extra = {"gap_s": gap, "lost_messages": lost, "observed_at": t}
-            out.append(Finding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, LOST, text, extra))
+            out.append(
+                ResponseFinding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, LOST, text, extra)
+            )
         return out
 
     def open_since(self) -> list[float]:
@@ -111,7 +115,7 @@ class FeedbackHealth:
             times.append(self.last_feedback)
         return times
 
-    def close(self) -> list[Finding]:
+    def close(self) -> list[ResponseFinding]:
         if self.first is None or self.last is None:
             return []
         length = self.last - (self.first + self._window * WINDOW_S)
@@ -119,7 +123,7 @@ class FeedbackHealth:
             return []
         return [self._judge_window(max(length, 0.0))]
 
-    def _judge_window(self, length: float) -> Finding:
+    def _judge_window(self, length: float) -> ResponseFinding:
         assert self.first is not None
         start = self.first + self._window * WINDOW_S
         messages, gaps, errors = self._window_messages, self._window_gaps, self._window_errors
@@ -135,7 +139,7 @@ class FeedbackHealth:
             verdict = UNKNOWN if self.messages == 0 else LOST
             what = "no gimbal feedback in the input" if not self.messages else "no feedback"
             text = f"{what} for {length:.0f} s: the responses cannot be judged"
-            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, verdict, text, extra)
+            return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, verdict, text, extra)
         hz = messages / length if length >= 1.0 else None
         extra["feedback_hz"] = hz
         problems = []
@@ -151,6 +155,6 @@ class FeedbackHealth:
         rate = f"{hz:.2f} messages/s" if hz is not None else f"{messages} messages"
         if problems:
             text = f"feedback over {length:.0f} s: " + ", ".join(problems)
-            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, DEGRADED, text, extra)
+            return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, DEGRADED, text, extra)
         text = f"feedback healthy over {length:.0f} s: {rate}, no message lost, no CRC error"
-        return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, HEALTHY, text, extra)
+        return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, HEALTHY, text, extra)

@@ -17,7 +17,7 @@ from analyzer.analysis.findings import (
     OBEYED,
     PARTIAL,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
     worst,
 )
 from analyzer.analysis.motion_fit import (
@@ -71,7 +71,7 @@ def judge_movement(
     *,
     free_from: float | None = None,
     cut: Cut | None = None,
-) -> Finding:
+) -> ResponseFinding:
     """The movement's commanded motion against the motion the feedback shows.
 
     ``before`` is the last attitude sample before the movement, ``inside`` those up to
@@ -114,7 +114,7 @@ def judge_movement(
             f"too little commanded motion to measure: {max(path):.1f} deg over "
             f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
         )
-        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
     measured = {i: p for i, p in series.items() if len(p) >= 2}
     found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
     if found is None and _seen_whole(movement, before, points, free_from, end):
@@ -124,7 +124,7 @@ def judge_movement(
     # one's hold): a gimbal ``lag`` late has done with the movement then.
     if cut is not None and (not points or points[-1].time < end + lag):
         text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
-        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
     verdicts: list[str] = []
     texts: list[str] = []
     ratios: list[float] = []
@@ -165,7 +165,7 @@ def judge_movement(
         if found.lag_s >= LATE_S:
             texts.append(f"it followed about {found.lag_s:.1f} s late")
     verdict = worst(*verdicts)
-    return Finding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+    return ResponseFinding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
 
 
 def _seen_whole(
@@ -246,7 +246,7 @@ def judge_stop(
     after: list[Sample],
     tolerance: float,
     follows: Callable[[str, float], float] | None = None,
-) -> Finding | None:
+) -> ResponseFinding | None:
     """Still moving after the stick came back (``end``)? None when too few samples show it.
 
     ``follows(axis, t)``: the angle of ``axis`` at ``t`` that the movement's commands,
@@ -281,7 +281,7 @@ def judge_stop(
     if not moved or moved_at is None:
         extra["duration_s"] = after[-1].time - end
         text = f"stopped when the commands stopped (still for {after[-1].time - end:.1f} s)"
-        return Finding(name, end, CHECK_STOP, OBEYED, text, extra)
+        return ResponseFinding(name, end, CHECK_STOP, OBEYED, text, extra)
     still = moved_at - end
     extra["duration_s"] = still
     text = f"still moving {still:.1f} s after the commands stopped (moved {moved:.1f} deg more)"
@@ -290,10 +290,10 @@ def judge_stop(
             f"still moving {still:.1f} s after the commands stopped, and still moving "
             f"(moved {moved:.1f} deg more)"
         )
-    return Finding(name, end, CHECK_STOP, NOT_OBEYED, text, extra)
+    return ResponseFinding(name, end, CHECK_STOP, NOT_OBEYED, text, extra)
 
 
-def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
+def judge_cadence(movement: Movement, rate_verdict: str) -> ResponseFinding | None:
     """The stream repeated too slowly to keep the gimbal moving: said once per stream, at
     the first movement it shows in (None when fast enough, or said already: the caller
     records that it was said)."""
@@ -309,10 +309,10 @@ def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
     }
     mean = movement.interval_mean
     if mean is None:
-        return Finding(NAME, movement.start, CHECK_REPEAT, verdict, _SENT_ONCE, extra)
+        return ResponseFinding(NAME, movement.start, CHECK_REPEAT, verdict, _SENT_ONCE, extra)
     text = (
         f"repeated every {mean:.2f} s on average (longest pause {movement.interval_max:.2f} s) "
         f"while the stick was off centre; the document recommends "
         f"{RECOMMENDED_REPEAT_S * 1000:.0f} ms to keep it moving"
     )
-    return Finding(NAME, movement.start, CHECK_REPEAT, verdict, text, extra)
+    return ResponseFinding(NAME, movement.start, CHECK_REPEAT, verdict, text, extra)

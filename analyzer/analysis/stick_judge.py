@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analyzer.analysis.findings import Finding
+from analyzer.analysis.findings import ResponseFinding
 from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion
 from analyzer.analysis.rates import Cut, CutBy, judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
@@ -104,10 +104,10 @@ class StickJudge:
             for a, b in itertools.pairwise(seen)
         )
 
-    def interrupt(self, t: float, name: str) -> list[Finding]:
+    def interrupt(self, t: float, name: str) -> list[ResponseFinding]:
         """Another motion command at ``t``: every stream ends; what waits is judged once
         its window, which reaches on by the longest lag, is over."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         self.streams.cut(t, name)
         for stop in self._stops:
             stop.until, stop.cut = min(stop.until, t), True
@@ -115,9 +115,9 @@ class StickJudge:
         self._stops = []
         return out
 
-    def settle(self, t: float, sample: Sample | None) -> list[Finding]:
+    def settle(self, t: float, sample: Sample | None) -> list[ResponseFinding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         streams = self.streams
         if streams.open:
             closed = streams.end_quiet(t)
@@ -152,9 +152,9 @@ class StickJudge:
             self._stops = watching
         return out
 
-    def close(self, ended_at: float) -> list[Finding]:
+    def close(self, ended_at: float) -> list[ResponseFinding]:
         """The end of the input (at ``ended_at``): every stream ends, everything is judged."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         self._stopped(self.streams.end())
         last = self.samples.last
         waiting = list(self.streams.waiting)
@@ -183,7 +183,7 @@ class StickJudge:
 
     def _judge_movement(
         self, movement: Movement, upto: float | None, cut: Cut | None = None
-    ) -> list[Finding]:
+    ) -> list[ResponseFinding]:
         """A stick movement against the feedback up to ``upto`` (a sample's time at or
         after its window's end; None: up to the window's end, which ``cut`` says the
         feedback did not reach), and its stream's cadence."""
@@ -216,7 +216,7 @@ class StickJudge:
                 return sample
         return self.samples.before(t)
 
-    def _judge_stop(self, stop: _StopCheck) -> list[Finding]:
+    def _judge_stop(self, stop: _StopCheck) -> list[ResponseFinding]:
         """Still once the stick came back and its grace is over, beyond what the
         movement's commands, followed as late as its fit found, still explain?"""
         movement = stop.movement

@@ -20,7 +20,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from enum import Enum
 
-from analyzer.analysis.motion_fit import LAG_MAX_S, Command
+from analyzer.analysis.motion_fit import LAG_MAX_S, StickCommand
 
 STREAM_GAP_S = 1.0  # commands further apart than this are separate streams
 RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
@@ -62,7 +62,7 @@ class Movement:
     component: str
     start: float
     stream: StickStream
-    commands: list[Command] = field(default_factory=list)
+    commands: list[StickCommand] = field(default_factory=list)
     count: int = 0  # off-centre commands
     last: float = 0.0  # the last off-centre command
     interval_sum: float = 0.0
@@ -73,7 +73,7 @@ class Movement:
     ended_by: EndedBy | None = None  # None while the stick is off centre
     window_end: float | None = None  # the feedback is judged up to here
     cut_short: str = ""  # what ended the window early, if anything
-    prior: list[Command] = field(default_factory=list)  # the stream's just before it
+    prior: list[StickCommand] = field(default_factory=list)  # the stream's just before it
     other_before: float | None = None  # the last other motion command before it
     other_name: str = ""  # and its name
     own_before: float | None = None  # the stream's newest speed older than ``prior``
@@ -81,7 +81,7 @@ class Movement:
     free_until: float | None = None  # another motion command took over here
     followed: tuple[float, dict[int, float]] | None = None  # its fit: lag, ratio per axis
 
-    def add(self, command: Command) -> None:
+    def add(self, command: StickCommand) -> None:
         """A command of the stream while the movement is open or awaits its judgement."""
         self.commands.append(command)
         if self.end is not None or (command.pan == 0 and command.tilt == 0):
@@ -166,14 +166,16 @@ class Streams:
         self.waiting: list[Movement] = []  # closed, their window still open
         self.other_at: float | None = None  # the last other motion command
         self.other_name = ""
-        self.recent: dict[str, deque[Command]] = {}  # a component's commands of the last PRIOR_S
+        self.recent: dict[
+            str, deque[StickCommand]
+        ] = {}  # a component's commands of the last PRIOR_S
         self.forgotten: dict[str, float] = {}  # the newest one off centre no longer kept
 
     def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
         """One gimbal_control; returns the movements it closed (their stop checks start)."""
         closed = self.end_quiet(t)
         stream = self.open.get(component)
-        command = Command(t, pan, tilt)
+        command = StickCommand(t, pan, tilt)
         for waiting in self.waiting:  # its motion goes on until it is judged
             if waiting.component == component:
                 waiting.add(command)
@@ -206,7 +208,7 @@ class Streams:
             movement.add(command)
         return closed
 
-    def _remember(self, component: str, command: Command) -> list[Command]:
+    def _remember(self, component: str, command: StickCommand) -> list[StickCommand]:
         """Keep ``command`` among the component's recent ones; those before it."""
         recent = self.recent.setdefault(component, deque())
         while recent and recent[0].time < command.time - PRIOR_S:

@@ -15,7 +15,7 @@ from analyzer.errors import SourceError, UsageError
 if TYPE_CHECKING:
     from analyzer.check.judge import Limits, StepResult
     from analyzer.check.observer import Observer
-    from analyzer.check.steps import Options, Step
+    from analyzer.check.steps import CheckStep, Options
     from analyzer.mcapio.write.video import VideoRecorder
     from analyzer.sim.transports import LinkSpec
 
@@ -209,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_check(
-    args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
+    args: argparse.Namespace, steps: tuple[CheckStep, ...], options: Options, limits: Limits
 ) -> int:
     from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture

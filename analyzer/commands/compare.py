@@ -114,9 +114,9 @@ def judge(path: str, settings: Settings, port: int, *, quiet: bool) -> Judged:
     steps = []
     if reader.format_name == "mcap":
         from analyzer.mcapio.channels import METADATA_NAME
-        from analyzer.mcapio.read.reader import Recording
+        from analyzer.mcapio.read.reader import McapRecording
 
-        command = Recording(path).metadata().get(METADATA_NAME, {}).get("command")
+        command = McapRecording(path).metadata().get(METADATA_NAME, {}).get("command")
         described = f"mcap of {command}" if command else described
         steps = recorded_steps(path)
     return Judged.of(path, described, judgements, steps, settings.tolerance_deg)

@@ -195,7 +195,7 @@ class SimulatorOption:
     fault: bool
 
 
-class LinePrinter:
+class DemoPrinter:
     """Sink printing each event as one plain line; UAV status thinned out unless ``everything``."""
 
     def __init__(self, stream: IO[str], *, everything: bool = False) -> None:
@@ -315,10 +315,10 @@ def simulated_camera() -> tuple[Any, Any]:
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
 
     try:
-        return Recording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
+        return McapRecording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
     except Exception:  # not a recording, or unreadable: not ours
         return False
 
@@ -377,7 +377,7 @@ def run(args: argparse.Namespace) -> int:
         from analyzer.ardupilot.live import NotedSource
 
         source = NotedSource(source)
-    printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
+    printer = None if tui else DemoPrinter(sys.stdout, everything=args.all)
     eye, camera = simulated_camera()
     recording = open_live_recording(
         args,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analyzer.analysis.camera.commands import ABSOLUTE, DIRECTION, LAYOUT, PALETTE, RATIO, Asked
-from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN, Finding
+from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN, ResponseFinding
 from analyzer.protocol.response_fields import CHECK_PICTURE
 
 STILL = 1.03  # the picture kept its scale within 3 % (the measurement's noise is below 1 %)
@@ -85,7 +85,7 @@ class CameraVerdict:
     """The finding of one camera command and what is known of the optical zoom after it
     (None when no range was given)."""
 
-    finding: Finding
+    finding: ResponseFinding
     zoom: ZoomRange | None
 
 
@@ -135,7 +135,7 @@ def judge(
     forgotten = None if zoom is None else zoom.forgotten()  # it may have changed unseen
     if seen.problem:
         return CameraVerdict(
-            Finding(command, t, CHECK_PICTURE, UNKNOWN, seen.problem, extra), forgotten
+            ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, seen.problem, extra), forgotten
         )
     if asked.kind in (PALETTE, LAYOUT):
         return CameraVerdict(_changes(command, t, asked, seen, already, extra), zoom)
@@ -147,7 +147,9 @@ def judge(
     doubt = seen.uncertainty
     unsure = _unsure(scale, doubt)
     if unsure:
-        return CameraVerdict(Finding(command, t, CHECK_PICTURE, UNKNOWN, unsure, extra), forgotten)
+        return CameraVerdict(
+            ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, unsure, extra), forgotten
+        )
     if asked.kind == DIRECTION:
         verdict, detail = _direction(asked, scale, zoom, doubt)
     elif asked.kind == RATIO:
@@ -164,7 +166,7 @@ def judge(
             f" (x{raw:.3g} as the picture shows it: the aircraft's motion explains "
             f"x{raw / scale:.3g})"
         )
-    return CameraVerdict(Finding(command, t, CHECK_PICTURE, verdict, detail, extra), zoom)
+    return CameraVerdict(ResponseFinding(command, t, CHECK_PICTURE, verdict, detail, extra), zoom)
 
 
 def _direction(asked: Asked, scale: float, zoom: ZoomRange | None, doubt: float) -> tuple[str, str]:
@@ -260,15 +262,17 @@ def _absolute(
 
 def _changes(
     command: str, t: float, asked: Asked, seen: Seen, already: bool, extra: dict[str, Any]
-) -> Finding:
+) -> ResponseFinding:
     field = "palette_changed" if asked.kind == PALETTE else "layout_changed"
     what = "its colours (the palette)" if asked.kind == PALETTE else "its layout"
     extra[field] = seen.changed
     if seen.changed is None:
-        return Finding(command, t, CHECK_PICTURE, UNKNOWN, f"cannot tell {what}", extra)
+        return ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, f"cannot tell {what}", extra)
     if seen.changed:
-        return Finding(command, t, CHECK_PICTURE, OBEYED, f"the picture changed {what}", extra)
+        return ResponseFinding(
+            command, t, CHECK_PICTURE, OBEYED, f"the picture changed {what}", extra
+        )
     if already:
         detail = f"the picture kept {what}: {asked.palette} was on already"
-        return Finding(command, t, CHECK_PICTURE, OBEYED, detail, extra)
-    return Finding(command, t, CHECK_PICTURE, NOT_OBEYED, f"the picture kept {what}", extra)
+        return ResponseFinding(command, t, CHECK_PICTURE, OBEYED, detail, extra)
+    return ResponseFinding(command, t, CHECK_PICTURE, NOT_OBEYED, f"the picture kept {what}", extra)

@@ -22,7 +22,7 @@ from analyzer.inputs.dataflash.formats import (
     FMT_TYPE,
     HEAD,
     CanColumns,
-    Layout,
+    RecordLayout,
     can_columns,
     parse_fmt,
 )
@@ -169,7 +169,7 @@ class DataFlashReader(InputReader):
         self.position_bytes = self.size_bytes or 0
 
     def _define(
-        self, layout: Layout | None, lengths: dict[int, int], cans: dict[int, CanColumns]
+        self, layout: RecordLayout | None, lengths: dict[int, int], cans: dict[int, CanColumns]
     ) -> None:
         """Take a new record format in: its length, and its CAN columns if it is CANF/CAFD."""
         if layout is None:
@@ -269,7 +269,7 @@ class DataFlashReader(InputReader):
         data = self._data
         size = len(data)
         at = data.find(HEAD + bytes([FMT_TYPE]))
-        gps: Layout | None = None
+        gps: RecordLayout | None = None
         while at >= 0 and gps is None:
             if at + FMT_LENGTH <= size:
                 layout = parse_fmt(data, at)
