@@ -25,6 +25,7 @@ from analyzer.analysis.motion_fit import (
     MIN_INTERVALS,
     AxisFit,
     CommandedMotion,
+    Fit,
     fit,
     whole,
 )
@@ -63,6 +64,29 @@ class Cut:
     at: float
 
 
+@dataclass(frozen=True)
+class MovementVerdict:
+    """A movement's finding, and how the gimbal followed while the stick was off centre
+    (lag, ratio per axis; None when no fit): what the stop check takes as explained."""
+
+    finding: ResponseFinding
+    followed: tuple[float, dict[int, float]] | None
+
+
+@dataclass
+class _Asked:
+    """What a movement's commands asked of each axis that turned more than the tolerance,
+    and the feedback to measure it by (up to an axis' limit)."""
+
+    motion: CommandedMotion
+    asked: list[float]
+    duration: float
+    points: list[Sample]
+    series: dict[int, list[tuple[float, float]]]
+    limits: dict[int, float | None]
+    commanded: list[tuple[str, str, int, str]]
+
+
 def judge_movement(
     movement: Movement,
     before: Sample | None,
@@ -71,7 +95,7 @@ def judge_movement(
     *,
     free_from: float | None = None,
     cut: Cut | None = None,
-) -> ResponseFinding:
+) -> MovementVerdict:
     """The movement's commanded motion against the motion the feedback shows.
 
     ``before`` is the last attitude sample before the movement, ``inside`` those up to
@@ -82,11 +106,6 @@ def judge_movement(
     the window did; unless what came shows the movement's motion over (past its lag),
     it is ``unknown``."""
     end = movement.end if movement.end is not None else movement.last + HOLD_S
-    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
-    at_start = motion.at(movement.start)
-    asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
-    duration = max(end - movement.start, 1e-9)
-    path = motion.path(movement.start, end)
     extra: dict[str, Any] = {
         "component": movement.component,
         "command_count": movement.count,
@@ -94,6 +113,61 @@ def judge_movement(
         "interval_mean_s": movement.interval_mean,
         "interval_max_s": movement.interval_max if movement.count > 1 else None,
     }
+    asked = _asked(movement, before, inside, min_motion, end, extra)
+    if not asked.commanded:
+        path = asked.motion.path(movement.start, end)
+        text = (
+            f"too little commanded motion to measure: {max(path):.1f} deg over "
+            f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
+        )
+        finding = ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return MovementVerdict(finding, None)
+    motion, points = asked.motion, asked.points
+    measured = {i: p for i, p in asked.series.items() if len(p) >= 2}
+    found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
+    if found is None and _seen_whole(movement, before, points, free_from, end):
+        found = whole(motion, measured)
+    lag = found.lag_s if found is not None and found.lag_measured else LAG_MAX_S
+    # ``end`` is when the commands stopped asking for motion (a 0, 0 command, or the last
+    # one's hold): a gimbal ``lag`` late has done with the movement then.
+    if cut is not None and (not points or points[-1].time < end + lag):
+        text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
+        finding = ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return MovementVerdict(finding, None)
+    verdicts, texts, ratios = _axis_verdicts(movement, asked, found, free_from, extra)
+    if ratios:
+        extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
+    # How it followed while the stick was off centre, and not after (a gimbal that
+    # drifts on would pass for a late one): what the stop check takes as explained.
+    onset = fit(
+        motion, measured, free_from=free_from, free_until=movement.free_until, seen_until=end
+    )
+    followed = None
+    if onset is not None:
+        followed = (onset.lag_s, {i: a.ratio for i, a in onset.axes.items()})
+    if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
+        extra["lag_s"] = found.lag_s
+        if found.lag_s >= LATE_S:
+            texts.append(f"it followed about {found.lag_s:.1f} s late")
+    verdict = worst(*verdicts)
+    finding = ResponseFinding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+    return MovementVerdict(finding, followed)
+
+
+def _asked(
+    movement: Movement,
+    before: Sample | None,
+    inside: list[Sample],
+    min_motion: float,
+    end: float,
+    extra: dict[str, Any],
+) -> _Asked:
+    """What the movement asked of each axis, and the feedback of each commanded one."""
+    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    at_start = motion.at(movement.start)
+    asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
+    duration = max(end - movement.start, 1e-9)
+    path = motion.path(movement.start, end)
     # A message whose segments came late is dated after it measured: left out of the fit.
     points = [s for s in ([before] if before is not None else []) + inside if not s.late]
     series: dict[int, list[tuple[float, float]]] = {}
@@ -109,63 +183,50 @@ def judge_movement(
         series[index] = [(s.time, s.value(axis)) for s in usable]
     if points:
         extra["observed_at"] = points[-1].time
-    if not commanded:
-        text = (
-            f"too little commanded motion to measure: {max(path):.1f} deg over "
-            f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
-        )
-        return ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
-    measured = {i: p for i, p in series.items() if len(p) >= 2}
-    found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
-    if found is None and _seen_whole(movement, before, points, free_from, end):
-        found = whole(motion, measured)
-    lag = found.lag_s if found is not None and found.lag_measured else LAG_MAX_S
-    # ``end`` is when the commands stopped asking for motion (a 0, 0 command, or the last
-    # one's hold): a gimbal ``lag`` late has done with the movement then.
-    if cut is not None and (not points or points[-1].time < end + lag):
-        text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
-        return ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+    return _Asked(motion, asked, duration, points, series, limits, commanded)
+
+
+def _axis_verdicts(
+    movement: Movement,
+    asked: _Asked,
+    found: Fit | None,
+    free_from: float | None,
+    extra: dict[str, Any],
+) -> tuple[list[str], list[str], list[float]]:
+    """Each commanded axis' verdict, its words and the ratio measured (where it was)."""
     verdicts: list[str] = []
     texts: list[str] = []
     ratios: list[float] = []
     whole_movement = found is not None and not found.lag_measured
-    for word, _, index, key in commanded:
+    for word, _, index, key in asked.commanded:
         axis_fit = found.axes.get(index) if found is not None else None
-        limit = limits[index]
+        limit = asked.limits[index]
         if axis_fit is None:
-            if limit is not None and limit * asked[index] > 0:
-                verdicts.append(OBEYED)
-                texts.append(f"{word} turned until its limit {limit:.1f}")
-            elif limit is not None:  # the stop on the other side: it turned the wrong way
-                verdicts.append(NOT_OBEYED)
-                texts.append(f"{word} turned to its limit {limit:.1f}, the wrong way")
-            else:
-                verdicts.append(UNKNOWN)
-                texts.append(f"{word} not measurable: {_too_few(movement, free_from)}")
+            verdict, said = _unmeasured(word, limit, asked.asked[index], movement, free_from)
+            verdicts.append(verdict)
+            texts.append(said)
             continue
         verdict, said = _axis_verdict(word, axis_fit, whole_movement=whole_movement)
         ratios.append(axis_fit.ratio)
         extra[f"{key}_ratio"] = axis_fit.ratio
-        extra[f"measured_{key}_dps"] = axis_fit.ratio * asked[index] / duration + 0.0
+        extra[f"measured_{key}_dps"] = axis_fit.ratio * asked.asked[index] / asked.duration + 0.0
         if limit is not None:
             said += f", then at its limit {limit:.1f}"
         verdicts.append(verdict)
         texts.append(said)
-    if ratios:
-        extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
-    # How it followed while the stick was off centre, and not after (a gimbal that
-    # drifts on would pass for a late one): what the stop check takes as explained.
-    onset = fit(
-        motion, measured, free_from=free_from, free_until=movement.free_until, seen_until=end
-    )
-    if onset is not None:
-        movement.followed = (onset.lag_s, {i: a.ratio for i, a in onset.axes.items()})
-    if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
-        extra["lag_s"] = found.lag_s
-        if found.lag_s >= LATE_S:
-            texts.append(f"it followed about {found.lag_s:.1f} s late")
-    verdict = worst(*verdicts)
-    return ResponseFinding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+    return verdicts, texts, ratios
+
+
+def _unmeasured(
+    word: str, limit: float | None, asked: float, movement: Movement, free_from: float | None
+) -> tuple[str, str]:
+    """An axis the fit could not measure: at its limit the way it was asked, the wrong
+    way, or unknown."""
+    if limit is not None and limit * asked > 0:
+        return OBEYED, f"{word} turned until its limit {limit:.1f}"
+    if limit is not None:  # the stop on the other side: it turned the wrong way
+        return NOT_OBEYED, f"{word} turned to its limit {limit:.1f}, the wrong way"
+    return UNKNOWN, f"{word} not measurable: {_too_few(movement, free_from)}"
 
 
 def _seen_whole(

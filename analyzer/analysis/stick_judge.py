@@ -192,9 +192,11 @@ class StickJudge:
         last = end if upto is None or movement.cut_short else max(upto, end)
         before = self._reference(movement.start)
         inside = self.samples.between(movement.start, last)
-        rate = judge_movement(
+        judged = judge_movement(
             movement, before, inside, self.tolerance, free_from=movement.free_from, cut=cut
         )
+        movement.followed = judged.followed  # what the stop check takes as explained
+        rate = judged.finding
         cadence = judge_cadence(movement, rate.verdict)
         if cadence is None:
             return [rate]
