@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Generator, Iterable
 from dataclasses import dataclass
 
 from analyzer.analysis.findings import Timed, untimed
@@ -16,7 +16,14 @@ from analyzer.analysis.response import (
 )
 from analyzer.analysis.stage import WITHOUT_VIDEO, Analysis, Judging
 from analyzer.analysis.time_order import TimeOrder
-from analyzer.api.reading import Decoding, FileEvents, Path, input_errors, open_decoding
+from analyzer.api.reading import (
+    Closable,
+    Decoding,
+    FileEvents,
+    Path,
+    input_errors,
+    open_decoding,
+)
 from analyzer.pipeline import BATCH_ITEMS, Pipeline, delivered_batches
 from analyzer.protocol.ids import TCP_PORT
 from analyzer.protocol.types import Event
@@ -109,7 +116,7 @@ class FindingsInOrder:
         return findings
 
 
-class Findings(Iterator[Finding]):
+class Findings(Closable[Finding]):
     """What ``analyze`` gives: its findings one at a time, as they are decided.
 
     ``camera_judged`` says whether the camera commands were judged from the recording's
@@ -117,19 +124,10 @@ class Findings(Iterator[Finding]):
     the video extra is not installed, or the events came without their video (an iterable
     of ``Event``s other than ``read``'s: a ``Decoder``'s, a ``Listener``'s, a list)."""
 
-    def __init__(self, findings: Iterator[Finding], analysis: Analysis) -> None:
-        self._findings = findings
+    def __init__(self, findings: Generator[Finding, None, None], analysis: Analysis) -> None:
+        super().__init__(findings)
         self.camera_judged = analysis.judges_camera
         self.camera_note = analysis.camera_note
-
-    def __next__(self) -> Finding:
-        return next(self._findings)
-
-    def close(self) -> None:
-        """Stop early: the input is closed."""
-        close = getattr(self._findings, "close", None)
-        if close is not None:
-            close()
 
 
 def analyze(
@@ -185,7 +183,9 @@ def analyze(
     return Findings(_findings(source, Pipeline(), analysis.judging(), BATCH_ITEMS), analysis)
 
 
-def _read_findings(decoding: Decoding, analysis: Analysis, path: Path) -> Iterator[Finding]:
+def _read_findings(
+    decoding: Decoding, analysis: Analysis, path: Path
+) -> Generator[Finding, None, None]:
     """The findings of an opened input; its reader is closed at the end (or when the
     caller stops early)."""
     try:
@@ -205,7 +205,7 @@ def _warn(note: str) -> None:
 
 def _findings(
     items: Iterable[object], pipeline: Pipeline, judging: Judging, batch_items: int
-) -> Iterator[Finding]:
+) -> Generator[Finding, None, None]:
     """The pipeline of ``analyze`` run over ``items``, its findings as they are released."""
     findings = FindingsInOrder(judging, pipeline.tally)
     pipeline.stages.append(findings)

@@ -5,9 +5,10 @@ from __future__ import annotations
 import errno
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import TypeVar
 
 from analyzer.errors import UsageError
 from analyzer.inputs import InputReader, open_input
@@ -15,10 +16,19 @@ from analyzer.pipeline import Pipeline, default_decoder, delivered_batches
 from analyzer.protocol.ids import PROTOCOL_IDS, TCP_PORT
 from analyzer.protocol.types import Event
 
-__all__ = ["Decoding", "FileEvents", "decoded_events", "input_errors", "open_decoding", "read"]
+__all__ = [
+    "Closable",
+    "Decoding",
+    "FileEvents",
+    "decoded_events",
+    "input_errors",
+    "open_decoding",
+    "read",
+]
 
 FILE_BATCH = 2048  # items handed to the pipeline at a time (1 for standard input)
 Path = str | os.PathLike[str]
+T = TypeVar("T")
 
 
 @dataclass
@@ -86,25 +96,31 @@ def read(
     return FileEvents(path, decoded_events(decoding, path))
 
 
-class FileEvents(Iterator[Event]):
+class Closable(Iterator[T]):
+    """An iterator over a generator that reads an input: ``close`` stops early, and the
+    input is closed."""
+
+    def __init__(self, items: Generator[T, None, None]) -> None:
+        self._items = items
+
+    def __next__(self) -> T:
+        return next(self._items)
+
+    def close(self) -> None:
+        """Stop early: the input is closed."""
+        self._items.close()
+
+
+class FileEvents(Closable[Event]):
     """The events of a file as ``read`` gives them, one at a time; ``path`` is the file
     (a recording's video stays there, for ``analyze`` to judge camera commands by)."""
 
-    def __init__(self, path: Path, events: Iterator[Event]) -> None:
+    def __init__(self, path: Path, events: Generator[Event, None, None]) -> None:
+        super().__init__(events)
         self.path = path
-        self._events = events
-
-    def __next__(self) -> Event:
-        return next(self._events)
-
-    def close(self) -> None:
-        """Stop early: the file is closed."""
-        close = getattr(self._events, "close", None)
-        if close is not None:
-            close()
 
 
-def decoded_events(decoding: Decoding, path: Path) -> Iterator[Event]:
+def decoded_events(decoding: Decoding, path: Path) -> Generator[Event, None, None]:
     """The events of an opened input as they are decoded; the reader is closed at the end
     (or when the caller stops early)."""
     reader, pipeline = decoding.reader, decoding.pipeline
