@@ -14,7 +14,7 @@ from typing import Any
 
 from analyzer import wall_clock
 from analyzer.errors import OutputError, SourceError
-from analyzer.pipeline import Decoding, Pipeline, Sink, Stage
+from analyzer.pipeline import Pipeline, PipelineDecoder, Sink, Stage
 from analyzer.portable import STOP_SIGNALS
 from analyzer.protocol.types import Event
 from analyzer.sources.base import link_event
@@ -99,7 +99,7 @@ class Capture:
         source: Any,
         sinks: Sequence[Sink],
         *,
-        decoder: Decoding | None = None,
+        decoder: PipelineDecoder | None = None,
         stages: Sequence[Stage] = (),
         batch_interval: float = 0.05,
     ) -> None:
@@ -130,7 +130,7 @@ class Capture:
         return self.pipeline.sinks
 
     @property
-    def decoder(self) -> Decoding:
+    def decoder(self) -> PipelineDecoder:
         return self.pipeline.decoder
 
     # -- control ---------------------------------------------------------------------------------

@@ -3,13 +3,14 @@
 A message should come about every 500 ms (``EXPECTED_FEEDBACK_HZ``); a silence of
 ``GAP_PERIODS`` periods or more lost messages (``lost_messages``). ``FeedbackTrack``
 times one stream (its source and direction): rate, the longest gap, the silences that
-lost messages. The counters (``analyzer.tally``) and the analysis of the feedback's
-health both count with these.
+lost messages, from the silences ``FeedbackClock`` yields: the one clock the counters
+(``analyzer.tally``) and the analysis of the feedback's health both time feedback by.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -41,12 +42,6 @@ _US = 1_000_000  # gaps are compared in whole microseconds, so equal gaps tie ex
 _MANY = 64  # messages timed at once with numpy (only columns bring that many)
 
 
-def silence_s(previous: float, t: float) -> float:
-    """The time between two messages in whole microseconds (a recording's nanosecond times
-    and the file it was made from give the same silence)."""
-    return (round(t * _US) - round(previous * _US)) / _US
-
-
 def feedback_stream(event: Event) -> str:
     """The stream a feedback message belongs to: its source, and direction if any."""
     direction = event.fields.get("direction")
@@ -72,9 +67,86 @@ def lost_messages(silence_s: float, period_s: float = FEEDBACK_PERIOD_S) -> int:
     return max(1, math.floor(silence_s / period_s + 0.5) - 1)
 
 
+@dataclass(frozen=True, slots=True)
+class Silence:
+    """The time between two arrivals of one stream's feedback (whole or damaged messages),
+    in whole microseconds: a recording's nanosecond times and the file it was made from
+    give the same silence."""
+
+    start: float  # the arrival before
+    end: float  # the arrival that ended it
+
+    @property
+    def gap_us(self) -> int:
+        return round(self.end * _US) - round(self.start * _US)
+
+    @property
+    def lost(self) -> int:
+        """Feedback messages lost in it (``lost_messages``)."""
+        return lost_messages(self.gap_us / _US)
+
+
+@dataclass(slots=True)
+class Arrivals:
+    """Whole messages of one stream at ``times``, after the arrival ``previous`` (None
+    before the stream's first message); iterating gives the silences they end."""
+
+    previous: float | None
+    times: list[float]
+
+    def __iter__(self) -> Iterator[Silence]:
+        previous = self.previous
+        for t in self.times:
+            if previous is not None:
+                yield Silence(previous, t)
+            previous = t
+
+
+@dataclass(slots=True)
+class FeedbackClock:
+    """When each stream's feedback last came, and the silences new messages end: the rules
+    the counters (``analyzer.tally``) and the feedback's health (``analysis.health``) both
+    time feedback by, written once.
+
+    - A whole message ends the silence before it (a stream's first message ends none).
+    - A message with a bad CRC came whole but damaged: it ends the silence before it too,
+      so that silence is not also counted as lost, but only after a message of its stream
+      and after the last arrival (``DAMAGED_FEEDBACK``; an incomplete one lost a segment,
+      and its silence counts).
+    - Only the first ``MAX_FEEDBACK_SOURCES`` streams are timed: a file naming millions of
+      channels must not grow the figures without limit; the rest are counted, not timed.
+
+    Sans-IO: times in, silences out.
+    """
+
+    last_arrival: dict[str, float] = field(default_factory=dict)  # stream -> its last
+
+    def messages(self, stream: str, times: list[float]) -> Arrivals | None:
+        """Whole messages of ``stream`` at ``times`` (one or more, in order): the silences
+        they end, or None when the stream is one too many to time."""
+        last = self.last_arrival
+        previous = last.get(stream)
+        if previous is None and len(last) >= MAX_FEEDBACK_SOURCES:
+            return None
+        if times:
+            last[stream] = times[-1]
+        return Arrivals(previous, times)
+
+    def damaged(self, stream: str, t: float) -> Silence | None:
+        """A message of ``stream`` with a bad CRC at ``t``: the silence it ends (None when
+        its stream has had no message, or ``t`` is not after the last arrival)."""
+        previous = self.last_arrival.get(stream)
+        if previous is None or t <= previous:
+            return None
+        self.last_arrival[stream] = t
+        return Silence(previous, t)
+
+
 @dataclass
 class FeedbackTrack:
-    """The feedback messages of one stream (source and direction), one time at a time.
+    """The figures of one stream's feedback (source and direction): messages, rate, the
+    longest gap and the silences that lost messages, from the silences its
+    ``FeedbackClock`` yields.
 
     The longest gap is the first of the longest silences between two messages; times are
     compared in whole microseconds, so a recording (nanosecond times) and the file it was
@@ -90,24 +162,19 @@ class FeedbackTrack:
     gaps_over_threshold: int = 0  # silences that lost messages (see lost_messages)
     lost_messages: int = 0  # feedback messages lost in them
     _longest_us: int = field(default=0, repr=False)
-    # The last message that came, whole or damaged: a silence ends with either.
-    _arrival: float | None = field(default=None, repr=False)
 
-    def add(self, t: float) -> None:
-        self.add_times([t])
-
-    def add_times(self, times: list[float]) -> None:
-        """Messages at ``times``, one after the other (``add`` of each, in one loop)."""
+    def add(self, arrivals: Arrivals) -> None:
+        """Whole messages and the silences they end (those of many messages at once)."""
+        times = arrivals.times
         if not times:
             return
-        previous = self._arrival if self._arrival is not None else self.last
+        previous = arrivals.previous
         if previous is None:
             self.first = previous = times[0]
             times = times[1:]
             self.count += 1
         if len(times) > _MANY:
             self._silences(previous, times)
-            previous = times[-1]
         else:
             previous_us = round(previous * _US)
             silence = self._silence
@@ -116,7 +183,7 @@ class FeedbackTrack:
                 silence(previous, t_us - previous_us, t)
                 previous, previous_us = t, t_us
         self.count += len(times)
-        self.last = self._arrival = previous
+        self.last = arrivals.times[-1]
 
     def _silences(self, previous: float, times: list[float]) -> None:
         """``_silence`` between each two messages of ``previous`` and ``times``, at once:
@@ -130,14 +197,10 @@ class FeedbackTrack:
         for gap_us in gaps[gaps / _US >= GAP_THRESHOLD_S].tolist():
             self._lost(gap_us)
 
-    def damaged(self, t: float) -> None:
-        """A message with a bad CRC came at ``t``: the silence before it ends there, and
-        what it ends is counted; the message itself is damaged, not lost."""
-        arrival = self._arrival if self._arrival is not None else self.last
-        if arrival is None or t <= arrival:
-            return
-        self._silence(arrival, round(t * _US) - round(arrival * _US), t)
-        self._arrival = t
+    def damaged(self, silence: Silence) -> None:
+        """The silence a message with a bad CRC ended: counted; the message itself is
+        damaged, not lost."""
+        self._silence(silence.start, silence.gap_us, silence.end)
 
     def _silence(self, last: float, gap_us: int, t: float) -> None:
         """The silence between messages at ``last`` and ``t`` (``gap_us`` microseconds)."""

@@ -103,16 +103,42 @@ class Batch:
 class Sink(Protocol):
     """Anything that consumes batches: MCAP writer, text printer, TUI bridge.
 
-    A sink that never looks at ``Batch.items`` says so with a ``keeps_items = False``
-    attribute; then frames a reader read as columns are never built one by one.
-    A sink that reads the events through ``Batch.segments`` says so with
-    ``takes_columns = True``: the events of blocks decoded in vectors then reach it as
-    columns; every other sink gets them as Events (``Batch.materialize``).
+    A sink that never looks at ``Batch.items`` says so (``SaysItems``); then frames a
+    reader read as columns are never built one by one. A sink that reads the events
+    through ``Batch.segments`` says so (``SaysColumns``): the events of blocks decoded in
+    vectors then reach it as columns; every other sink gets them as Events
+    (``Batch.materialize``).
     """
 
     def handle(self, batch: Batch) -> None: ...
 
     def close(self) -> None: ...
+
+
+@runtime_checkable
+class SaysItems(Protocol):
+    """A sink that says whether it looks at ``Batch.items`` (one without the attribute
+    does)."""
+
+    keeps_items: bool
+
+
+@runtime_checkable
+class SaysColumns(Protocol):
+    """A sink that says whether it reads the events through ``Batch.segments`` (one
+    without the attribute does not)."""
+
+    takes_columns: bool
+
+
+def keeps_items(sink: object) -> bool:
+    """Whether ``sink`` looks at raw items."""
+    return sink.keeps_items if isinstance(sink, SaysItems) else True
+
+
+def takes_columns(sink: object) -> bool:
+    """Whether ``sink`` takes the events of blocks decoded in vectors as columns."""
+    return sink.takes_columns if isinstance(sink, SaysColumns) else False
 
 
 class Stage(Protocol):
@@ -136,8 +162,8 @@ class ColumnStage(Protocol):
     def process_segments(self, segments: Iterable[list[Event] | EventColumns]) -> list[Event]: ...
 
 
-class Decoding(Protocol):
-    """What the pipeline needs of a decoder (``analyzer.protocol.decoder.Decoder``)."""
+class PipelineDecoder(Protocol):
+    """What the pipeline needs of a decoder (``analyzer.protocol.decoder.ProtocolDecoder``)."""
 
     def feed_can(self, frame: CanFrame) -> list[Event]: ...
 
@@ -171,10 +197,10 @@ class SinkFailure:
     closing: bool = False
 
 
-def default_decoder(*, emit_other: bool = False) -> Decoding:
-    from analyzer.protocol.decoder import Decoder
+def default_decoder(*, emit_other: bool = False) -> PipelineDecoder:
+    from analyzer.protocol.decoder import ProtocolDecoder
 
-    return Decoder(emit_other=emit_other)
+    return ProtocolDecoder(emit_other=emit_other)
 
 
 class Pipeline:
@@ -191,10 +217,10 @@ class Pipeline:
         self,
         sinks: Sequence[Sink] = (),
         *,
-        decoder: Decoding | None = None,
+        decoder: PipelineDecoder | None = None,
         stages: Sequence[Stage] = (),
     ) -> None:
-        self.decoder: Decoding = decoder if decoder is not None else default_decoder()
+        self.decoder: PipelineDecoder = decoder if decoder is not None else default_decoder()
         self.sinks: list[Sink] = list(sinks)
         self.stages: list[Stage] = list(stages)
         self.tally = Tally()
@@ -232,7 +258,7 @@ class Pipeline:
     @property
     def keeps_items(self) -> bool:
         """Whether a sink looks at raw items (else frames read as columns stay columns)."""
-        return any(getattr(sink, "keeps_items", True) for sink in self.sinks)
+        return any(map(keeps_items, self.sinks))
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Events from outside the decoder (link changes, notes) into the open batch."""
@@ -280,7 +306,7 @@ class Pipeline:
                         self.tally.add_columns(segment)
             else:
                 self.tally.add_events(batch.events)
-        if batch.columns and not all(getattr(s, "takes_columns", False) for s in self.sinks):
+        if batch.columns and not all(map(takes_columns, self.sinks)):
             batch.materialize()
         failed = {id(f.sink) for f in self.failures}
         for sink in self.sinks:

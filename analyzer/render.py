@@ -149,42 +149,61 @@ def describe(event: Event) -> str:
     fields = event.fields
     topic = event.topic
     if topic == TOPIC_DIAGNOSTICS:
-        text = str(fields.get("detail", ""))
-        raw = str(fields.get("raw", ""))
-        if raw:
-            parts = raw.split()
-            more = f" ... ({len(parts)} bytes)" if len(parts) > RAW_SHOWN else ""
-            text += f"  raw {' '.join(parts[:RAW_SHOWN])}{more}"
-        return text
+        return _diagnostic_words(fields)
     if topic == TOPIC_UAV_TEXT:
         return repr(str(fields.get("text", "")))
     if topic == TOPIC_CAN_BUS_STATE:
         return bus_state_words(fields)
     if topic == TOPIC_CAN_OTHER:
-        can_id = int(fields.get("can_id", 0))
-        ident = f"0x{can_id:08X}" if fields.get("extended", True) else f"0x{can_id:03X}"
-        if fields.get("remote"):
-            return f"id {ident} [{fields.get('dlc', 0)}] remote request"
-        return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
+        return _other_frame_words(fields)
+    return _field_words(topic, fields)
+
+
+def _diagnostic_words(fields: dict[str, Any]) -> str:
+    """A diagnostic's detail, and the first bytes of what it is about."""
+    text = str(fields.get("detail", ""))
+    raw = str(fields.get("raw", ""))
+    if raw:
+        parts = raw.split()
+        more = f" ... ({len(parts)} bytes)" if len(parts) > RAW_SHOWN else ""
+        text += f"  raw {' '.join(parts[:RAW_SHOWN])}{more}"
+    return text
+
+
+def _other_frame_words(fields: dict[str, Any]) -> str:
+    """Another device's CAN frame: its ID, length and data."""
+    can_id = int(fields.get("can_id", 0))
+    ident = f"0x{can_id:08X}" if fields.get("extended", True) else f"0x{can_id:03X}"
+    if fields.get("remote"):
+        return f"id {ident} [{fields.get('dlc', 0)}] remote request"
+    return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
+
+
+def _field_words(topic: str, fields: dict[str, Any]) -> str:
+    """A command's, a message's or a finding's fields in words: those that say it alone
+    first, then each value with its name and unit, then the trailing ones."""
     head: list[str] = []
     words: list[str] = []
     tail: list[str] = []
-    if topic == TOPIC_COMMAND:
+    command = topic == TOPIC_COMMAND
+    if command:
         if fields.get("component") not in (None, "gimbal"):
             head.append(str(fields["component"]))
         if fields.get("name") == "unknown":
             words.append(f"s_id 0x{fields.get('s_id', 0):02X} cmd 0x{fields.get('cmd', 0):02X}")
             words.append(f"raw {fields.get('raw', '')}")
+    trailing = TRAILING_FIELDS.get(topic, ())
     for key, value in fields.items():
         if key in META_FIELDS or (key.endswith(CODE_SUFFIX) and key[: -len(CODE_SUFFIX)] in fields):
             continue  # the label says it; the number stays in the JSON
-        if topic == TOPIC_COMMAND and key in LEADING_WORDS and isinstance(value, str):
+        said_alone = command and isinstance(value, str)
+        if said_alone and key in LEADING_WORDS:
             head.append(value)  # "zoom_in", "single", "iron_red" say it alone
-        elif topic == TOPIC_COMMAND and key in TRAILING_WORDS and isinstance(value, str):
+        elif said_alone and key in TRAILING_WORDS:
             tail.append(value)
-        elif key in TRAILING_FIELDS.get(topic, ()):
+        elif key in trailing:
             tail.append(value_words(key, value, fields))
-        elif topic == TOPIC_COMMAND and key == "axis" and isinstance(value, str):
+        elif said_alone and key == "axis":
             continue  # the value's own name says it: "pitch -45.00 deg"
         elif topic == TOPIC_ANALYSIS_RESPONSE and key == "verdict":
             words.append(f"verdict {verdict_word(fields)}")  # a gap is LOST, not NOT OBEYED

@@ -263,27 +263,7 @@ def idu_pcap() -> bytes:
     seq[False] += 1
     send(0.002, True, b"", "A")
 
-    stream: list[tuple[float, bool, bytes]] = []
-    for t, data in command_script():
-        stream.append((t, True, wrap_control(data)))
-    for i in range(int(FLIGHT_S)):  # forwarded UAV status at 1 Hz
-        p = flight_path(float(i))
-        stream.append(
-            (i + 0.6, True, wrap_can(GPS_ID, encode_gps(p["latitude_deg"], p["longitude_deg"])))
-        )
-        stream.append((i + 0.6, True, wrap_can(ALTITUDE_ID, encode_altitude(p["altitude_m"]))))
-    for slot in range(int(FLIGHT_S * 2)):
-        t = 0.25 + slot * 0.5
-        stream.append((t, False, feedback_message(slot, t)))
-    stream.sort(key=lambda s: (s[0], not s[1]))
-
-    # Glue frames sent at the same moment in the same direction into one segment.
-    merged: list[tuple[float, bool, bytes]] = []
-    for t, to_idu, data in stream:
-        if merged and merged[-1][0] == t and merged[-1][1] == to_idu:
-            merged[-1] = (t, to_idu, merged[-1][2] + data)
-        else:
-            merged.append((t, to_idu, data))
+    merged = _idu_stream()
     for index, (t, to_idu, data) in enumerate(merged):
         t += 0.01
         if index == 30:  # one frame split over two segments
@@ -307,6 +287,37 @@ def idu_pcap() -> bytes:
     send(FLIGHT_S + 0.102, True, b"", "A")
     packets.sort(key=lambda p: p[0])
 
+    return _pcap_file(packets)
+
+
+def _idu_stream() -> list[tuple[float, bool, bytes]]:
+    """The link's frames by time and direction (True: to the IDU): the ground station's
+    commands and forwarded UAV status, the IDU's feedback at 2 Hz; frames sent at the same
+    moment in the same direction glued into one segment."""
+    stream: list[tuple[float, bool, bytes]] = []
+    for t, data in command_script():
+        stream.append((t, True, wrap_control(data)))
+    for i in range(int(FLIGHT_S)):  # forwarded UAV status at 1 Hz
+        p = flight_path(float(i))
+        stream.append(
+            (i + 0.6, True, wrap_can(GPS_ID, encode_gps(p["latitude_deg"], p["longitude_deg"])))
+        )
+        stream.append((i + 0.6, True, wrap_can(ALTITUDE_ID, encode_altitude(p["altitude_m"]))))
+    for slot in range(int(FLIGHT_S * 2)):
+        t = 0.25 + slot * 0.5
+        stream.append((t, False, feedback_message(slot, t)))
+    stream.sort(key=lambda s: (s[0], not s[1]))
+    merged: list[tuple[float, bool, bytes]] = []
+    for t, to_idu, data in stream:
+        if merged and merged[-1][0] == t and merged[-1][1] == to_idu:
+            merged[-1] = (t, to_idu, merged[-1][2] + data)
+        else:
+            merged.append((t, to_idu, data))
+    return merged
+
+
+def _pcap_file(packets: list[tuple[float, bytes]]) -> bytes:
+    """Ethernet packets (seconds after START, bytes) as a classic pcap file."""
     header = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)  # Ethernet
     out = [header]
     for t, frame in packets:

@@ -20,7 +20,7 @@ from typing import Any
 from analyzer.bus_figures import BusFigures
 from analyzer.feedback_track import (
     FEEDBACK_TOPICS,
-    MAX_FEEDBACK_SOURCES,
+    FeedbackClock,
     FeedbackTrack,
     damaged_feedback,
     feedback_stream,
@@ -76,6 +76,8 @@ class Tally:
     first_time: float | None = None
     last_time: float | None = None
     bus: BusFigures = field(default_factory=BusFigures)  # what the error frames say
+    # When each timed stream's feedback last came (it decides which streams are timed).
+    clock: FeedbackClock = field(default_factory=FeedbackClock, repr=False, compare=False)
 
     # -- folding -----------------------------------------------------------------------------
 
@@ -236,28 +238,28 @@ class Tally:
     def _time_points(self, points: list[tuple[float, str, bool]]) -> None:
         """Feedback messages (time, stream, damaged) in the order they came; a run of
         whole messages of one stream is timed in one go."""
-        feedback = self.feedback
+        feedback, clock = self.feedback, self.clock
         i, n = 0, len(points)
         while i < n:
             t, key, damaged = points[i]
             if damaged:
-                track = feedback.get(key)
-                if track is not None:
-                    track.damaged(t)
+                silence = clock.damaged(key, t)
+                if silence is not None:
+                    feedback[key].damaged(silence)
                 i += 1
                 continue
             end = i + 1
             while end < n and points[end][1] == key and not points[end][2]:
                 end += 1
             self.crc_checked += end - i
-            track = feedback.get(key)
-            if track is None:
-                if len(feedback) >= MAX_FEEDBACK_SOURCES:
-                    self.feedback_untracked += end - i
-                    i = end
-                    continue
-                track = feedback[key] = FeedbackTrack()
-            track.add_times([p[0] for p in points[i:end]])
+            arrivals = clock.messages(key, [p[0] for p in points[i:end]])
+            if arrivals is None:  # one stream too many to time
+                self.feedback_untracked += end - i
+            else:
+                track = feedback.get(key)
+                if track is None:
+                    track = feedback[key] = FeedbackTrack()
+                track.add(arrivals)
             i = end
 
     def widen(self, first: float | None, last: float | None) -> None:
@@ -303,13 +305,15 @@ class Tally:
 
     def copy(self) -> Tally:
         """An independent snapshot."""
-        twin = Tally(**{k: v for k, v in asdict(self).items() if k not in ("feedback", "bus")})
+        kept = ("feedback", "bus", "clock")
+        twin = Tally(**{k: v for k, v in asdict(self).items() if k not in kept})
         twin.bus = BusFigures.from_figures(self.bus.figures())
         twin.topics, twin.kinds = Counter(self.topics), Counter(self.kinds)
         twin.commands = Counter(self.commands)
         twin.feedback = {
             k: FeedbackTrack.from_figures(t.figures()) for k, t in self.feedback.items()
         }
+        twin.clock = FeedbackClock(dict(self.clock.last_arrival))
         return twin
 
     # -- as an MCAP metadata record ----------------------------------------------------------
@@ -350,5 +354,9 @@ class Tally:
             first_time=optional_float(data.get("first_time")),
             last_time=optional_float(data.get("last_time")),
             bus=BusFigures.from_figures(figures.get("bus") or {}),
+        )
+        # Timing goes on from each stream's last message.
+        tally.clock = FeedbackClock(
+            {k: t.last for k, t in tally.feedback.items() if t.last is not None}
         )
         return tally

@@ -34,7 +34,7 @@ import av
 from analyzer.analysis.camera import hook
 from analyzer.analysis.camera.source import RecordingVideo
 from analyzer.cli import main
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.mcapio.read.video_window import parse_frame
 from analyzer.mcapio.write.video import ROLE_VIDEO
 from analyzer.sim.camera.offline import record_offline
@@ -77,7 +77,7 @@ def decode_everything(path: Path) -> tuple[int, float]:
     decoder = cast(av.VideoCodecContext, av.CodecContext.create("h264", "r"))
     decoder.thread_type = "SLICE"
     frames = 0
-    for message in Recording(path).messages(topics={"/camera/main"}, roles={ROLE_VIDEO}):
+    for message in McapRecording(path).messages(topics={"/camera/main"}, roles={ROLE_VIDEO}):
         frame = parse_frame(message.data)
         if frame is not None:
             frames += len(decoder.decode(av.Packet(frame.data)))

@@ -32,7 +32,7 @@ from mcap.writer import CompressionType, Writer
 from mcap_ros2._dynamic import serialize_dynamic
 from mcap_ros2.decoder import DecoderFactory
 
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.mcapio.read.ros_can import ROS2_CAN_FRAME, frame_from_cdr
 from analyzer.protocol.types import CanFrame
 from benchmarks.convert_speed import make_frames
@@ -120,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         def library_file() -> list[CanFrame]:
             return [from_library(m.ros_msg, m.log_time_ns) for m in read_ros2_messages(str(path))]
 
-        file_ours_t, file_ours = best(lambda: list(Recording(path).items()), args.repeat)  # type: ignore[arg-type]
+        file_ours_t, file_ours = best(lambda: list(McapRecording(path).items()), args.repeat)  # type: ignore[arg-type]
         file_lib_t, file_lib = best(library_file, args.repeat)
         assert file_ours == file_lib == ours, "the two file readers disagree"
     print(f"whole file   {n} frames, uncompressed rosbag2-style MCAP")

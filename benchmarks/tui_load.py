@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from analyzer.capture import Capture
 from analyzer.pipeline import Batch, RawItem
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import CanFrame
 from analyzer.tui.app import MonitorApp, add_sink
 from analyzer.tui.bridge import TuiBridge
@@ -159,7 +159,7 @@ async def run_app_under_load(seconds: float, rate: float, ids: int = 40) -> dict
 def fold_throughput(n_frames: int = 200_000) -> float:
     """Frames/s the screen model folds on one core (pre-decoded batches, no UI)."""
     frames = list(session(0.0, n_frames / 8000, foreign_per_s=8000 - PROTOCOL_RATE))
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     batches: list[Batch] = []
     for i in range(0, len(frames), 400):
         chunk: list[RawItem] = list(frames[i : i + 400])

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from analyzer.analysis.stage import analysis_stages
+from analyzer.analysis.stage import Analysis
 from analyzer.api.analysis import analyze
 from analyzer.check.offline import SimulatedBench
 from analyzer.check.steps import STEPS, Options
@@ -232,7 +232,7 @@ def monitor_verdicts(frames: list[CanFrame]) -> list[dict[str, Any]]:
         def close(self) -> None:
             pass
 
-    pipeline = Pipeline([Panel()], stages=analysis_stages())
+    pipeline = Pipeline([Panel()], stages=Analysis().stages())
     cut = frames[0].time if frames else 0.0
     for frame in frames:
         if frame.time >= cut + 0.1:

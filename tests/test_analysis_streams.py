@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from analyzer.analysis.motion_fit import Command, CommandedMotion
+from analyzer.analysis.motion_fit import CommandedMotion, StickCommand
 from analyzer.analysis.streams import HOLD_S
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.ground import Step
@@ -123,9 +123,9 @@ def test_a_gimbal_that_turns_the_wrong_way() -> None:
     """A pan sent to the dual-sensor gimbal that the simulator turns as commanded, judged
     against a gimbal mounted the other way round is no simulator option: a stream whose
     commanded motion is the negative of the feedback's is the same finding."""
-    from analyzer.analysis.motion_fit import Command, CommandedMotion, fit
+    from analyzer.analysis.motion_fit import CommandedMotion, StickCommand, fit
 
-    motion = CommandedMotion([Command(0.05 * i, 20.0, 0.0) for i in range(40)], 0.3)
+    motion = CommandedMotion([StickCommand(0.05 * i, 20.0, 0.0) for i in range(40)], 0.3)
     feedback = [(0.5 * i, -20.0 * min(0.5 * i, 2.3)) for i in range(8)]
     found = fit(motion, {0: feedback})
     assert found is not None and found.axes[0].ratio == pytest.approx(-1, abs=0.05)
@@ -283,7 +283,7 @@ def test_feedback_that_comes_late_or_not_at_all_does_not_bend_the_ratio() -> Non
 
 
 def _corners_one_by_one(
-    commands: list[Command], hold: float
+    commands: list[StickCommand], hold: float
 ) -> tuple[list[float], list[float], list[float]]:
     """The commanded motion's corners as a running total makes them, command by command."""
     times: list[float] = []
@@ -324,7 +324,7 @@ def test_the_commanded_motion_is_the_running_total_of_the_commands(
     commands, t = [], start
     for step, pan, tilt in steps:
         t += step
-        commands.append(Command(t, pan, tilt))
+        commands.append(StickCommand(t, pan, tilt))
     motion = CommandedMotion(commands, HOLD_S)
     times, pans, tilts = _corners_one_by_one(commands, HOLD_S)
     assert motion.times.tolist() == times

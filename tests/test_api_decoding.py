@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analyzer import Decoder, Event, encode, status_message, tcp_frame
-from analyzer.protocol.decoder import Decoder as ProtocolDecoder
+from analyzer.protocol.decoder import ProtocolDecoder as ProtocolDecoder
 from analyzer.protocol.feedback import encode_ranging, segments
 from analyzer.protocol.types import CanFrame
 from tests.test_protocol_feedback import attitude_by_hand

@@ -140,7 +140,10 @@ def test_the_examples_of_the_python_api_page_run(
 
     text = DOCS.read_text(encoding="utf-8")
     commands = re.findall(r"^    (gimbal-analyzer .*)$", text, re.M)
-    assert commands == ["gimbal-analyzer convert samples/flight-candump.log -o flight.mcap"]
+    assert commands == [
+        "gimbal-analyzer demo --no-tui --duration 10 --video main -o demo.mcap",
+        "gimbal-analyzer convert samples/flight-candump.log -o flight.mcap",
+    ]
     for line in commands:
         assert main(shlex.split(line)[1:]) == 0
     parser = doctest.DocTestParser()

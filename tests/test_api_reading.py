@@ -168,3 +168,35 @@ def test_recording_errors(tmp_path: Path, inputs: dict[str, Path]) -> None:
         Recording(SAMPLES / "flight-candump.log")
     with pytest.raises(ValueError, match=r"no table for topic '/gimbal'; valid: /gimbal/command"):
         Recording(inputs["flight-candump.mcap"]).table("/gimbal")
+
+
+def test_analyze_judges_a_recordings_camera_alike_from_its_path_and_from_read(
+    tmp_path: Path,
+) -> None:
+    """A recording with video: ``analyze(read(path))`` judges the camera commands from the
+    file's pictures as ``analyze(path)`` does, and as ``analyze --json`` prints them; events
+    that came without their video say so in the result."""
+    from analyzer.sim.ground import Step
+    from tests.camera_flights import record
+
+    steps = (
+        Step(0.3, "zoom", {"action": "zoom_in_2x"}),
+        Step(3.0, "zoom", {"action": "zoom_out_2x"}),
+    )
+    path = record(tmp_path / "zoom.mcap", steps, 5.0)
+    from_path = analyze(path)
+    from_read = analyze(read(path))
+    assert from_path.camera_judged and from_read.camera_judged
+    assert from_path.camera_note == from_read.camera_note == ""
+    findings = list(from_path)
+    camera = [f for f in findings if f.command.startswith("zoom")]
+    assert len(camera) == 2, lines(findings)
+    assert (
+        lines(list(from_read))
+        == lines(findings)
+        == cli_output("analyze", "--json", str(path)).splitlines()
+    )
+    without = analyze(list(read(path)))
+    assert not without.camera_judged
+    assert without.camera_note == "camera commands not judged: the events came without their video"
+    assert lines(list(without)) == lines([f for f in findings if f not in camera])

@@ -46,7 +46,7 @@ def test_export_writes_the_driver_and_its_page_and_replaces_neither_unasked(
 def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_obeyed(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from analyzer.mcapio.read.reader import Recording, read_events
+    from analyzer.mcapio.read.reader import McapRecording, read_events
 
     driver = tmp_path / DRIVER_NAME
     driver.write_text(lua_text(), encoding="utf-8")
@@ -63,7 +63,7 @@ def test_demo_ardupilot_records_the_drivers_view_and_analyze_finds_the_gimbal_ob
     assert topics["/uav/text"] == 0  # the simulator does not play the UAV: the driver does
     targets = {e.fields["target"] for e in events if e.topic == "/ardupilot/targets"}
     assert {"rate", "angle"} <= targets
-    metadata = Recording(path).metadata()["gimbal-analyzer"]
+    metadata = McapRecording(path).metadata()["gimbal-analyzer"]
     assert metadata["ardupilot_driver"] == DRIVER_NAME
     _status_on_schedule_and_attitudes_as_they_complete(events)
     _valid_against_their_schemas(path, {"/ardupilot/mount", "/ardupilot/targets"})

@@ -27,7 +27,7 @@ from analyzer.inputs.blf.reader import BlfReader
 from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.pipeline import Pipeline, run_items
 from analyzer.protocol.can_message import frame_from_message
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import BAD_FRAME, TOPIC_DIAGNOSTICS, CanFrame, Event
 from tests import blf_files as blf
@@ -53,7 +53,7 @@ def our_items(path: Path) -> list[Any]:
 def decoded(items: Any, columns: bool = True) -> tuple[list[str], dict[str, Any]]:
     """``decode --json`` lines and the counters of ``items`` (a reader or frames)."""
     sink = Lines(columns)
-    pipeline = Pipeline([sink], decoder=Decoder(emit_other=True))
+    pipeline = Pipeline([sink], decoder=ProtocolDecoder(emit_other=True))
     run_items(items, pipeline, batch_items=2000)
     tally = pipeline.tally
     return sink.lines, {"figures": tally.figures(), "items": tally.items()}

@@ -14,14 +14,14 @@ from analyzer.analysis.camera.motion import motion
 from analyzer.analysis.camera.stage import CameraJudge
 from analyzer.analysis.camera.weak_links import (
     WEAK_INLIERS,
-    Link,
+    PictureLink,
     doubt_words,
     first_doubted,
     neighbours,
     vouched,
 )
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import TOPIC_UAV_TEXT, CanFrame, Event
 from tests.soft_water import FPS, FilmedLake, ZoomTo, lake, lens, view
@@ -30,9 +30,11 @@ from tests.test_camera_pictures import through_h264
 # -- the rule --------------------------------------------------------------------------------
 
 
-def link(first: float, second: float, scale: float, inliers: int = 200, **more: Any) -> Link:
+def link(first: float, second: float, scale: float, inliers: int = 200, **more: Any) -> PictureLink:
     """A link over ``first``..``second`` seconds (frames at 10 a second)."""
-    return Link(round(first * 10), round(second * 10), first, second, inliers, 69, scale, **more)
+    return PictureLink(
+        round(first * 10), round(second * 10), first, second, inliers, 69, scale, **more
+    )
 
 
 def test_the_issue_s_weak_link_is_not_believed_against_links_zooming_out() -> None:
@@ -98,7 +100,7 @@ def water() -> np.ndarray:
 
 def judged(film: FilmedLake, commands: list[tuple[float, str, dict[str, Any]]]) -> list[Any]:
     """The camera findings of ``commands`` (decoded from their CAN frames) on ``film``."""
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events = [
         event
         for t, name, params in commands

@@ -19,7 +19,7 @@ from analyzer.protocol.bus_state import (
     next_state,
 )
 from analyzer.protocol.can_error import CLASS_NAMES, KNOWN_CLASSES, decode_error_frame
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import (
     BUS_ERROR,
     TOPIC_CAN_BUS_STATE,
@@ -120,7 +120,7 @@ def test_any_id_and_data_decode_without_an_exception(can_id: int, data: bytes) -
 def test_the_decoder_turns_any_error_frame_into_a_diagnostic_with_its_bytes(
     can_id: int, data: bytes, extended: bool
 ) -> None:
-    events = Decoder().feed(CanFrame(5.0, can_id, data, extended, "can0", is_error=True))
+    events = ProtocolDecoder().feed(CanFrame(5.0, can_id, data, extended, "can0", is_error=True))
     diagnostic = events[0]
     assert diagnostic.topic == TOPIC_DIAGNOSTICS
     assert diagnostic.fields["kind"] == BUS_ERROR
@@ -133,7 +133,7 @@ def test_the_decoder_turns_any_error_frame_into_a_diagnostic_with_its_bytes(
 # -- the controller's state ---------------------------------------------------------------------
 
 
-def states(decoder: Decoder, frames: list[CanFrame]) -> list[str]:
+def states(decoder: ProtocolDecoder, frames: list[CanFrame]) -> list[str]:
     events: list[Event] = []
     for f in frames:
         events.extend(decoder.feed(f))
@@ -149,7 +149,7 @@ def test_state_goes_down_to_bus_off_and_back_on_restart() -> None:
         frame(0x200, "0000000000000010", 3.5),  # counters alone do not leave bus-off
         frame(0x100, "0000000000000000", 4.0),  # restarted
     ]
-    assert states(Decoder(), frames) == [
+    assert states(ProtocolDecoder(), frames) == [
         ERROR_WARNING,
         ERROR_PASSIVE,
         ERROR_PASSIVE,
@@ -165,17 +165,17 @@ def test_state_from_the_error_counters_and_back_to_error_active() -> None:
         frame(0x202, "0500000000008088", 2.0),  # rx 136: passive
         frame(0x004, "0040000000000000", 3.0),  # back-to-error-active
     ]
-    assert states(Decoder(), frames) == [ERROR_WARNING, ERROR_PASSIVE, ERROR_ACTIVE]
+    assert states(ProtocolDecoder(), frames) == [ERROR_WARNING, ERROR_PASSIVE, ERROR_ACTIVE]
 
 
 def test_each_channel_has_its_own_state() -> None:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     assert states(decoder, [frame(0x040, "00" * 8, 1.0, "can0")]) == [BUS_OFF]
     assert states(decoder, [frame(0x020, "00" * 8, 1.1, "can1")]) == [ERROR_ACTIVE]
 
 
 def test_bus_state_messages_at_each_change_and_every_second() -> None:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for i in range(32):  # 3.1 s of no-ACK frames every 0.1 s, bus-off at 2.05 s
         events.extend(decoder.feed(frame(0x020, "00" * 8, 10.0 + i * 0.1)))
@@ -214,7 +214,7 @@ def test_status_line_shows_state_worst_and_classes() -> None:
     from analyzer.tui.state import MonitorState
     from analyzer.tui.status_bar import StatusInfo, render_status
 
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     state = MonitorState()
     frames = [
         frame(0x040, "00" * 8, 1700000000.0),
@@ -231,7 +231,7 @@ def test_status_line_shows_state_worst_and_classes() -> None:
 def test_foxglove_log_levels_follow_the_state() -> None:
     from analyzer.mcapio.foxglove import LOG_ERROR, LOG_INFO, LOG_WARNING, log_level
 
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     levels = [
         log_level(e)
         for f in [
@@ -252,6 +252,6 @@ def test_status_line_says_when_a_bus_went_off_while_it_still_is() -> None:
 
     state = MonitorState()
     bus_off = frame(0x040, "00" * 8, 1700000000.0)
-    state.fold(Batch([bus_off], Decoder().feed(bus_off)), wall_time=1700000000.5)
+    state.fold(Batch([bus_off], ProtocolDecoder().feed(bus_off)), wall_time=1700000000.5)
     text = render_status(state, StatusInfo(source="can:socketcan:can0")).plain
     assert "CAN bus-off  worst bus-off 22:13:20.000Z  1 error frame: bus-off 1" in text

@@ -19,7 +19,7 @@ from can.interfaces.socketcan import constants, socketcan
 
 from analyzer.cli import main
 from analyzer.inputs.python_can.reader import frame_from_message
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import TOPIC_CAN_BUS_STATE, TOPIC_DIAGNOSTICS
 from tests.platforms import linux
 
@@ -165,7 +165,7 @@ def test_live_socketcan_through_python_can(tmp_path: Path) -> None:
     socket delivers (struct can_frame plus its SO_TIMESTAMPNS), then the decoder."""
     sender, receiver = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
     receiver.setsockopt(socket.SOL_SOCKET, constants.SO_TIMESTAMPNS, 1)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     texts = []
     try:
         for can_id, data in ISSUE_FRAMES:
@@ -322,6 +322,6 @@ def test_error_frames_of_an_adapter_with_its_own_encoding_are_unspecified() -> N
         source.close()
         sender.shutdown()
     assert (frames[0].can_id, frames[0].data) == (0, b"\x00\x00\x07\x02")
-    (diagnostic, _state) = Decoder().feed(frames[0])
+    (diagnostic, _state) = ProtocolDecoder().feed(frames[0])
     assert diagnostic.fields["error"] == "unspecified"
     assert diagnostic.fields["raw"] == "00 00 07 02" and "malformed" not in diagnostic.fields

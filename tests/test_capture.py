@@ -87,9 +87,9 @@ class ScriptedSource:
 
 class SpyDecoder:
     def __init__(self) -> None:
-        from analyzer.protocol.decoder import Decoder
+        from analyzer.protocol.decoder import ProtocolDecoder
 
-        self.inner = Decoder()
+        self.inner = ProtocolDecoder()
         self.ticks: list[float] = []
         self.closed = 0
 

@@ -37,7 +37,7 @@ from analyzer.protocol.schema import topic_schemas
 from analyzer.protocol.types import Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.runner import SimulatorRunner
-from analyzer.sim.transports import Link, TcpServerLink, open_gimbal_link, parse_link
+from analyzer.sim.transports import SimulatedLink, TcpServerLink, open_gimbal_link, parse_link
 from tests.platforms import posix_signals
 from tests.test_report_command import load
 
@@ -62,7 +62,7 @@ class Gimbal:
             attitude=(args.start_pitch, args.start_yaw),
         )
         self.duration: float | None = args.duration  # then it goes away, link and all
-        self.link: Link = open_gimbal_link(parse_link(on))
+        self.link: SimulatedLink = open_gimbal_link(parse_link(on))
         self.to = on if on.startswith("can:") else self.link.name
         self.runner: SimulatorRunner | None = None
         self._stop = threading.Event()

@@ -188,7 +188,7 @@ def test_send_help_says_the_repeat_unit_is_required(capsys: pytest.CaptureFixtur
 def test_a_live_record_that_received_nothing_is_exit_1(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
 
     probe = socket.create_server(("127.0.0.1", 0))
     port = probe.getsockname()[1]
@@ -198,7 +198,7 @@ def test_a_live_record_that_received_nothing_is_exit_1(
     err = capsys.readouterr().err
     assert code == 1, err
     assert f"nothing was received from tcp:127.0.0.1:{port}" in err
-    assert not Recording(out).recovered  # finished all the same, with its link diagnostics
+    assert not McapRecording(out).recovered  # finished all the same, with its link diagnostics
 
 
 @posix_signals

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from analyzer.errors import EXIT_FAILED, EXIT_OK
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "samples" / "flight-candump.log"
@@ -96,7 +96,7 @@ def test_demo_to_a_full_standard_output_finishes_its_recording(tmp_path: Path) -
     assert proc.returncode == EXIT_FAILED
     assert "Traceback" not in proc.stderr
     assert "cannot write to standard output: No space left on device" in proc.stderr
-    assert not Recording(tmp_path / "d.mcap").recovered  # footer and summary written
+    assert not McapRecording(tmp_path / "d.mcap").recovered  # footer and summary written
 
 
 def _read_one_line_then_close(args: list[str], cwd: Path) -> subprocess.Popen[bytes]:
@@ -123,7 +123,7 @@ def test_demo_piped_into_head_ends_quietly(tmp_path: Path) -> None:
     err = proc.stderr.read().decode()
     assert proc.returncode == EXIT_OK, err
     assert "error" not in err.lower() and "Traceback" not in err
-    assert not Recording(tmp_path / "d.mcap").recovered
+    assert not McapRecording(tmp_path / "d.mcap").recovered
 
 
 def test_record_print_piped_into_head_ends_quietly(tmp_path: Path) -> None:
@@ -134,7 +134,7 @@ def test_record_print_piped_into_head_ends_quietly(tmp_path: Path) -> None:
     assert proc.returncode == EXIT_OK, err
     assert "Traceback" not in err and "error" not in err.lower()
     assert "ended: output closed" in err
-    assert not Recording(tmp_path / "r.mcap").recovered
+    assert not McapRecording(tmp_path / "r.mcap").recovered
 
 
 def test_decode_piped_into_head_ends_quietly(tmp_path: Path) -> None:

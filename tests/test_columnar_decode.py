@@ -26,7 +26,7 @@ from analyzer.inputs.candump.columns import _all_digits, _all_hex, _decimal, _ni
 from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.crc import crc16
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.event_columns import EventColumns, _json_column
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.protocol.vector_decode import crc16_rows
@@ -78,7 +78,7 @@ def decoded(
     fleet.takes_columns = columns
     stages = [ResponseAnalyzer(Settings())] if analysis else []
     sinks: list[Any] = [sink, fleet] if analysis else [sink]
-    pipeline = Pipeline(sinks, decoder=Decoder(emit_other=raw), stages=stages)
+    pipeline = Pipeline(sinks, decoder=ProtocolDecoder(emit_other=raw), stages=stages)
     run_items(reader, pipeline, batch_items=2000)
     reader.close()
     figures = {

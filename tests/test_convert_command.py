@@ -9,8 +9,8 @@ from typing import Any
 import pytest
 
 from analyzer.cli import main
-from analyzer.mcapio.read.reader import Recording, read_events, read_items
-from analyzer.protocol.decoder import Decoder
+from analyzer.mcapio.read.reader import McapRecording, read_events, read_items
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import CanFrame, Event
 from tests.test_mcap_support import traffic
 
@@ -29,7 +29,7 @@ def _candump(path: Path) -> list[CanFrame]:
 
 
 def _decode(items: Any) -> list[dict[str, Any]]:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for item in items:
         events.extend([item] if isinstance(item, Event) else decoder.feed(item))
@@ -58,7 +58,7 @@ def test_candump_convert_decode_round_trip(
     stored = [json.loads(json.dumps(e.to_dict())) for e in read_events(out)]
     assert [e for e in stored if e["topic"] != "/analysis/response"] == direct
     assert any(e["topic"] == "/analysis/response" for e in stored)
-    recording = Recording(out)
+    recording = McapRecording(out)
     assert not recording.recovered
     meta = recording.metadata()["gimbal-analyzer"]
     assert meta["source"] == f"file:{log}"

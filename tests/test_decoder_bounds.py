@@ -5,7 +5,7 @@ from __future__ import annotations
 import tracemalloc
 
 from analyzer.feedback_track import MAX_FEEDBACK_SOURCES
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import FEEDBACK_ID, TEXT_ID
@@ -46,7 +46,7 @@ def test_lru_table_evicts_the_least_recently_used() -> None:
 
 
 def test_partial_feedback_of_evicted_channels_is_reported_with_the_reason() -> None:
-    decoder = Decoder(max_sources=4)
+    decoder = ProtocolDecoder(max_sources=4)
     events: list[Event] = []
     for i in range(10):  # half a message on each of 10 channels
         for n, segment in enumerate(SEGMENTS[:2]):
@@ -65,7 +65,7 @@ def test_partial_feedback_of_evicted_channels_is_reported_with_the_reason() -> N
 
 
 def test_a_busy_channel_keeps_its_state_among_many_one_shot_channels() -> None:
-    decoder = Decoder(max_sources=8)
+    decoder = ProtocolDecoder(max_sources=8)
     attitudes = 0
     t = 1.0
     for round_ in range(50):
@@ -80,7 +80,7 @@ def test_a_busy_channel_keeps_its_state_among_many_one_shot_channels() -> None:
 
 
 def test_text_and_stream_state_are_bounded_too() -> None:
-    decoder = Decoder(max_sources=3)
+    decoder = ProtocolDecoder(max_sources=3)
     events: list[Event] = []
     first_text = encode_text("HELLO WORLD")[0]  # a start frame, never ended
     for i in range(6):
@@ -96,7 +96,7 @@ def test_text_and_stream_state_are_bounded_too() -> None:
 
 
 def test_a_million_channel_names_cannot_grow_the_decoder() -> None:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     count = MAX_SOURCES * 8
     tracemalloc.start()
     for i in range(count // 2):

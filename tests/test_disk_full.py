@@ -16,7 +16,7 @@ import pytest
 
 from analyzer import output_file
 from analyzer.capture import Capture
-from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.read.reader import McapRecording, read_items
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.protocol.types import CanFrame
 
@@ -76,7 +76,7 @@ def test_record_on_a_full_disk_keeps_every_complete_chunk_and_says_so(tmp_path: 
     kept = int(last.split("; ")[-1].split(" messages up to ")[0])
     assert kept > 1000
     assert out.stat().st_size <= 300_000
-    recording = Recording(out)
+    recording = McapRecording(out)
     assert sum(1 for _ in recording.messages()) == kept
     frames = list(read_items(out))
     assert frames and frames[0].time == pytest.approx(T0)
@@ -180,4 +180,4 @@ def test_a_write_error_in_the_flush_thread_stops_the_capture(
     assert str(capture.error).startswith(f"disk full: cannot write {path}")
     assert sink.error is not None and f"{sink.kept_messages} messages up to" in sink.error
     assert sink.kept_messages > 0
-    assert sum(1 for _ in Recording(path).messages()) == sink.kept_messages
+    assert sum(1 for _ in McapRecording(path).messages()) == sink.kept_messages

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from analyzer.export.dbc import CMD_SIGNALS, command_signal_name, dbc_text
 from analyzer.protocol.codec import decode_command, encode_command
-from analyzer.protocol.command_table import BY_CODE, COMMANDS, Command
+from analyzer.protocol.command_table import BY_CODE, COMMANDS, CommandRow
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import (
     ALTITUDE_ID,
@@ -155,10 +155,10 @@ def test_the_uav_examples_decode_alike(can_id: int, hex_data: str, values: dict[
 @pytest.mark.parametrize(
     ("row", "variant", "values"),
     _cases(),
-    ids=lambda v: v.name if isinstance(v, Command) else str(v) if isinstance(v, int) else "",
+    ids=lambda v: v.name if isinstance(v, CommandRow) else str(v) if isinstance(v, int) else "",
 )
 def test_every_row_decodes_alike_and_encodes_back(
-    row: Command, variant: int | None, values: dict[str, Any]
+    row: CommandRow, variant: int | None, values: dict[str, Any]
 ) -> None:
     kwargs = dict(values)
     if variant is not None and row.selector is not None:

@@ -17,7 +17,7 @@ from analyzer.mcapio.channels import CAN_FRAME_SCHEMA, STREAM_BYTES_SCHEMA, perm
 from analyzer.mcapio.foxglove import VIEW_SCHEMAS, FoxgloveViews
 from analyzer.mcapio.schema_subset import foxglove_problems
 from analyzer.protocol.crc import crc_bytes
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import LAYOUTS, segments
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, HEADER
@@ -155,7 +155,9 @@ def check(events: list[Event]) -> None:
 
 
 def test_unknown_palette_is_a_label_with_its_code() -> None:
-    (event,) = Decoder().feed_can(CanFrame(1.0, CONTROL_ID, bytes.fromhex("1F027F0000000000")))
+    (event,) = ProtocolDecoder().feed_can(
+        CanFrame(1.0, CONTROL_ID, bytes.fromhex("1F027F0000000000"))
+    )
     assert event.fields["palette"] == "unknown_0x7f" and event.fields["palette_code"] == 0x7F
     assert "palette: unknown value 127 (0x7F)" in event.warnings
     check([event])
@@ -168,7 +170,7 @@ def test_attitude_labels_and_codes() -> None:
         pitch_deg=1, yaw_deg=2, gimbal_type=9, control_mode=1, check_range=False
     )
     frames = [CanFrame(1.0, FEEDBACK_ID, part) for part in segments(message)]
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events = [e for f in frames for e in decoder.feed_can(f)]
     (event,) = events
     assert event.fields["gimbal_type"] == "unknown_0x09" and event.fields["gimbal_type_code"] == 9
@@ -183,7 +185,7 @@ FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCh
 @FAST
 @given(st.lists(st.binary(min_size=0, max_size=8), min_size=1, max_size=4))
 def test_any_command_frame_gives_valid_events(frames: list[bytes]) -> None:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for i, data in enumerate(frames):
         events += decoder.feed_can(CanFrame(1.0 + i, CONTROL_ID, data))
@@ -196,7 +198,7 @@ def test_any_command_frame_gives_valid_events(frames: list[bytes]) -> None:
 @given(st.binary(min_size=8, max_size=8), st.sampled_from(["0F", "1F"]), st.integers(0, 255))
 def test_any_command_over_tcp_gives_valid_events(data: bytes, s_id: str, cmd: int) -> None:
     can_data = bytes.fromhex(s_id) + bytes([cmd]) + data[2:]
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events = decoder.feed_stream(StreamChunk(1.0, wrap_control(can_data), "tcp", TO_IDU))
     events += decoder.close()
     assert [e.topic for e in events] == [TOPIC_COMMAND]
@@ -213,7 +215,7 @@ def test_any_feedback_payload_gives_valid_events(length_byte: int, payload: byte
     message[0:2] = HEADER
     message[2] = length_byte
     message[layout.crc_offset : layout.crc_offset + 2] = crc_bytes(message[: layout.crc_offset])
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for i, part in enumerate(segments(bytes(message))):
         events += decoder.feed_can(CanFrame(1.0 + i / 100, FEEDBACK_ID, part))
@@ -226,7 +228,7 @@ def test_any_feedback_payload_gives_valid_events(length_byte: int, payload: byte
 @FAST
 @given(st.lists(st.tuples(st.sampled_from([FEEDBACK_ID, CONTROL_ID]), st.binary(max_size=8))))
 def test_any_feedback_frames_give_valid_events(frames: list[tuple[int, bytes]]) -> None:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for i, (can_id, data) in enumerate(frames):
         events += decoder.feed_can(CanFrame(1.0 + i / 100, can_id, data))

@@ -22,7 +22,7 @@ from analyzer.inputs.base import by_frames
 from analyzer.inputs.candump.reader import CandumpParser, CandumpReader
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.frame_columns import DIRECTIONS, FrameColumns
 from analyzer.protocol.ids import (
@@ -157,8 +157,8 @@ def as_columns(frames: list[CanFrame]) -> FrameColumns:
 def test_the_decoder_decodes_columns_as_the_same_frames_one_by_one(
     batches: list[list[CanFrame]], emit_other: bool, sources: int
 ) -> None:
-    short = Decoder(emit_other=emit_other, max_sources=sources)
-    long = Decoder(emit_other=emit_other, max_sources=sources)
+    short = ProtocolDecoder(emit_other=emit_other, max_sources=sources)
+    long = ProtocolDecoder(emit_other=emit_other, max_sources=sources)
     short_events: list[Event] = []
     long_events: list[Event] = []
     for frames in batches:
@@ -287,7 +287,7 @@ def test_feedback_in_columns_is_reassembled_as_segment_by_segment(
 ) -> None:
     """Messages taken whole in vectors, and everything around them, as the reassembler
     takes one segment at a time, wherever the blocks end."""
-    short, long = Decoder(), Decoder()
+    short, long = ProtocolDecoder(), ProtocolDecoder()
     short_events: list[Event] = []
     long_events: list[Event] = []
     edges = sorted({0, len(frames), *(c for c in cuts if c < len(frames))})

@@ -15,7 +15,7 @@ from analyzer.errors import UsageError
 from analyzer.inputs import detect_format, open_input, sniff_format
 from analyzer.inputs.stdin import StdinCandumpReader, StdinStreamReader
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import (
     GARBAGE,
@@ -138,7 +138,7 @@ def test_raw_dump_with_garbage_decodes(tmp_path: Path) -> None:
     assert all(isinstance(i, StreamChunk) for i in items)
     assert b"".join(i.data for i in items) == data
     assert reader.position_bytes == reader.size_bytes == len(data)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events = [e for i in items for e in decoder.feed(i)] + decoder.close()
     assert [e.topic for e in events if e.topic == TOPIC_COMMAND] == [TOPIC_COMMAND] * 2
     assert any(e.fields.get("kind") == GARBAGE for e in events)

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from analyzer.errors import UsageError
 from analyzer.inputs import open_input
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude
 from analyzer.protocol.framing import wrap_can, wrap_control
 from analyzer.protocol.ids import GPS_ID
@@ -126,7 +126,7 @@ def write_pcap(
 def decode(path: Path, **kw: Any) -> tuple[list[Any], list[Event], Any]:
     reader = open_input(str(path), **kw)
     items = list(reader)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     for item in items:
         events.extend([item] if isinstance(item, Event) else decoder.feed(item))

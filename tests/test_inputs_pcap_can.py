@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from analyzer.inputs import InputReader, open_input
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, Event
 from tests.log_makers import flight_frames, sll_pcap, socketcan_frame
 
@@ -80,7 +80,7 @@ def test_frames_the_host_sent_are_tx(tmp_path: Path) -> None:
         writer.writepkt(header + socketcan_frame(frame), ts=1.0)
     frames, _, _ = read(path)
     assert [(f.direction, f.channel) for f in frames] == [("tx", "if3")]
-    events = Decoder().feed(frames[0])
+    events = ProtocolDecoder().feed(frames[0])
     assert [e.topic for e in events] == [TOPIC_COMMAND]
 
 
@@ -103,10 +103,12 @@ def test_can_fd_frames_of_classic_length_decode_and_longer_ones_are_reported(
     assert events == []
     assert [(f.is_fd, len(f.data)) for f in frames] == [(True, 8), (True, 48), (False, 8)]
     assert frames[0].data == command
-    decoded = Decoder().feed(frames[0])
+    decoded = ProtocolDecoder().feed(frames[0])
     assert decoded[0].topic == TOPIC_COMMAND and decoded[0].fields["name"] == "look_down"
     assert any("CAN FD" in w for w in decoded[0].warnings)
-    assert all(isinstance(e, Event) for e in Decoder().feed(frames[1]))  # 48 bytes: no crash
+    assert all(
+        isinstance(e, Event) for e in ProtocolDecoder().feed(frames[1])
+    )  # 48 bytes: no crash
     assert reader.stats["long_fd_frames"] == 1
     assert any("more than 8" in n for n in reader.notes)
 

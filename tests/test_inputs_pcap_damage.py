@@ -14,7 +14,7 @@ from analyzer.inputs import open_input
 from analyzer.inputs.pcap.tcp_flows import FlowTable
 from analyzer.inputs.pcap.tcp_reassembly import MAX_PENDING_SEGMENTS, TcpDirection
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.types import BAD_FRAME, TOPIC_COMMAND, CanFrame, Event
@@ -88,7 +88,7 @@ def pcapng_bytes(frames: list[bytes], link_field: int = 1, options: bytes = b"")
 def decode(path: Path) -> tuple[list[Event], list[Event], Any]:
     """(commands, diagnostics, reader)."""
     reader = open_input(str(path))
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     with reader:
         for item in reader:

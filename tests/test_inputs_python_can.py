@@ -11,7 +11,7 @@ import pytest
 from analyzer.errors import UsageError
 from analyzer.inputs import open_input
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.ids import FEEDBACK_ID
 from analyzer.protocol.types import (
@@ -61,7 +61,7 @@ def test_formats_read_and_decode(tmp_path: Path, name: str) -> None:
     assert frames[1].extended is False
     assert reader.stats["frames"] == 6
     assert reader.position_bytes == reader.size_bytes
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     topics = [e.topic for f in frames for e in decoder.feed(f)]
     assert topics == [TOPIC_COMMAND, TOPIC_GIMBAL_ATTITUDE]
 

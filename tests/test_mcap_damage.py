@@ -19,7 +19,7 @@ from mcap.records import ChunkIndex
 
 from analyzer.cli import main
 from analyzer.mcapio.read.info import recording_info
-from analyzer.mcapio.read.reader import Recording, RecordingError, read_replay
+from analyzer.mcapio.read.reader import McapRecording, RecordingError, read_replay
 from analyzer.mcapio.read.records import MAX_CHUNK_UNCOMPRESSED, RECORD_HEAD
 from analyzer.protocol.types import INCOMPLETE, TOPIC_DIAGNOSTICS, Event
 from analyzer.tally import Tally
@@ -91,7 +91,7 @@ def _record(record: object) -> bytes:
     return bytes(builder.end())
 
 
-def _everything(recording: Recording) -> list[tuple[int, bytes]]:
+def _everything(recording: McapRecording) -> list[tuple[int, bytes]]:
     return [(m.log_time, m.data) for m in recording.messages()]
 
 
@@ -181,7 +181,7 @@ def test_a_crafted_chunk_index_is_a_reported_loss_not_a_crash(
 ) -> None:
     path = _recording(tmp_path)
     data = path.read_bytes()
-    before = _everything(Recording(path))
+    before = _everything(McapRecording(path))
     crafted = ChunkIndex(
         message_start_time=0,
         message_end_time=0,
@@ -194,7 +194,7 @@ def test_a_crafted_chunk_index_is_a_reported_loss_not_a_crash(
         uncompressed_size=length,
     )
     path.write_bytes(_with_summary(data, _record(crafted)))
-    recording = Recording(path)
+    recording = McapRecording(path)
     assert not recording.recovered
     assert _everything(recording) == before
     assert len(recording.damage) == 1
@@ -215,7 +215,7 @@ def test_a_crafted_chunk_index_is_a_reported_loss_not_a_crash(
 def test_duplicated_chunk_index_records_read_each_chunk_once(tmp_path: Path) -> None:
     path = _recording(tmp_path)
     data = path.read_bytes()
-    before = _everything(Recording(path))
+    before = _everything(McapRecording(path))
     start, footer_at = _summary_bounds(data)
     section = data[start:footer_at]
     indexes, pos = [], 0
@@ -226,7 +226,7 @@ def test_duplicated_chunk_index_records_read_each_chunk_once(tmp_path: Path) -> 
         pos += 9 + length
     path.write_bytes(_with_summary(data, b"".join(indexes) * 200))
     started = time.perf_counter()
-    recording = Recording(path)
+    recording = McapRecording(path)
     assert _everything(recording) == before
     assert recording.damage == []
     assert time.perf_counter() - started < 5
@@ -257,7 +257,7 @@ def test_a_compression_bomb_is_refused_with_bounded_memory(
 ) -> None:
     path = _recording(tmp_path)
     data = path.read_bytes()
-    before = _everything(Recording(path))
+    before = _everything(McapRecording(path))
     chunks = _chunks(data)
     bomb_size = 1 << 30
     bomb = _bomb(compression)
@@ -269,7 +269,7 @@ def test_a_compression_bomb_is_refused_with_bounded_memory(
     tracemalloc.start()
     try:
         started = time.perf_counter()
-        recording = Recording(path)
+        recording = McapRecording(path)
         got = _everything(recording)
         _, peak = tracemalloc.get_traced_memory()
     finally:
@@ -294,7 +294,7 @@ def test_an_unfinished_file_resynchronises_after_a_bad_record_length(tmp_path: P
     victim = [c for c in chunks if not c.defines_channels][3]
     struct.pack_into("<Q", unfinished, victim.offset + 1, 2**40)  # its record length
     path.write_bytes(bytes(unfinished))
-    recording = Recording(path)
+    recording = McapRecording(path)
     got = _everything(recording)
     expected = [m for c in chunks if c is not victim for m in c.messages]
     assert got == expected
@@ -307,15 +307,15 @@ def test_an_unfinished_file_resynchronises_after_a_bad_record_length(tmp_path: P
 def test_a_damaged_leading_magic_does_not_hide_the_rest(tmp_path: Path) -> None:
     path = _recording(tmp_path)
     data = bytearray(path.read_bytes())
-    before = _everything(Recording(path))
+    before = _everything(McapRecording(path))
     data[3] ^= 0x01
     path.write_bytes(bytes(data))
-    recording = Recording(path)
+    recording = McapRecording(path)
     assert _everything(recording) == before
     assert recording.damage and "magic" in recording.damage[0].detail
     path.write_bytes(b"(1700000000.0) can0 0F01#00\n" * 10)
     with pytest.raises(RecordingError, match="not an MCAP file"):
-        Recording(path)
+        McapRecording(path)
 
 
 # -- the property ---------------------------------------------------------------------------------
@@ -411,7 +411,7 @@ def test_mutated_recordings_keep_intact_chunks_and_report_every_loss(
     started = time.perf_counter()
     try:
         try:
-            recording = Recording(path)
+            recording = McapRecording(path)
         except RecordingError:
             assert mutated[:8] != MAGIC or len(mutated) < 8  # only an unrecognisable file
             return

@@ -14,7 +14,7 @@ from mcap.reader import NonSeekingReader, make_reader
 from analyzer import output_file
 from analyzer.errors import SourceError
 from analyzer.mcapio.channels import STATS_METADATA_NAME
-from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.read.reader import McapRecording, read_items
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 from analyzer.mcapio.write.failure import keep_complete_chunks
 from analyzer.mcapio.write.sink import McapSink
@@ -63,7 +63,7 @@ def _library_messages(path: Path) -> list[tuple[str, int, int, int]]:
 
 def _our_messages(path: Path) -> list[tuple[str, int, int]]:
     """(topic, log time, own time) in file order, read by the project's reader."""
-    return [(m.topic, m.log_time, json.loads(m.data)["t"]) for m in Recording(path).messages()]
+    return [(m.topic, m.log_time, json.loads(m.data)["t"]) for m in McapRecording(path).messages()]
 
 
 def test_a_frame_late_by_less_than_the_hold_back_keeps_its_log_time_across_flushes(
@@ -130,7 +130,7 @@ def test_a_killed_recorder_leaves_an_indexed_file_of_what_is_older_than_the_hold
     assert summary is not None and summary.statistics is not None
     kept = [own for _, _, _, own in _library_messages(killed)]
     assert kept == [T0 + n * S // 10 for n in range(20)]  # up to 1 s before the newest
-    assert not Recording(killed).recovered
+    assert not McapRecording(killed).recovered
     assert [own for _, _, own in _our_messages(killed)] == kept
     recorder.add("/camera/main", T0 + 25 * S // 10)  # late, within the hold-back
     recorder.finish()
@@ -171,13 +171,13 @@ def test_the_sink_writes_held_back_messages_when_nothing_else_comes(tmp_path: Pa
             now[0] = n / 10
             sink.write_item(CanFrame(T0 / S + n / 10, 0x0F01, bytes(8)))
             sink.flush()
-        assert Recording(path).summary().statistics.message_count == 10  # 1 s held back
+        assert McapRecording(path).summary().statistics.message_count == 10  # 1 s held back
         now[0] = 3.0
         sink.flush()  # nothing came since: the held ones go to disk
-        assert Recording(path).summary().statistics.message_count == 20
+        assert McapRecording(path).summary().statistics.message_count == 20
     finally:
         sink.close()
-    assert sum(1 for _ in Recording(path).messages()) == 20
+    assert sum(1 for _ in McapRecording(path).messages()) == 20
 
 
 def test_a_full_disk_keeps_every_complete_chunk_in_order(
@@ -230,7 +230,7 @@ def test_when_a_chunk_does_not_fit_the_messages_held_back_from_it_are_still_trie
     with path.open("rb") as f:
         found = [m.log_time for _, _, m in make_reader(f, validate_crcs=True).iter_messages()]
     assert found == [T0 + 2 * S]  # what fitted in the space the failed chunk freed
-    assert Recording(path).metadata()[STATS_METADATA_NAME] == {"frames": "2"}
+    assert McapRecording(path).metadata()[STATS_METADATA_NAME] == {"frames": "2"}
 
 
 @st.composite

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from analyzer.mcapio.read.reader import Recording, RecordingError, read_events, read_items
+from analyzer.mcapio.read.reader import McapRecording, RecordingError, read_events, read_items
 from analyzer.mcapio.write.sink import McapSink
 from tests.test_mcap_support import batches, decode_all, event_dicts, traffic, write_recording
 
@@ -28,7 +28,7 @@ def test_finished_file_gives_back_items_and_events(tmp_path: Path) -> None:
 def test_metadata(tmp_path: Path) -> None:
     path = tmp_path / "rec.mcap"
     write_recording(path)
-    assert Recording(path).metadata()["gimbal-analyzer"]["source"] == "test:traffic"
+    assert McapRecording(path).metadata()["gimbal-analyzer"]["source"] == "test:traffic"
 
 
 def _live_recording(path: Path) -> list[list[object]]:
@@ -52,7 +52,7 @@ def test_unfinished_file_is_recovered_up_to_the_last_flush(tmp_path: Path) -> No
     assert got.recovered
     assert list(got) == everything
     assert "recovered" in got.note
-    recording = Recording(path)
+    recording = McapRecording(path)
     assert recording.recovered
     assert recording.metadata()["gimbal-analyzer"]["source"] == "t"
 
@@ -109,7 +109,7 @@ def test_damaged_chunk_in_an_unfinished_file_is_skipped(tmp_path: Path) -> None:
     # one): that chunk fails its CRC.
     data[_middle_chunk_byte(bytes(data))] ^= 0xFF
     path.write_bytes(bytes(data))
-    recording = Recording(path)
+    recording = McapRecording(path)
     items = list(recording.items())
     assert recording.recovery is not None
     assert recording.recovery.damaged_chunks == 1
@@ -132,7 +132,7 @@ def test_not_an_mcap_file(tmp_path: Path) -> None:
 
 def test_replay_carries_link_and_bad_line_diagnostics(tmp_path: Path) -> None:
     from analyzer.mcapio.read.reader import read_replay
-    from analyzer.protocol.decoder import Decoder
+    from analyzer.protocol.decoder import ProtocolDecoder
     from analyzer.protocol.types import BAD_LINE, LINK, Event, diagnostic
 
     path = tmp_path / "rec.mcap"
@@ -151,7 +151,7 @@ def test_replay_carries_link_and_bad_line_diagnostics(tmp_path: Path) -> None:
     carried = [i for i in replay if isinstance(i, Event)]
     assert [e.fields["kind"] for e in carried] == [LINK, BAD_LINE]
     # Decoding the replay gives every stored event again (order within a batch may differ).
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     again: list[Event] = []
     for item in replay:
         again.extend([item] if isinstance(item, Event) else decoder.feed(item))
@@ -169,7 +169,7 @@ def test_fast_path_reads_what_the_mcap_library_reads(tmp_path: Path) -> None:
 
     path = tmp_path / "rec.mcap"
     write_recording(path, traffic(20.0), emit_other=True, chunk_size=2048)
-    ours = [(m.topic, m.log_time, m.data) for m in Recording(path).messages()]
+    ours = [(m.topic, m.log_time, m.data) for m in McapRecording(path).messages()]
     with open(path, "rb") as f:
         theirs = [
             (c.topic, m.log_time, m.data)
@@ -177,8 +177,8 @@ def test_fast_path_reads_what_the_mcap_library_reads(tmp_path: Path) -> None:
         ]
     assert ours == theirs
     some = {"/diagnostics", "/gimbal/attitude"}
-    assert [m for m in Recording(path).messages(topics=some)] == [
-        m for m in Recording(path).messages() if m.topic in some
+    assert [m for m in McapRecording(path).messages(topics=some)] == [
+        m for m in McapRecording(path).messages() if m.topic in some
     ]
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from analyzer.analysis.stage import analysis_stages
+from analyzer.analysis.stage import Analysis
 from analyzer.mcapio.read.info import recording_info
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Pipeline, run_items
@@ -17,7 +17,7 @@ from tests.test_mcap_support import T0, traffic
 
 def _convert(path: Path, flush_interval: float | None) -> tuple[Pipeline, McapSink]:
     sink = McapSink(path, metadata={"source": "test"}, flush_interval=flush_interval)
-    pipeline = Pipeline(sinks=[sink], stages=analysis_stages())
+    pipeline = Pipeline(sinks=[sink], stages=Analysis().stages())
     run_items(traffic(6.0, gap_after=2.0, bus_off=True), pipeline, batch_items=7)
     return pipeline, sink
 

@@ -8,7 +8,7 @@ from typing import Any
 
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging
 from analyzer.protocol.framing import wrap_can, wrap_control
 from analyzer.protocol.ids import (
@@ -105,7 +105,7 @@ def traffic(
 
 
 def decode_all(items: list[RawItem], *, emit_other: bool = False) -> list[Event]:
-    decoder = Decoder(emit_other=emit_other)
+    decoder = ProtocolDecoder(emit_other=emit_other)
     events: list[Event] = []
     for item in items:
         events.extend(decoder.feed(item))
@@ -115,7 +115,7 @@ def decode_all(items: list[RawItem], *, emit_other: bool = False) -> list[Event]
 
 def batches(items: list[RawItem], *, emit_other: bool = False, size: int = 25) -> list[Batch]:
     """Decode like the capture engine does and cut into batches."""
-    decoder = Decoder(emit_other=emit_other)
+    decoder = ProtocolDecoder(emit_other=emit_other)
     out: list[Batch] = []
     for start in range(0, len(items), size):
         chunk = items[start : start + size]

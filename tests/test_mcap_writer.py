@@ -17,10 +17,10 @@ from analyzer import PROTOCOL_DOCUMENT, __version__, output_file
 from analyzer.errors import SourceError
 from analyzer.mcapio.foxglove import LOG_ERROR, LOG_WARNING
 from analyzer.mcapio.log_time import time_ns
-from analyzer.mcapio.read.reader import Recording, read_items
+from analyzer.mcapio.read.reader import McapRecording, read_items
 from analyzer.mcapio.write.sink import McapSink
 from analyzer.pipeline import Batch
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.schema import topic_schemas
 from analyzer.protocol.types import BUS_ERROR, CanFrame, diagnostic
 from tests.mcap_doctor import examine
@@ -263,7 +263,7 @@ def test_disk_full_stops_with_a_clear_message_and_a_readable_file(
     assert got == written[: len(got)]
     # every message of every chunk written completely is there (the summary did not fit)
     assert recording.recovered
-    assert sum(1 for _ in Recording(path).messages()) == sink.kept_messages
+    assert sum(1 for _ in McapRecording(path).messages()) == sink.kept_messages
     assert path.stat().st_size <= 40_000
 
 
@@ -385,7 +385,7 @@ def test_sink_writes_a_batch_in_time_order(tmp_path: Path) -> None:
     """A batch holds its raw frames first and its events after: they are merged by time."""
     path = tmp_path / "batch.mcap"
     sink = McapSink(path, metadata={}, flush_interval=None, chunk_size=512)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     for start in (0.0, 10.0):
         batch = Batch()
         for i in range(40):

@@ -10,7 +10,7 @@ import pytest
 from analyzer import output_file
 from analyzer.cli import main
 from analyzer.commands import demo
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.output_file import OutputFile, OutputRefused, check_output, write_output
 from tests.platforms import posix_permissions, symlinks
 
@@ -157,7 +157,7 @@ def test_convert_needs_force_and_ignores_a_planted_partial_symlink(
     assert "use --force" in capsys.readouterr().err
     assert out.read_bytes() == first
     assert main(["convert", str(log), "-o", str(out), "-q", "--force"]) == 0
-    assert Recording(out).metadata()  # a complete recording
+    assert McapRecording(out).metadata()  # a complete recording
     assert _listing(tmp_path) == ["flight.log", "flight.mcap", "flight.mcap.partial", "victim.txt"]
 
 
@@ -205,7 +205,7 @@ def test_record_force_replaces_an_earlier_recording(tmp_path: Path) -> None:
     assert main(["record", "--source", f"file:{log}", "-o", str(out), "-q"]) == 2
     assert out.read_bytes() == b"old"
     assert main(["record", "--source", f"file:{log}", "-o", str(out), "-q", "--force"]) == 0
-    assert sum(1 for _ in Recording(out).messages()) > 0
+    assert sum(1 for _ in McapRecording(out).messages()) > 0
     assert _listing(tmp_path) == ["X.log", "rec.mcap"]
 
 

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from analyzer.protocol.codec import EncodeError, decode_command, encode_command
-from analyzer.protocol.command_table import COMMANDS, Command
+from analyzer.protocol.command_table import COMMANDS, CommandRow
 from analyzer.protocol.fields import Field
 
 # The document's "Examples of common functions" table, with the values it names.
@@ -65,8 +65,8 @@ def _example_value(f: Field) -> object:
     return f.scale(raw)
 
 
-def _cases() -> list[tuple[Command, int | None, dict[str, object]]]:
-    cases: list[tuple[Command, int | None, dict[str, object]]] = []
+def _cases() -> list[tuple[CommandRow, int | None, dict[str, object]]]:
+    cases: list[tuple[CommandRow, int | None, dict[str, object]]] = []
     for row in COMMANDS:
         params = {f.name: _example_value(f) for f in row.params}
         if row.selector is None:
@@ -82,10 +82,10 @@ def _cases() -> list[tuple[Command, int | None, dict[str, object]]]:
 @pytest.mark.parametrize(
     ("row", "variant", "values"),
     _cases(),
-    ids=lambda v: v.name if isinstance(v, Command) else str(v) if isinstance(v, int) else "",
+    ids=lambda v: v.name if isinstance(v, CommandRow) else str(v) if isinstance(v, int) else "",
 )
 def test_every_row_round_trips(
-    row: Command, variant: int | None, values: dict[str, object]
+    row: CommandRow, variant: int | None, values: dict[str, object]
 ) -> None:
     kwargs = dict(values)
     if variant is not None and row.selector is not None:

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.framing import wrap_can, wrap_control
 from analyzer.protocol.ids import (
@@ -67,7 +67,7 @@ def test_uav_attitude_and_flags() -> None:
 
 
 def test_text_message_is_reassembled() -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     events: list[Event] = []
     for i, (can_id, data) in enumerate(encode_text("Low battery: return to home")):
         events += dec.feed(frame(can_id, data, 1.0 + i / 100))
@@ -78,7 +78,7 @@ def test_text_message_is_reassembled() -> None:
 
 
 def test_text_that_never_ends_is_reported() -> None:
-    dec = Decoder(text_limit=64)
+    dec = ProtocolDecoder(text_limit=64)
     events: list[Event] = []
     for i in range(9):
         events += dec.feed(frame(TEXT_ID, b"ABCDEFGH", float(i)))
@@ -89,7 +89,7 @@ def test_text_that_never_ends_is_reported() -> None:
 
 
 def test_every_topic_from_can() -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     items: list[CanFrame] = [frame(CONTROL_ID, encode_command("look_down"), 1.0)]
     items += [
         frame(FEEDBACK_ID, s, 1.1) for s in segments(encode_attitude(pitch_deg=-30, yaw_deg=90))
@@ -117,7 +117,7 @@ def test_every_topic_from_can() -> None:
 
 
 def test_foreign_frames_on_request_and_bad_frames() -> None:
-    dec = Decoder(emit_other=True)
+    dec = ProtocolDecoder(emit_other=True)
     other = dec.feed(frame(0x18FF50E5, b"\x01\x02", 1.0))
     assert other[0].topic == "/can/other" and other[0].fields["data"] == "01 02"
     remote = dec.feed(frame(CONTROL_ID, b"", 1.0, is_remote=True))
@@ -130,7 +130,7 @@ def test_foreign_frames_on_request_and_bad_frames() -> None:
 
 
 def test_tcp_stream_both_directions() -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     to_idu = wrap_control(encode_command("gimbal_control", pan_speed_dps=80)) + wrap_can(
         GPS_ID, encode_gps(31.1234567, 118.1234567)
     )
@@ -152,7 +152,7 @@ def test_tcp_stream_both_directions() -> None:
 
 
 def test_documents_look_down_example_on_tcp() -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     doc = bytes.fromhex(
         "EB 90 0A 00 00 00 00 00 00 00 00 00 00 40 88 0F 07 00 00 00 00 00 00 68 5e"
     )
@@ -165,7 +165,7 @@ def test_documents_look_down_example_on_tcp() -> None:
 
 
 def test_feedback_faults_on_can_become_diagnostics() -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     good = segments(encode_attitude(pitch_deg=1, yaw_deg=2))
     corrupt = [good[0], good[1], b"\xff" * 8, good[3]]
     events: list[Event] = []
@@ -186,7 +186,7 @@ def test_feedback_faults_on_can_become_diagnostics() -> None:
     st.booleans(),
 ), max_size=40))  # fmt: skip
 def test_decoder_never_raises_on_any_can_frames(frames: list[tuple[int, bytes, bool]]) -> None:
-    dec = Decoder(emit_other=True)
+    dec = ProtocolDecoder(emit_other=True)
     events: list[Event] = []
     for i, (can_id, data, remote) in enumerate(frames):
         events += dec.feed(CanFrame(i * 0.1, can_id, data, is_remote=remote and i % 5 == 0))
@@ -200,7 +200,7 @@ def test_decoder_never_raises_on_any_can_frames(frames: list[tuple[int, bytes, b
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(st.binary(max_size=60), st.booleans()), max_size=20))
 def test_decoder_never_raises_on_any_stream_bytes(chunks: list[tuple[bytes, bool]]) -> None:
-    dec = Decoder()
+    dec = ProtocolDecoder()
     for i, (data, up) in enumerate(chunks):
         dec.feed(StreamChunk(float(i), data, "tcp", TO_IDU if up else FROM_IDU))
     dec.close()

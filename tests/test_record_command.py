@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
-from analyzer.mcapio.read.reader import Recording, read_events, read_items
+from analyzer.mcapio.read.reader import McapRecording, read_events, read_items
 from analyzer.protocol.feedback import encode_attitude
 from analyzer.protocol.types import StreamChunk
 from tests.mcap_doctor import examine
@@ -116,7 +116,7 @@ def _yaws_in_events(path: Path) -> set[float]:
 def test_kill_9_keeps_everything_older_than_a_second(tmp_path: Path) -> None:
     path, idu, killed, _, code = _record(tmp_path, 2.5, signal.SIGKILL)
     assert code == -signal.SIGKILL
-    recording = Recording(path)
+    recording = McapRecording(path)
     items = read_items(path)
     stream = b"".join(i.data for i in items if isinstance(i, StreamChunk))
     if recording.recovered:  # killed in the middle of a write: no summary, recovered
@@ -159,7 +159,7 @@ def test_sigterm_and_ctrl_c_finish_the_file(tmp_path: Path, sig: int) -> None:
     path, idu, signalled, err, code = _record(tmp_path, 1.2, sig)
     assert code == 0, err.decode()
     assert b"recorded" in err
-    recording = Recording(path)
+    recording = McapRecording(path)
     assert not recording.recovered
     with open(path, "rb") as f:
         reader = make_reader(f, validate_crcs=True)

@@ -13,7 +13,7 @@ import pytest
 from analyzer.inputs import open_input
 from analyzer.inputs.candump.reader import CandumpParser
 from analyzer.mcapio.channels import can_frame_from_dict, can_frame_json
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.protocol.types import CanFrame
 
@@ -85,7 +85,7 @@ def test_socketcan_pcap_remote_frame_keeps_its_dlc(tmp_path: Path) -> None:
 
 def test_other_frame_events_and_recordings_carry_the_requested_dlc() -> None:
     frame = CanFrame(T0, 0x123, b"", False, "can0", is_remote=True, remote_dlc=7)
-    (event,) = Decoder(emit_other=True).feed(frame)
+    (event,) = ProtocolDecoder(emit_other=True).feed(frame)
     assert event.fields["dlc"] == 7 and event.fields["remote"] is True
     stored = json.loads(can_frame_json(frame))
     assert stored["dlc"] == 7
@@ -99,5 +99,5 @@ def test_decode_shows_the_requested_dlc(tmp_path: Path) -> None:
     from analyzer.render import render_event
 
     frame = CanFrame(T0, 0x123, b"", False, "can0", is_remote=True, remote_dlc=5)
-    (event,) = Decoder(emit_other=True).feed(frame)
+    (event,) = ProtocolDecoder(emit_other=True).feed(frame)
     assert "0x123 [5] remote request" in render_event(event)

@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import ALTITUDE_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
@@ -23,7 +23,7 @@ T = 1_700_000_000.25
 
 
 def decode(*items: CanFrame | StreamChunk, emit_other: bool = False) -> list[Event]:
-    decoder = Decoder(emit_other=emit_other)
+    decoder = ProtocolDecoder(emit_other=emit_other)
     return [e for item in items for e in decoder.feed(item)] + decoder.close()
 
 

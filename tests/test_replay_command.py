@@ -27,7 +27,7 @@ from pathlib import Path
 import pytest
 
 from analyzer import read
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.protocol.ids import ALTITUDE_ID, GPS_ID
 from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, TOPIC_GIMBAL_ATTITUDE
 from tests.platforms import posix_signals
@@ -171,7 +171,7 @@ def test_a_can_flight_replays_over_tcp_with_its_commands_and_timing(
     assert run.commands()[-134:-2] == flight_commands()
     assert TOPIC_GIMBAL_ATTITUDE not in {e.topic for e in run.gimbal.received}
     # The recording names the flight and the span, and holds the commands as sent.
-    meta = Recording(run.folder / "bench.mcap").metadata()["gimbal-analyzer"]
+    meta = McapRecording(run.folder / "bench.mcap").metadata()["gimbal-analyzer"]
     assert (meta["command"], meta["flight"], meta["flight_span"]) == (
         "replay",
         FLIGHT,

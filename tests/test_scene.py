@@ -25,7 +25,7 @@ from analyzer.mcapio.read.video import Thumbnail
 from analyzer.mcapio.scene_views import TOPIC_SCENE, TOPIC_TF
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.command_table import COMMANDS
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.ids import ALTITUDE_ID, CONTROL_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import CanFrame, Event
@@ -64,7 +64,7 @@ class Bench:
     """A decoder and the views of a recording with a 1920x1080 stream (thumbnail 320x180)."""
 
     def __init__(self) -> None:
-        self.decoder = Decoder()
+        self.decoder = ProtocolDecoder()
         self.views = FoxgloveViews()
         self.views.scene.add_camera("main")
         self.views.scene.add_overlay(ANNOTATIONS, 1920, 1080)

@@ -13,9 +13,9 @@ from analyzer.cli import main
 from analyzer.commands import send
 from analyzer.errors import UsageError
 from analyzer.protocol.command_table import BY_NAME, COMMANDS
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import TOPIC_COMMAND, CanFrame, StreamChunk
-from analyzer.sim.transports import CanLink, parse_link
+from analyzer.sim.transports import SimulatedCanLink, parse_link
 
 
 def run_send(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
@@ -167,7 +167,7 @@ def test_repeat_without_a_unit_is_a_usage_error(capsys: pytest.CaptureFixture[st
 
 def test_transmits_on_a_can_bus_only_with_to(capsys: pytest.CaptureFixture[str]) -> None:
     spec = f"can:virtual:send-test-{uuid.uuid4().hex[:8]}"
-    listener = CanLink(parse_link(spec))
+    listener = SimulatedCanLink(parse_link(spec))
     try:
         code, out, _ = run_send(
             capsys, "gimbal_control", "--tilt-speed", "5", "--to", spec,
@@ -211,7 +211,7 @@ def test_transmits_tcp_frames_and_reads_the_replies(capsys: pytest.CaptureFixtur
         server.close()
     assert code == 0
     assert "sent 2 time(s)" in out
-    events = Decoder().feed(StreamChunk(0.0, bytes(received), "t"))
+    events = ProtocolDecoder().feed(StreamChunk(0.0, bytes(received), "t"))
     assert [(e.topic, e.fields["name"]) for e in events] == [(TOPIC_COMMAND, "look_down")] * 2
 
 

@@ -15,10 +15,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analyzer.feedback_track import FeedbackTrack
+from analyzer.feedback_track import FeedbackClock, FeedbackTrack
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.crc import crc_bytes
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, encode_ranging, segments
 from analyzer.protocol.ids import (
     ALTITUDE_ID,
@@ -116,7 +116,7 @@ def as_dicts(events: list[Event]) -> list[dict[str, Any]]:
 def test_feed_batch_is_the_general_path_item_by_item(
     batch: list[Any], other: bool, sources: int
 ) -> None:
-    one = Decoder(emit_other=other, max_sources=sources)
+    one = ProtocolDecoder(emit_other=other, max_sources=sources)
     slow: list[Event] = []
     for item in batch:
         if isinstance(item, CanFrame):  # the long way: the general path for every frame
@@ -128,7 +128,7 @@ def test_feed_batch_is_the_general_path_item_by_item(
         else:
             slow.append(item)
     slow += one.close()
-    two = Decoder(emit_other=other, max_sources=sources)
+    two = ProtocolDecoder(emit_other=other, max_sources=sources)
     fast: list[Event] = []
     half = len(batch) // 2
     two.feed_batch(batch[:half], fast)
@@ -276,15 +276,27 @@ def test_tally_folds_a_batch_as_the_figures_define(items: list[Any], events: lis
 def test_many_feedback_messages_are_timed_as_one_by_one(
     steps: list[float], start: float, damaged_first: int
 ) -> None:
-    """The counters time a feedback group's messages at once (``add_times``): the same
-    longest gap (the first of the longest), the same silences and lost messages."""
+    """The counters time a feedback group's messages at once (``FeedbackTrack.add`` of many
+    arrivals): the same longest gap (the first of the longest), the same silences and lost
+    messages as one by one; the clock yields the same silences either way."""
     times = [start + sum(steps[: i + 1]) for i in range(len(steps))]
     one, many = FeedbackTrack(), FeedbackTrack()
-    for track in (one, many):
+    one_clock, many_clock = FeedbackClock(), FeedbackClock()
+    for track, clock in ((one, one_clock), (many, many_clock)):
         if damaged_first:
-            track.add(start - 10)
-            track.damaged(start - 10 + damaged_first)
+            track.add(clock.messages("s", [start - 10]))  # type: ignore[arg-type]
+            silence = clock.damaged("s", start - 10 + damaged_first)
+            assert silence is not None
+            track.damaged(silence)
+    one_by_one = []
     for t in times:
-        one.add(t)
-    many.add_times(times)
+        arrivals = one_clock.messages("s", [t])
+        assert arrivals is not None
+        one_by_one += list(arrivals)
+        one.add(arrivals)
+    arrivals = many_clock.messages("s", times)
+    assert arrivals is not None
+    many.add(arrivals)
     assert dataclasses.asdict(many) == dataclasses.asdict(one)
+    assert list(arrivals) == one_by_one
+    assert one_clock.last_arrival == many_clock.last_arrival

@@ -15,7 +15,7 @@ import pytest
 from analyzer.capture import Capture
 from analyzer.pipeline import Batch
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import (
@@ -36,8 +36,8 @@ from analyzer.sim.ground import GroundScript, Step
 from analyzer.sim.runner import SimulatorRunner
 from analyzer.sim.scene import Scene
 from analyzer.sim.transports import (
-    Link,
     LinkSpec,
+    SimulatedLink,
     open_gimbal_link,
     open_ground_link,
     parse_link,
@@ -106,7 +106,7 @@ def captured(spec: str) -> Iterator[tuple[Collect, Any]]:
         capture.join(5)
 
 
-def repeat(link: Link, data: bytes, seconds: float) -> None:
+def repeat(link: SimulatedLink, data: bytes, seconds: float) -> None:
     """Send a command every 50 ms for ``seconds`` (gimbal_control must be repeated)."""
     end = time.monotonic() + seconds
     while time.monotonic() < end:
@@ -214,7 +214,7 @@ def test_serial_gimbal_on_a_pty() -> None:
     try:
         with simulator(parse_link(f"serial:{os.ttyname(slave)}@115200")):
             os.write(master, wrap_control(encode_command("specified_angle", pitch_deg=-20)))
-            decoder = Decoder()
+            decoder = ProtocolDecoder()
             events: list[Event] = []
 
             def read() -> dict[str, Any] | None:

@@ -6,7 +6,7 @@ from collections import Counter
 
 import pytest
 
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.types import (
     CRC_MISMATCH,
@@ -26,7 +26,7 @@ SECONDS = 60.0  # 120 feedback messages, 480 segments
 def run(seconds: float = SECONDS, **faults: float) -> tuple[list[Event], SimulatedGimbal]:
     config = SimConfig(faults=FaultConfig(seed=3, **faults))
     gimbal = SimulatedGimbal(0.0, config)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     t = 0.0
     while t <= seconds:

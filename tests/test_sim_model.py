@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from analyzer.protocol.codec import decode_command, encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import ALTITUDE_ID, FEEDBACK_ID, GPS_ID, TEXT_END_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
@@ -165,7 +165,7 @@ def test_ranging_points_where_the_line_of_sight_meets_the_ground() -> None:
 
 def drive(gimbal: SimulatedGimbal, until: float, step: float = 0.01) -> list[Event]:
     """Poll the simulator on simulated time and decode what it sends, as the analyzer does."""
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events: list[Event] = []
     t = 0.0
     while t <= until:

@@ -12,7 +12,7 @@ from textual.pilot import Pilot
 
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID
 from analyzer.protocol.types import CanFrame
@@ -58,8 +58,8 @@ def sample_frames(t: float = T0) -> list[CanFrame]:
     return frames
 
 
-def batch_of(frames: list[CanFrame], decoder: Decoder | None = None) -> Batch:
-    decoder = decoder or Decoder()
+def batch_of(frames: list[CanFrame], decoder: ProtocolDecoder | None = None) -> Batch:
+    decoder = decoder or ProtocolDecoder()
     events = [e for f in frames for e in decoder.feed(f)]
     return Batch(list[RawItem](frames), events, frames[-1].time + 0.01)
 
@@ -159,7 +159,7 @@ def test_pause_keeps_counting_and_resume_catches_up() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
         app, bridge = make_app(clock)
-        decoder = Decoder()
+        decoder = ProtocolDecoder()
         async with app.run_test(size=SIZE) as pilot:
             bridge.handle(batch_of(sample_frames(), decoder))
             await settle(app, pilot)
@@ -273,7 +273,7 @@ def test_id_table_rows_are_keyed_and_updated_in_place() -> None:
         clock = Clock(T0 + 0.5)
         app, bridge = make_app(clock)
         async with app.run_test(size=SIZE) as pilot:
-            decoder = Decoder()
+            decoder = ProtocolDecoder()
             bridge.handle(batch_of(sample_frames(), decoder))
             await settle(app, pilot)
             table = app.query_one(IdTable)

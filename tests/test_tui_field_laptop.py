@@ -7,10 +7,10 @@ from __future__ import annotations
 import asyncio
 import re
 
-from analyzer.analysis.findings import Finding
+from analyzer.analysis.findings import ResponseFinding
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
@@ -27,7 +27,7 @@ SIZE = (80, 24)
 
 
 def decoded(items: list[RawItem], events: list[Event] | None = None) -> Batch:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     out = [e for item in items for e in decoder.feed(item)]
     return Batch(items, sorted(out + (events or []), key=lambda e: e.time), items[-1].time)
 
@@ -38,7 +38,7 @@ def app_at(now: float) -> tuple[MonitorApp, TuiBridge]:
 
 
 def finding(t: float, command: str, verdict: str, detail: str) -> Event:
-    return Finding(command, t, "target", verdict, detail).to_event()
+    return ResponseFinding(command, t, "target", verdict, detail).to_event()
 
 
 def test_a_number_key_shows_did_it_obey_with_the_findings_before_the_latest() -> None:

@@ -18,7 +18,7 @@ from textual.pilot import Pilot
 
 from analyzer.inputs import open_input
 from analyzer.pipeline import Batch, RawItem
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import (
     TOPIC_COMMAND,
     TOPIC_DIAGNOSTICS,
@@ -48,7 +48,7 @@ RECORDING = "flight.mcap"
 
 def sample_batch() -> Batch:
     """The whole sample flight, decoded, as one batch (as the capture would deliver it)."""
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     items: list[RawItem] = []
     events: list[Event] = []
     for item in open_input(str(SAMPLE)):

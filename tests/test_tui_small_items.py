@@ -7,7 +7,7 @@ import asyncio
 import pytest
 
 from analyzer.pipeline import Batch
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.ids import FEEDBACK_ID, UAV_ATTITUDE_ID
 from analyzer.protocol.types import CanFrame
@@ -70,7 +70,7 @@ def test_the_log_is_in_time_order_when_a_report_comes_late() -> None:
     def command(t: float, name: str, channel: str = "can0") -> CanFrame:
         return CanFrame(T0 + t, CONTROL_ID, encode_command(name), channel=channel)
 
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     newer = command(3.905, "look_down")
     older = command(3.449, "forward", "can1")
     state = MonitorState(log_limit=3)
@@ -96,7 +96,7 @@ def test_the_cursor_stays_on_its_entry_when_an_older_one_is_inserted() -> None:
     async def body() -> None:
         clock = Clock(T0 + 0.5)
         app, bridge = make_app(clock)
-        decoder = Decoder()
+        decoder = ProtocolDecoder()
         async with app.run_test(size=(120, 40)) as pilot:
             bridge.handle(batch_of(sample_frames(), decoder))
             await settle(app, pilot)

@@ -8,7 +8,7 @@ import pytest
 
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.feedback import encode_attitude, segments
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID, GPS_ID
 from analyzer.protocol.types import (
@@ -33,7 +33,7 @@ T0 = 1_700_000_000.0
 
 
 def decoded(frames: list[CanFrame], wall: float | None = None) -> Batch:
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     events = [e for f in frames for e in decoder.feed(f)]
     return Batch(list[RawItem](frames), events, wall if wall is not None else frames[-1].time)
 
@@ -132,7 +132,7 @@ def test_the_feedback_rate_is_steady_while_feedback_comes() -> None:
     from one-second counts; from the messages' own times it reads 2.0 at any moment."""
     state = MonitorState()
     frames = feedback_every(0.5, 30.0)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     readings = []
     for start in range(0, len(frames), 4):  # a batch per message, as a capture makes them
         chunk = frames[start : start + 4]

@@ -23,7 +23,7 @@ import jsonschema
 import pytest
 from mcap.reader import make_reader
 
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.mcapio.write.video import COMPRESSED_IMAGE_SCHEMA, COMPRESSED_VIDEO_SCHEMA
 from analyzer.video.annexb import H264_IDR, H264_SPS, nal_type, split_nals
 from analyzer.video.spec import VIDEO_HOLD_BACK_S
@@ -307,7 +307,7 @@ def test_disk_full_with_video_stops_and_keeps_every_complete_chunk(
     kept = int(last.split("; ")[-1].split(" messages up to ")[0])
     # Read as every command reads it: finished with a summary when the freed space
     # allowed, else the complete chunks, recovered.
-    recording = Recording(out)
+    recording = McapRecording(out)
     assert sum(1 for _ in recording.messages()) == kept
     video = [json.loads(m.data) for m in recording.messages(topics={"/camera/main"})]
     assert len(video) > 10 and decode_all(video) == len(video), done.stderr
@@ -395,7 +395,7 @@ def test_a_recorder_killed_with_kill_9_leaves_video_that_decodes(
         recorder.kill()
         killed_at = time.time()
         recorder.communicate(timeout=30)
-    recording = Recording(out)  # what the last 0.5 s flush left, read as every command does
+    recording = McapRecording(out)  # what the last 0.5 s flush left, read as every command does
     assert not recording.recovered  # the provisional summary: indexed
     video = [json.loads(m.data) for m in recording.messages(topics={"/camera/main"})]
     assert len(video) > 30 and decode_all(video) == len(video)

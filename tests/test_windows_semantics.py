@@ -28,7 +28,7 @@ from analyzer import portable, stdio
 from analyzer.ansi import ENABLE_VIRTUAL_TERMINAL_PROCESSING, ansi_ok
 from analyzer.cli import main
 from analyzer.errors import OutputClosed
-from analyzer.mcapio.read.reader import Recording
+from analyzer.mcapio.read.reader import McapRecording
 from analyzer.output_file import OutputFile, write_output
 from analyzer.progress import Progress
 from analyzer.stdio import GuardedStdout, utf8_when_redirected
@@ -103,7 +103,7 @@ def test_convert_writes_a_readable_recording_under_the_windows_runtime(
     assert main(["convert", str(SAMPLE), "-o", str(out), "-q"]) == 0
     writes = [flags for flags in windows_runtime if flags & (os.O_WRONLY | os.O_RDWR)]
     assert writes and all(flags & FAKE_O_BINARY for flags in writes)
-    assert Recording(out).summary().statistics.message_count > 0
+    assert McapRecording(out).summary().statistics.message_count > 0
 
 
 def test_every_os_open_of_the_analyzer_goes_through_portable_open_fd() -> None:
@@ -209,7 +209,7 @@ def test_ctrl_break_finishes_a_recording_as_ctrl_c_does(tmp_path: Path) -> None:
     proc.send_signal(signal.SIGUSR1)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
-    assert Recording(out).summary().statistics.message_count > 0  # finished: with its summary
+    assert McapRecording(out).summary().statistics.message_count > 0  # finished: with its summary
 
 
 class FakeConsole:

@@ -48,7 +48,7 @@ def worst(*verdicts: str) -> str:
 
 
 @dataclass(slots=True)
-class Finding:
+class ResponseFinding:
     """One judgement; ``extra`` holds the optional fields of analyzer.protocol.response_fields."""
 
     command: str
@@ -124,7 +124,7 @@ __all__ = [
     "PARTIAL",
     "UNKNOWN",
     "VERDICTS",
-    "Finding",
+    "ResponseFinding",
     "cut_words",
     "no_feedback_until",
     "verdict_line",

@@ -12,15 +12,10 @@ from analyzer.analysis.findings import (
     HEALTHY,
     LOST,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
 )
 from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ as EXPECTED_HZ
-from analyzer.feedback_track import (
-    FEEDBACK_PERIOD_S,
-    MAX_FEEDBACK_SOURCES,
-    lost_messages,
-    silence_s,
-)
+from analyzer.feedback_track import FEEDBACK_PERIOD_S, FeedbackClock, Silence
 from analyzer.feedback_track import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 
 WINDOW_S = 60.0
@@ -30,14 +25,14 @@ MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement on
 class FeedbackHealth:
     """Folds feedback times and feedback errors; findings per silence and per minute.
 
-    Silences are timed per stream (source and direction), as the tally times them, and
-    counted with the same ``lost_messages``: its gaps are the summary's gaps."""
+    Silences are timed per stream (source and direction) by a ``FeedbackClock``, the
+    tally's clock: its gaps are the summary's gaps."""
 
     def __init__(self) -> None:
         self.first: float | None = None  # first event of the input, feedback or not
         self.last: float | None = None
         self.last_feedback: float | None = None
-        self._last_of: dict[str, float] = {}  # stream -> its last feedback message
+        self.clock = FeedbackClock()  # when each stream's feedback last came
         self._window = 0
         self._window_messages = 0
         self._window_gaps = 0
@@ -47,7 +42,7 @@ class FeedbackHealth:
         self.gaps = 0
         self.lost = 0
 
-    def tick(self, t: float) -> list[Finding]:
+    def tick(self, t: float) -> list[ResponseFinding]:
         """Any event's time: closes the minute windows that ended before ``t``."""
         first = self.first
         if first is None:
@@ -63,37 +58,37 @@ class FeedbackHealth:
             return found
         return []
 
-    def feedback(self, t: float, stream: str = "") -> list[Finding]:
+    def feedback(self, t: float, stream: str = "") -> list[ResponseFinding]:
         """One feedback message at ``t`` of ``stream``; a finding when it ends a silence
         that lost messages."""
         out = self.tick(t)
         self.messages += 1
         self._window_messages += 1
         self.last_feedback = t
-        return out + self._arrived(t, stream)
+        arrivals = self.clock.messages(stream, [t])
+        if arrivals is None:  # as the tally: streams beyond so many are counted, not timed
+            return out
+        for silence in arrivals:
+            out += self._ended(silence)
+        return out
 
-    def error(self, t: float, stream: str = "", *, ends_silence: bool = True) -> list[Finding]:
+    def error(
+        self, t: float, stream: str = "", *, ends_silence: bool = True
+    ) -> list[ResponseFinding]:
         """A damaged feedback message (CRC error, incomplete) at ``t`` of ``stream``,
         counted as damaged. A message with a bad CRC came whole: the silence before it
         ends there, so it is not also lost (``ends_silence``; as the tally times it)."""
         out = self.tick(t)
         self._window_errors += 1
-        previous = self._last_of.get(stream)
-        if not ends_silence or previous is None or t <= previous:
-            return out  # no message of that stream timed yet: nothing lost to tell
-        return out + self._arrived(t, stream)
+        silence = self.clock.damaged(stream, t) if ends_silence else None
+        return out if silence is None else out + self._ended(silence)
 
-    def _arrived(self, t: float, stream: str) -> list[Finding]:
-        """A message (whole or damaged) of ``stream`` came at ``t``: the silence it ends."""
-        out: list[Finding] = []
-        previous = self._last_of.get(stream)
-        if previous is None and len(self._last_of) >= MAX_FEEDBACK_SOURCES:
-            return out  # as the tally: streams beyond so many are counted, not timed
-        self._last_of[stream] = t
-        if previous is None:
-            return out
+    def _ended(self, silence: Silence) -> list[ResponseFinding]:
+        """A message (whole or damaged) ended ``silence``: a finding if it lost messages."""
+        out: list[ResponseFinding] = []
+        previous, t = silence.start, silence.end
         gap = t - previous
-        lost = lost_messages(silence_s(previous, t))
+        lost = silence.lost
         if lost:
             self.gaps += 1
             self.lost += lost
@@ -105,7 +100,9 @@ class FeedbackHealth:
                 f"(expected every {FEEDBACK_PERIOD_S:g} s)"
             )
             extra = {"gap_s": gap, "lost_messages": lost, "observed_at": t}
-            out.append(Finding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, LOST, text, extra))
+            out.append(
+                ResponseFinding(FEEDBACK_COMMAND, previous, CHECK_FEEDBACK_GAP, LOST, text, extra)
+            )
         return out
 
     def open_since(self) -> list[float]:
@@ -118,7 +115,7 @@ class FeedbackHealth:
             times.append(self.last_feedback)
         return times
 
-    def close(self) -> list[Finding]:
+    def close(self) -> list[ResponseFinding]:
         if self.first is None or self.last is None:
             return []
         length = self.last - (self.first + self._window * WINDOW_S)
@@ -126,7 +123,7 @@ class FeedbackHealth:
             return []
         return [self._judge_window(max(length, 0.0))]
 
-    def _judge_window(self, length: float) -> Finding:
+    def _judge_window(self, length: float) -> ResponseFinding:
         assert self.first is not None
         start = self.first + self._window * WINDOW_S
         messages, gaps, errors = self._window_messages, self._window_gaps, self._window_errors
@@ -142,7 +139,7 @@ class FeedbackHealth:
             verdict = UNKNOWN if self.messages == 0 else LOST
             what = "no gimbal feedback in the input" if not self.messages else "no feedback"
             text = f"{what} for {length:.0f} s: the responses cannot be judged"
-            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, verdict, text, extra)
+            return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, verdict, text, extra)
         hz = messages / length if length >= 1.0 else None
         extra["feedback_hz"] = hz
         problems = []
@@ -158,6 +155,6 @@ class FeedbackHealth:
         rate = f"{hz:.2f} messages/s" if hz is not None else f"{messages} messages"
         if problems:
             text = f"feedback over {length:.0f} s: " + ", ".join(problems)
-            return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, DEGRADED, text, extra)
+            return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, DEGRADED, text, extra)
         text = f"feedback healthy over {length:.0f} s: {rate}, no message lost, no CRC error"
-        return Finding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, HEALTHY, text, extra)
+        return ResponseFinding(FEEDBACK_COMMAND, start, CHECK_FEEDBACK, HEALTHY, text, extra)

@@ -40,7 +40,7 @@ Floats = npt.NDArray[np.float64]
 
 
 @dataclass(slots=True)
-class Command:
+class StickCommand:
     """Speeds (deg/s) asked from ``time`` on (never changed once made; not frozen, which
     would cost every gimbal_control of a log a third of a microsecond more)."""
 
@@ -54,7 +54,7 @@ class CommandedMotion:
     speeds hold until the next command, or for ``hold`` seconds when the next one comes
     later than that (the gimbal stops when the commands stop)."""
 
-    def __init__(self, commands: Sequence[Command], hold: float) -> None:
+    def __init__(self, commands: Sequence[StickCommand], hold: float) -> None:
         # Two corners a command: where it starts, and where its speeds stop holding.
         start = np.array([c.time for c in commands], dtype=np.float64)
         until = start + hold

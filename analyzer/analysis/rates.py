@@ -6,6 +6,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -16,7 +17,7 @@ from analyzer.analysis.findings import (
     OBEYED,
     PARTIAL,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
     worst,
 )
 from analyzer.analysis.motion_fit import (
@@ -24,11 +25,12 @@ from analyzer.analysis.motion_fit import (
     MIN_INTERVALS,
     AxisFit,
     CommandedMotion,
+    Fit,
     fit,
     whole,
 )
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
-from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, Movement
+from analyzer.analysis.streams import HOLD_S, RECOMMENDED_REPEAT_S, EndedBy, Movement
 from analyzer.analysis.targets import STILL_DEG
 
 RATE_OK = (0.75, 1.33)  # measured / commanded motion within this range: obeyed
@@ -43,13 +45,46 @@ _SENT_ONCE = (
 )
 
 
+class CutBy(Enum):
+    """What ended the feedback before a movement's window was over (its value: the words)."""
+
+    INPUT_ENDED = "the input ended"
+    FEEDBACK_STOPPED = "the feedback stopped"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class Cut:
-    """The feedback ended before a movement's window was over: ``what`` ended ("the
-    input ended", "the feedback stopped") and ``at`` what time."""
+    """The feedback ended before a movement's window was over: ``what`` ended it and
+    ``at`` what time."""
 
-    what: str
+    what: CutBy
     at: float
+
+
+@dataclass(frozen=True)
+class MovementVerdict:
+    """A movement's finding, and how the gimbal followed while the stick was off centre
+    (lag, ratio per axis; None when no fit): what the stop check takes as explained."""
+
+    finding: ResponseFinding
+    followed: tuple[float, dict[int, float]] | None
+
+
+@dataclass
+class _Asked:
+    """What a movement's commands asked of each axis that turned more than the tolerance,
+    and the feedback to measure it by (up to an axis' limit)."""
+
+    motion: CommandedMotion
+    asked: list[float]
+    duration: float
+    points: list[Sample]
+    series: dict[int, list[tuple[float, float]]]
+    limits: dict[int, float | None]
+    commanded: list[tuple[str, str, int, str]]
 
 
 def judge_movement(
@@ -60,7 +95,7 @@ def judge_movement(
     *,
     free_from: float | None = None,
     cut: Cut | None = None,
-) -> Finding:
+) -> MovementVerdict:
     """The movement's commanded motion against the motion the feedback shows.
 
     ``before`` is the last attitude sample before the movement, ``inside`` those up to
@@ -71,11 +106,6 @@ def judge_movement(
     the window did; unless what came shows the movement's motion over (past its lag),
     it is ``unknown``."""
     end = movement.end if movement.end is not None else movement.last + HOLD_S
-    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
-    at_start = motion.at(movement.start)
-    asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
-    duration = max(end - movement.start, 1e-9)
-    path = motion.path(movement.start, end)
     extra: dict[str, Any] = {
         "component": movement.component,
         "command_count": movement.count,
@@ -83,6 +113,61 @@ def judge_movement(
         "interval_mean_s": movement.interval_mean,
         "interval_max_s": movement.interval_max if movement.count > 1 else None,
     }
+    asked = _asked(movement, before, inside, min_motion, end, extra)
+    if not asked.commanded:
+        path = asked.motion.path(movement.start, end)
+        text = (
+            f"too little commanded motion to measure: {max(path):.1f} deg over "
+            f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
+        )
+        finding = ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return MovementVerdict(finding, None)
+    motion, points = asked.motion, asked.points
+    measured = {i: p for i, p in asked.series.items() if len(p) >= 2}
+    found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
+    if found is None and _seen_whole(movement, before, points, free_from, end):
+        found = whole(motion, measured)
+    lag = found.lag_s if found is not None and found.lag_measured else LAG_MAX_S
+    # ``end`` is when the commands stopped asking for motion (a 0, 0 command, or the last
+    # one's hold): a gimbal ``lag`` late has done with the movement then.
+    if cut is not None and (not points or points[-1].time < end + lag):
+        text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
+        finding = ResponseFinding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+        return MovementVerdict(finding, None)
+    verdicts, texts, ratios = _axis_verdicts(movement, asked, found, free_from, extra)
+    if ratios:
+        extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
+    # How it followed while the stick was off centre, and not after (a gimbal that
+    # drifts on would pass for a late one): what the stop check takes as explained.
+    onset = fit(
+        motion, measured, free_from=free_from, free_until=movement.free_until, seen_until=end
+    )
+    followed = None
+    if onset is not None:
+        followed = (onset.lag_s, {i: a.ratio for i, a in onset.axes.items()})
+    if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
+        extra["lag_s"] = found.lag_s
+        if found.lag_s >= LATE_S:
+            texts.append(f"it followed about {found.lag_s:.1f} s late")
+    verdict = worst(*verdicts)
+    finding = ResponseFinding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+    return MovementVerdict(finding, followed)
+
+
+def _asked(
+    movement: Movement,
+    before: Sample | None,
+    inside: list[Sample],
+    min_motion: float,
+    end: float,
+    extra: dict[str, Any],
+) -> _Asked:
+    """What the movement asked of each axis, and the feedback of each commanded one."""
+    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    at_start = motion.at(movement.start)
+    asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
+    duration = max(end - movement.start, 1e-9)
+    path = motion.path(movement.start, end)
     # A message whose segments came late is dated after it measured: left out of the fit.
     points = [s for s in ([before] if before is not None else []) + inside if not s.late]
     series: dict[int, list[tuple[float, float]]] = {}
@@ -98,63 +183,50 @@ def judge_movement(
         series[index] = [(s.time, s.value(axis)) for s in usable]
     if points:
         extra["observed_at"] = points[-1].time
-    if not commanded:
-        text = (
-            f"too little commanded motion to measure: {max(path):.1f} deg over "
-            f"{end - movement.start:.1f} s (no more than the {min_motion:g} deg tolerance)"
-        )
-        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
-    measured = {i: p for i, p in series.items() if len(p) >= 2}
-    found = fit(motion, measured, free_from=free_from, free_until=movement.free_until)
-    if found is None and _seen_whole(movement, before, points, free_from, end):
-        found = whole(motion, measured)
-    lag = found.lag_s if found is not None and found.lag_measured else LAG_MAX_S
-    # ``end`` is when the commands stopped asking for motion (a 0, 0 command, or the last
-    # one's hold): a gimbal ``lag`` late has done with the movement then.
-    if cut is not None and (not points or points[-1].time < end + lag):
-        text = f"{_cut_words(movement, cut, end)}: the motion it asked for cannot be judged"
-        return Finding(NAME, movement.start, CHECK_RATE, UNKNOWN, text, extra)
+    return _Asked(motion, asked, duration, points, series, limits, commanded)
+
+
+def _axis_verdicts(
+    movement: Movement,
+    asked: _Asked,
+    found: Fit | None,
+    free_from: float | None,
+    extra: dict[str, Any],
+) -> tuple[list[str], list[str], list[float]]:
+    """Each commanded axis' verdict, its words and the ratio measured (where it was)."""
     verdicts: list[str] = []
     texts: list[str] = []
     ratios: list[float] = []
     whole_movement = found is not None and not found.lag_measured
-    for word, _, index, key in commanded:
+    for word, _, index, key in asked.commanded:
         axis_fit = found.axes.get(index) if found is not None else None
-        limit = limits[index]
+        limit = asked.limits[index]
         if axis_fit is None:
-            if limit is not None and limit * asked[index] > 0:
-                verdicts.append(OBEYED)
-                texts.append(f"{word} turned until its limit {limit:.1f}")
-            elif limit is not None:  # the stop on the other side: it turned the wrong way
-                verdicts.append(NOT_OBEYED)
-                texts.append(f"{word} turned to its limit {limit:.1f}, the wrong way")
-            else:
-                verdicts.append(UNKNOWN)
-                texts.append(f"{word} not measurable: {_too_few(movement, free_from)}")
+            verdict, said = _unmeasured(word, limit, asked.asked[index], movement, free_from)
+            verdicts.append(verdict)
+            texts.append(said)
             continue
         verdict, said = _axis_verdict(word, axis_fit, whole_movement=whole_movement)
         ratios.append(axis_fit.ratio)
         extra[f"{key}_ratio"] = axis_fit.ratio
-        extra[f"measured_{key}_dps"] = axis_fit.ratio * asked[index] / duration + 0.0
+        extra[f"measured_{key}_dps"] = axis_fit.ratio * asked.asked[index] / asked.duration + 0.0
         if limit is not None:
             said += f", then at its limit {limit:.1f}"
         verdicts.append(verdict)
         texts.append(said)
-    if ratios:
-        extra["rate_ratio"] = max(ratios, key=lambda r: abs(1 - r))
-    # How it followed while the stick was off centre, and not after (a gimbal that
-    # drifts on would pass for a late one): what the stop check takes as explained.
-    onset = fit(
-        motion, measured, free_from=free_from, free_until=movement.free_until, seen_until=end
-    )
-    if onset is not None:
-        movement.followed = (onset.lag_s, {i: a.ratio for i, a in onset.axes.items()})
-    if found is not None and found.lag_measured and any(abs(r) >= RATE_NONE for r in ratios):
-        extra["lag_s"] = found.lag_s
-        if found.lag_s >= LATE_S:
-            texts.append(f"it followed about {found.lag_s:.1f} s late")
-    verdict = worst(*verdicts)
-    return Finding(NAME, movement.start, CHECK_RATE, verdict, "; ".join(texts), extra)
+    return verdicts, texts, ratios
+
+
+def _unmeasured(
+    word: str, limit: float | None, asked: float, movement: Movement, free_from: float | None
+) -> tuple[str, str]:
+    """An axis the fit could not measure: at its limit the way it was asked, the wrong
+    way, or unknown."""
+    if limit is not None and limit * asked > 0:
+        return OBEYED, f"{word} turned until its limit {limit:.1f}"
+    if limit is not None:  # the stop on the other side: it turned the wrong way
+        return NOT_OBEYED, f"{word} turned to its limit {limit:.1f}, the wrong way"
+    return UNKNOWN, f"{word} not measurable: {_too_few(movement, free_from)}"
 
 
 def _seen_whole(
@@ -183,7 +255,7 @@ def _cut_words(movement: Movement, cut: Cut, end: float) -> str:
     """'the input ended 0.4 s into the movement' or '... 0.6 s after it, before ...'."""
     if cut.at < movement.start:
         return f"{cut.what} {movement.start - cut.at:.1f} s before the movement"
-    if movement.ended_by == "the input ended" or cut.at < end:
+    if movement.ended_by is EndedBy.INPUT_ENDED or cut.at < end:
         return f"{cut.what} {max(0.0, cut.at - movement.start):.1f} s into the movement"
     return (
         f"{cut.what} {cut.at - end:.1f} s after it, before its last motion could be seen "
@@ -235,7 +307,7 @@ def judge_stop(
     after: list[Sample],
     tolerance: float,
     follows: Callable[[str, float], float] | None = None,
-) -> Finding | None:
+) -> ResponseFinding | None:
     """Still moving after the stick came back (``end``)? None when too few samples show it.
 
     ``follows(axis, t)``: the angle of ``axis`` at ``t`` that the movement's commands,
@@ -270,7 +342,7 @@ def judge_stop(
     if not moved or moved_at is None:
         extra["duration_s"] = after[-1].time - end
         text = f"stopped when the commands stopped (still for {after[-1].time - end:.1f} s)"
-        return Finding(name, end, CHECK_STOP, OBEYED, text, extra)
+        return ResponseFinding(name, end, CHECK_STOP, OBEYED, text, extra)
     still = moved_at - end
     extra["duration_s"] = still
     text = f"still moving {still:.1f} s after the commands stopped (moved {moved:.1f} deg more)"
@@ -279,16 +351,16 @@ def judge_stop(
             f"still moving {still:.1f} s after the commands stopped, and still moving "
             f"(moved {moved:.1f} deg more)"
         )
-    return Finding(name, end, CHECK_STOP, NOT_OBEYED, text, extra)
+    return ResponseFinding(name, end, CHECK_STOP, NOT_OBEYED, text, extra)
 
 
-def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
+def judge_cadence(movement: Movement, rate_verdict: str) -> ResponseFinding | None:
     """The stream repeated too slowly to keep the gimbal moving: said once per stream, at
-    the first movement it shows in (None when fast enough, or said already)."""
-    stream = movement.stream
-    if stream.cadence_said or movement.ended_by == "the input ended" or not movement.too_slow():
+    the first movement it shows in (None when fast enough, or said already: the caller
+    records that it was said)."""
+    said = movement.stream.cadence_said
+    if said or movement.ended_by is EndedBy.INPUT_ENDED or not movement.too_slow():
         return None  # (the input ended: what would have followed is not known)
-    stream.cadence_said = True
     verdict = OBEYED if rate_verdict == OBEYED else PARTIAL
     extra: dict[str, Any] = {
         "component": movement.component,
@@ -298,10 +370,10 @@ def judge_cadence(movement: Movement, rate_verdict: str) -> Finding | None:
     }
     mean = movement.interval_mean
     if mean is None:
-        return Finding(NAME, movement.start, CHECK_REPEAT, verdict, _SENT_ONCE, extra)
+        return ResponseFinding(NAME, movement.start, CHECK_REPEAT, verdict, _SENT_ONCE, extra)
     text = (
         f"repeated every {mean:.2f} s on average (longest pause {movement.interval_max:.2f} s) "
         f"while the stick was off centre; the document recommends "
         f"{RECOMMENDED_REPEAT_S * 1000:.0f} ms to keep it moving"
     )
-    return Finding(NAME, movement.start, CHECK_REPEAT, verdict, text, extra)
+    return ResponseFinding(NAME, movement.start, CHECK_REPEAT, verdict, text, extra)

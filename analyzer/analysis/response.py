@@ -14,7 +14,7 @@ from analyzer.analysis.findings import (
     OBEYED,
     PARTIAL,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
     cut_words,
 )
 from analyzer.analysis.health import FeedbackHealth
@@ -30,9 +30,9 @@ from analyzer.analysis.tracking import (
     nothing_to_stop,
 )
 from analyzer.feedback_track import (
-    DAMAGED_FEEDBACK,
     EXPECTED_FEEDBACK_HZ,
     GAP_THRESHOLD_S,
+    damaged_feedback,
     feedback_stream,
 )
 from analyzer.protocol.event_columns import EventColumns
@@ -120,7 +120,7 @@ class ResponseAnalyzer:
 
     def feed(self, event: Event) -> list[Event]:
         t, topic = event.time, event.topic
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         if topic == TOPIC_GIMBAL_ATTITUDE:
             out += self.health.feedback(t, feedback_stream(event))
             sample = sample_from(t, event.fields, event.warnings)
@@ -135,14 +135,14 @@ class ResponseAnalyzer:
             out += self.health.feedback(t, feedback_stream(event))
             out += self._settle(t, None)
         elif topic == TOPIC_DIAGNOSTICS and event.fields.get("kind") in DAMAGED_KINDS:
-            damaged = event.fields.get("kind") in DAMAGED_FEEDBACK
+            damaged = damaged_feedback(event)  # a bad CRC: it ends the silence before it
             out += self.health.error(t, feedback_stream(event), ends_silence=damaged)
             out += self._settle(t, None)
         else:  # the most frequent: time passes, perhaps a command (no list made for nothing)
             out = self._moment(t, topic, event.fields)
         return self._emit(out) if out else []
 
-    def _moment(self, t: float, topic: str, fields: dict[str, Any] | None) -> list[Finding]:
+    def _moment(self, t: float, topic: str, fields: dict[str, Any] | None) -> list[ResponseFinding]:
         """Any event but feedback and damage: its time passes; a command is judged."""
         out = self.health.tick(t)
         if self._targets or self._tracking or self._sticks.active:
@@ -191,7 +191,7 @@ class ResponseAnalyzer:
 
     def close(self) -> list[Event]:
         """The end of the input: judge what is still open with what was seen."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         last = self.samples.last
         end = last.time if last is not None else None
         for check in self._targets:
@@ -207,16 +207,16 @@ class ResponseAnalyzer:
         out += self.health.close()
         return self._emit(out)
 
-    def _emit(self, findings: list[Finding]) -> list[Event]:
+    def _emit(self, findings: list[ResponseFinding]) -> list[Event]:
         for finding in findings:
             self.verdicts[finding.verdict] += 1
         return [f.to_event() for f in findings]
 
     # -- commands -------------------------------------------------------------------------
 
-    def _command(self, t: float, fields: dict[str, Any]) -> list[Finding]:
+    def _command(self, t: float, fields: dict[str, Any]) -> list[ResponseFinding]:
         name = str(fields.get("name", ""))
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         if name == "gimbal_control":
             return self._gimbal_control(t, fields)
         if name not in MOTION and name != "tracking_stop":
@@ -273,10 +273,10 @@ class ResponseAnalyzer:
         elif session.seen_on and sample.time > session.last:
             self._session = None  # the gimbal let go of its target
 
-    def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[Finding]:
+    def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[ResponseFinding]:
         """One command of a stick stream: targets end at a speed, movements open and close."""
         pan, tilt = _speeds(fields)
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         if (pan != 0 or tilt != 0) and self._targets:
             # A speed takes over both axes; zeros (a centred stick) leave targets alone.
             out += self._end_targets(t, "gimbal_control", BOTH)
@@ -292,9 +292,9 @@ class ResponseAnalyzer:
         check, last = self._last_target, self.samples.last
         return check is not None and last is not None and check.met(last, self.settings)
 
-    def _end_targets(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
+    def _end_targets(self, t: float, name: str, axes: frozenset[str]) -> list[ResponseFinding]:
         """A new motion command: earlier targets on its axes are judged as they stand."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         keep: list[TargetCheck] = []
         for check in self._targets:
             if check.axes() & axes:
@@ -307,16 +307,16 @@ class ResponseAnalyzer:
         self._targets = keep
         return out
 
-    def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[Finding]:
+    def _interrupt(self, t: float, name: str, axes: frozenset[str]) -> list[ResponseFinding]:
         """A motion command other than gimbal_control: earlier targets on its axes, and
         the stick streams, end here; what waits for feedback is judged on what came."""
         return self._end_targets(t, name, axes) + self._sticks.interrupt(t, name)
 
     # -- time passing ---------------------------------------------------------------------
 
-    def _settle(self, t: float, sample: Sample | None) -> list[Finding]:
+    def _settle(self, t: float, sample: Sample | None) -> list[ResponseFinding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         late = FEEDBACK_WAIT_S
         if self._targets:
             keep: list[TargetCheck] = []
@@ -410,12 +410,12 @@ class ResponseAnalyzer:
 
     def _judge_tracking(
         self, check: TrackingCheck, sample: Sample | None, cut_short: str
-    ) -> Finding:
+    ) -> ResponseFinding:
         seen = [] if sample is not None else self._between(check.time, check.deadline)
         return judge_tracking(check, sample, seen, cut_short, self.settings.flag_allowed_s)
 
-    def _limits(self, sample: Sample) -> list[Finding]:
-        out: list[Finding] = []
+    def _limits(self, sample: Sample) -> list[ResponseFinding]:
+        out: list[ResponseFinding] = []
         for axis in (PITCH, MOTOR_YAW):
             limit = sample.at_limit(axis)
             if limit is not None and self._at_limit[axis] is None:
@@ -427,7 +427,7 @@ class ResponseAnalyzer:
                     f"{sample.time - t:.1f} s after {name}: it cannot turn further that way"
                 )
                 extra = {"axis": axis, "limit_deg": limit, "observed_at": sample.time}
-                out.append(Finding(name, t, CHECK_LIMIT, verdict, text, extra))
+                out.append(ResponseFinding(name, t, CHECK_LIMIT, verdict, text, extra))
             self._at_limit[axis] = limit
         return out
 

@@ -8,9 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analyzer.analysis.findings import Finding
+from analyzer.analysis.findings import ResponseFinding
 from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion
-from analyzer.analysis.rates import Cut, judge_cadence, judge_movement, judge_stop
+from analyzer.analysis.rates import Cut, CutBy, judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
 from analyzer.analysis.streams import HOLD_S, Movement, Streams
@@ -104,10 +104,10 @@ class StickJudge:
             for a, b in itertools.pairwise(seen)
         )
 
-    def interrupt(self, t: float, name: str) -> list[Finding]:
+    def interrupt(self, t: float, name: str) -> list[ResponseFinding]:
         """Another motion command at ``t``: every stream ends; what waits is judged once
         its window, which reaches on by the longest lag, is over."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         self.streams.cut(t, name)
         for stop in self._stops:
             stop.until, stop.cut = min(stop.until, t), True
@@ -115,9 +115,9 @@ class StickJudge:
         self._stops = []
         return out
 
-    def settle(self, t: float, sample: Sample | None) -> list[Finding]:
+    def settle(self, t: float, sample: Sample | None) -> list[ResponseFinding]:
         """Judge what has had its time; ``sample`` is a new attitude sample at ``t``."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         streams = self.streams
         if streams.open:
             closed = streams.end_quiet(t)
@@ -125,7 +125,7 @@ class StickJudge:
                 self._stopped(closed)
         late = 0.0 if sample is not None else self.late
         if streams.waiting:
-            waiting: list[Movement] = []
+            judged: list[Movement] = []
             for movement in streams.waiting:
                 end = movement.window_end
                 assert end is not None
@@ -134,8 +134,9 @@ class StickJudge:
                 elif t > end + self.late:  # no good message after the window
                     out += self._judge_movement(movement, None, self._stopped_at(end))
                 else:
-                    waiting.append(movement)
-            streams.waiting = waiting
+                    continue
+                judged.append(movement)
+            streams.judged(judged)
         if self._stops:
             watching: list[_StopCheck] = []
             for stop in self._stops:
@@ -151,18 +152,19 @@ class StickJudge:
             self._stops = watching
         return out
 
-    def close(self, ended_at: float) -> list[Finding]:
+    def close(self, ended_at: float) -> list[ResponseFinding]:
         """The end of the input (at ``ended_at``): every stream ends, everything is judged."""
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         self._stopped(self.streams.end())
         last = self.samples.last
-        for movement in self.streams.waiting:
-            cut = Cut("the input ended", ended_at)
+        waiting = list(self.streams.waiting)
+        for movement in waiting:
+            cut = Cut(CutBy.INPUT_ENDED, ended_at)
             if last is None or last.time < max(ended_at - self.late, movement.start):
                 # the feedback had gone silent before: that is what cut it
-                cut = Cut("the feedback stopped", last.time if last is not None else ended_at)
+                cut = Cut(CutBy.FEEDBACK_STOPPED, last.time if last is not None else ended_at)
             out += self._judge_movement(movement, None, cut)
-        self.streams.waiting = []
+        self.streams.judged(waiting)
         for stop in self._stops:
             out += self._judge_stop(stop)
         self._stops = []
@@ -175,13 +177,13 @@ class StickJudge:
     def _stopped(self, movements: list[Movement]) -> None:
         """Movements the stick came back from: the gimbal must then hold still."""
         for movement in movements:
-            if movement.ended_by in ("zeros", "pause"):
+            if movement.ended_by is not None and movement.ended_by.centred:
                 until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
                 self._stops.append(_StopCheck(movement, until))
 
     def _judge_movement(
         self, movement: Movement, upto: float | None, cut: Cut | None = None
-    ) -> list[Finding]:
+    ) -> list[ResponseFinding]:
         """A stick movement against the feedback up to ``upto`` (a sample's time at or
         after its window's end; None: up to the window's end, which ``cut`` says the
         feedback did not reach), and its stream's cadence."""
@@ -190,11 +192,16 @@ class StickJudge:
         last = end if upto is None or movement.cut_short else max(upto, end)
         before = self._reference(movement.start)
         inside = self.samples.between(movement.start, last)
-        rate = judge_movement(
+        judged = judge_movement(
             movement, before, inside, self.tolerance, free_from=movement.free_from, cut=cut
         )
+        movement.followed = judged.followed  # what the stop check takes as explained
+        rate = judged.finding
         cadence = judge_cadence(movement, rate.verdict)
-        return [rate] if cadence is None else [rate, cadence]
+        if cadence is None:
+            return [rate]
+        movement.stream.cadence_said = True  # a stream's cadence is said once
+        return [rate, cadence]
 
     def _stopped_at(self, end: float) -> Cut | None:
         """Why no message came to close a window that ended at ``end``: the feedback
@@ -202,7 +209,7 @@ class StickJudge:
         last = self.samples.last
         if last is not None and last.time >= end:
             return None
-        return Cut("the feedback stopped", last.time if last is not None else end)
+        return Cut(CutBy.FEEDBACK_STOPPED, last.time if last is not None else end)
 
     def _reference(self, t: float) -> Sample | None:
         """The last sample at or before ``t`` not dated late (one measured when dated)."""
@@ -211,7 +218,7 @@ class StickJudge:
                 return sample
         return self.samples.before(t)
 
-    def _judge_stop(self, stop: _StopCheck) -> list[Finding]:
+    def _judge_stop(self, stop: _StopCheck) -> list[ResponseFinding]:
         """Still once the stick came back and its grace is over, beyond what the
         movement's commands, followed as late as its fit found, still explain?"""
         movement = stop.movement

@@ -18,8 +18,9 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from enum import Enum
 
-from analyzer.analysis.motion_fit import LAG_MAX_S, Command
+from analyzer.analysis.motion_fit import LAG_MAX_S, StickCommand
 
 STREAM_GAP_S = 1.0  # commands further apart than this are separate streams
 RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
@@ -34,6 +35,24 @@ TAIL_S = HOLD_S + LAG_MAX_S  # the feedback is watched this long after a movemen
 PRIOR_S = HOLD_S + LAG_MAX_S  # commands this long before a movement may still turn the gimbal
 
 
+class EndedBy(Enum):
+    """How a movement's end was seen (its value: the words)."""
+
+    ZEROS = "zeros"  # a command of 0, 0: the stick came back
+    PAUSE = "pause"  # the stream paused
+    OTHER_COMMAND = "another motion command"  # it took over (``Movement.cut_short`` names it)
+    INPUT_ENDED = "the input ended"
+    LENGTH = "length"  # held off centre longer than MAX_MOVEMENT_S: judged in pieces
+
+    def __str__(self) -> str:
+        return self.value
+
+    @property
+    def centred(self) -> bool:
+        """The stick was seen back at the centre: the gimbal must then hold still."""
+        return self in (EndedBy.ZEROS, EndedBy.PAUSE)
+
+
 @dataclass(eq=False)
 class Movement:
     """One stick movement: the commands from its first off-centre one, and those that
@@ -43,7 +62,7 @@ class Movement:
     component: str
     start: float
     stream: StickStream
-    commands: list[Command] = field(default_factory=list)
+    commands: list[StickCommand] = field(default_factory=list)
     count: int = 0  # off-centre commands
     last: float = 0.0  # the last off-centre command
     interval_sum: float = 0.0
@@ -51,10 +70,10 @@ class Movement:
     peak_pan: float = 0.0
     peak_tilt: float = 0.0
     end: float | None = None  # when the stick came back (None while it is off centre)
-    ended_by: str = ""  # "zeros", "pause", "a later command", "the input ended", "length"
+    ended_by: EndedBy | None = None  # None while the stick is off centre
     window_end: float | None = None  # the feedback is judged up to here
     cut_short: str = ""  # what ended the window early, if anything
-    prior: list[Command] = field(default_factory=list)  # the stream's just before it
+    prior: list[StickCommand] = field(default_factory=list)  # the stream's just before it
     other_before: float | None = None  # the last other motion command before it
     other_name: str = ""  # and its name
     own_before: float | None = None  # the stream's newest speed older than ``prior``
@@ -62,7 +81,7 @@ class Movement:
     free_until: float | None = None  # another motion command took over here
     followed: tuple[float, dict[int, float]] | None = None  # its fit: lag, ratio per axis
 
-    def add(self, command: Command) -> None:
+    def add(self, command: StickCommand) -> None:
         """A command of the stream while the movement is open or awaits its judgement."""
         self.commands.append(command)
         if self.end is not None or (command.pan == 0 and command.tilt == 0):
@@ -78,17 +97,18 @@ class Movement:
         if abs(command.tilt) > abs(self.peak_tilt):
             self.peak_tilt = command.tilt
 
-    def close(self, end: float, why: str) -> None:
+    def close(self, end: float, why: EndedBy) -> None:
         """The stick is centred from ``end`` on (``why`` says how that was seen)."""
         if self.end is None:
             self.end, self.ended_by = end, why
             self.window_end = end + TAIL_S
 
-    def cut(self, t: float, why: str) -> None:
-        """Another motion command at ``t``: the gimbal answers it, not this movement, from
-        ``t`` plus its lag; the window reaches on by the longest lag."""
+    def cut(self, t: float, name: str) -> None:
+        """Another motion command ``name`` at ``t``: the gimbal answers it, not this
+        movement, from ``t`` plus its lag; the window reaches on by the longest lag."""
+        why = f"{name} came"
         if self.end is None:
-            self.close(min(t, self.last + HOLD_S), why)
+            self.close(min(t, self.last + HOLD_S), EndedBy.OTHER_COMMAND)
         assert self.window_end is not None
         if t + LAG_MAX_S < self.window_end:
             self.window_end, self.cut_short = t + LAG_MAX_S, why
@@ -102,7 +122,7 @@ class Movement:
     @property
     def stopped_at(self) -> float:
         """When the commands stopped asking for speed: the 0, 0 command, else the last."""
-        if self.ended_by == "zeros" and self.end is not None:
+        if self.ended_by is EndedBy.ZEROS and self.end is not None:
             return self.end
         return self.last
 
@@ -113,10 +133,12 @@ class Movement:
         document's, or a pause the gimbal stops in."""
         mean = self.interval_mean
         if mean is None:
-            if self.ended_by == "pause":
+            if self.ended_by is EndedBy.PAUSE:
                 return True
             return (
-                self.ended_by == "zeros" and self.end is not None and self.end - self.last > HOLD_S
+                self.ended_by is EndedBy.ZEROS
+                and self.end is not None
+                and self.end - self.last > HOLD_S
             )
         return mean > SLOW_REPEAT_S or self.interval_max > PAUSE_STOP_S
 
@@ -128,7 +150,7 @@ class StickStream:
     component: str
     last: float
     movement: Movement | None = None
-    cadence_said: bool = False  # a stream's cadence is judged once
+    cadence_said: bool = False  # a stream's cadence is judged once (the judge records it)
 
 
 class Streams:
@@ -144,14 +166,16 @@ class Streams:
         self.waiting: list[Movement] = []  # closed, their window still open
         self.other_at: float | None = None  # the last other motion command
         self.other_name = ""
-        self.recent: dict[str, deque[Command]] = {}  # a component's commands of the last PRIOR_S
+        self.recent: dict[
+            str, deque[StickCommand]
+        ] = {}  # a component's commands of the last PRIOR_S
         self.forgotten: dict[str, float] = {}  # the newest one off centre no longer kept
 
     def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
         """One gimbal_control; returns the movements it closed (their stop checks start)."""
         closed = self.end_quiet(t)
         stream = self.open.get(component)
-        command = Command(t, pan, tilt)
+        command = StickCommand(t, pan, tilt)
         for waiting in self.waiting:  # its motion goes on until it is judged
             if waiting.component == component:
                 waiting.add(command)
@@ -165,14 +189,14 @@ class Streams:
         if movement is not None:
             if t - movement.start >= MAX_MOVEMENT_S and not centred:
                 movement.commands.append(command)  # the stick goes on: so does the motion
-                movement.close(t, "length")
+                movement.close(t, EndedBy.LENGTH)
                 self._retire(stream)
                 closed.append(movement)
                 movement = None
             else:
                 movement.add(command)
                 if centred:
-                    movement.close(t, "zeros")
+                    movement.close(t, EndedBy.ZEROS)
                     self._retire(stream)
                     closed.append(movement)
                 return closed
@@ -184,7 +208,7 @@ class Streams:
             movement.add(command)
         return closed
 
-    def _remember(self, component: str, command: Command) -> list[Command]:
+    def _remember(self, component: str, command: StickCommand) -> list[StickCommand]:
         """Keep ``command`` among the component's recent ones; those before it."""
         recent = self.recent.setdefault(component, deque())
         while recent and recent[0].time < command.time - PRIOR_S:
@@ -205,29 +229,33 @@ class Streams:
             return closed  # the usual answer, for every event while a stick moves
         quiet = [c for c, stream in self.open.items() if t - stream.last > STREAM_GAP_S]
         for component in quiet:
-            closed += self._end(component, None, "pause")
+            closed += self._end(component, None, EndedBy.PAUSE)
         return closed
 
     def cut(self, t: float, name: str) -> list[Movement]:
         """Another motion command ``name`` at ``t``: every stream ends, every window is
         cut there."""
         self.other_at, self.other_name = t, name
-        why = f"{name} came"
         closed: list[Movement] = []
         for component in list(self.open):
-            closed += self._end(component, t, why)
+            closed += self._end(component, t, EndedBy.OTHER_COMMAND, name)
         for waiting in self.waiting:
-            waiting.cut(t, why)
+            waiting.cut(t, name)
         return closed
 
     def end(self) -> list[Movement]:
         """The input ended: every open stream ends."""
         closed: list[Movement] = []
         for component in list(self.open):
-            closed += self._end(component, None, "the input ended")
+            closed += self._end(component, None, EndedBy.INPUT_ENDED)
         return closed
 
-    def _end(self, component: str, t: float | None, why: str) -> list[Movement]:
+    def judged(self, movements: list[Movement]) -> None:
+        """Movements judged: they wait no more."""
+        done = set(map(id, movements))
+        self.waiting = [m for m in self.waiting if id(m) not in done]
+
+    def _end(self, component: str, t: float | None, why: EndedBy, name: str = "") -> list[Movement]:
         stream = self.open.pop(component)
         movement = stream.movement
         if movement is None:
@@ -236,7 +264,7 @@ class Streams:
         if t is None:
             movement.close(movement.last + HOLD_S, why)
         else:
-            movement.cut(t, why)
+            movement.cut(t, name)
         self.waiting.append(movement)
         return [movement]
 

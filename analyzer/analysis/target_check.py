@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from analyzer.analysis.findings import CHECK_TARGET, Finding, worst
+from analyzer.analysis.findings import CHECK_TARGET, ResponseFinding, worst
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample
 from analyzer.analysis.targets import AxisGoal, judge_axis
 from analyzer.analysis.yaw_geometry import shortest_difference
@@ -38,7 +38,7 @@ class TargetCheck:
     yaw: YawCommand | None = None
     count: int = 1
     last_sent: float = field(init=False)
-    finding: Finding | None = None
+    finding: ResponseFinding | None = None
 
     def __post_init__(self) -> None:
         self.last_sent = self.time
@@ -88,7 +88,7 @@ class TargetCheck:
         self.count += 1
         self.last_sent = t
 
-    def release(self) -> Finding:
+    def release(self) -> ResponseFinding:
         """The judged finding, with the re-sends counted in."""
         finding = self.finding
         assert finding is not None
@@ -135,7 +135,7 @@ def judge_target(
     tolerance: float,
     allowed_s: float,
     cut_short: str,
-) -> Finding:
+) -> ResponseFinding:
     """The finding of ``check`` from the sample before it and those in its time."""
     goals = check.goals
     labels: dict[str, str] = {}
@@ -178,4 +178,4 @@ def judge_target(
         extra["limit_deg"] = limits[0]
     if samples:
         extra["observed_at"] = samples[-1].time
-    return Finding(check.command, check.time, CHECK_TARGET, verdict, detail, extra)
+    return ResponseFinding(check.command, check.time, CHECK_TARGET, verdict, detail, extra)

@@ -101,17 +101,10 @@ def judge_axis(
         None,
     )
     if reached is not None:
-        result.response_s = samples[reached].time - command_time
         past = [-sign * w for w in travels[reached:]] if sign else [0.0]
-        result.overshoot_deg = max(0.0, *past)
-        text = f"{goal.label} reached {_fmt(target)} in {result.response_s:.1f} s"
-        if result.overshoot_deg > tolerance:
-            text += f", overshooting by {_fmt(result.overshoot_deg)} deg"
-        if abs(final_error) > tolerance:
-            result.verdict = PARTIAL
-            text += f" but then drifted to {_fmt(last.value(axis))} ({_fmt(final_error)} off)"
-        result.text = text
-        return result
+        return _reached(
+            result, samples[reached].time - command_time, max(0.0, *past), last, tolerance
+        )
     moved = first_travel - travels[-1]
     where = f"{_fmt(last.value(axis))}, {_fmt(abs(final_error))} deg from the target"
     if cut_short and not _settled(travels, samples):
@@ -143,13 +136,35 @@ def judge_axis(
         text = f"moved the other way, to {where}"
     else:
         result.verdict = PARTIAL
-        step = travels[-2] - travels[-1] if len(samples) > 1 else 0.0
-        if abs(step) < STILL_DEG:
-            text = f"stopped short at {where}"
-        else:
-            text = f"still on its way, at {where}"
+        text = _short_of_it(travels, where)
     result.text = head + text + _limit_note(goal, last, result)
     return result
+
+
+def _reached(
+    result: AxisResult, response_s: float, overshoot: float, last: Sample, tolerance: float
+) -> AxisResult:
+    """The target reached ``response_s`` after the command, gone past it by ``overshoot``:
+    in words, and partly obeyed when the axis drifted off again."""
+    goal = result.goal
+    result.response_s, result.overshoot_deg = response_s, overshoot
+    text = f"{goal.label} reached {_fmt(goal.target)} in {response_s:.1f} s"
+    if overshoot > tolerance:
+        text += f", overshooting by {_fmt(overshoot)} deg"
+    final_error = goal.error(last)
+    if abs(final_error) > tolerance:
+        result.verdict = PARTIAL
+        text += f" but then drifted to {_fmt(last.value(goal.axis))} ({_fmt(final_error)} off)"
+    result.text = text
+    return result
+
+
+def _short_of_it(travels: list[float], where: str) -> str:
+    """An axis that moved the right way but not far enough: stopped, or still moving."""
+    step = travels[-2] - travels[-1] if len(travels) > 1 else 0.0
+    if abs(step) < STILL_DEG:
+        return f"stopped short at {where}"
+    return f"still on its way, at {where}"
 
 
 def _limit_note(goal: AxisGoal, last: Sample, result: AxisResult) -> str:

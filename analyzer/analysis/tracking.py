@@ -10,7 +10,7 @@ from analyzer.analysis.findings import (
     NOT_OBEYED,
     OBEYED,
     UNKNOWN,
-    Finding,
+    ResponseFinding,
     no_feedback_until,
 )
 from analyzer.analysis.samples import Sample
@@ -63,7 +63,7 @@ def judge_tracking(
     seen: list[Sample],
     cut_short: str,
     allowed_s: float,
-) -> Finding:
+) -> ResponseFinding:
     """``sample``: the first attitude message showing the flag as wanted (obeyed); else
     ``seen``, the messages of the allowance, all showing it as it was: not obeyed, or
     unknown when ``cut_short`` names what ended the allowance early."""
@@ -75,11 +75,11 @@ def judge_tracking(
         extra["response_s"] = sample.time - check.time
         extra["observed_at"] = sample.time
         text = f"the feedback's tracking flag went {flag} after {extra['response_s']:.2f} s"
-        return Finding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
+        return ResponseFinding(check.command, check.time, CHECK_TRACKING, OBEYED, text, extra)
     if not seen:
         why = cut_short or f"within {allowed_s:g} s"
         text = f"{no_feedback_until(why)}: the tracking flag could not be checked"
-        return Finding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
+        return ResponseFinding(check.command, check.time, CHECK_TRACKING, UNKNOWN, text, extra)
     extra["observed_at"] = seen[-1].time
     span = seen[-1].time - check.time
     verdict = UNKNOWN if cut_short else NOT_OBEYED
@@ -93,12 +93,12 @@ def judge_tracking(
             f"({n} attitude message{'s' if n > 1 else ''}, the last {span:.1f} s after "
             "the command)"
         )
-    return Finding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
+    return ResponseFinding(check.command, check.time, CHECK_TRACKING, verdict, text, extra)
 
 
 def nothing_to_stop(
     t: float, before: Sample | None, *, seen_on: bool, session: TrackingSession | None = None
-) -> Finding:
+) -> ResponseFinding:
     """A tracking_stop at ``t`` when the feedback did not show tracking on: nothing to obey.
     ``before``: the last attitude message before it; ``seen_on``: any showed the flag on;
     ``session``: the session it ends, if one was on."""
@@ -111,4 +111,4 @@ def nothing_to_stop(
     extra: dict[str, Any] = {"observed_at": before.time} if before is not None else {}
     if session is not None:
         extra.update(session.figures(t))
-    return Finding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)
+    return ResponseFinding("tracking_stop", t, CHECK_TRACKING, UNKNOWN, text, extra)

@@ -4,25 +4,31 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Generator, Iterable
 from dataclasses import dataclass
-from typing import Protocol
 
 from analyzer.analysis.findings import Timed, untimed
 from analyzer.analysis.response import (
     DEFAULT_FLAG_ALLOWED_S,
     DEFAULT_TIME_ALLOWED_S,
     DEFAULT_TOLERANCE_DEG,
-    ResponseAnalyzer,
     Settings,
 )
+from analyzer.analysis.stage import WITHOUT_VIDEO, Analysis, Judging
 from analyzer.analysis.time_order import TimeOrder
-from analyzer.api.reading import Decoding, Path, input_errors, open_decoding
+from analyzer.api.reading import (
+    Closable,
+    Decoding,
+    FileEvents,
+    Path,
+    input_errors,
+    open_decoding,
+)
 from analyzer.pipeline import BATCH_ITEMS, Pipeline, delivered_batches
 from analyzer.protocol.ids import TCP_PORT
 from analyzer.protocol.types import Event
 
-__all__ = ["Finding", "FindingsInOrder", "Judging", "analyze"]
+__all__ = ["Finding", "Findings", "FindingsInOrder", "Judging", "analyze"]
 
 
 @dataclass(slots=True)
@@ -61,16 +67,6 @@ class Finding(Event):
     @classmethod
     def of(cls, event: Event) -> Finding:
         return cls(event.topic, event.time, event.source, event.fields, event.warnings)
-
-
-class Judging(Protocol):
-    """What the ordering needs of the analysis (``ResponseAnalyzer``)."""
-
-    def process(self, events: list[Event]) -> list[Event]: ...
-
-    def close(self) -> list[Event]: ...
-
-    def earliest_pending(self) -> float | None: ...
 
 
 class FindingsInOrder:
@@ -120,6 +116,20 @@ class FindingsInOrder:
         return findings
 
 
+class Findings(Closable[Finding]):
+    """What ``analyze`` gives: its findings one at a time, as they are decided.
+
+    ``camera_judged`` says whether the camera commands were judged from the recording's
+    video; when they could have been and were not, ``camera_note`` says why, in one line:
+    the video extra is not installed, or the events came without their video (an iterable
+    of ``Event``s other than ``read``'s: a ``Decoder``'s, a ``Listener``'s, a list)."""
+
+    def __init__(self, findings: Generator[Finding, None, None], analysis: Analysis) -> None:
+        super().__init__(findings)
+        self.camera_judged = analysis.judges_camera
+        self.camera_note = analysis.camera_note
+
+
 def analyze(
     source: Path | Iterable[Event],
     *,
@@ -128,7 +138,7 @@ def analyze(
     flag_allowed_s: float = DEFAULT_FLAG_ALLOWED_S,
     format: str | None = None,
     port: int = TCP_PORT,
-) -> Iterator[Finding]:
+) -> Findings:
     """Did the gimbal obey? Each command with a visible effect judged against the
     attitude feedback that followed, and the feedback's own health: the findings of
     ``analyze --json``, in time order, as they are decided.
@@ -142,12 +152,21 @@ def analyze(
     that is not above 0 raises ``ValueError``. An input without a clock (a raw byte
     dump) gives no findings. Errors of the input as ``read``.
 
+    The camera commands of a recording with video (``demo --video``, ``record --video``)
+    are judged from its pictures, whether ``source`` is the recording's path or
+    ``read(path)`` (its events know their file); without the video extra they are not,
+    and a ``RuntimeWarning`` says so. Events that came without their video (a
+    ``Decoder``'s, a ``Listener``'s, a list) leave the camera commands unjudged: the
+    result's ``camera_judged`` is False and ``camera_note`` says why.
+
     >>> from analyzer import analyze, read
     >>> findings = list(analyze("samples/flight-candump.log", tolerance_deg=2))
     >>> [f.command for f in findings if f.check == "target"]
     ['specified_angle', 'specified_angle', 'look_down', 'forward']
     >>> findings == list(analyze(read("samples/flight-candump.log"), tolerance_deg=2))
     True
+    >>> analyze([]).camera_note
+    'camera commands not judged: the events came without their video'
     """
     settings = Settings(
         tolerance_deg=tolerance_deg, time_allowed_s=time_allowed_s, flag_allowed_s=flag_allowed_s
@@ -155,22 +174,25 @@ def analyze(
     if isinstance(source, (str, os.PathLike)):
         with input_errors(source):
             decoding = open_decoding(source, format, port=port)
-        return _read_findings(decoding, settings, source)
-    return _findings(source, Pipeline(), ResponseAnalyzer(settings), BATCH_ITEMS)
+        analysis = Analysis.of_file(source, settings).tell(_warn)
+        return Findings(_read_findings(decoding, analysis, source), analysis)
+    if isinstance(source, FileEvents):  # read(path): the file's video judges its camera
+        analysis = Analysis.of_file(source.path, settings).tell(_warn)
+    else:
+        analysis = Analysis(settings, camera_note=WITHOUT_VIDEO)
+    return Findings(_findings(source, Pipeline(), analysis.judging(), BATCH_ITEMS), analysis)
 
 
-def _read_findings(decoding: Decoding, settings: Settings, path: Path) -> Iterator[Finding]:
+def _read_findings(
+    decoding: Decoding, analysis: Analysis, path: Path
+) -> Generator[Finding, None, None]:
     """The findings of an opened input; its reader is closed at the end (or when the
     caller stops early)."""
-    # A recording with video: the camera commands are judged from its picture too (the
-    # camera judgement, with PyAV and OpenCV, is imported only when a file is read).
-    from analyzer.analysis.camera.hook import camera_judge, with_camera
-
-    camera = camera_judge(path, settings.time_allowed_s, note=_warn)
-    judging = with_camera(ResponseAnalyzer(settings), camera)
     try:
         with input_errors(path):
-            yield from _findings(decoding.reader, decoding.pipeline, judging, decoding.batch_items)
+            yield from _findings(
+                decoding.reader, decoding.pipeline, analysis.judging(), decoding.batch_items
+            )
     finally:
         decoding.reader.close()
 
@@ -183,7 +205,7 @@ def _warn(note: str) -> None:
 
 def _findings(
     items: Iterable[object], pipeline: Pipeline, judging: Judging, batch_items: int
-) -> Iterator[Finding]:
+) -> Generator[Finding, None, None]:
     """The pipeline of ``analyze`` run over ``items``, its findings as they are released."""
     findings = FindingsInOrder(judging, pipeline.tally)
     pipeline.stages.append(findings)

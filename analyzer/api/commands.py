@@ -106,7 +106,7 @@ class Command:
     parameters: tuple[Parameter, ...]
 
     @classmethod
-    def of(cls, row: command_table.Command) -> Command:
+    def of(cls, row: command_table.CommandRow) -> Command:
         """The public view of one row of the command table."""
         parameters: list[Parameter] = []
         selector = row.selector

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from analyzer.protocol.can_message import frame_from_message
-from analyzer.protocol.decoder import Decoder as ProtocolDecoder
+from analyzer.protocol.decoder import ProtocolDecoder as ProtocolDecoder
 from analyzer.protocol.types import CanFrame, Event, StreamChunk
 
 if TYPE_CHECKING:

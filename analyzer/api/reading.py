@@ -5,9 +5,10 @@ from __future__ import annotations
 import errno
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import TypeVar
 
 from analyzer.errors import UsageError
 from analyzer.inputs import InputReader, open_input
@@ -15,10 +16,19 @@ from analyzer.pipeline import Pipeline, default_decoder, delivered_batches
 from analyzer.protocol.ids import PROTOCOL_IDS, TCP_PORT
 from analyzer.protocol.types import Event
 
-__all__ = ["Decoding", "decoded_events", "input_errors", "open_decoding", "read"]
+__all__ = [
+    "Closable",
+    "Decoding",
+    "FileEvents",
+    "decoded_events",
+    "input_errors",
+    "open_decoding",
+    "read",
+]
 
 FILE_BATCH = 2048  # items handed to the pipeline at a time (1 for standard input)
 Path = str | os.PathLike[str]
+T = TypeVar("T")
 
 
 @dataclass
@@ -55,7 +65,7 @@ def read(
     *,
     port: int = TCP_PORT,
     other_frames: bool = False,
-) -> Iterator[Event]:
+) -> FileEvents:
     """Every event of a capture file, in order, as it is decoded (memory does not grow
     with the file): the events ``decode --json`` prints, one ``Event`` per line.
 
@@ -67,7 +77,8 @@ def read(
     TCP port in pcap files; ``other_frames``: also the frames of other devices
     (``decode --raw``). A missing file raises ``FileNotFoundError``; one that cannot be
     read or recognised, ``ValueError``. Damage inside a file is no error: it comes as
-    ``/diagnostics`` events.
+    ``/diagnostics`` events. The iterator knows its file (``path``): ``analyze`` of it
+    judges a recording's camera commands from its video, as ``analyze`` of the path does.
 
     >>> from analyzer import read
     >>> for event in read("samples/flight-candump.log"):
@@ -82,10 +93,34 @@ def read(
     """
     with input_errors(path):
         decoding = open_decoding(path, format, port=port, other_frames=other_frames)
-    return decoded_events(decoding, path)
+    return FileEvents(path, decoded_events(decoding, path))
 
 
-def decoded_events(decoding: Decoding, path: Path) -> Iterator[Event]:
+class Closable(Iterator[T]):
+    """An iterator over a generator that reads an input: ``close`` stops early, and the
+    input is closed."""
+
+    def __init__(self, items: Generator[T, None, None]) -> None:
+        self._items = items
+
+    def __next__(self) -> T:
+        return next(self._items)
+
+    def close(self) -> None:
+        """Stop early: the input is closed."""
+        self._items.close()
+
+
+class FileEvents(Closable[Event]):
+    """The events of a file as ``read`` gives them, one at a time; ``path`` is the file
+    (a recording's video stays there, for ``analyze`` to judge camera commands by)."""
+
+    def __init__(self, path: Path, events: Generator[Event, None, None]) -> None:
+        super().__init__(events)
+        self.path = path
+
+
+def decoded_events(decoding: Decoding, path: Path) -> Generator[Event, None, None]:
     """The events of an opened input as they are decoded; the reader is closed at the end
     (or when the caller stops early)."""
     reader, pipeline = decoding.reader, decoding.pipeline

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from analyzer.api.reading import Path, input_errors
 from analyzer.mcapio.channels import ROLE_EVENT
-from analyzer.mcapio.read.reader import Recording as McapRecording
+from analyzer.mcapio.read.reader import McapRecording as McapRecording
 from analyzer.protocol.types import Event
 
 if TYPE_CHECKING:

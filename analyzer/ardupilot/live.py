@@ -18,7 +18,7 @@ from analyzer.errors import UsageError
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.sim.engine import SimConfig
 from analyzer.sim.scene import Scene
-from analyzer.sim.transports import CanLink, Link, LinkSpec
+from analyzer.sim.transports import LinkSpec, SimulatedCanLink, SimulatedLink
 from analyzer.sim.uav import FlightPath
 from analyzer.sources.base import Source, SourceItem
 
@@ -56,7 +56,7 @@ def load_driver(path: str, interpreter: str, say: Callable[[str], None]) -> Driv
     return DriverFile(text, name, lua)
 
 
-class AutopilotCanLink(CanLink):
+class AutopilotCanLink(SimulatedCanLink):
     """The autopilot's CAN port: frames go out standard or extended as the script set them."""
 
     def send_frame(self, can_id: int, data: bytes, extended: bool) -> bool:
@@ -116,7 +116,7 @@ class ArduPilotScene(Scene):
         log: Callable[[str], None] | None = None,
         lua: ModuleType | None = None,
     ) -> None:
-        def autopilot(link: Link) -> AutopilotRunner:
+        def autopilot(link: SimulatedLink) -> AutopilotRunner:
             assert isinstance(link, AutopilotCanLink)
             machine = Autopilot(
                 script_source,

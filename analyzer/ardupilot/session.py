@@ -10,7 +10,7 @@ from analyzer.ardupilot.autopilot import BOOT_MS, Autopilot
 from analyzer.ardupilot.plan import DEMO_PERIOD, DEMO_PLAN, MountLibrary, Step
 from analyzer.ardupilot.script import LuaScript
 from analyzer.ardupilot.vehicle import Vehicle
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.uav import FlightPath
@@ -55,7 +55,7 @@ def run_session(
     frames: list[CanFrame] = []
     sent: list[CanFrame] = []
     events: list[Event] = []
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     sim = SimulatedGimbal(start, config or SimConfig(ranging=True)) if gimbal else None
     clock = {"now": start}
 

@@ -230,7 +230,7 @@ class ParamSingleton(Binding):
         return True
 
 
-class Parameter(Binding):
+class ParamBinding(Binding):
     """Parameter(name): a parameter bound by name (an error if there is none)."""
 
     lua_class = "Parameter_ud"
@@ -289,12 +289,12 @@ def lua_globals(vehicle: Vehicle, log: CallLog) -> dict[str, Any]:
     def new_frame() -> CANFrame:
         return CANFrame()
 
-    def new_parameter(name: Any = None) -> Parameter:
+    def new_parameter(name: Any = None) -> ParamBinding:
         if name is None:
-            return Parameter(vehicle)
+            return ParamBinding(vehicle)
         if str(name) not in vehicle.parameters:
             raise ScriptError(f"Parameter: no parameter named {name}")
-        return Parameter(vehicle, str(name))
+        return ParamBinding(vehicle, str(name))
 
     def new_location() -> Location:
         return Location(home_cm=round(vehicle.home().alt() or 0))
@@ -342,5 +342,5 @@ BINDING_CLASSES: tuple[type[Binding], ...] = (
     GpsSingleton,
     ParamSingleton,
     GcsSingleton,
-    Parameter,
+    ParamBinding,
 )

@@ -5,7 +5,7 @@ from __future__ import annotations
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW
 from analyzer.check.align import CENTRING, Goals, commands_for
 from analyzer.check.runner import AFTER_DEADLINE_S, encode
-from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Send, Step
+from analyzer.check.steps import REPEAT_S, Attitude, CheckStep, Hold, Listen, Options, Send
 from analyzer.protocol.framing import wrap_control
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import hexstr
@@ -26,7 +26,7 @@ def _turn(goals: Goals, attitude: Attitude) -> float:
 
 
 def dry_run_lines(
-    steps: tuple[Step, ...], options: Options, allowed_s: float, min_slew_dps: float
+    steps: tuple[CheckStep, ...], options: Options, allowed_s: float, min_slew_dps: float
 ) -> list[str]:
     """Every frame of ``steps`` (and the final centring) for a gimbal that starts centred.
 

@@ -9,7 +9,7 @@ from analyzer import wall_clock
 from analyzer.errors import SourceError
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import TO_IDU, CanFrame, Event, StreamChunk
-from analyzer.sim.transports import Link, LinkSpec, open_ground_link, to_stream
+from analyzer.sim.transports import LinkSpec, SimulatedLink, open_ground_link, to_stream
 from analyzer.sources.base import QueuedSource, link_event
 
 RECEIVE_WAIT_S = 0.05
@@ -28,7 +28,7 @@ class CheckLink(QueuedSource):
     thread_name = "check-link"
 
     def __init__(
-        self, spec: LinkSpec, link: Link | None = None, purpose: str = "the check"
+        self, spec: LinkSpec, link: SimulatedLink | None = None, purpose: str = "the check"
     ) -> None:
         super().__init__()
         self.spec = spec

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from analyzer.analysis.stage import analysis_stages
+from analyzer.analysis.stage import Analysis
 from analyzer.check.judge import Limits, StepResult
 from analyzer.check.observer import Observer
 from analyzer.check.runner import CheckRunner
-from analyzer.check.steps import Options, Step
+from analyzer.check.steps import CheckStep, Options
 from analyzer.pipeline import Pipeline
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
@@ -47,10 +47,10 @@ class SimulatedBench:
         self.now = start
         self._ticks = 0
         self.gimbal = SimulatedGimbal(start, config)
-        self._decoder = Decoder()  # the gimbal's own, for the commands it receives
+        self._decoder = ProtocolDecoder()  # the gimbal's own, for the commands it receives
         self.limits = limits or Limits()
         self.observer = _Observer(self, keep_events=True)
-        self.pipeline = Pipeline([self.observer], stages=analysis_stages(self.limits.settings))
+        self.pipeline = Pipeline([self.observer], stages=Analysis(self.limits.settings).stages())
         self.frames: list[CanFrame] = []
 
     # -- the link --------------------------------------------------------------------------
@@ -108,7 +108,9 @@ class SimulatedBench:
 
     # -- the check -------------------------------------------------------------------------
 
-    def check(self, steps: tuple[Step, ...], options: Options | None = None) -> list[StepResult]:
+    def check(
+        self, steps: tuple[CheckStep, ...], options: Options | None = None
+    ) -> list[StepResult]:
         """Run the check's ``steps`` on this bench, as ``gimbal-analyzer check`` would."""
         runner = CheckRunner(
             self,

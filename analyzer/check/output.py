@@ -121,11 +121,11 @@ def result_from_fields(fields: dict[str, Any]) -> StepResult:
 
 def recorded_steps(path: str) -> list[StepResult]:
     """The steps of a recording `check` made, in order (none for any other recording)."""
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
     from analyzer.protocol.types import TOPIC_CHECK_STEPS
 
     results = []
-    for message in Recording(path).messages({TOPIC_CHECK_STEPS}):
+    for message in McapRecording(path).messages({TOPIC_CHECK_STEPS}):
         with contextlib.suppress(ValueError, TypeError):
             fields = json.loads(message.data)
             if isinstance(fields, dict):

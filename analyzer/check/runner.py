@@ -31,7 +31,7 @@ from analyzer.check.judge import (
     undecided,
 )
 from analyzer.check.observer import Observer
-from analyzer.check.steps import REPEAT_S, Attitude, Hold, Listen, Options, Plan, Send, Step
+from analyzer.check.steps import REPEAT_S, Attitude, CheckStep, Hold, Listen, Options, Plan, Send
 from analyzer.feedback_track import GAP_THRESHOLD_S
 from analyzer.protocol.check_fields import FAIL
 from analyzer.protocol.codec import encode_command
@@ -62,7 +62,7 @@ class _Running:
     """A step that has sent everything and may still wait for its findings."""
 
     index: int
-    step: Step
+    step: CheckStep
     plan: Plan
     started_at: float
     ended_at: float = 0.0
@@ -114,7 +114,7 @@ class CheckRunner:
 
     # -- the sequence ----------------------------------------------------------------------
 
-    def run(self, steps: tuple[Step, ...]) -> list[StepResult]:
+    def run(self, steps: tuple[CheckStep, ...]) -> list[StepResult]:
         clock = self.clock
         first = clock.monotonic() + FIRST_FEEDBACK_WAIT_S
         if not self.observer.wait(lambda: bool(self.observer.samples), first):
@@ -141,7 +141,7 @@ class CheckRunner:
         self._flush(force=True)
         return self.results
 
-    def _try(self, index: int, step: Step) -> _Running:
+    def _try(self, index: int, step: CheckStep) -> _Running:
         """One run of ``step``: to its start, then its actions."""
         clock = self.clock
         plan = step.plan(self.attitude(), self.options)

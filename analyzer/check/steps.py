@@ -100,7 +100,7 @@ class Plan:
 
 
 @dataclass(frozen=True)
-class Step:
+class CheckStep:
     name: str
     summary: str
     plan: Callable[[Attitude, Options], Plan]
@@ -231,27 +231,33 @@ def _feedback(now: Attitude, options: Options) -> Plan:
     return Plan((Listen(options.listen_s),), now)
 
 
-STEPS: tuple[Step, ...] = (
-    Step("feedback", "listen: feedback period, lost messages, CRC errors", _feedback),
-    Step("forward", "from pitch -45 / yaw motor 150 back to the centre (forward)", _forward),
-    Step("pitch_angle", "specified_angle pitch 45 -> -90", _pitch_angle),
-    Step(
+STEPS: tuple[CheckStep, ...] = (
+    CheckStep("feedback", "listen: feedback period, lost messages, CRC errors", _feedback),
+    CheckStep("forward", "from pitch -45 / yaw motor 150 back to the centre (forward)", _forward),
+    CheckStep("pitch_angle", "specified_angle pitch 45 -> -90", _pitch_angle),
+    CheckStep(
         "yaw_airframe",
         "specified_angle yaw motor 0 -> 150 from the nose (DATA4 = 1)",
         _yaw_airframe,
     ),
-    Step("yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> +-150", _yaw_geodetic),
-    Step("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
-    Step("tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed),
-    Step("look_down", "look_down: pitch 45 -> -90", _look_down),
-    Step("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
-    Step("tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking),
+    CheckStep(
+        "yaw_geodetic", "specified_angle yaw from north: yaw motor 0 -> +-150", _yaw_geodetic
+    ),
+    CheckStep("pan_speed", "gimbal_control pan at the asked speed every 50 ms, then 0", _pan_speed),
+    CheckStep(
+        "tilt_speed", "gimbal_control tilt at the asked speed every 50 ms, then 0", _tilt_speed
+    ),
+    CheckStep("look_down", "look_down: pitch 45 -> -90", _look_down),
+    CheckStep("zoom", "zoom in, stop, zoom 1x (judged from the video; skipped without)", _zoom),
+    CheckStep(
+        "tracking", "tracking at the image centre, flag on; tracking_stop, flag off", _tracking
+    ),
 )
 BY_NAME = {step.name: step for step in STEPS}
 assert tuple(BY_NAME) == STEP_NAMES
 
 
-def select(names: str | None) -> tuple[Step, ...]:
+def select(names: str | None) -> tuple[CheckStep, ...]:
     """The steps named in ``a,b,c`` (in the built-in order), all of them for None.
 
     Raises ValueError naming the unknown ones and the valid names."""

@@ -148,8 +148,7 @@ def settings_from(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.analysis.camera.hook import camera_judge, with_camera
-    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.analysis.stage import Analysis
     from analyzer.commands.analyze_output import FindingsOutput
     from analyzer.pipeline import run_items
     from analyzer.progress import Progress
@@ -157,10 +156,8 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     decoding = open_decoding_of(args)
     reader, pipeline = decoding.reader, decoding.pipeline
-    analyzer = ResponseAnalyzer(settings)
-    extra_notes: list[str] = []  # the camera not judged: the video extra is missing
-    camera = camera_judge(args.file, settings.time_allowed_s, note=extra_notes.append)
-    judging = with_camera(analyzer, camera)
+    analysis = Analysis.of_file(args.file, settings)
+    judging = analysis.judging()
     out = sys.stdout
     output = FindingsOutput(
         judging, pipeline.tally, json_lines=args.json, problems=args.problems
@@ -175,10 +172,10 @@ def run(args: argparse.Namespace) -> int:
         reader.close()
     for failure in pipeline.failures:
         raise failure.error
-    notes = [*reader.notes, *extra_notes]
+    # The camera not judged: the video extra is missing.
+    notes = [*reader.notes, *([analysis.camera_note] if analysis.camera_note else [])]
     if output.untimed:
         # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
-        analyzer.verdicts.clear()
         notes.append(
             f"{args.file} carries no timestamps (a raw TCP/UART byte dump?), so responses "
             "cannot be timed; record with `gimbal-analyzer record` to get times"

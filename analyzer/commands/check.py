@@ -8,14 +8,18 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, TextIO, cast
 
 from analyzer.errors import SourceError, UsageError
 
 if TYPE_CHECKING:
+    from analyzer.capture import Capture
     from analyzer.check.judge import Limits, StepResult
+    from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
-    from analyzer.check.steps import Options, Step
+    from analyzer.check.runner import CheckRunner
+    from analyzer.check.steps import CheckStep, Options
+    from analyzer.mcapio.write.sink import McapSink
     from analyzer.mcapio.write.video import VideoRecorder
     from analyzer.sim.transports import LinkSpec
 
@@ -209,54 +213,21 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_check(
-    args: argparse.Namespace, steps: tuple[Step, ...], options: Options, limits: Limits
+    args: argparse.Namespace, steps: tuple[CheckStep, ...], options: Options, limits: Limits
 ) -> int:
-    from analyzer.analysis.stage import analysis_stages
-    from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
-    from analyzer.check.output import JsonPrinter, TablePrinter, summary
+    from analyzer.check.output import JsonPrinter, TablePrinter
     from analyzer.check.runner import CheckRunner
-    from analyzer.commands.video_options import video_metadata, video_recorder
-    from analyzer.mcapio.write.sink import McapSink, recording_metadata
-    from analyzer.output_file import check_output
-    from analyzer.protocol.check_fields import FAIL
     from analyzer.sim.transports import parse_link
-    from analyzer.video.spec import VIDEO_HOLD_BACK_S
 
     spec = parse_link(args.to)
-    if args.output is not None:
-        path = check_output(args.output, force=args.force)
-    else:
-        path = check_output(default_output())
-    if args.report is not None:
-        check_output(args.report, force=args.force)
+    path = _recording_path(args)
     say = sys.stderr if args.json else sys.stdout
     link = CheckLink(spec)
-    try:
-        sink = McapSink(
-            path,
-            metadata=recording_metadata(
-                f"check: bench check over {spec}", command="check", **video_metadata(args)
-            ),
-            force=args.force,
-            hold_back=VIDEO_HOLD_BACK_S if options.video else 0.0,
-        )
-    except BaseException:
-        link.close()
-        raise
+    sink = _recording_sink(args, link, path, spec, options)
     observer = Observer(keep_events=args.report is not None)
-    stages = analysis_stages(limits.settings)
-    video = video_recorder(args, sink)
-    if video is not None:  # the zoom judged from the picture, as the frames come in
-        from analyzer.analysis.camera.live import LiveVideo  # PyAV, OpenCV: --video only
-        from analyzer.analysis.camera.stage import CameraJudge
-
-        pictures = LiveVideo([s.spec.name for s in video.streams])
-        video.taps.append(pictures.add)
-        stages += [video.stage, CameraJudge(pictures, limits.settings.time_allowed_s)]
-    sinks = [s for s in (video, sink, observer) if s is not None]
-    capture = Capture(link, sinks, stages=stages)
+    capture, video = _check_capture(args, link, sink, observer, limits)
     printer = JsonPrinter(sys.stdout) if args.json else TablePrinter(sys.stdout)
     runner = CheckRunner(
         link, observer, limits, options, printer, lambda text: print(f"warning: {text}", file=say)
@@ -268,6 +239,89 @@ def _run_check(
     capture.start()
     if video is not None:  # the zoom step needs pictures from before its first command
         _wait_for_video(video, lambda text: print(f"warning: {text}", file=say))
+    _run_steps(runner, steps, link, observer, capture, sink, path)
+    results = runner.results
+    _say_how_it_ended(runner, path, say)
+    if args.report is not None:
+        _write_report(args.report, args.force, observer, results, spec, limits)
+        print(f"report written to {args.report}", file=say)
+    if capture.error is not None:
+        raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
+    from analyzer.protocol.check_fields import FAIL
+
+    return 1 if any(r.verdict == FAIL for r in results) else 0
+
+
+def _recording_path(args: argparse.Namespace) -> str:
+    """Where the check records (refused before anything moves if it may not be written),
+    with the --report page checked as well."""
+    from analyzer.output_file import check_output
+
+    if args.output is not None:
+        path = check_output(args.output, force=args.force)
+    else:
+        path = check_output(default_output())
+    if args.report is not None:
+        check_output(args.report, force=args.force)
+    return str(path)
+
+
+def _recording_sink(
+    args: argparse.Namespace, link: CheckLink, path: str, spec: LinkSpec, options: Options
+) -> McapSink:
+    """The check's recording (the link is closed if it cannot be opened)."""
+    from analyzer.commands.video_options import video_metadata
+    from analyzer.mcapio.write.sink import McapSink, recording_metadata
+    from analyzer.video.spec import VIDEO_HOLD_BACK_S
+
+    try:
+        return McapSink(
+            path,
+            metadata=recording_metadata(
+                f"check: bench check over {spec}", command="check", **video_metadata(args)
+            ),
+            force=args.force,
+            hold_back=VIDEO_HOLD_BACK_S if options.video else 0.0,
+        )
+    except BaseException:
+        link.close()
+        raise
+
+
+def _check_capture(
+    args: argparse.Namespace, link: CheckLink, sink: McapSink, observer: Observer, limits: Limits
+) -> tuple[Capture, VideoRecorder | None]:
+    """The capture of the link through the analysis into the recording and the observer,
+    and the camera's recorder with --video (its zoom judged from the picture as the
+    frames come in)."""
+    from analyzer.analysis.stage import Analysis
+    from analyzer.capture import Capture
+    from analyzer.commands.video_options import video_recorder
+
+    analysis = Analysis(limits.settings)
+    video = video_recorder(args, sink)
+    if video is not None:
+        from analyzer.analysis.camera.live import LiveVideo  # PyAV, OpenCV: --video only
+
+        pictures = LiveVideo([s.spec.name for s in video.streams])
+        video.taps.append(pictures.add)
+        analysis = Analysis(limits.settings, pictures)
+    stages = analysis.stages(before_camera=None if video is None else video.stage)
+    sinks = [s for s in (video, sink, observer) if s is not None]
+    return Capture(link, sinks, stages=stages), video
+
+
+def _run_steps(
+    runner: CheckRunner,
+    steps: tuple[CheckStep, ...],
+    link: CheckLink,
+    observer: Observer,
+    capture: Capture,
+    sink: McapSink,
+    path: str,
+) -> None:
+    """The steps run; whatever happens, the gimbal is stopped and centred, every verdict
+    goes through the pipeline and the recording is finished."""
     completed = False
     try:
         runner.run(steps)
@@ -293,19 +347,17 @@ def _run_check(
             sink.close()
     if sink.error is not None:
         raise SourceError(sink.error)
-    results = runner.results
-    print(summary(results), file=say)
+
+
+def _say_how_it_ended(runner: CheckRunner, path: str, say: TextIO) -> None:
+    from analyzer.check.output import summary
+
+    print(summary(runner.results), file=say)
     if runner.centred is False:
         print("warning: the feedback did not show the gimbal back at the centre", file=say)
     elif runner.centred:
         print("the gimbal is stopped and centred", file=say)
     print(f"recorded to {path}", file=say)
-    if args.report is not None:
-        _write_report(args.report, args.force, observer, results, spec, limits)
-        print(f"report written to {args.report}", file=say)
-    if capture.error is not None:
-        raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
-    return 1 if any(r.verdict == FAIL for r in results) else 0
 
 
 VIDEO_WAIT_S = 10.0  # the camera's streams have this long to deliver their first frames

@@ -100,24 +100,23 @@ def run(args: argparse.Namespace) -> int:
 def judge(path: str, settings: Settings, port: int, *, quiet: bool) -> Judged:
     """``path`` judged by the response analysis (and its video, if it has one), with a
     check recording's steps and a replay's span."""
-    from analyzer.analysis.camera.hook import camera_judge, with_camera
-    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.analysis.stage import Analysis
     from analyzer.check.output import recorded_steps
     from analyzer.commands.input_pass import read_through
     from analyzer.compare.judged import Judged, Judgements
 
     judgements = Judgements()
-    stage = with_camera(ResponseAnalyzer(settings), camera_judge(path, settings.time_allowed_s))
-    reader = read_through(path, [judgements], stages=[stage], port=port, quiet=quiet)
+    stages = Analysis.of_file(path, settings).stages()
+    reader = read_through(path, [judgements], stages=stages, port=port, quiet=quiet)
     if judgements.first is not None and judgements.first == judgements.last:
         raise UsageError(f"{path} carries no timestamps: its responses cannot be timed")
     described = reader.format_name
     steps = []
     if reader.format_name == "mcap":
         from analyzer.mcapio.channels import METADATA_NAME
-        from analyzer.mcapio.read.reader import Recording
+        from analyzer.mcapio.read.reader import McapRecording
 
-        command = Recording(path).metadata().get(METADATA_NAME, {}).get("command")
+        command = McapRecording(path).metadata().get(METADATA_NAME, {}).get("command")
         described = f"mcap of {command}" if command else described
         steps = recorded_steps(path)
     return Judged.of(path, described, judgements, steps, settings.tolerance_deg)

@@ -67,13 +67,12 @@ def run(args: argparse.Namespace) -> int:
     meta = recording_metadata(
         f"file:{args.input}", command="convert", input_format=args.format or "auto"
     )
-    from analyzer.analysis.camera.hook import camera_stages
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
 
     # Made before the output exists: the decoder's import takes a while. A recording with
     # video has its camera commands judged from it too.
     notes: list[str] = []  # the camera not judged: the video extra is missing
-    pipeline = Pipeline(stages=[*analysis_stages(), *camera_stages(args.input, note=notes.append)])
+    pipeline = Pipeline(stages=Analysis.of_file(args.input).tell(notes.append).stages())
     progress = Progress.maybe(source, sys.stderr, quiet=args.quiet, label="converting ")
     started = time.perf_counter()
     sink: McapSink | None = None

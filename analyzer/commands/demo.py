@@ -195,7 +195,7 @@ class SimulatorOption:
     fault: bool
 
 
-class LinePrinter:
+class DemoPrinter:
     """Sink printing each event as one plain line; UAV status thinned out unless ``everything``."""
 
     def __init__(self, stream: IO[str], *, everything: bool = False) -> None:
@@ -315,60 +315,35 @@ def simulated_camera() -> tuple[Any, Any]:
 def written_by_demo(path: Path) -> bool:
     """True for a recording made by `demo` itself (its metadata says so): one it may replace."""
     from analyzer.mcapio.channels import METADATA_NAME
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
 
     try:
-        return Recording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
+        return McapRecording(path).metadata().get(METADATA_NAME, {}).get("command") == "demo"
     except Exception:  # not a recording, or unreadable: not ours
         return False
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.capture import OUTPUT_CLOSED
     from analyzer.commands.live_recording import Companion, open_live_recording
-    from analyzer.commands.video_options import silent_streams, video_metadata
-    from analyzer.live.attach import foxglove_summary
+    from analyzer.commands.video_options import video_metadata
     from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
-    from analyzer.sim.engine import SimConfig
-    from analyzer.sim.faults import FaultConfig
-    from analyzer.sim.ground import GroundScript, pilot_script
-    from analyzer.sim.scene import Scene
     from analyzer.sim.transports import LinkSpec
     from analyzer.sources import open_source
     from analyzer.video.spec import VIDEO_HOLD_BACK_S, video_specs
 
     # a wrong --video is a usage error before anything starts; video needs the hold-back
     hold_back = VIDEO_HOLD_BACK_S if video_specs(args) else 0.0
-    tui = not args.no_tui and sys.stdin.isatty() and sys.stdout.isatty()
-    run_app: Any = None
-    if tui:
-        try:
-            from analyzer.tui.app import run_app
-        except ImportError:
-            tui = False
+    run_app = _monitor_app(args)
+    tui = run_app is not None
     duration = args.duration if args.duration is not None else (None if tui else PLAIN_DURATION)
     if duration is not None and duration <= 0:
         raise UsageError("--duration must be a positive number of seconds")
     target = check_output(args.output, force=args.force, replaceable=written_by_demo)
     path = str(target)
     spec = LinkSpec("can", interface="virtual", channel=CHANNEL)
-    faults = FaultConfig() if args.clean else fault_config(args)
-    config = SimConfig(
-        ranging=True,
-        uav=True,
-        faults=faults,
-        behaviour=behaviour(args),
-        heading_deg=args.heading,
-    )
-
-    if args.lua != "lupa" and not args.ardupilot:
-        raise UsageError("--lua chooses the Lua of an --ardupilot driver: give --ardupilot")
-    if args.stick and args.ardupilot:
-        raise UsageError(
-            "--stick drives the demo's ground station, and with --ardupilot the driver is "
-            "the ground station: give one of them"
-        )
+    _check_driver_options(args)
+    config = _sim_config(args)
     driver = _driver(args) if args.ardupilot else None
     if driver is not None:
         config = replace(config, uav=False)  # the driver's status frames are the only ones
@@ -377,7 +352,7 @@ def run(args: argparse.Namespace) -> int:
         from analyzer.ardupilot.live import NotedSource
 
         source = NotedSource(source)
-    printer = None if tui else LinePrinter(sys.stdout, everything=args.all)
+    printer = None if tui else DemoPrinter(sys.stdout, everything=args.all)
     eye, camera = simulated_camera()
     recording = open_live_recording(
         args,
@@ -395,20 +370,7 @@ def run(args: argparse.Namespace) -> int:
         simulated_camera=camera,
         replaceable=written_by_demo,
     )
-    capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
-    try:
-        script = GroundScript(pilot_script()) if args.stick else None
-        scene: Any = (
-            Scene(spec, config, script=script)
-            if driver is None
-            else _autopilot(args, spec, config, driver, source, tui)
-        )
-    except BaseException:
-        source.close()
-        sink.close()
-        if live is not None:
-            live.close()
-        raise
+    scene = _scene(args, recording, spec, config, driver, tui)
     recording.companions.append(Companion(scene.start, scene.stop))
     eye.attach(scene.gimbal)
 
@@ -418,6 +380,7 @@ def run(args: argparse.Namespace) -> int:
             if driver is None
             else f"simulated gimbal and ArduPilot running {driver.name}"
         )
+        faults = config.faults
         print(
             f"demo: {who} on {spec}; recording {path}; faults: {faults.describe()}; {duration:g} s",
             flush=True,
@@ -425,11 +388,82 @@ def run(args: argparse.Namespace) -> int:
 
     result = recording.run(
         duration,
-        tui=run_app if tui else None,
+        tui=run_app,
         label=f"demo on {spec}",
         exit_when_done=args.duration is not None,
         started=first_line,
     )
+    return _said_at_the_end(recording, scene, printer, tui, result)
+
+
+def _monitor_app(args: argparse.Namespace) -> Any:
+    """The monitor UI's runner when the demo shows it (a terminal, no --no-tui, the UI
+    loads), else None: then it prints lines."""
+    if args.no_tui or not (sys.stdin.isatty() and sys.stdout.isatty()):
+        return None
+    try:
+        from analyzer.tui.app import run_app
+    except ImportError:
+        return None
+    return run_app
+
+
+def _check_driver_options(args: argparse.Namespace) -> None:
+    """--lua and --stick against --ardupilot: a UsageError when they do not go together."""
+    if args.lua != "lupa" and not args.ardupilot:
+        raise UsageError("--lua chooses the Lua of an --ardupilot driver: give --ardupilot")
+    if args.stick and args.ardupilot:
+        raise UsageError(
+            "--stick drives the demo's ground station, and with --ardupilot the driver is "
+            "the ground station: give one of them"
+        )
+
+
+def _sim_config(args: argparse.Namespace) -> Any:
+    """The simulated gimbal and UAV the options ask for (faults unless --clean)."""
+    from analyzer.sim.engine import SimConfig
+    from analyzer.sim.faults import FaultConfig
+
+    return SimConfig(
+        ranging=True,
+        uav=True,
+        faults=FaultConfig() if args.clean else fault_config(args),
+        behaviour=behaviour(args),
+        heading_deg=args.heading,
+    )
+
+
+def _scene(
+    args: argparse.Namespace, recording: Any, spec: Any, config: Any, driver: Any, tui: bool
+) -> Any:
+    """The simulated gimbal with its ground station: the scripted one, or ArduPilot
+    running ``driver``; on a failure the recording's source, sink and server close."""
+    from analyzer.sim.ground import GroundScript, pilot_script
+    from analyzer.sim.scene import Scene
+
+    try:
+        script = GroundScript(pilot_script()) if args.stick else None
+        if driver is None:
+            return Scene(spec, config, script=script)
+        return _autopilot(args, spec, config, driver, recording.source, tui)
+    except BaseException:
+        recording.source.close()
+        recording.sink.close()
+        if recording.live is not None:
+            recording.live.close()
+        raise
+
+
+def _said_at_the_end(
+    recording: Any, scene: Any, printer: DemoPrinter | None, tui: bool, result: int
+) -> int:
+    """The demo's last lines (on standard error under the monitor UI); the exit code."""
+    from analyzer.capture import OUTPUT_CLOSED
+    from analyzer.commands.video_options import silent_streams
+    from analyzer.live.attach import foxglove_summary
+
+    capture, sink, live, video = recording.capture, recording.sink, recording.live, recording.video
+    path = recording.path
     if sink.error is not None:
         raise SourceError(sink.error)
     if capture.error is not None:

@@ -79,20 +79,43 @@ def _simulator_lines(meta: dict[str, str]) -> list[str]:
 
 def render(info: RecordingInfo) -> str:
     """Human-readable report."""
-    lines = []
+    lines = [f"file        {info.path} ({_size(info.size_bytes)}, {_state(info)})"]
+    lines += _damage_lines(info)
+    lines += _origin_lines(info)
+    lines += _time_lines(info)
+    if info.topics:
+        width = max(len(t.topic) for t in info.topics)
+        lines.append("")
+        lines.append(f"  {'topic':<{width}}  {'count':>9}  {'rate/s':>9}  schema")
+        for t in info.topics:
+            rate = "-" if t.rate_hz is None else f"{t.rate_hz:.2f}"
+            lines.append(f"  {t.topic:<{width}}  {t.count:>9}  {rate:>9}  {t.schema}")
+    lines.append("")
+    lines.append(f"figures of the run, from {info.stats_from}:")
+    lines.extend(event_lines(info.tally))
+    lines.extend(feedback_lines(info.tally))
+    lines.extend(bus_lines(info.tally))
+    lines.append(crc_line(info.tally))
+    # Paths, metadata, topics and kinds come from the file: no raw control characters.
+    return "\n".join(printable(line) for line in lines)
+
+
+def _state(info: RecordingInfo) -> str:
+    """Whether the recording was finished, recovered or damaged, in words."""
     if info.summary_damaged:
-        state = "DAMAGED (its summary failed its checks; read sequentially)"
-    elif info.recovered:
-        state = "RECOVERED (recording was not finished)"
-    elif info.damage:
-        state = f"finished, DAMAGED ({len(info.damage)} unreadable part(s))"
-    elif not info.closed:
-        state = (
-            "NOT CLOSED (the recorder stopped without closing it; complete up to its last flush)"
-        )
-    else:
-        state = "finished"
-    lines.append(f"file        {info.path} ({_size(info.size_bytes)}, {state})")
+        return "DAMAGED (its summary failed its checks; read sequentially)"
+    if info.recovered:
+        return "RECOVERED (recording was not finished)"
+    if info.damage:
+        return f"finished, DAMAGED ({len(info.damage)} unreadable part(s))"
+    if not info.closed:
+        return "NOT CLOSED (the recorder stopped without closing it; complete up to its last flush)"
+    return "finished"
+
+
+def _damage_lines(info: RecordingInfo) -> list[str]:
+    """How it was recovered, what could not be read and how to repair it."""
+    lines = []
     if info.recovered:
         lines.append(f"recovery    {info.recovery_note}")
     for detail in info.damage[:MAX_DAMAGE_LINES]:
@@ -111,7 +134,13 @@ def render(info: RecordingInfo) -> str:
         )
         lines.append("            writes a clean copy of everything readable: Foxglove refuses a")
         lines.append("            file with a damaged chunk and stops at the first damaged record")
+    return lines
+
+
+def _origin_lines(info: RecordingInfo) -> list[str]:
+    """Where the recording came from: its source, the simulator, the writer, the document."""
     meta = info.metadata
+    lines = []
     if meta.get("source"):
         lines.append(f"source      {meta['source']}")
     lines.extend(_simulator_lines(meta))
@@ -121,30 +150,21 @@ def render(info: RecordingInfo) -> str:
         lines.append(f"written by  {info.writer}")
     if meta.get("protocol_document"):
         lines.append(f"protocol    {meta['protocol_document']}")
+    return lines
+
+
+def _time_lines(info: RecordingInfo) -> list[str]:
+    """Its time range, duration and message count."""
     if info.start_ns is None or info.end_ns is None:
-        lines.append("time range  (no messages)")
+        lines = ["time range  (no messages)"]
     else:
-        lines.append(
+        lines = [
             f"time range  {format_datetime(info.start_ns / 1e9)} .. "
-            f"{format_datetime(info.end_ns / 1e9)}"
-        )
-        lines.append(f"duration    {info.duration_s:.3f} s")
+            f"{format_datetime(info.end_ns / 1e9)}",
+            f"duration    {info.duration_s:.3f} s",
+        ]
     lines.append(f"messages    {info.message_count}, counts from {info.counts_from}")
-    if info.topics:
-        width = max(len(t.topic) for t in info.topics)
-        lines.append("")
-        lines.append(f"  {'topic':<{width}}  {'count':>9}  {'rate/s':>9}  schema")
-        for t in info.topics:
-            rate = "-" if t.rate_hz is None else f"{t.rate_hz:.2f}"
-            lines.append(f"  {t.topic:<{width}}  {t.count:>9}  {rate:>9}  {t.schema}")
-    lines.append("")
-    lines.append(f"figures of the run, from {info.stats_from}:")
-    lines.extend(event_lines(info.tally))
-    lines.extend(feedback_lines(info.tally))
-    lines.extend(bus_lines(info.tally))
-    lines.append(crc_line(info.tally))
-    # Paths, metadata, topics and kinds come from the file: no raw control characters.
-    return "\n".join(printable(line) for line in lines)
+    return lines
 
 
 def run(args: argparse.Namespace) -> int:

@@ -126,7 +126,7 @@ def open_live_recording(
     command's own sinks (printers, status line); ``simulated_camera`` makes the streams of
     ``--camera sim`` (demo's). On a failure the source and the live
     server are closed before the error goes on."""
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture
     from analyzer.commands.video_options import video_recorder
     from analyzer.live.attach import start_foxglove
@@ -152,6 +152,6 @@ def open_live_recording(
     video = video_recorder(args, sink, simulated_camera)
     own = sinks_after(sink, video)
     sinks: list[Any] = [s for s in (video, sink, *own, live) if s is not None]
-    stages = [*analysis_stages(), *([video.stage] if video is not None else [])]
+    stages = Analysis().stages(before_camera=None if video is None else video.stage)
     capture = Capture(source, sinks, stages=stages)
     return LiveRecording(capture, sink, path, source, video, live)

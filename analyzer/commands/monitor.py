@@ -72,14 +72,14 @@ def run(args: argparse.Namespace) -> int:
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise UsageError("monitor needs a terminal; use `decode` to print events to a pipe")
 
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture
     from analyzer.live.attach import foxglove_status, start_foxglove, with_foxglove
     from analyzer.tui.app import run_app
 
     live = start_foxglove(args, encode=True)  # no recording to feed it
     source = open_source(args.source, replay_speed=speed)
-    capture = Capture(source, [] if live is None else [live], stages=analysis_stages())
+    capture = Capture(source, [] if live is None else [live], stages=Analysis().stages())
     label = str(getattr(source, "description", args.source))
     result = run_app(
         capture, source_label=with_foxglove(label, live), live_status=foxglove_status(live)

@@ -227,36 +227,16 @@ def _input_files(spec: str) -> list[str]:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.commands.live_recording import open_live_recording
-    from analyzer.commands.video_options import silent_streams, video_frames, video_metadata
-    from analyzer.live.attach import foxglove_note, foxglove_summary
+    from analyzer.commands.video_options import video_metadata
+    from analyzer.live.attach import foxglove_note
     from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.output_file import check_output
     from analyzer.sources import open_source
-    from analyzer.video.spec import video_specs
 
-    if args.duration is not None and not args.duration > 0:
-        raise UsageError("--duration must be a positive number of seconds")
-    if args.tui and not (sys.stdin.isatty() and sys.stdout.isatty()):
-        raise UsageError(
-            "record --tui needs a terminal; leave out --tui to record with a status line "
-            "on standard error"
-        )
-    inputs = _input_files(args.source)
-    # a wrong --video is a usage error before anything starts; video needs the hold-back
-    hold_back = VIDEO_HOLD_BACK_S if video_specs(args) else 0.0
-    if hold_back and inputs:
-        raise UsageError(
-            "--video records a live camera next to a live source; a file: replay has the "
-            "times of its recording"
-        )
+    inputs, hold_back = _checked_arguments(args)
     target = check_output(args.output, force=args.force, inputs=inputs)
     path = str(target)
-    run_app: Any = None
-    if args.tui:
-        try:
-            from analyzer.tui.app import run_app
-        except ImportError as exc:
-            raise UsageError(f"the monitor UI is not available ({exc})") from None
+    run_app = _monitor_app() if args.tui else None
     source = open_source(args.source, replay_speed=args.speed)
     description = str(getattr(source, "description", args.source))
     note = getattr(source, "listen_note", None)
@@ -289,21 +269,65 @@ def run(args: argparse.Namespace) -> int:
         sinks_after=own_sinks,
         inputs=inputs,
     )
-    capture, sink, video, live = (
-        recording.capture,
-        recording.sink,
-        recording.video,
-        recording.live,
-    )
     if status is not None:
+        live = recording.live
         status.notes.append(lambda: foxglove_note(live))
-        status.capture = capture
+        status.capture = recording.capture
     result = recording.run(
         args.duration,
-        tui=run_app if args.tui else None,
+        tui=run_app,
         label=description,
         exit_when_done=args.duration is not None,
     )
+    return _said_at_the_end(args, recording, link, description, bool(inputs), result)
+
+
+def _checked_arguments(args: argparse.Namespace) -> tuple[list[str], float]:
+    """The input files of a file: source and the video's hold-back, once the options are
+    seen to go together (a UsageError before anything starts otherwise)."""
+    from analyzer.video.spec import video_specs
+
+    if args.duration is not None and not args.duration > 0:
+        raise UsageError("--duration must be a positive number of seconds")
+    if args.tui and not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise UsageError(
+            "record --tui needs a terminal; leave out --tui to record with a status line "
+            "on standard error"
+        )
+    inputs = _input_files(args.source)
+    # a wrong --video is a usage error before anything starts; video needs the hold-back
+    hold_back = VIDEO_HOLD_BACK_S if video_specs(args) else 0.0
+    if hold_back and inputs:
+        raise UsageError(
+            "--video records a live camera next to a live source; a file: replay has the "
+            "times of its recording"
+        )
+    return inputs, hold_back
+
+
+def _monitor_app() -> Any:
+    """The monitor UI's runner (--tui), or a UsageError when it cannot be loaded."""
+    try:
+        from analyzer.tui.app import run_app
+    except ImportError as exc:
+        raise UsageError(f"the monitor UI is not available ({exc})") from None
+    return run_app
+
+
+def _said_at_the_end(
+    args: argparse.Namespace,
+    recording: Any,
+    link: LinkWatch,
+    description: str,
+    from_file: bool,
+    result: int,
+) -> int:
+    """What the recording ended with, on standard error; the exit code (a capture error,
+    nothing received or a silent video stream fail it)."""
+    from analyzer.live.attach import foxglove_summary
+
+    capture, sink, video, live = recording.capture, recording.sink, recording.video, recording.live
+    path = recording.path
     stats = capture.stats
     if sink.error is not None:
         raise SourceError(sink.error)
@@ -314,7 +338,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         result = 1
-    nothing_received = result == 0 and not inputs and not (stats.frames or stats.chunks)
+    nothing_received = result == 0 and not from_file and not (stats.frames or stats.chunks)
     reason = capture.stop_reason or "stopped"
     if not args.quiet:
         print(
@@ -328,26 +352,41 @@ def run(args: argparse.Namespace) -> int:
     if video is not None and not args.quiet:
         print(f"{video_summary(video)}", file=sys.stderr)
     if nothing_received:
-        # A live source that delivered nothing is a failed capture (exit 1), not a
-        # success: say why we think nothing came (the last link message).
-        last = link.last_words()
-        pictures = video_frames(video) if video is not None else None
-        holds = f"{pictures} and its link diagnostics" if pictures else "only its link diagnostics"
-        print(
-            f"gimbal-analyzer record: nothing was received from {description} in "
-            f"{stats.elapsed_s:.1f} s"
-            + (f" (last link message: {last})" if last else "")
-            + f"; the recording {path} holds {holds}",
-            file=sys.stderr,
-        )
+        _say_nothing_received(link, video, description, stats.elapsed_s, path)
         result = EXIT_FAILED
-    if not nothing_received and not inputs and link.status.failing:
+    if not nothing_received and not from_file and link.status.failing:
         # an adapter unplugged and not back: the recording ends at the loss, say so
         print(
             f"gimbal-analyzer record: warning: {description} had not come back when the "
             f"capture ended ({link.status.describe(time.time())})",
             file=sys.stderr,
         )
+    return _said_of_the_video_and_drops(video, stats, result)
+
+
+def _say_nothing_received(
+    link: LinkWatch, video: Any, description: str, elapsed_s: float, path: str
+) -> None:
+    """A live source that delivered nothing is a failed capture (exit 1), not a success:
+    say why we think nothing came (the last link message)."""
+    from analyzer.commands.video_options import video_frames
+
+    last = link.last_words()
+    pictures = video_frames(video) if video is not None else None
+    holds = f"{pictures} and its link diagnostics" if pictures else "only its link diagnostics"
+    print(
+        f"gimbal-analyzer record: nothing was received from {description} in "
+        f"{elapsed_s:.1f} s"
+        + (f" (last link message: {last})" if last else "")
+        + f"; the recording {path} holds {holds}",
+        file=sys.stderr,
+    )
+
+
+def _said_of_the_video_and_drops(video: Any, stats: Any, result: int) -> int:
+    """A video stream that never delivered, frames dropped: said even with --quiet."""
+    from analyzer.commands.video_options import silent_streams
+
     for words in silent_streams(video) if video is not None else []:
         # A stream asked for that never delivered is a failure, even with --quiet.
         print(f"gimbal-analyzer record: {words}", file=sys.stderr)

@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> int:
-    from analyzer.analysis.stage import analysis_stages
+    from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
@@ -163,7 +163,7 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
         link.close()
         raise
     observer = Observer()
-    capture = Capture(link, [sink, observer], stages=analysis_stages())
+    capture = Capture(link, [sink, observer], stages=Analysis().stages())
     progress = None if args.quiet else _progress(span, args.speed)
     player = Player(link, observer, source=link.source_name, progress=progress)
     print(f"replay over {link.description}; recording {path}", flush=True)

@@ -3,7 +3,13 @@
 from __future__ import annotations
 
 import argparse
-from typing import IO, cast
+from typing import IO, TYPE_CHECKING, cast
+
+if TYPE_CHECKING:
+    from analyzer.report.camera import PictureChoice
+    from analyzer.report.collect import ReportData
+    from analyzer.report.stream import EventsInto
+    from analyzer.scene.timeline import OverlayTimeline
 
 HELP = "write a flight report: one offline HTML file with plots, findings and diagnostics"
 
@@ -57,77 +63,42 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from analyzer.analysis.camera.hook import NOT_JUDGED, camera_judge, with_camera
-    from analyzer.analysis.response import ResponseAnalyzer
+    from analyzer.analysis.stage import NOT_JUDGED, Analysis, WithCamera
     from analyzer.commands.analyze import open_reader, settings_from
-    from analyzer.extras import VIDEO, installed
+    from analyzer.extras import VIDEO
     from analyzer.output_file import OutputFile, check_output
     from analyzer.pipeline import Pipeline, run_items
-    from analyzer.progress import Progress, further_pass
-    from analyzer.report import camera
+    from analyzer.progress import Progress
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
     from analyzer.report.stream import EventsInto, FindingsInto
-    from analyzer.report.tables import UNTIMED
 
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
     settings = settings_from(args)
     reader = open_reader(args)
     data = ReportData(source=reader.source, format_name=reader.format_name)
-    camera_stage = None
     left_out: list[str] = []  # what the missing video extra leaves out, in words
-    if reader.format_name == "mcap":  # a recording with video: camera commands judged by it
-        camera_stage = camera_judge(
-            args.file,
-            settings.time_allowed_s,
-            keep_pictures=True,
-            note=lambda _: left_out.append(NOT_JUDGED),
-        )
-    stage = FindingsInto(with_camera(ResponseAnalyzer(settings), camera_stage), data)
+    # A recording with video: camera commands judged by it.
+    recording = args.file if reader.format_name == "mcap" else None
+    analysis = Analysis.of_file(recording, settings, keep_pictures=True)
+    analysis.tell(lambda _: left_out.append(NOT_JUDGED))
+    judging = analysis.judging()
+    camera_stage = judging.camera if isinstance(judging, WithCamera) else None
     sinks = [EventsInto(data.add)]
-    overlays = None
-    if reader.format_name == "mcap":  # only a recording has camera pictures to draw over
-        from analyzer.mcapio.read.video import thumbnail_times
-        from analyzer.scene.timeline import OverlayTimeline
-
-        # The pictures show what Foxglove draws over them: the overlay at each picture's
-        # moment is kept as the events go by (not the overlay of every feedback).
-        with further_pass(args.file, sys.stderr, quiet=args.quiet, label="camera times ") as read:
-            overlays = OverlayTimeline(thumbnail_times(args.file, read))
-        if overlays.moments:
-            sinks.append(EventsInto(overlays.add))
-            if not installed(VIDEO):
-                left_out.append("camera pictures shown without their overlay")
+    overlays = _overlays(args, sinks, left_out) if recording is not None else None
     camera_notes = [f"{' and '.join(left_out)}: {VIDEO.missing}"] if left_out else []
     # The same decoding and counting as every command; the analysis is a stage of it.
-    pipeline = Pipeline(sinks, stages=[stage])
+    pipeline = Pipeline(sinks, stages=[FindingsInto(judging, data)])
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
     try:
         run_items(reader, pipeline, progress=progress)
     finally:
         reader.close()
     data.notes.extend([*reader.notes, *camera_notes])
-    lead = ""
     data.frames = pipeline.tally.frames
-    if data.first is not None and data.first == data.last and data.topics.total() > 1:
-        # A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense.
-        data.untimed = True
-        if data.findings.total or data.commands:
-            data.drop_findings()
-            data.notes.append(UNTIMED)
-    pictures = None
-    if overlays is not None and data.first is not None and data.last is not None:
-        from analyzer.check.output import recorded_steps_html
-        from analyzer.mcapio.read.video import read_thumbnails  # camera pictures
-
-        shown = camera.shown_findings(data.findings.worst_first())
-        with further_pass(args.file, sys.stderr, quiet=args.quiet, label="pictures ") as read:
-            thumbnails = overlays.pictures(read_thumbnails(args.file, read))
-            pictures = camera.choose(thumbnails, data.first, data.last, shown)
-        if not pictures.count:
-            pictures = None
-        lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
+    _mark_untimed(data)
+    pictures, lead = _pictures(args, data, overlays)
     judged = ""
     if camera_stage is not None and not data.untimed:
         from analyzer.report.camera_judged import judged_section
@@ -151,3 +122,60 @@ def run(args: argparse.Namespace) -> int:
     for note in [*reader.notes, *camera_notes]:
         sys.stderr.write(f"note: {note}\n")
     return 0
+
+
+def _overlays(
+    args: argparse.Namespace, sinks: list[EventsInto], left_out: list[str]
+) -> OverlayTimeline:
+    """A recording's camera pictures show what Foxglove draws over them: the overlay at
+    each picture's moment, kept as the events go by (a sink added to ``sinks``), not the
+    overlay of every feedback."""
+    import sys
+
+    from analyzer.extras import VIDEO, installed
+    from analyzer.mcapio.read.video import thumbnail_times
+    from analyzer.progress import further_pass
+    from analyzer.report.stream import EventsInto
+    from analyzer.scene.timeline import OverlayTimeline
+
+    with further_pass(args.file, sys.stderr, quiet=args.quiet, label="camera times ") as read:
+        overlays = OverlayTimeline(thumbnail_times(args.file, read))
+    if overlays.moments:
+        sinks.append(EventsInto(overlays.add))
+        if not installed(VIDEO):
+            left_out.append("camera pictures shown without their overlay")
+    return overlays
+
+
+def _mark_untimed(data: ReportData) -> None:
+    """A raw byte dump has no clock: "0.0 s later" everywhere would be nonsense, so its
+    findings are dropped, and a note says why."""
+    from analyzer.report.tables import UNTIMED
+
+    if data.first is not None and data.first == data.last and data.topics.total() > 1:
+        data.untimed = True
+        if data.findings.total or data.commands:
+            data.drop_findings()
+            data.notes.append(UNTIMED)
+
+
+def _pictures(
+    args: argparse.Namespace, data: ReportData, overlays: OverlayTimeline | None
+) -> tuple[PictureChoice | None, str]:
+    """The camera pictures chosen for the page and, for a recording of `check`, its
+    steps on top (none of either for a file that is no recording)."""
+    import sys
+
+    if overlays is None or data.first is None or data.last is None:
+        return None, ""
+    from analyzer.check.output import recorded_steps_html
+    from analyzer.mcapio.read.video import read_thumbnails  # camera pictures
+    from analyzer.progress import further_pass
+    from analyzer.report import camera
+
+    shown = camera.shown_findings(data.findings.worst_first())
+    with further_pass(args.file, sys.stderr, quiet=args.quiet, label="pictures ") as read:
+        thumbnails = overlays.pictures(read_thumbnails(args.file, read))
+        pictures = camera.choose(thumbnails, data.first, data.last, shown)
+    lead = recorded_steps_html(args.file)  # a recording of `check`: its steps on top
+    return (pictures if pictures.count else None), lead

@@ -9,7 +9,7 @@ import time
 from typing import Any
 
 from analyzer.errors import UsageError
-from analyzer.protocol.command_table import BY_NAME, Command
+from analyzer.protocol.command_table import BY_NAME, CommandRow
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import COMPONENT_NAMES
 from analyzer.terminal_text import printable
@@ -46,7 +46,7 @@ COMMON_OPTIONS = frozenset({"to", "repeat", "count", "listen", "component", "s_i
 # -- options generated from the table ------------------------------------------------------------
 
 
-def command_fields(rows: tuple[Command, ...]) -> list[Field]:
+def command_fields(rows: tuple[CommandRow, ...]) -> list[Field]:
     """Every parameter of a command name (selector first), across its table rows."""
     seen: dict[str, Field] = {}
     for row in rows:
@@ -81,7 +81,7 @@ def field_help(f: Field) -> str:
     return "; ".join(parts)
 
 
-def single_field(rows: tuple[Command, ...]) -> Field | None:
+def single_field(rows: tuple[CommandRow, ...]) -> Field | None:
     """The only parameter of a one-parameter command (it may also be given positionally)."""
     fields = command_fields(rows)
     return fields[0] if len(fields) == 1 else None
@@ -199,7 +199,7 @@ def _value(f: Field, text: str) -> Any:
     return text
 
 
-def build_params(args: argparse.Namespace, rows: tuple[Command, ...]) -> dict[str, Any]:
+def build_params(args: argparse.Namespace, rows: tuple[CommandRow, ...]) -> dict[str, Any]:
     params: dict[str, Any] = {}
     only = single_field(rows)
     for f in command_fields(rows):
@@ -285,7 +285,7 @@ def transmit(
     count: int | None,
     listen: float = 0.0,
 ) -> int:
-    from analyzer.protocol.decoder import Decoder
+    from analyzer.protocol.decoder import ProtocolDecoder
     from analyzer.protocol.ids import CONTROL_ID
     from analyzer.protocol.types import TOPIC_GIMBAL_ATTITUDE
     from analyzer.sim.transports import open_ground_link, parse_link
@@ -294,7 +294,7 @@ def transmit(
     link = open_ground_link(spec)
     if spec.kind == "can" and spec.interface == "virtual":
         print(f"  note: {spec} reaches only buses inside this process; nothing else hears it")
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     replies: list[Any] = []
 
     def drain(timeout: float, show: bool) -> None:

@@ -7,11 +7,16 @@ import ipaddress
 import math
 import sys
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from analyzer.errors import SourceError, UsageError
 from analyzer.sim.behaviour import Behaviour
 from analyzer.sim.faults import FaultConfig
+
+if TYPE_CHECKING:
+    from analyzer.sim.engine import SimulatedGimbal
+    from analyzer.sim.transports import LinkSpec
 
 HELP = "run a simulated gimbal that answers commands (CAN, TCP in the IDU's role, serial)"
 DESCRIPTION = """\
@@ -293,36 +298,19 @@ def _camera(args: argparse.Namespace, gimbal: Any, link: Any) -> Any:
         raise SourceError(f"--camera-port: {exc}") from None
 
 
-def run(args: argparse.Namespace) -> int:
+def _say_what_runs(
+    args: argparse.Namespace,
+    spec: LinkSpec,
+    link_name: str,
+    gimbal: SimulatedGimbal,
+    say: Callable[[str], None],
+) -> None:
+    """The simulator's first lines: what it is, where it listens and what it sends."""
     from analyzer.protocol.feedback import GIMBAL_TYPES
     from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
-    from analyzer.sim.engine import SimConfig, SimulatedGimbal
-    from analyzer.sim.runner import SimulatorRunner
-    from analyzer.sim.transports import open_gimbal_link, parse_link
 
-    if args.gimbal_type not in GIMBAL_TYPES:
-        valid = ", ".join(f"{k} ({v})" for k, v in GIMBAL_TYPES.items())
-        raise UsageError(f"--gimbal-type {args.gimbal_type}: valid: {valid}")
-    spec = parse_link(args.on)
-
-    def say(text: str) -> None:
-        print(text, flush=True)
-
-    start = time.monotonic()
-    link = open_gimbal_link(spec, log=lambda text: say(f"[{time.monotonic() - start:7.2f}] {text}"))
-    config = SimConfig(
-        gimbal_type=args.gimbal_type,
-        ranging=args.ranging,
-        uav=args.uav,
-        faults=fault_config(args),
-        behaviour=behaviour(args),
-        heading_deg=args.heading,
-        attitude=(args.start_pitch, args.start_yaw),
-    )
-    gimbal = SimulatedGimbal(start, config)
-    camera = _camera(args, gimbal, link)
     kind = GIMBAL_TYPES[args.gimbal_type]
-    say(f"simulated gimbal, type {args.gimbal_type} ({kind}), on {link.name}")
+    say(f"simulated gimbal, type {args.gimbal_type} ({kind}), on {link_name}")
     if spec.kind == "can":
         say(
             f"  commands on CAN ID 0x{CONTROL_ID:08X}; attitude feedback every 500 ms on "
@@ -355,6 +343,36 @@ def run(args: argparse.Namespace) -> int:
     if args.start_pitch or args.start_yaw:
         model = gimbal.model
         say(f"  starts at pitch {model.pitch_deg:g}, yaw motor {model.motor_yaw_deg:g}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from analyzer.protocol.feedback import GIMBAL_TYPES
+    from analyzer.sim.engine import SimConfig, SimulatedGimbal
+    from analyzer.sim.runner import SimulatorRunner
+    from analyzer.sim.transports import open_gimbal_link, parse_link
+
+    if args.gimbal_type not in GIMBAL_TYPES:
+        valid = ", ".join(f"{k} ({v})" for k, v in GIMBAL_TYPES.items())
+        raise UsageError(f"--gimbal-type {args.gimbal_type}: valid: {valid}")
+    spec = parse_link(args.on)
+
+    def say(text: str) -> None:
+        print(text, flush=True)
+
+    start = time.monotonic()
+    link = open_gimbal_link(spec, log=lambda text: say(f"[{time.monotonic() - start:7.2f}] {text}"))
+    config = SimConfig(
+        gimbal_type=args.gimbal_type,
+        ranging=args.ranging,
+        uav=args.uav,
+        faults=fault_config(args),
+        behaviour=behaviour(args),
+        heading_deg=args.heading,
+        attitude=(args.start_pitch, args.start_yaw),
+    )
+    gimbal = SimulatedGimbal(start, config)
+    camera = _camera(args, gimbal, link)
+    _say_what_runs(args, spec, link.name, gimbal, say)
     say(f"  faults: {config.faults.describe()}")
     say(f"  behaviour: {config.behaviour.describe()}")
     if camera is not None:

@@ -169,6 +169,25 @@ def run(args: argparse.Namespace) -> int:
         client.close()
 
 
+def _open_dataset(args: argparse.Namespace, client: Client | None) -> Dataset:
+    """The dataset folder, made if new; with Dask workers that write, checked to be one
+    they reach (a new folder goes again when they do not)."""
+    from analyzer.fleet.dataset import Dataset
+    from analyzer.fleet.runner import workers_reach
+
+    dataset = Dataset(args.output)
+    made = not dataset.root.exists()
+    dataset.create()
+    if client is not None and not args.client_writes:
+        try:
+            workers_reach(client, os.path.abspath(args.output))
+        except UsageError:
+            if made:
+                shutil.rmtree(dataset.root, ignore_errors=True)  # empty folders made above
+            raise
+    return dataset
+
+
 def _run(
     args: argparse.Namespace,
     paths: list[str],
@@ -176,20 +195,10 @@ def _run(
     started: float,
     client: Client | None,
 ) -> int:
-    from analyzer.fleet.dataset import Dataset
-    from analyzer.fleet.runner import run_dask, run_local, workers_reach
+    from analyzer.fleet.runner import run_dask, run_local
 
-    dataset = Dataset(args.output)
-    made = not dataset.root.exists()
-    dataset.create()
+    dataset = _open_dataset(args, client)
     root = os.path.abspath(args.output)
-    if client is not None and not args.client_writes:
-        try:
-            workers_reach(client, root)
-        except UsageError:
-            if made:
-                shutil.rmtree(dataset.root, ignore_errors=True)  # empty folders made above
-            raise
     out = sys.stdout
     removed = dataset.remove_partial()
     if removed:

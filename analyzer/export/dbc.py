@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
-from analyzer.protocol.command_table import COMMANDS, Command
+from analyzer.protocol.command_table import COMMANDS, CommandRow
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import (
     COMPONENT_NAMES,
@@ -50,7 +50,7 @@ def frame_id(can_id: int) -> int:
     return can_id | 0x80000000
 
 
-def command_signal_name(row: Command, f: Field) -> str:
+def command_signal_name(row: CommandRow, f: Field) -> str:
     """The DBC signal of a command parameter: ``<command>_<field>``, ``ds_`` for 0x1F."""
     name = row.name if f.name == row.name else f"{row.name}_{f.name}"
     return _PREFIX[row.s_id] + name
@@ -73,7 +73,7 @@ class _Signal:
 
 
 @dataclass(frozen=True)
-class _Message:
+class _DbcMessage:
     can_id: int
     name: str
     sender: str
@@ -140,7 +140,7 @@ def _as_multiplexer(signal: _Signal, comment: str | None = None) -> _Signal:
     )
 
 
-def _command_message() -> _Message:
+def _command_message() -> _DbcMessage:
     s_id_field = Field(S_ID_SIGNAL, 0, "u8", labels=COMPONENT_NAMES, description="S_ID")
     signals = [
         _as_multiplexer(
@@ -169,7 +169,7 @@ def _command_message() -> _Message:
             for key, variant in row.variants.items():
                 for f in variant:
                     signals.append(_field_signal(f, command_signal_name(row, f), (selector, key)))
-    return _Message(
+    return _DbcMessage(
         CONTROL_ID,
         COMMAND_MESSAGE,
         GROUND_STATION,
@@ -186,10 +186,10 @@ def _byte_signals(prefix: str, comment: str) -> tuple[_Signal, ...]:
     )
 
 
-def _messages() -> list[_Message]:
+def _messages() -> list[_DbcMessage]:
     messages = [_command_message()]
     messages.append(
-        _Message(
+        _DbcMessage(
             FEEDBACK_ID,
             "gimbal_feedback_segment",
             GIMBAL,
@@ -203,7 +203,7 @@ def _messages() -> list[_Message]:
     for status in STATUS_FRAMES.values():
         signals = tuple(_field_signal(f, f.name) for f in status.layout.fields)
         messages.append(
-            _Message(
+            _DbcMessage(
                 status.can_id,
                 f"uav_{status.name}",
                 FLIGHT_CONTROLLER,
@@ -213,7 +213,7 @@ def _messages() -> list[_Message]:
         )
     text_comment = "ASCII character of a UAV text message (0 = padding)"
     messages.append(
-        _Message(
+        _DbcMessage(
             TEXT_ID,
             "uav_text",
             FLIGHT_CONTROLLER,
@@ -224,7 +224,7 @@ def _messages() -> list[_Message]:
         )
     )
     messages.append(
-        _Message(
+        _DbcMessage(
             TEXT_END_ID,
             "uav_text_end",
             FLIGHT_CONTROLLER,
@@ -244,7 +244,7 @@ def _signal_line(s: _Signal, receiver: str) -> str:
     )
 
 
-def _lines(messages: Iterable[_Message]) -> list[str]:
+def _lines(messages: Iterable[_DbcMessage]) -> list[str]:
     messages = list(messages)
     out = [
         'VERSION ""',

@@ -5,7 +5,7 @@ from __future__ import annotations
 from functools import cache
 from importlib import resources
 
-from analyzer.protocol.command_table import COMMANDS, Command
+from analyzer.protocol.command_table import COMMANDS, CommandRow
 from analyzer.protocol.feedback import (
     FEEDBACK_ID_BYTES,
     LAYOUTS,
@@ -72,7 +72,7 @@ def _command_abbrs() -> dict[tuple[int, int, str], str]:
     return out
 
 
-def command_abbr(row: Command, f: Field) -> str:
+def command_abbr(row: CommandRow, f: Field) -> str:
     """Display-filter name of a command parameter, e.g. ``gimbal.gimbal_control.pan_speed_dps``."""
     return _command_abbrs()[(row.s_id, row.cmd, f.name)]
 

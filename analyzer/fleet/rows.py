@@ -125,7 +125,8 @@ _ERROR_WORDS = {
 
 def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None:
     from analyzer.analysis.findings import untimed
-    from analyzer.analysis.response import ResponseAnalyzer, Settings
+    from analyzer.analysis.response import Settings
+    from analyzer.analysis.stage import Analysis
     from analyzer.inputs import open_input
     from analyzer.pipeline import Pipeline, run_items
     from analyzer.progress import Progress
@@ -142,8 +143,9 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
     settings = Settings(**knobs)
     reader = open_input(path, work.fmt, work.port, wanted_ids=PROTOCOL_IDS)
     sink = ColumnSink(out, work.recording, work.content_hash)
-    # What decode, analyze and report run; findings reach the sink as they are made.
-    pipeline = Pipeline([sink], stages=[ResponseAnalyzer(settings)])
+    # What decode, analyze and report run; findings reach the sink as they are made. The
+    # camera commands are not judged here: a fleet's video is not decoded file by file.
+    pipeline = Pipeline([sink], stages=Analysis(settings).stages())
     progress = Progress.maybe(reader, sys.stderr, quiet=not work.progress)
     try:
         run_items(reader, pipeline, progress=progress)

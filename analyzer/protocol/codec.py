@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from analyzer.protocol.command_decoders import CAN_DATA_SIZE, decoder_for, unused_warning
-from analyzer.protocol.command_table import BY_CODE, BY_NAME, COMMANDS, Command
+from analyzer.protocol.command_table import BY_CODE, BY_NAME, COMMANDS, CommandRow
 from analyzer.protocol.fields import EncodeError, Field, pad
 from analyzer.protocol.ids import COMPONENT_NAMES
 from analyzer.protocol.types import hexstr
@@ -69,7 +69,7 @@ def decode_command_fields(data: bytes) -> tuple[dict[str, Any], list[str]]:
     return out, warnings
 
 
-def find_command(name: str, s_id: int | str | None = None) -> Command:
+def find_command(name: str, s_id: int | str | None = None) -> CommandRow:
     """The table row for a command name; ``s_id`` (number or component name) picks one."""
     rows = BY_NAME.get(name)
     if not rows:
@@ -154,7 +154,7 @@ def encode_command(
     return bytes(buffer)
 
 
-def _infer_variant(row: Command, params: dict[str, Any]) -> int:
+def _infer_variant(row: CommandRow, params: dict[str, Any]) -> int:
     assert row.selector is not None
     for raw, variant in row.variants.items():
         if variant and all(f.name in params for f in variant):

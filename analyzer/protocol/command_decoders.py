@@ -6,7 +6,7 @@ from collections.abc import Callable, Sequence
 from operator import attrgetter
 from typing import Any
 
-from analyzer.protocol.command_table import BY_CODE, Command
+from analyzer.protocol.command_table import BY_CODE, CommandRow
 from analyzer.protocol.compiled import Code, layout_struct
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import COMPONENT_NAMES
@@ -23,7 +23,7 @@ def unused_warning(name: str, data: bytes, unused: Sequence[int]) -> str | None:
     return f"bytes not used by {name} are not zero: {listed}"
 
 
-def _decoder(row: Command, fields: Sequence[Field], variant: int | None) -> CommandDecoder:
+def _decoder(row: CommandRow, fields: Sequence[Field], variant: int | None) -> CommandDecoder:
     """Data (8 bytes) -> (values, warnings) of ``row`` decoded with ``fields`` in this order
     (the selector first, if any); ``variant`` is None when the selector's value has no
     layout (the general path says so right after the selector's own values)."""
@@ -56,7 +56,7 @@ def _decoder(row: Command, fields: Sequence[Field], variant: int | None) -> Comm
     return decode
 
 
-def command_fits(row: Command) -> bool:
+def command_fits(row: CommandRow) -> bool:
     """Whether ``row`` has a generated decoder: a one-byte selector, if any, and in every
     layout fields that fit in the 8 data bytes without overlapping."""
     if row.selector is None:
@@ -74,7 +74,7 @@ def _fits(fields: Sequence[Field]) -> bool:
 _OFFSET = attrgetter("offset")
 
 
-def compile_command(row: Command) -> CommandDecoder | None:
+def compile_command(row: CommandRow) -> CommandDecoder | None:
     """The decoder of ``row`` for 8 data bytes; None for a layout this cannot generate."""
     if not command_fits(row):
         return None

@@ -15,7 +15,7 @@ def D(n: int) -> int:
 
 
 @dataclass(frozen=True)
-class Command:
+class CommandRow:
     """One row of the command table."""
 
     s_id: int
@@ -136,9 +136,9 @@ TRACKING_BOX = (
 G = COMPONENT_GIMBAL
 DS = COMPONENT_DUAL_SENSOR
 
-COMMANDS: tuple[Command, ...] = (
+COMMANDS: tuple[CommandRow, ...] = (
     # -- gimbal / optical camera (S_ID 0x0F) -------------------------------------------------
-    Command(
+    CommandRow(
         G,
         0x01,
         "tap_zoom",
@@ -146,11 +146,11 @@ COMMANDS: tuple[Command, ...] = (
         TAP_POINT,
         description="Turn the target point to the image centre and zoom in twice.",
     ),
-    Command(
+    CommandRow(
         G, 0x02, "forward", "Forward", description="Return the gimbal to the forward position."
     ),
-    Command(G, 0x03, "zoom_1x", "One Key to 1x Image", description="Zoom back to 1x."),
-    Command(
+    CommandRow(G, 0x03, "zoom_1x", "One Key to 1x Image", description="Zoom back to 1x."),
+    CommandRow(
         G,
         0x04,
         "gimbal_control",
@@ -161,7 +161,7 @@ COMMANDS: tuple[Command, ...] = (
         ),
         description="Rotate at the given speeds; repeat about every 50 ms to keep moving.",
     ),
-    Command(
+    CommandRow(
         G,
         0x05,
         "tracking",
@@ -169,9 +169,11 @@ COMMANDS: tuple[Command, ...] = (
         TRACKING_BOX,
         description="Start tracking the target in the given box.",
     ),
-    Command(G, 0x06, "tracking_stop", "Tracking stop", description="Stop target tracking."),
-    Command(G, 0x07, "look_down", "One key to down", description="Point the camera straight down."),
-    Command(
+    CommandRow(G, 0x06, "tracking_stop", "Tracking stop", description="Stop target tracking."),
+    CommandRow(
+        G, 0x07, "look_down", "One key to down", description="Point the camera straight down."
+    ),
+    CommandRow(
         G,
         0x08,
         "specified_angle",
@@ -230,7 +232,7 @@ COMMANDS: tuple[Command, ...] = (
         },
         description="Turn to an absolute yaw or pitch angle, or set the zoom ratio.",
     ),
-    Command(
+    CommandRow(
         G,
         0x10,
         "snapshot",
@@ -246,7 +248,7 @@ COMMANDS: tuple[Command, ...] = (
         },
         description="Take pictures: single, continuous, time-lapse or timed, or stop.",
     ),
-    Command(
+    CommandRow(
         G,
         0x11,
         "recording",
@@ -254,7 +256,7 @@ COMMANDS: tuple[Command, ...] = (
         (Field("action", D(1), "u8", labels=RECORDING_ACTIONS, description="start or stop"),),
         description="Start or stop video recording.",
     ),
-    Command(
+    CommandRow(
         G,
         0x12,
         "zoom",
@@ -262,7 +264,7 @@ COMMANDS: tuple[Command, ...] = (
         (Field("action", D(1), "u8", labels=ZOOM_ACTIONS, description="zoom action"),),
         description="Optical zoom in / out / stop / 1x / 2x steps.",
     ),
-    Command(
+    CommandRow(
         G,
         0x13,
         "focus",
@@ -270,7 +272,7 @@ COMMANDS: tuple[Command, ...] = (
         (Field("action", D(1), "u8", labels=FOCUS_ACTIONS, description="focus action"),),
         description="Focus + / - / stop / auto focus.",
     ),
-    Command(
+    CommandRow(
         G,
         0x14,
         "tap_focus",
@@ -283,9 +285,9 @@ COMMANDS: tuple[Command, ...] = (
         ),
         description="Focus on the given point (box size fixed at 25 x 16 px).",
     ),
-    Command(G, 0xF0, "quick_calibration", "Quick Calibration", description="Quick calibration."),
+    CommandRow(G, 0xF0, "quick_calibration", "Quick Calibration", description="Quick calibration."),
     # -- dual-sensor camera (S_ID 0x1F) --------------------------------------------------------
-    Command(
+    CommandRow(
         DS,
         0x01,
         "tap_zoom",
@@ -293,7 +295,7 @@ COMMANDS: tuple[Command, ...] = (
         TAP_POINT,
         description="Turn the target point to the image centre and zoom in twice.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x02,
         "palette",
@@ -301,14 +303,14 @@ COMMANDS: tuple[Command, ...] = (
         (Field("palette", D(1), "u8", labels=PALETTES, description="thermal colour palette"),),
         description="Select the thermal colour palette.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x03,
         "pip_cycle",
         "Picture-in-picture mode cycle switching",
         description="Cycle the picture-in-picture mode.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x04,
         "gimbal_control",
@@ -319,7 +321,7 @@ COMMANDS: tuple[Command, ...] = (
         ),
         description="Rotate at the given speeds; repeat about every 50 ms to keep moving.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x05,
         "tracking",
@@ -327,14 +329,14 @@ COMMANDS: tuple[Command, ...] = (
         TRACKING_BOX,
         description="Start tracking the target in the given box.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x07,
         "tracking_stop",
         "Stop Tracking (Dual-Sensor)",
         description="Stop target tracking.",
     ),
-    Command(
+    CommandRow(
         DS,
         0x12,
         "digital_zoom",
@@ -344,8 +346,8 @@ COMMANDS: tuple[Command, ...] = (
     ),
 )
 
-BY_CODE: dict[tuple[int, int], Command] = {(c.s_id, c.cmd): c for c in COMMANDS}
-BY_NAME: dict[str, tuple[Command, ...]] = {}
+BY_CODE: dict[tuple[int, int], CommandRow] = {(c.s_id, c.cmd): c for c in COMMANDS}
+BY_NAME: dict[str, tuple[CommandRow, ...]] = {}
 for _c in COMMANDS:
     BY_NAME[_c.name] = (*BY_NAME.get(_c.name, ()), _c)
 COMMAND_NAMES: tuple[str, ...] = tuple(BY_NAME)

@@ -31,13 +31,13 @@ from analyzer.protocol.uav import TextAssembler, decode_status
 if TYPE_CHECKING:  # streams are framed by modules imported when one comes
     from analyzer.protocol.framing import RawFrame, StreamFramer
 
-__all__ = ["STATUS_TOPICS", "Decoder"]
+__all__ = ["STATUS_TOPICS", "ProtocolDecoder"]
 
 # The extra fields of a plain CAN frame: none. Shared and never written to.
 NO_EXTRA: dict[str, Any] = {}
 
 
-class Decoder:
+class ProtocolDecoder:
     """Decodes everything of the protocol from any mix of CAN frames and stream chunks.
 
     State (feedback reassembly, text messages, stream framing) is kept per CAN channel

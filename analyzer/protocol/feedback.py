@@ -29,7 +29,8 @@ GIMBAL_TYPES = {
 }
 CONTROL_MODES = {1: "full_lock", 2: "course_following", 3: "locking"}
 WIDE_MOTOR_YAW_TYPES = frozenset({3, 4})  # 3.5x zoom models: motor yaw up to +-325 deg
-MOTOR_YAW_LIMIT = 17000
+MOTOR_YAW_LIMIT = 17000  # centidegrees: +-170 deg
+WIDE_MOTOR_YAW_LIMIT = 32500  # centidegrees: +-325 deg on WIDE_MOTOR_YAW_TYPES
 
 # Bytes 12-15 of every feedback message: CMD+DID 0x21 0xFE, C_ID 0x0F, Data_id 0x01.
 FEEDBACK_ID_BYTES = b"\x21\xfe\x0f\x01"
@@ -108,8 +109,8 @@ ATTITUDE = FeedbackLayout(
                 "s16",
                 div=100,
                 unit="deg",
-                minimum=-32500,
-                maximum=32500,
+                minimum=-WIDE_MOTOR_YAW_LIMIT,
+                maximum=WIDE_MOTOR_YAW_LIMIT,
                 description="yaw motor angle; +-170 deg, +-325 deg on 3.5x zoom models",
             ),
         ),

@@ -145,13 +145,7 @@ class StreamFramer:
         buf = self._buf
         while buf:
             if self._pad:
-                n = 0
-                limit = min(self._pad, len(buf))
-                while n < limit and buf[n] == 0:
-                    n += 1
-                del buf[:n]
-                self.bytes_framed += n
-                self._pad = 0 if n < limit else self._pad - n
+                self._skip_padding(buf)
                 if not buf:
                     break
             start = buf.find(HEADER)
@@ -162,13 +156,7 @@ class StreamFramer:
             self._to_garbage(start, time, out)
             if len(buf) < 3:
                 if final:
-                    self._flush_garbage(out)
-                    out.append(
-                        self._diag(
-                            time, INCOMPLETE, "stream ended inside a frame header", bytes(buf)
-                        )
-                    )
-                    buf.clear()
+                    self._ended_inside(time, "stream ended inside a frame header", out)
                 break
             frame_type = buf[2]
             size = FRAME_LENGTHS.get(frame_type)
@@ -178,49 +166,67 @@ class StreamFramer:
                 continue
             if len(buf) < size:
                 if final:
-                    self._flush_garbage(out)
-                    out.append(
-                        self._diag(
-                            time,
-                            INCOMPLETE,
-                            f"stream ended after {len(buf)} of {size} bytes of a type "
-                            f"0x{frame_type:02X} frame",
-                            bytes(buf),
-                        )
+                    self._ended_inside(
+                        time,
+                        f"stream ended after {len(buf)} of {size} bytes of a type "
+                        f"0x{frame_type:02X} frame",
+                        out,
                     )
-                    buf.clear()
                 break
             frame = bytes(buf[:size])
             verdict = self._verdict(frame)
-            if verdict is not None:
-                self._flush_garbage(out)
-                out.append(RawFrame(time, frame_type, frame, crc_set=verdict))
-                del buf[:size]
-                self.bytes_framed += size
-                if size < FEEDBACK_MESSAGE_SIZE and frame_type not in (FRAME_CONTROL, FRAME_CAN):
-                    self._pad = FEEDBACK_MESSAGE_SIZE - size
-                continue
             self._flush_garbage(out)
-            restart = frame.find(HEADER, 1)
-            if restart > 0:
-                out.append(
-                    self._diag(
-                        time,
-                        INCOMPLETE,
-                        f"type 0x{frame_type:02X} frame cut short after {restart} of {size} bytes "
-                        "(a new header follows; bytes lost?)",
-                        frame[:restart],
-                    )
-                )
-                del buf[:restart]
+            if verdict is None:
+                self._rejected(time, frame, size, out)
                 continue
-            if frame_type in FRAME_SIZES:
-                # The zero padding of a damaged feedback frame belongs to it, as for a good one.
-                while size < min(len(buf), FEEDBACK_MESSAGE_SIZE) and buf[size] == 0:
-                    size += 1
-            out.append(self._diag(time, CRC_MISMATCH, _crc_detail(frame), bytes(buf[:size])))
+            out.append(RawFrame(time, frame_type, frame, crc_set=verdict))
             del buf[:size]
+            self.bytes_framed += size
+            if size < FEEDBACK_MESSAGE_SIZE and frame_type not in (FRAME_CONTROL, FRAME_CAN):
+                self._pad = FEEDBACK_MESSAGE_SIZE - size
         return out
+
+    def _skip_padding(self, buf: bytearray) -> None:
+        """The zeros that pad a short feedback frame to FEEDBACK_MESSAGE_SIZE: framed."""
+        n = 0
+        limit = min(self._pad, len(buf))
+        while n < limit and buf[n] == 0:
+            n += 1
+        del buf[:n]
+        self.bytes_framed += n
+        self._pad = 0 if n < limit else self._pad - n
+
+    def _ended_inside(self, time: float, detail: str, out: list[RawFrame | Event]) -> None:
+        """The stream ended inside a frame: what is left is an incomplete frame."""
+        buf = self._buf
+        self._flush_garbage(out)
+        out.append(self._diag(time, INCOMPLETE, detail, bytes(buf)))
+        buf.clear()
+
+    def _rejected(self, time: float, frame: bytes, size: int, out: list[RawFrame | Event]) -> None:
+        """A frame whose CRC fails: cut short by a new header (those bytes lost), or
+        damaged (with its padding); either way a diagnostic, and the bytes go."""
+        buf = self._buf
+        frame_type = frame[2]
+        restart = frame.find(HEADER, 1)
+        if restart > 0:
+            out.append(
+                self._diag(
+                    time,
+                    INCOMPLETE,
+                    f"type 0x{frame_type:02X} frame cut short after {restart} of {size} bytes "
+                    "(a new header follows; bytes lost?)",
+                    frame[:restart],
+                )
+            )
+            del buf[:restart]
+            return
+        if frame_type in FRAME_SIZES:
+            # The zero padding of a damaged feedback frame belongs to it, as for a good one.
+            while size < min(len(buf), FEEDBACK_MESSAGE_SIZE) and buf[size] == 0:
+                size += 1
+        out.append(self._diag(time, CRC_MISMATCH, _crc_detail(frame), bytes(buf[:size])))
+        del buf[:size]
 
     @staticmethod
     def _verdict(frame: bytes) -> bool | None:

@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analyzer.protocol.command_decoders import CAN_DATA_SIZE, command_fits
-from analyzer.protocol.command_table import BY_CODE, Command
+from analyzer.protocol.command_table import BY_CODE, CommandRow
 from analyzer.protocol.feedback import (
     ATTITUDE,
     FEEDBACK_ID_BYTES,
@@ -155,7 +155,7 @@ def _items(fields: Sequence[Field]) -> list[str]:
     return keys
 
 
-def _command_layout(row: Command, fields: Sequence[Field]) -> VectorLayout:
+def _command_layout(row: CommandRow, fields: Sequence[Field]) -> VectorLayout:
     constants = {
         "s_id": row.s_id,
         "cmd": row.cmd,

@@ -43,7 +43,7 @@ REPLAY = "replay"  # the link state of the diagnostic where the replayed span be
 REPLAY_END = "replay_end"  # ... and where it ends
 
 
-class Link(Protocol):
+class ReplayLink(Protocol):
     """Sends a command's data (``send``) or any frame of the ground station's
     (``send_frame``), each returning the time it went; ``note`` records an event."""
 
@@ -95,7 +95,7 @@ class Player:
 
     def __init__(
         self,
-        link: Link,
+        link: ReplayLink,
         watch: Watch,
         *,
         source: str = "replay",

@@ -12,7 +12,7 @@ from typing import Any
 from analyzer import timefmt
 from analyzer.report.decimate import Decimator
 from analyzer.report.finding_groups import whole_run
-from analyzer.scene.timeline import Picture  # a camera picture: stream, time, jpeg
+from analyzer.scene.timeline import TimedPicture  # a camera picture: stream, time, jpeg
 
 STRIP_SIZE = 8  # pictures in the strip along the flight
 MAX_FINDING_PICTURES = 40  # findings shown with their pictures
@@ -34,7 +34,7 @@ figcaption { font-size: 11px; color: #555; }
 """
 
 
-def picture_jpeg(picture: Picture) -> bytes:
+def picture_jpeg(picture: TimedPicture) -> bytes:
     """The JPEG shown for ``picture``: the one place where a picture's image is asked for
     (a picture of ``analyzer.scene.timeline`` draws its overlay in then, and only then)."""
     return picture.jpeg
@@ -48,7 +48,7 @@ def _clock(t: float) -> str:
     return timefmt.format_clock(t) if timefmt.is_absolute(t) else f"{t:.3f} s"
 
 
-def _img(picture: Picture, alt: str) -> str:
+def _img(picture: TimedPicture, alt: str) -> str:
     data = base64.b64encode(picture_jpeg(picture)).decode("ascii")
     return f'<img src="data:image/jpeg;base64,{data}" alt="{_e(alt)}">'
 
@@ -89,14 +89,14 @@ class PictureChoice:
 
     def __init__(self, wanted: Iterable[Wanted], strip: Sequence[Wanted] = ()) -> None:
         self.strip = list(strip)  # the moments of the strip along the flight
-        self.best: dict[Wanted, Picture] = {w: _NONE for w in wanted}
+        self.best: dict[Wanted, TimedPicture] = {w: _NONE for w in wanted}
         self.count = 0
         self.streams: set[str] = set()
         self.first: float | None = None
         self.last: float | None = None
         self.times = Decimator((), MAX_TICKS)  # (time,) for the timeline's ticks
 
-    def offer(self, picture: Picture) -> None:
+    def offer(self, picture: TimedPicture) -> None:
         t = picture.time
         self.count += 1
         self.streams.add(picture.stream)
@@ -107,7 +107,7 @@ class PictureChoice:
             if want.better(t, None if best is _NONE else best.time):
                 self.best[want] = picture
 
-    def get(self, want: Wanted) -> Picture | None:
+    def get(self, want: Wanted) -> TimedPicture | None:
         found = self.best.get(want, _NONE)
         return None if found is _NONE else found
 
@@ -119,7 +119,7 @@ class _NoPicture:
     jpeg: bytes = b""
 
 
-_NONE: Picture = _NoPicture()
+_NONE: TimedPicture = _NoPicture()
 
 
 def shown_findings(examples: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -160,7 +160,7 @@ def at_verdict(finding: dict[str, Any]) -> Wanted | None:
 
 
 def choose(
-    pictures: Iterable[Picture], first: float, last: float, findings: Sequence[dict[str, Any]]
+    pictures: Iterable[TimedPicture], first: float, last: float, findings: Sequence[dict[str, Any]]
 ) -> PictureChoice:
     """Reads the pictures once, keeping only those the section shows (the strip spans the
     flight, ``first`` to ``last``)."""
@@ -171,7 +171,7 @@ def choose(
     return choice
 
 
-def _figure(picture: Picture | None, what: str, t: float) -> str:
+def _figure(picture: TimedPicture | None, what: str, t: float) -> str:
     if picture is None:
         return f'<figure><p class="empty">no picture {_e(what)}</p></figure>'
     offset = picture.time - t
@@ -187,7 +187,7 @@ def camera_section(choice: PictureChoice, findings: Sequence[dict[str, Any]]) ->
         return ""
     first, last = choice.first, choice.last
     span = last - first
-    strip: list[Picture] = []
+    strip: list[TimedPicture] = []
     for want in choice.strip:
         picture = choice.get(want)
         if picture is not None and picture not in strip:

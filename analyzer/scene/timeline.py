@@ -13,7 +13,7 @@ from analyzer.scene.overlays import Overlay, overlay
 from analyzer.scene.state import COMMAND, FEEDBACK, INPUT_TOPICS, GimbalState
 
 
-class Picture(Protocol):
+class TimedPicture(Protocol):
     """A camera picture (``analyzer.mcapio.read.video.Thumbnail``)."""
 
     @property
@@ -64,7 +64,7 @@ class OverlayTimeline:
             raise KeyError(f"{t} is not one of the moments the timeline follows")
         return self._shown.get(t, self._current)
 
-    def pictures(self, pictures: Iterable[Picture]) -> Iterator[Picture]:
+    def pictures(self, pictures: Iterable[TimedPicture]) -> Iterator[TimedPicture]:
         """The pictures with the overlay of their moment drawn in (when they are shown); a
         picture of a moment not followed is left as it is."""
         for picture in pictures:
@@ -76,7 +76,7 @@ class OverlaidPicture:
     """A picture whose JPEG has the overlay drawn in, drawn the first time it is asked for
     (a report shows a few of many pictures)."""
 
-    def __init__(self, picture: Picture, shown: Overlay) -> None:
+    def __init__(self, picture: TimedPicture, shown: Overlay) -> None:
         self.stream = picture.stream
         self.time = picture.time
         self.overlay = shown

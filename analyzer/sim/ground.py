@@ -11,7 +11,7 @@ from typing import Any
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.sim.pilot import Stick
-from analyzer.sim.transports import Link
+from analyzer.sim.transports import SimulatedLink
 
 REPEAT_S = 0.05  # gimbal_control is repeated every 50 ms, as the document recommends
 EPSILON = 1e-6  # times are sums of floats: compare with a little slack
@@ -144,7 +144,7 @@ class GroundStation:
 
     def __init__(
         self,
-        link: Link,
+        link: SimulatedLink,
         script: GroundScript | None = None,
         *,
         clock: Callable[[], float] = time.monotonic,

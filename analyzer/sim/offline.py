@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import CONTROL_ID
 from analyzer.protocol.types import FROM_IDU, TO_IDU, CanFrame, Event, StreamChunk
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
@@ -29,7 +29,7 @@ def _play(
 ) -> tuple[list[CanFrame | StreamChunk], list[Event]]:
     script = GroundScript(steps, period=None)
     gimbal = SimulatedGimbal(start, config)
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     items: list[CanFrame | StreamChunk] = []
     events: list[Event] = []
     for tick in range(round(duration / TICK_S) + 1):

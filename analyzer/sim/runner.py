@@ -6,10 +6,10 @@ import threading
 import time
 from collections.abc import Callable
 
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.types import TOPIC_COMMAND, TOPIC_DIAGNOSTICS, Event
 from analyzer.sim.engine import SimulatedGimbal, describe_command
-from analyzer.sim.transports import Link
+from analyzer.sim.transports import SimulatedLink
 
 MAX_WAIT = 0.05  # longest sleep between checks of the stop flag
 REPEAT_QUIET_S = 1.0  # a command repeated unchanged is reported at most this often
@@ -22,7 +22,7 @@ class SimulatorRunner:
     def __init__(
         self,
         gimbal: SimulatedGimbal,
-        link: Link,
+        link: SimulatedLink,
         *,
         log: Callable[[str], None] | None = None,
         clock: Callable[[], float] = time.monotonic,
@@ -33,7 +33,7 @@ class SimulatorRunner:
         self.log = log
         self.clock = clock
         self.status_every = status_every
-        self.decoder = Decoder()
+        self.decoder = ProtocolDecoder()
         self.received: list[Event] = []  # events decoded from what the simulator received
         self.keep_received = False
         self._stop = threading.Event()

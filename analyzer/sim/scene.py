@@ -10,7 +10,7 @@ from typing import Protocol
 from analyzer.sim.engine import SimConfig, SimulatedGimbal
 from analyzer.sim.ground import GroundScript, GroundStation
 from analyzer.sim.runner import SimulatorRunner
-from analyzer.sim.transports import Link, LinkSpec, open_gimbal_link, open_ground_link
+from analyzer.sim.transports import LinkSpec, SimulatedLink, open_gimbal_link, open_ground_link
 
 
 class Ground(Protocol):
@@ -36,10 +36,10 @@ class Scene:
         *,
         script: GroundScript | None = None,
         log: Callable[[str], None] | None = None,
-        ground: Callable[[Link], Ground] | None = None,
-        open_ground: Callable[[LinkSpec], Link] = open_ground_link,
+        ground: Callable[[SimulatedLink], Ground] | None = None,
+        open_ground: Callable[[LinkSpec], SimulatedLink] = open_ground_link,
     ) -> None:
-        self.links: list[Link] = []
+        self.links: list[SimulatedLink] = []
         gimbal_link = open_gimbal_link(spec)
         self.links.append(gimbal_link)
         try:

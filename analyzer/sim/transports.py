@@ -30,7 +30,7 @@ def _quiet(_: str) -> None:
     pass
 
 
-class Link(Protocol):
+class SimulatedLink(Protocol):
     """Both ends of the simulator speak through one of these."""
 
     name: str
@@ -104,7 +104,7 @@ def to_stream(can_id: int, data: bytes) -> bytes:
 # -- CAN ---------------------------------------------------------------------------------------
 
 
-class CanLink:
+class SimulatedCanLink:
     """A python-can bus: sends frames with extended IDs, receives every frame of the bus."""
 
     def __init__(self, spec: LinkSpec) -> None:
@@ -288,7 +288,7 @@ class TcpClientLink:
 # -- serial ------------------------------------------------------------------------------------
 
 
-class SerialLink:
+class SimulatedSerialLink:
     """A UART ("TTL") in the gimbal's role: the same framing as TCP."""
 
     def __init__(self, spec: LinkSpec, direction: str = TO_IDU) -> None:
@@ -328,19 +328,19 @@ class SerialLink:
 # -- opening -----------------------------------------------------------------------------------
 
 
-def open_gimbal_link(spec: LinkSpec, log: Log = _quiet) -> Link:
+def open_gimbal_link(spec: LinkSpec, log: Log = _quiet) -> SimulatedLink:
     """The simulated gimbal's end: a CAN bus, a TCP server (IDU role) or a serial port."""
     if spec.kind == "can":
-        return CanLink(spec)
+        return SimulatedCanLink(spec)
     if spec.kind == "tcp":
         return TcpServerLink(spec, log)
-    return SerialLink(spec, direction=TO_IDU)
+    return SimulatedSerialLink(spec, direction=TO_IDU)
 
 
-def open_ground_link(spec: LinkSpec) -> Link:
+def open_ground_link(spec: LinkSpec) -> SimulatedLink:
     """A ground station's end: a CAN bus, a TCP client or a serial port."""
     if spec.kind == "can":
-        return CanLink(spec)
+        return SimulatedCanLink(spec)
     if spec.kind == "tcp":
         return TcpClientLink(spec)
-    return SerialLink(spec, direction=FROM_IDU)
+    return SimulatedSerialLink(spec, direction=FROM_IDU)

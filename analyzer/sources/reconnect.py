@@ -19,7 +19,7 @@ RECONNECTING = "reconnecting"
 Put = Callable[[SourceItem], None]
 
 
-class Link(Protocol):
+class LiveLink(Protocol):
     """One live link a ``ReconnectingSource`` opens, reads and opens again.
 
     ``open`` raises the driver's or the OS's error when it cannot open (a UsageError
@@ -117,7 +117,7 @@ class ReconnectingSource(QueuedSource):
 
     def __init__(
         self,
-        link: Link,
+        link: LiveLink,
         *,
         source_name: str,
         open_now: bool,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from analyzer.errors import UsageError
@@ -154,43 +155,67 @@ def parse_source(spec: str) -> SourceSpec:
     kind = kind.strip().lower()
     if not sep and kind != "tcp":
         raise _bad(spec, "missing 'KIND:'")
-    if kind == "can":
-        interface, sep, channel = rest.partition(":")
-        if not interface or not sep or not channel:
-            raise _bad(spec, "CAN sources need an interface and a channel")
-        channel, options = _split_options(channel)
-        channel, bitrate = _split_rate(channel)
-        if not channel:
-            raise _bad(spec, "missing CAN channel")
-        if bitrate is None and interface not in NO_BITRATE:
-            bitrate = DEFAULT_CAN_BITRATE
-        if bitrate is not None and bitrate <= 0:
-            raise _bad(spec, "bitrate must be positive")
-        return CanSpec(interface, channel, bitrate, options)
-    if kind == "tcp":
-        if not rest:
-            return TcpSpec(DEFAULT_IDU_HOST, DEFAULT_IDU_PORT)
-        host, port = tcp_address(rest, spec)
-        return TcpSpec(host, port)
-    if kind == "proxy":
-        listen, sep, idu = rest.partition("->")
-        if not sep or not listen or not idu:
-            raise _bad(spec, "a proxy needs LISTEN->IDU_HOST:PORT")
-        if listen.isdigit():
-            listen_host, listen_port = DEFAULT_PROXY_LISTEN_HOST, _port(listen, spec)
-        else:
-            listen_host, listen_port = split_host_port(listen, spec)
-        idu_host, idu_port = tcp_address(idu, spec)
-        return ProxySpec(listen_host, listen_port, idu_host, idu_port)
-    if kind == "serial":
-        url, baudrate = _split_rate(rest)
-        if not url:
-            raise _bad(spec, "missing serial device")
-        if baudrate is not None and baudrate <= 0:
-            raise _bad(spec, "baud rate must be positive")
-        return SerialSpec(url, DEFAULT_SERIAL_BAUDRATE if baudrate is None else baudrate)
-    if kind == "file":
-        if not rest:
-            raise _bad(spec, "missing file path")
-        return FileSpec(rest)
-    raise _bad(spec, f"unknown source kind {kind!r}")
+    parse = _PARSERS.get(kind)
+    if parse is None:
+        raise _bad(spec, f"unknown source kind {kind!r}")
+    return parse(rest, spec)
+
+
+def _can_source(rest: str, spec: str) -> CanSpec:
+    interface, sep, channel = rest.partition(":")
+    if not interface or not sep or not channel:
+        raise _bad(spec, "CAN sources need an interface and a channel")
+    channel, options = _split_options(channel)
+    channel, bitrate = _split_rate(channel)
+    if not channel:
+        raise _bad(spec, "missing CAN channel")
+    if bitrate is None and interface not in NO_BITRATE:
+        bitrate = DEFAULT_CAN_BITRATE
+    if bitrate is not None and bitrate <= 0:
+        raise _bad(spec, "bitrate must be positive")
+    return CanSpec(interface, channel, bitrate, options)
+
+
+def _tcp_source(rest: str, spec: str) -> TcpSpec:
+    if not rest:
+        return TcpSpec(DEFAULT_IDU_HOST, DEFAULT_IDU_PORT)
+    host, port = tcp_address(rest, spec)
+    return TcpSpec(host, port)
+
+
+def _proxy_source(rest: str, spec: str) -> ProxySpec:
+    listen, sep, idu = rest.partition("->")
+    if not sep or not listen or not idu:
+        raise _bad(spec, "a proxy needs LISTEN->IDU_HOST:PORT")
+    if listen.isdigit():
+        listen_host, listen_port = DEFAULT_PROXY_LISTEN_HOST, _port(listen, spec)
+    else:
+        listen_host, listen_port = split_host_port(listen, spec)
+    idu_host, idu_port = tcp_address(idu, spec)
+    return ProxySpec(listen_host, listen_port, idu_host, idu_port)
+
+
+def _serial_source(rest: str, spec: str) -> SerialSpec:
+    url, baudrate = _split_rate(rest)
+    if not url:
+        raise _bad(spec, "missing serial device")
+    if baudrate is not None and baudrate <= 0:
+        raise _bad(spec, "baud rate must be positive")
+    return SerialSpec(url, DEFAULT_SERIAL_BAUDRATE if baudrate is None else baudrate)
+
+
+def _file_source(rest: str, spec: str) -> FileSpec:
+    if not rest:
+        raise _bad(spec, "missing file path")
+    return FileSpec(rest)
+
+
+# Each source kind's parser: the rest of the spec after "KIND:" (and the whole spec, for
+# its errors) in, its spec out.
+_PARSERS: dict[str, Callable[[str, str], SourceSpec]] = {
+    "can": _can_source,
+    "tcp": _tcp_source,
+    "proxy": _proxy_source,
+    "serial": _serial_source,
+    "file": _file_source,
+}

@@ -13,7 +13,7 @@ import sys
 
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.codec import encode_command
-from analyzer.protocol.decoder import Decoder
+from analyzer.protocol.decoder import ProtocolDecoder
 from analyzer.protocol.ids import CONTROL_ID, FEEDBACK_ID
 from analyzer.protocol.types import LINK, CanFrame, diagnostic
 from analyzer.tui.app import MonitorApp
@@ -54,7 +54,7 @@ async def render(width: int = 120, height: int = 40, svg: str | None = None) -> 
         clock=lambda: now[0],
         file_size=lambda path: 4_812_345,
     )
-    decoder = Decoder()
+    decoder = ProtocolDecoder()
     async with app.run_test(size=(width, height)) as pilot:
         link = diagnostic(T0, "can0", LINK, "opened socketcan can0 (listen-only)", state="open")
         bridge.handle(Batch([], [link], T0))

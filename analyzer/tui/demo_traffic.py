@@ -58,13 +58,39 @@ def session(
     GPS, altitude and attitude at ``uav_hz`` and a text every 5 s; other equipment adds
     ``foreign_per_s`` frames spread over ``foreign_ids`` foreign IDs with counters.
     """
-    timeline: list[tuple[float, int, bytes]] = []
+    timeline = _Timeline(seconds)
+    _ground_station(timeline, pan_hz)
+    _gimbal(timeline)
+    if uav_hz > 0:
+        _uav(timeline, uav_hz)
+    if foreign_per_s > 0:
+        n = int(seconds * foreign_per_s)
+        for k in range(n):
+            index = k % foreign_ids
+            counter = (k // foreign_ids) & 0xFFFF
+            data = bytes([index & 0xFF, 0x10, counter & 0xFF, counter >> 8, 0, 0, 0x55, 0xAA])
+            timeline.frames.append((k / foreign_per_s, FOREIGN_BASE_ID + index, data))
+    timeline.frames.sort(key=lambda entry: entry[0])
+    for offset, can_id, data in timeline.frames:
+        yield CanFrame(t0 + offset, can_id, data, channel="can0")
 
-    def at(offset: float, can_id: int, data: bytes) -> None:
-        if 0.0 <= offset < seconds:
-            timeline.append((offset, can_id, data))
 
-    cycles = int(seconds // 10) + 1
+class _Timeline:
+    """The session's frames by their offset from its start (those inside it only)."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self.frames: list[tuple[float, int, bytes]] = []
+
+    def at(self, offset: float, can_id: int, data: bytes) -> None:
+        if 0.0 <= offset < self.seconds:
+            self.frames.append((offset, can_id, data))
+
+
+def _ground_station(timeline: _Timeline, pan_hz: float) -> None:
+    """Every 10 s: the camera script, a pan at ``pan_hz`` for 5 s, two waypoint texts."""
+    at = timeline.at
+    cycles = int(timeline.seconds // 10) + 1
     for cycle in range(cycles):
         base = cycle * 10.0
         for offset, name, params in CAMERA_SCRIPT:
@@ -77,7 +103,12 @@ def session(
         for offset in (0.5, 5.5):
             for j, (can_id, data) in enumerate(encode_text(f"waypoint {cycle * 2 + 1}")):
                 at(base + offset + j * 0.001, can_id, data)
-    for k in range(int(seconds * 2) + 1):
+
+
+def _gimbal(timeline: _Timeline) -> None:
+    """Attitude feedback every 0.5 s, laser ranging every 2 s, each in four segments."""
+    at = timeline.at
+    for k in range(int(timeline.seconds * 2) + 1):
         t = k * 0.5 + 0.25
         pitch, yaw, motor = _pose(t)
         message = encode_attitude(pitch_deg=pitch, yaw_deg=yaw, motor_yaw_deg=motor)
@@ -89,19 +120,13 @@ def session(
             )
             for j, segment in enumerate(segments(message)):
                 at(t + 0.1 + j * 0.001, FEEDBACK_ID, segment)
-    if uav_hz > 0:
-        for k in range(int(seconds * uav_hz) + 1):
-            t = k / uav_hz + 0.01
-            at(t, GPS_ID, encode_gps(31.1234567 + t * 1e-6, 118.1234567 + t * 2e-6))
-            at(t + 0.002, ALTITUDE_ID, encode_altitude(506.78 + 0.1 * math.sin(t)))
-            at(t + 0.004, UAV_ATTITUDE_ID, encode_uav_attitude(1.5, -0.75, (90.0 + t) % 180))
-    if foreign_per_s > 0:
-        n = int(seconds * foreign_per_s)
-        for k in range(n):
-            index = k % foreign_ids
-            counter = (k // foreign_ids) & 0xFFFF
-            data = bytes([index & 0xFF, 0x10, counter & 0xFF, counter >> 8, 0, 0, 0x55, 0xAA])
-            timeline.append((k / foreign_per_s, FOREIGN_BASE_ID + index, data))
-    timeline.sort(key=lambda entry: entry[0])
-    for offset, can_id, data in timeline:
-        yield CanFrame(t0 + offset, can_id, data, channel="can0")
+
+
+def _uav(timeline: _Timeline, uav_hz: float) -> None:
+    """GPS, altitude and attitude at ``uav_hz``."""
+    at = timeline.at
+    for k in range(int(timeline.seconds * uav_hz) + 1):
+        t = k / uav_hz + 0.01
+        at(t, GPS_ID, encode_gps(31.1234567 + t * 1e-6, 118.1234567 + t * 2e-6))
+        at(t + 0.002, ALTITUDE_ID, encode_altitude(506.78 + 0.1 * math.sin(t)))
+        at(t + 0.004, UAV_ATTITUDE_ID, encode_uav_attitude(1.5, -0.75, (90.0 + t) % 180))

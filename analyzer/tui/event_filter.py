@@ -51,7 +51,7 @@ def _parse_id(token: str) -> int | None:
 
 
 @dataclass(frozen=True)
-class Term:
+class FilterTerm:
     """One word of a filter: a topic prefix, a CAN ID or a name / text fragment."""
 
     text: str
@@ -59,7 +59,7 @@ class Term:
     can_id: int | None = None
 
     @classmethod
-    def parse(cls, token: str) -> Term:
+    def parse(cls, token: str) -> FilterTerm:
         if token.startswith("/"):
             return cls(token, topic=token)
         can_id = _parse_id(token)
@@ -95,18 +95,18 @@ class EventFilter:
     """
 
     text: str = ""
-    include: tuple[Term, ...] = field(default=())
-    exclude: tuple[Term, ...] = field(default=())
+    include: tuple[FilterTerm, ...] = field(default=())
+    exclude: tuple[FilterTerm, ...] = field(default=())
 
     @classmethod
     def parse(cls, text: str) -> EventFilter:
-        include: list[Term] = []
-        exclude: list[Term] = []
+        include: list[FilterTerm] = []
+        exclude: list[FilterTerm] = []
         for token in text.split():
             if token.startswith("-") and len(token) > 1:
-                exclude.append(Term.parse(token[1:]))
+                exclude.append(FilterTerm.parse(token[1:]))
             else:
-                include.append(Term.parse(token))
+                include.append(FilterTerm.parse(token))
         return cls(text.strip(), tuple(include), tuple(exclude))
 
     @property

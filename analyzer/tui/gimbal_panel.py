@@ -4,6 +4,11 @@ from __future__ import annotations
 
 from rich.text import Text
 
+from analyzer.protocol.feedback import (
+    MOTOR_YAW_LIMIT,
+    WIDE_MOTOR_YAW_LIMIT,
+    WIDE_MOTOR_YAW_TYPES,
+)
 from analyzer.protocol.types import Event
 from analyzer.tui.fit import grid, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
@@ -19,9 +24,8 @@ from analyzer.tui.state import MonitorState
 
 PITCH_RANGE = (-110.0, 60.0)
 YAW_RANGE = (0.0, 360.0)
-MOTOR_YAW_RANGE = (-170.0, 170.0)
-WIDE_MOTOR_YAW_RANGE = (-325.0, 325.0)  # 3.5x zoom gimbals
-WIDE_MOTOR_YAW_TYPES = (3, 4)
+MOTOR_YAW_RANGE = (-MOTOR_YAW_LIMIT / 100, MOTOR_YAW_LIMIT / 100)
+WIDE_MOTOR_YAW_RANGE = (-WIDE_MOTOR_YAW_LIMIT / 100, WIDE_MOTOR_YAW_LIMIT / 100)  # 3.5x zoom
 BAR_WIDTH = 22
 MIN_BAR_WIDTH = 8
 

@@ -313,46 +313,62 @@ class MonitorState:
             if event.warnings:
                 total.warnings += 1
                 counters.warnings += 1
-            self.seq += 1
-            insert_in_time_order(self.all_log, LogEntry(self.seq, event))
-            if topic in COMMAND_VIEW_TOPICS:
-                entry = LogEntry(self.seq, event)  # its own: a folded line changes
-                if topic != TOPIC_COMMAND or not self._runs.fold(entry):
-                    insert_in_time_order(self.command_log, entry)
-            if topic == TOPIC_GIMBAL_ATTITUDE:
-                self.attitude = event
-                self._note_feedback(event)
-            elif topic == TOPIC_COMMAND:
-                self.last_commands[command_group(event)] = event
-            elif topic == TOPIC_DIAGNOSTICS:
-                kind = str(event.fields.get("kind", "?"))
-                total.kinds[kind] += 1
-                counters.kinds[kind] += 1
-                if kind == LINK:
-                    if not is_camera_event(event):  # the status bar is the telemetry's link
-                        self.link.note(event)
-                        self.link_state = self.link.state
-                        self.link_detail = self.link.detail
-                else:
-                    self._window_errors += 1
-                    self._errors_meter.add(event.time)
-                    if kind == BUS_ERROR:
-                        self.bus.add_events((event,))
-            elif topic == TOPIC_UAV_GPS:
-                self.gps = event
-            elif topic == TOPIC_UAV_ALTITUDE:
-                self.altitude = event
-            elif topic == TOPIC_UAV_ATTITUDE:
-                self.uav_attitude = event
-            elif topic == TOPIC_UAV_TEXT:
-                self.text = event
-            elif topic == TOPIC_GIMBAL_RANGING:
-                self.ranging = event
-                self._note_feedback(event)
-            elif topic == TOPIC_ANALYSIS_RESPONSE:
-                self.finding = event
-                self.findings.append(event)
-                self.counts.add(event.fields)
+            self._log(event)
+            if topic == TOPIC_DIAGNOSTICS:
+                self._fold_diagnostic(event)
+            else:
+                self._fold_latest(event)
+
+    def _log(self, event: Event) -> None:
+        """Into the log of everything and, for a command or finding, the command view's
+        (a command repeated folds into its line there)."""
+        self.seq += 1
+        insert_in_time_order(self.all_log, LogEntry(self.seq, event))
+        topic = event.topic
+        if topic in COMMAND_VIEW_TOPICS:
+            entry = LogEntry(self.seq, event)  # its own: a folded line changes
+            if topic != TOPIC_COMMAND or not self._runs.fold(entry):
+                insert_in_time_order(self.command_log, entry)
+
+    def _fold_latest(self, event: Event) -> None:
+        """The newest event of each topic the panels show."""
+        topic = event.topic
+        if topic == TOPIC_GIMBAL_ATTITUDE:
+            self.attitude = event
+            self._note_feedback(event)
+        elif topic == TOPIC_COMMAND:
+            self.last_commands[command_group(event)] = event
+        elif topic == TOPIC_UAV_GPS:
+            self.gps = event
+        elif topic == TOPIC_UAV_ALTITUDE:
+            self.altitude = event
+        elif topic == TOPIC_UAV_ATTITUDE:
+            self.uav_attitude = event
+        elif topic == TOPIC_UAV_TEXT:
+            self.text = event
+        elif topic == TOPIC_GIMBAL_RANGING:
+            self.ranging = event
+            self._note_feedback(event)
+        elif topic == TOPIC_ANALYSIS_RESPONSE:
+            self.finding = event
+            self.findings.append(event)
+            self.counts.add(event.fields)
+
+    def _fold_diagnostic(self, event: Event) -> None:
+        """A diagnostic: counted by kind; a link change for the status bar, else an error."""
+        kind = str(event.fields.get("kind", "?"))
+        self.total.kinds[kind] += 1
+        self.counters.kinds[kind] += 1
+        if kind == LINK:
+            if not is_camera_event(event):  # the status bar is the telemetry's link
+                self.link.note(event)
+                self.link_state = self.link.state
+                self.link_detail = self.link.detail
+            return
+        self._window_errors += 1
+        self._errors_meter.add(event.time)
+        if kind == BUS_ERROR:
+            self.bus.add_events((event,))
 
     def _note_feedback(self, event: Event) -> None:
         self.feedback_count += 1

@@ -14,7 +14,7 @@ from analyzer.video.thumbnail import DECODERS
 ANALYSIS_WIDTH = 640  # pictures are looked at this wide at most
 
 
-class AccessUnit(Protocol):
+class EncodedFrame(Protocol):
     """A frame as stored: capture time and Annex B bytes."""
 
     @property
@@ -34,7 +34,7 @@ class Picture:
 
 def decode_window(
     codec: str,
-    units: Sequence[AccessUnit],
+    units: Sequence[EncodedFrame],
     start: float,
     *,
     every_s: float = 0.0,

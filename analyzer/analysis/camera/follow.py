@@ -23,7 +23,7 @@ import numpy as np
 from analyzer.analysis.camera.motion import MIN_FEATURES, Features, Motion, features, motion
 from analyzer.analysis.camera.weak_links import (
     WEAK_INLIERS,
-    Link,
+    PictureLink,
     first_doubted,
     neighbours,
 )
@@ -51,7 +51,7 @@ class Followed:
     # links (its attitude is sampled twice a second while the gimbal may turn 60 deg/s)
     uncertainty: float = 0.0
     # with a WEAK_LINK problem: the link not believed, and the strong links next to it
-    doubted: tuple[Link, tuple[Link, ...]] | None = None
+    doubted: tuple[PictureLink, tuple[PictureLink, ...]] | None = None
 
     def settled(self, times: Sequence[float], seconds: float, within: float) -> bool:
         """Whether the scale stayed within ``within`` (a fraction) over the last
@@ -116,7 +116,7 @@ def follow(
         return Followed(np.eye(3), 1.0, 1.0, 0, 0, 0, "" if last == 0 else LOST)
     if cache[0].count < MIN_FEATURES:
         return Followed(np.eye(3), 1.0, 1.0, 0, 0, 0, TOO_LITTLE_TEXTURE)
-    links: list[tuple[Link, np.ndarray]] = []
+    links: list[tuple[PictureLink, np.ndarray]] = []
     anchor = 0
     problem = ""
     while anchor < last:
@@ -130,7 +130,7 @@ def follow(
             break
         step, measured = found
         motion_part, unsure = explained(anchor, anchor + step) if explained else (1.0, 0.0)
-        link = Link(
+        link = PictureLink(
             anchor,
             anchor + step,
             clock[anchor],
@@ -176,9 +176,9 @@ def _link(cache: FeatureCache, anchor: int, step: int) -> tuple[int, Motion] | N
 
 
 def _followed(
-    links: list[tuple[Link, np.ndarray]],
+    links: list[tuple[PictureLink, np.ndarray]],
     problem: str,
-    doubted: tuple[Link, tuple[Link, ...]] | None,
+    doubted: tuple[PictureLink, tuple[PictureLink, ...]] | None,
 ) -> Followed:
     """The Followed of a chain of links (``problem``: why it stopped where it did)."""
     total = np.eye(3)

@@ -42,7 +42,7 @@ from analyzer.analysis.camera.source import VideoSource
 from analyzer.analysis.camera.telemetry import Telemetry
 from analyzer.analysis.camera.verdicts import Seen, ZoomRange, judge
 from analyzer.analysis.camera.weak_links import doubt_words
-from analyzer.analysis.findings import Finding
+from analyzer.analysis.findings import ResponseFinding
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, TOPIC_COMMAND, Event
 from analyzer.video.decode import Picture
 
@@ -118,7 +118,7 @@ class CameraJudge:
         """No finding still to come has an earlier time (None: none is pending)."""
         return min((p.time for p in self._pending), default=None)
 
-    def _emit(self, findings: list[Finding]) -> list[Event]:
+    def _emit(self, findings: list[ResponseFinding]) -> list[Event]:
         for finding in findings:
             self.verdicts[finding.verdict] += 1
         return [f.to_event() for f in findings]
@@ -149,9 +149,9 @@ class CameraJudge:
 
     # -- judging -------------------------------------------------------------------------
 
-    def _judge_due(self, *, final: bool) -> list[Finding]:
+    def _judge_due(self, *, final: bool) -> list[ResponseFinding]:
         reach = self.video.until()
-        out: list[Finding] = []
+        out: list[ResponseFinding] = []
         keep: list[_Pending] = []
         for pending in sorted(self._pending, key=lambda p: p.time):
             ready = self._now >= pending.end + WAIT_S and reach >= pending.end
@@ -164,7 +164,7 @@ class CameraJudge:
         self.telemetry.forget_before(oldest - BEFORE_S)
         return out
 
-    def _judge(self, pending: _Pending) -> Finding:
+    def _judge(self, pending: _Pending) -> ResponseFinding:
         wanted = pending.asked
         if wanted.group in (OPTICAL, DIGITAL) and self._zoom is None:
             self._zoom = ZoomRange(self.telemetry.max_zoom)
@@ -176,7 +176,10 @@ class CameraJudge:
         else:
             seen = self._look(pending, stream, shown)
         already = wanted.kind == PALETTE and wanted.palette == self._palette
-        finding = judge(pending.command, pending.time, wanted, seen, zoom, already)
+        verdict = judge(pending.command, pending.time, wanted, seen, zoom, already)
+        finding = verdict.finding
+        if zoom is not None:
+            self._zoom = verdict.zoom  # what this command taught of the optical zoom
         if wanted.kind == PALETTE and finding.verdict == "obeyed":
             self._palette = wanted.palette
         if self.keep_pictures and len(self.judged) < MAX_PICTURES // 2:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analyzer.analysis.camera.commands import ABSOLUTE, DIRECTION, LAYOUT, PALETTE, RATIO, Asked
-from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN, Finding
+from analyzer.analysis.findings import NOT_OBEYED, OBEYED, PARTIAL, UNKNOWN, ResponseFinding
 from analyzer.protocol.response_fields import CHECK_PICTURE
 
 STILL = 1.03  # the picture kept its scale within 3 % (the measurement's noise is below 1 %)
@@ -39,12 +39,18 @@ class Seen:
     uncertainty: float = 0.0  # log of the scale: how far the motion taken out may be off
 
 
+@dataclass(frozen=True, slots=True)
 class ZoomRange:
-    """What is known of the optical zoom ratio: it lies between ``low`` and ``high``."""
+    """What is known of the optical zoom ratio: it lies between ``low`` and ``high``
+    (1x to the ``longest`` at first). A value: what a command teaches is a new range."""
 
-    def __init__(self, longest: float) -> None:
-        self.longest = longest
-        self.low, self.high = 1.0, longest
+    longest: float
+    low: float = 1.0
+    high: float = math.inf
+
+    def __post_init__(self) -> None:
+        if self.high > self.longest:
+            object.__setattr__(self, "high", self.longest)
 
     @property
     def pinned(self) -> bool:
@@ -55,20 +61,32 @@ class ZoomRange:
             return f"{math.sqrt(self.low * self.high):.1f}x"
         return f"between {self.low:.1f}x and {self.high:.1f}x"
 
-    def moved(self, scale: float) -> None:
+    def moved(self, scale: float) -> ZoomRange:
+        """The range after the picture changed scale by ``scale``."""
         low = max(1.0, self.low * scale / STILL)
         high = min(self.longest, self.high * scale * STILL)
         if low > high:  # not what this range allowed: start again
-            self.forget()
-        else:
-            self.low, self.high = low, high
+            return self.forgotten()
+        return ZoomRange(self.longest, low, high)
 
-    def reached(self, ratio: float) -> None:
-        self.low = max(1.0, min(ratio / (1 + TOLERANCE), self.longest))
-        self.high = min(self.longest, max(ratio * (1 + TOLERANCE), 1.0))
+    def reached(self, ratio: float) -> ZoomRange:
+        """The range once the lens was seen at ``ratio``."""
+        low = max(1.0, min(ratio / (1 + TOLERANCE), self.longest))
+        high = min(self.longest, max(ratio * (1 + TOLERANCE), 1.0))
+        return ZoomRange(self.longest, low, high)
 
-    def forget(self) -> None:
-        self.low, self.high = 1.0, self.longest
+    def forgotten(self) -> ZoomRange:
+        """Nothing known any more (the zoom may have changed unseen)."""
+        return ZoomRange(self.longest)
+
+
+@dataclass(frozen=True, slots=True)
+class CameraVerdict:
+    """The finding of one camera command and what is known of the optical zoom after it
+    (None when no range was given)."""
+
+    finding: ResponseFinding
+    zoom: ZoomRange | None
 
 
 def _kept(scale: float, doubt: float) -> bool:
@@ -103,22 +121,24 @@ def _way(scale: float) -> str:
 
 def judge(
     command: str, t: float, asked: Asked, seen: Seen, zoom: ZoomRange | None, already: bool
-) -> Finding:
-    """The finding of one camera command. ``zoom`` is the optical zoom's range (for an
-    optical zoom command, updated here); ``already``: the palette asked is the one the
-    camera was last seen to take (so the colours need not change)."""
+) -> CameraVerdict:
+    """The finding of one camera command, and the optical zoom's range after it. ``zoom``
+    is the range before (for an optical zoom command; it is not changed); ``already``: the
+    palette asked is the one the camera was last seen to take (so the colours need not
+    change)."""
     extra: dict[str, Any] = {
         "stream": seen.stream,
         "frame_before": seen.before,
         "frame_after": seen.after,
         "observed_at": seen.after,
     }
+    forgotten = None if zoom is None else zoom.forgotten()  # it may have changed unseen
     if seen.problem:
-        if zoom is not None:
-            zoom.forget()  # the zoom may have changed unseen
-        return Finding(command, t, CHECK_PICTURE, UNKNOWN, seen.problem, extra)
+        return CameraVerdict(
+            ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, seen.problem, extra), forgotten
+        )
     if asked.kind in (PALETTE, LAYOUT):
-        return _changes(command, t, asked, seen, already, extra)
+        return CameraVerdict(_changes(command, t, asked, seen, already, extra), zoom)
     assert seen.scale is not None
     scale = seen.scale
     extra["scale"] = scale
@@ -127,24 +147,26 @@ def judge(
     doubt = seen.uncertainty
     unsure = _unsure(scale, doubt)
     if unsure:
-        if zoom is not None:
-            zoom.forget()
-        return Finding(command, t, CHECK_PICTURE, UNKNOWN, unsure, extra)
+        return CameraVerdict(
+            ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, unsure, extra), forgotten
+        )
     if asked.kind == DIRECTION:
         verdict, detail = _direction(asked, scale, zoom, doubt)
     elif asked.kind == RATIO:
         verdict, detail = _ratio(asked, scale, seen.tap_offset, extra, doubt)
     else:
-        verdict, detail = _absolute(asked, scale, zoom, extra, doubt)
-    if asked.kind != ABSOLUTE and zoom is not None:
-        zoom.moved(scale)
+        verdict, detail, after = _absolute(asked, scale, zoom, extra, doubt)
+    if asked.kind == ABSOLUTE:
+        zoom = None if zoom is None else after
+    elif zoom is not None:
+        zoom = zoom.moved(scale)
     raw = extra.get("raw_scale")
     if raw is not None:
         detail += (
             f" (x{raw:.3g} as the picture shows it: the aircraft's motion explains "
             f"x{raw / scale:.3g})"
         )
-    return Finding(command, t, CHECK_PICTURE, verdict, detail, extra)
+    return CameraVerdict(ResponseFinding(command, t, CHECK_PICTURE, verdict, detail, extra), zoom)
 
 
 def _direction(asked: Asked, scale: float, zoom: ZoomRange | None, doubt: float) -> tuple[str, str]:
@@ -190,7 +212,8 @@ def _ratio(
 
 def _absolute(
     asked: Asked, scale: float, zoom: ZoomRange | None, extra: dict[str, Any], doubt: float
-) -> tuple[str, str]:
+) -> tuple[str, str, ZoomRange]:
+    """An absolute zoom's verdict, its words and the zoom's range after it."""
     ratio = asked.value
     zoom = zoom or ZoomRange(max(ratio, 35.0))
     before = zoom.words()
@@ -200,49 +223,56 @@ def _absolute(
     may_stay = low / (1 + TOLERANCE) <= ratio <= high * (1 + TOLERANCE)
     if _kept(scale, doubt):
         if may_stay and zoom.pinned:
-            zoom.reached(ratio)
-            return OBEYED, f"{_kept_words(scale, doubt)}: the lens was at {before}"
+            words = f"{_kept_words(scale, doubt)}: the lens was at {before}"
+            return OBEYED, words, zoom.reached(ratio)
         if may_stay:
-            return UNKNOWN, (
+            return (
+                UNKNOWN,
                 f"{_kept_words(scale, doubt)}: the lens was at {ratio:g}x already, or "
-                f"ignored the command (the zoom before lay {before})"
+                f"ignored the command (the zoom before lay {before})",
+                zoom,
             )
-        return NOT_OBEYED, f"{_kept_words(scale, doubt)} at {before}, {ratio:g}x asked"
+        return NOT_OBEYED, f"{_kept_words(scale, doubt)} at {before}, {ratio:g}x asked", zoom
     inward = ratio > high * (1 + TOLERANCE)
     outward = ratio < low / (1 + TOLERANCE)
     if (inward and scale < 1) or (outward and scale > 1):
         return (
             NOT_OBEYED,
             f"the picture {_way(scale)} (x{scale:.3g}) from {before}, {ratio:g}x asked",
+            zoom,
         )
     slack = STILL * math.exp(doubt)
     after_low, after_high = max(1.0, low * scale / slack), high * scale * slack
     if after_low / (1 + TOLERANCE) <= ratio <= after_high * (1 + TOLERANCE):
-        pinned = zoom.pinned
-        zoom.reached(ratio)
-        if pinned:
-            return OBEYED, f"the picture {_way(scale)} x{scale:.3g}, from {before} to {ratio:g}x"
-        return OBEYED, (
+        if zoom.pinned:
+            words = f"the picture {_way(scale)} x{scale:.3g}, from {before} to {ratio:g}x"
+            return OBEYED, words, zoom.reached(ratio)
+        words = (
             f"the picture {_way(scale)} x{scale:.3g}, as to {ratio:g}x (the zoom before is "
             f"known only to lie {before})"
         )
-    zoom.moved(scale)
-    return PARTIAL, (
-        f"the picture {_way(scale)} x{scale:.3g} from {before}: to {zoom.words()}, not {ratio:g}x"
+        return OBEYED, words, zoom.reached(ratio)
+    moved = zoom.moved(scale)
+    return (
+        PARTIAL,
+        f"the picture {_way(scale)} x{scale:.3g} from {before}: to {moved.words()}, not {ratio:g}x",
+        moved,
     )
 
 
 def _changes(
     command: str, t: float, asked: Asked, seen: Seen, already: bool, extra: dict[str, Any]
-) -> Finding:
+) -> ResponseFinding:
     field = "palette_changed" if asked.kind == PALETTE else "layout_changed"
     what = "its colours (the palette)" if asked.kind == PALETTE else "its layout"
     extra[field] = seen.changed
     if seen.changed is None:
-        return Finding(command, t, CHECK_PICTURE, UNKNOWN, f"cannot tell {what}", extra)
+        return ResponseFinding(command, t, CHECK_PICTURE, UNKNOWN, f"cannot tell {what}", extra)
     if seen.changed:
-        return Finding(command, t, CHECK_PICTURE, OBEYED, f"the picture changed {what}", extra)
+        return ResponseFinding(
+            command, t, CHECK_PICTURE, OBEYED, f"the picture changed {what}", extra
+        )
     if already:
         detail = f"the picture kept {what}: {asked.palette} was on already"
-        return Finding(command, t, CHECK_PICTURE, OBEYED, detail, extra)
-    return Finding(command, t, CHECK_PICTURE, NOT_OBEYED, f"the picture kept {what}", extra)
+        return ResponseFinding(command, t, CHECK_PICTURE, OBEYED, detail, extra)
+    return ResponseFinding(command, t, CHECK_PICTURE, NOT_OBEYED, f"the picture kept {what}", extra)

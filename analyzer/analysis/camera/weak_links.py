@@ -25,7 +25,7 @@ FASTER = 2.0  # over a weak link the lens may zoom up to this much faster than a
 
 
 @dataclass(frozen=True)
-class Link:
+class PictureLink:
     """One measurement between frames ``first`` and ``second`` (taken at ``start`` and
     ``end``): how many matches agreed of those found, the change of scale the picture
     shows (``raw_scale``), what the aircraft's motion explains of it (``explained``) and
@@ -56,14 +56,14 @@ class Link:
         return math.log(self.lens) / max(self.end - self.start, 1e-6)
 
 
-def neighbours(links: Sequence[Link], index: int) -> list[Link]:
+def neighbours(links: Sequence[PictureLink], index: int) -> list[PictureLink]:
     """The nearest strong link before ``links[index]`` and the nearest after it."""
     before = next((n for n in reversed(links[:index]) if not n.weak), None)
     after = next((n for n in links[index + 1 :] if not n.weak), None)
     return [n for n in (before, after) if n is not None]
 
 
-def vouched(link: Link, around: Sequence[Link]) -> bool:
+def vouched(link: PictureLink, around: Sequence[PictureLink]) -> bool:
     """Whether the strong links ``around`` a weak one vouch for its change of scale: each
     of them, zooming as it did (up to FASTER times as fast), would have made about as
     much of the weak link's time, give or take AGREE and the telemetry's doubt. A link
@@ -82,7 +82,7 @@ def vouched(link: Link, around: Sequence[Link]) -> bool:
     return True
 
 
-def first_doubted(links: Sequence[Link]) -> int | None:
+def first_doubted(links: Sequence[PictureLink]) -> int | None:
     """The index of the first weak link that its neighbours do not vouch for (None: all
     links are believed)."""
     for index, link in enumerate(links):
@@ -91,7 +91,7 @@ def first_doubted(links: Sequence[Link]) -> int | None:
     return None
 
 
-def doubt_words(link: Link, around: Sequence[Link], origin: float) -> str:
+def doubt_words(link: PictureLink, around: Sequence[PictureLink], origin: float) -> str:
     """Why a weak link is not believed, in words (its times from ``origin``, the
     command's time)."""
     head = (

@@ -124,6 +124,42 @@ def _blank(n: int) -> FrameColumns:
     )
 
 
+def _timestamps(at: Any, point: int, whole: int, good: Array) -> Array:
+    """The lines' ``(seconds.micros)`` stamps as whole microseconds (uint64); ``good`` is
+    narrowed to the lines whose stamp is all digits."""
+    fraction = at.right(point + 1, 6)
+    good &= _all_digits(fraction)
+    micros = _decimal(fraction)
+    high = max(0, whole - 8)
+    low = at.right(1 + high, whole - high)
+    good &= _all_digits(low)
+    seconds = _decimal(low)
+    if high:
+        top = at.right(1, high)
+        good &= _all_digits(top)
+        seconds += _decimal(top) * np.uint64(10**8)
+    micros += seconds * np.uint64(10**6)
+    return micros
+
+
+def _can_ids(at: Any, space: int, id_digits: int, good: Array) -> Array:
+    """The lines' CAN IDs (3 or 8 hex digits after ``space``); ``good`` is narrowed to
+    the lines whose ID is hex (and, extended, at most 29 bits)."""
+    ident = at.left(space + 1, id_digits)
+    good &= _all_hex(ident)
+    if id_digits == 8:
+        good &= at.byte(space + 1) <= ord("1")
+        can_id = _pack(_nibbles(ident))
+        return (
+            (can_id & 0xFF) << 24
+            | (can_id >> 8 & 0xFF) << 16
+            | (can_id >> 16 & 0xFF) << 8
+            | (can_id >> 24)
+        )
+    nib = _nibbles(ident)
+    return (nib & 0xF) << 8 | (nib >> 8 & 0xF) << 4 | (nib >> 16 & 0xF)
+
+
 def _read_shape(
     lines: Lines,
     rows: Array,
@@ -149,35 +185,11 @@ def _read_shape(
         return
     at = lines.at(rows)
     good = (at.byte(point) == 46) & (at.byte(close + 1) == 32) & (at.byte(space) == 32)
-    fraction = at.right(point + 1, 6)
-    good &= _all_digits(fraction)
-    micros = _decimal(fraction)
-    high = max(0, whole - 8)
-    low = at.right(1 + high, whole - high)
-    good &= _all_digits(low)
-    seconds = _decimal(low)
-    if high:
-        top = at.right(1, high)
-        good &= _all_digits(top)
-        seconds += _decimal(top) * np.uint64(10**8)
-    micros += seconds * np.uint64(10**6)
+    micros = _timestamps(at, point, whole, good)
     channel = [at.left(c, min(8, space - c), 0x21) for c in range(close + 2, space, 8)]
     for word in channel:
         good &= _all_solid(word)
-    ident = at.left(space + 1, id_digits)
-    good &= _all_hex(ident)
-    if id_digits == 8:
-        good &= at.byte(space + 1) <= ord("1")
-        can_id = _pack(_nibbles(ident))
-        can_id = (
-            (can_id & 0xFF) << 24
-            | (can_id >> 8 & 0xFF) << 16
-            | (can_id >> 16 & 0xFF) << 8
-            | (can_id >> 24)
-        )
-    else:
-        nib = _nibbles(ident)
-        can_id = (nib & 0xF) << 8 | (nib >> 8 & 0xF) << 4 | (nib >> 16 & 0xF)
+    can_id = _can_ids(at, space, id_digits, good)
     data = np.zeros(rows.shape[0], np.uint64)
     for half in range(0, digits, 8):
         word = at.left(hash_at + 1 + half, min(8, digits - half))

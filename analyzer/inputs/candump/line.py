@@ -85,19 +85,7 @@ def parse_screen_line(
     whether that time is a relative one (-tz or -td: no date).
     """
     tokens = line.split()
-    i = 0
-    ts: float | None = None
-    dated = False  # ``-t A``: a date and time of day
-    if tokens[0][:1] == b"(":
-        if tokens[0].endswith(b")"):
-            ts = timestamp(tokens[0][1:-1])
-            i = 1
-        elif len(tokens) > 1 and tokens[1].endswith(b")"):
-            ts = date_time(tokens[0][1:] + b" " + tokens[1][:-1])
-            i = 2
-            dated = True
-        else:
-            raise LineError("timestamp not closed by ')'")
+    ts, i, dated = _screen_time(tokens)
     if len(tokens) < i + 3:
         raise LineError("not a candump line")
     name = tokens[i]
@@ -113,29 +101,8 @@ def parse_screen_line(
     if len(tokens) < i + 2:
         raise LineError("not a candump line")
     info = frame_id(tokens[i])
-    length_text = tokens[i + 1]
-    if not (length_text[:1] == b"[" and length_text[-1:] == b"]"):
-        raise LineError("no data length in brackets after the CAN ID")
-    inner = length_text[1:-1]
-    if not inner.isdigit():
-        raise LineError("data length is not a number")
-    length = int(inner)
-    is_fd = len(inner) == 2  # candump prints CAN FD lengths with two digits
-    check_length(length, is_fd)
-    rest = tokens[i + 2 :]
-    is_remote = False
-    payload = b""
-    if rest[:2] == [b"remote", b"request"]:
-        is_remote = True
-        rest = rest[2:]
-    else:
-        hex_bytes = rest[:length]
-        if len(hex_bytes) < length or not all(
-            len(t) == 2 and t[0] in _HEXDIGITS and t[1] in _HEXDIGITS for t in hex_bytes
-        ):
-            raise LineError(f"expected {length} data bytes in hex")
-        payload = bytes(int(t, 16) for t in hex_bytes)
-        rest = rest[length:]
+    length, is_fd = _screen_length(tokens[i + 1])
+    payload, is_remote, rest = _screen_data(tokens[i + 2 :], length)
     is_error = info[2]
     if rest[:1] == [b"ERRORFRAME"]:
         is_error = True
@@ -158,6 +125,44 @@ def parse_screen_line(
         length if is_remote else 0,
     )
     return frame, timed, relative
+
+
+def _screen_time(tokens: list[bytes]) -> tuple[float | None, int, bool]:
+    """A screen line's time in parentheses, if any: the time, the tokens it took and
+    whether it was a date and time of day (``-t A``)."""
+    if tokens[0][:1] != b"(":
+        return None, 0, False
+    if tokens[0].endswith(b")"):
+        return timestamp(tokens[0][1:-1]), 1, False
+    if len(tokens) > 1 and tokens[1].endswith(b")"):
+        return date_time(tokens[0][1:] + b" " + tokens[1][:-1]), 2, True
+    raise LineError("timestamp not closed by ')'")
+
+
+def _screen_length(text: bytes) -> tuple[int, bool]:
+    """``[8]`` (or ``[64]``, two digits for CAN FD): the data length, and whether FD."""
+    if not (text[:1] == b"[" and text[-1:] == b"]"):
+        raise LineError("no data length in brackets after the CAN ID")
+    inner = text[1:-1]
+    if not inner.isdigit():
+        raise LineError("data length is not a number")
+    length = int(inner)
+    is_fd = len(inner) == 2  # candump prints CAN FD lengths with two digits
+    check_length(length, is_fd)
+    return length, is_fd
+
+
+def _screen_data(rest: list[bytes], length: int) -> tuple[bytes, bool, list[bytes]]:
+    """The data bytes in hex (or ``remote request``): the payload, whether a remote
+    request, and the tokens after them."""
+    if rest[:2] == [b"remote", b"request"]:
+        return b"", True, rest[2:]
+    hex_bytes = rest[:length]
+    if len(hex_bytes) < length or not all(
+        len(t) == 2 and t[0] in _HEXDIGITS and t[1] in _HEXDIGITS for t in hex_bytes
+    ):
+        raise LineError(f"expected {length} data bytes in hex")
+    return bytes(int(t, 16) for t in hex_bytes), False, rest[length:]
 
 
 def check_length(length: int, is_fd: bool) -> None:

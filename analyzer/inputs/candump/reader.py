@@ -16,7 +16,7 @@ from analyzer.inputs.candump.scan import (
     WHERE,
     Found,
     Place,
-    Scan,
+    WantedIdPattern,
     can_frames,
     id_texts,
     scanner,
@@ -137,7 +137,7 @@ class CandumpParser(CandumpLineParser):
         """The CanFrames of the wanted frames the scan found."""
         return list(can_frames(found, self._places.get, self._place))
 
-    def _parse_matches(self, block: bytes, scan: Scan) -> list[InputItem]:
+    def _parse_matches(self, block: bytes, scan: WantedIdPattern) -> list[InputItem]:
         """A block with lines for the line parser: each in its place, with its number."""
         out: list[InputItem] = []
         wanted: list[Found] = []  # wanted frames since the last other line

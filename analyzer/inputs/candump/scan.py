@@ -60,7 +60,7 @@ SAMPLE = 1 << 16
 
 
 @dataclass(frozen=True)
-class Scan:
+class WantedIdPattern:
     """The pattern for one set of wanted IDs, as ``findall`` and as ``finditer``.
 
     ``findall(block)`` lists what the matches found, in order (a block is whole lines);
@@ -109,10 +109,10 @@ _POINT, _NOTHING, _MICRO = repeat(b"."), repeat(b""), repeat(1_000_000)
 
 
 @functools.lru_cache(maxsize=8)
-def scanner(wanted_ids: frozenset[int] | None) -> Scan:
+def scanner(wanted_ids: frozenset[int] | None) -> WantedIdPattern:
     """The scan for this set of wanted IDs (None: every ID is wanted)."""
     pattern = re.compile(block_pattern(wanted_ids).encode())
-    return Scan(
+    return WantedIdPattern(
         cast(Callable[[bytes], list[Found]], pattern.findall),
         pattern.finditer,
     )

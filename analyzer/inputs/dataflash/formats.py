@@ -44,7 +44,7 @@ STRUCT_CODES = {
 
 
 @dataclass(slots=True)
-class Layout:
+class RecordLayout:
     """One record type: its name, whole length (header included), columns and struct."""
 
     type: int
@@ -62,13 +62,13 @@ class Layout:
             return None
 
 
-def parse_fmt(record: bytes | mmap.mmap, offset: int = 0) -> Layout | None:
+def parse_fmt(record: bytes | mmap.mmap, offset: int = 0) -> RecordLayout | None:
     """The layout an FMT record at ``offset`` defines (None when the record is nonsense)."""
     kind, length, name, fmt, columns = FMT_BODY.unpack_from(record, offset + 3)
     return make_layout(kind, length, _text(name), _text(fmt), _text(columns))
 
 
-def make_layout(kind: int, length: int, name: str, fmt: str, columns: str) -> Layout | None:
+def make_layout(kind: int, length: int, name: str, fmt: str, columns: str) -> RecordLayout | None:
     """A Layout from the fields of an FMT record; None when they contradict each other."""
     names = tuple(columns.split(",")) if columns else ()
     if length < 3 or not name:
@@ -79,14 +79,14 @@ def make_layout(kind: int, length: int, name: str, fmt: str, columns: str) -> La
     for char in fmt:
         code = STRUCT_CODES.get(char)
         if code is None:
-            return Layout(kind, name, length, names, None, ())
+            return RecordLayout(kind, name, length, names, None, ())
         codes.append(code)
         offsets.append(size)
         size += struct.calcsize("<" + code)
     if size != length or (names and len(names) != len(fmt)):
         return None
     body = struct.Struct("<" + "".join(codes))
-    return Layout(kind, name, length, names, body, tuple(offsets), tuple(codes))
+    return RecordLayout(kind, name, length, names, body, tuple(offsets), tuple(codes))
 
 
 def _text(raw: bytes) -> str:
@@ -104,7 +104,7 @@ class CanColumns:
     fd: bool  # CAFD: DLC is a CAN FD length code, eight 8-byte data words
 
 
-def can_columns(layout: Layout) -> CanColumns | str | None:
+def can_columns(layout: RecordLayout) -> CanColumns | str | None:
     """The CAN columns of a CANF / CAFD layout (ArduPilot's or a Lua script's).
 
     None for any other record type; a reason in words for a CANF / CAFD layout whose

@@ -22,7 +22,7 @@ from analyzer.inputs.dataflash.formats import (
     FMT_TYPE,
     HEAD,
     CanColumns,
-    Layout,
+    RecordLayout,
     can_columns,
     parse_fmt,
 )
@@ -80,7 +80,9 @@ class DataFlashReader(InputReader):
                 "seconds since the autopilot booted, not dates"
             )
 
-    def __iter__(self) -> Iterator[InputItem]:
+    # The usual record is read inline, one unpack and one frame each: this loop runs for every
+    # record of a log (benchmarks/dataflash_speed.py); damage and the end are apart.
+    def __iter__(self) -> Iterator[InputItem]:  # noqa: C901, PLR0915
         data = self._data
         size = len(data)
         counts = self.counts
@@ -159,9 +161,14 @@ class DataFlashReader(InputReader):
         counts.records = records
         counts.can_records = frames
         self.last_time = last_time
+        yield from self._finished(last_time or base)
+
+    def _finished(self, last_time: float) -> Iterator[InputItem]:
+        """After the last record: what the decompression found wrong, as diagnostics, and
+        the records of a layout that could not be read as CAN frames, as notes."""
         for problem in self._gzip_problems:
-            yield diagnostic(last_time or base, self.source, BAD_FRAME, problem)
-        for kind, count in unread.items():
+            yield diagnostic(last_time, self.source, BAD_FRAME, problem)
+        for kind, count in self._unread_records.items():
             name, why = self._unread_layouts[kind]
             self.notes.append(
                 f"{count:,} {name} record(s) (type {kind}) could not be read as CAN frames: {why}"
@@ -169,7 +176,7 @@ class DataFlashReader(InputReader):
         self.position_bytes = self.size_bytes or 0
 
     def _define(
-        self, layout: Layout | None, lengths: dict[int, int], cans: dict[int, CanColumns]
+        self, layout: RecordLayout | None, lengths: dict[int, int], cans: dict[int, CanColumns]
     ) -> None:
         """Take a new record format in: its length, and its CAN columns if it is CANF/CAFD."""
         if layout is None:
@@ -269,7 +276,7 @@ class DataFlashReader(InputReader):
         data = self._data
         size = len(data)
         at = data.find(HEAD + bytes([FMT_TYPE]))
-        gps: Layout | None = None
+        gps: RecordLayout | None = None
         while at >= 0 and gps is None:
             if at + FMT_LENGTH <= size:
                 layout = parse_fmt(data, at)

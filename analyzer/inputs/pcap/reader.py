@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.pcap.notes import PcapStats, capture_notes, capture_problems
-from analyzer.inputs.pcap.records import CaptureFile, Damage, Packet
+from analyzer.inputs.pcap.records import CaptureFile, Packet, PcapDamage
 from analyzer.inputs.pcap.socketcan import CanCounts, can_notes, sll2_can, sll_can, socketcan_frame
 from analyzer.inputs.pcap.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
 from analyzer.inputs.pcap.tcp_reassembly import Delivered, Result
@@ -107,7 +107,7 @@ class PcapReader(InputReader):
         counts = self.counts
         time = 0.0
         for record in self._file:
-            if isinstance(record, Damage):
+            if isinstance(record, PcapDamage):
                 counts.damaged_records += 1
                 yield diagnostic(
                     time,

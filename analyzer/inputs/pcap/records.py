@@ -54,7 +54,7 @@ class Packet:
 
 
 @dataclass(slots=True)
-class Damage:
+class PcapDamage:
     """Something wrong with the file itself, in words, and the record it happened at."""
 
     text: str
@@ -101,7 +101,7 @@ class CaptureFile:
         self._record = struct.Struct(self._order + "IIII")
         self._last_time: float | None = None
 
-    def __iter__(self) -> Iterator[Packet | Damage]:
+    def __iter__(self) -> Iterator[Packet | PcapDamage]:
         return self._pcapng() if self.ng else self._pcap()
 
     # -- pcap ------------------------------------------------------------------------------
@@ -115,7 +115,7 @@ class CaptureFile:
         last = self._last_time
         return last is None or abs(sec - last) < MAX_CLOCK_JUMP
 
-    def _pcap(self) -> Iterator[Packet | Damage]:
+    def _pcap(self) -> Iterator[Packet | PcapDamage]:
         f = self._f
         size = self._record.size
         pos = 24
@@ -125,7 +125,7 @@ class CaptureFile:
             if not header:
                 return
             if len(header) < size:
-                yield Damage(
+                yield PcapDamage(
                     f"the file is cut off inside the header of record {self.records + 1} "
                     f"(byte {pos:,})",
                     self.records,
@@ -134,7 +134,7 @@ class CaptureFile:
             if not self._plausible(header):
                 sec, _frac, caplen, wire = self._record.unpack(header)
                 found = self._find_record(pos + 1)
-                yield Damage(self._skipped(pos, found, caplen, wire), self.records)
+                yield PcapDamage(self._skipped(pos, found, caplen, wire), self.records)
                 if found is None:
                     return
                 pos = found
@@ -145,7 +145,7 @@ class CaptureFile:
             following = f.read(size)
             if len(data) < caplen:
                 self.records += 1
-                yield Damage(
+                yield PcapDamage(
                     f"the file is cut off inside record {self.records} (byte {pos:,}): "
                     f"{len(data)} of its {caplen} bytes are there",
                     self.records,
@@ -160,7 +160,7 @@ class CaptureFile:
                 found = self._find_record(pos + size)
                 if found is not None and found < end:
                     self.records += 1
-                    yield Damage(
+                    yield PcapDamage(
                         f"record {self.records} at byte {pos:,} has a wrong captured length "
                         f"({caplen} bytes, but the next record starts after "
                         f"{found - pos - size}): read up to there and resynchronised",
@@ -220,7 +220,7 @@ class CaptureFile:
 
     # -- pcapng ----------------------------------------------------------------------------
 
-    def _pcapng(self) -> Iterator[Packet | Damage]:
+    def _pcapng(self) -> Iterator[Packet | PcapDamage]:
         f = self._f
         pos = 0
         while True:
@@ -229,7 +229,7 @@ class CaptureFile:
             if not head:
                 return
             if len(head) < 8:
-                yield Damage(f"the file is cut off inside a block header at byte {pos:,}", 0)
+                yield PcapDamage(f"the file is cut off inside a block header at byte {pos:,}", 0)
                 return
             if head[:4] == PCAPNG_MAGIC:
                 order = f.read(4)
@@ -242,7 +242,7 @@ class CaptureFile:
                 f.seek(pos + 8)
                 body = f.read(length - 8)
                 if len(body) < length - 8:
-                    yield Damage(
+                    yield PcapDamage(
                         f"the file is cut off inside a block at byte {pos:,} "
                         f"({len(body) + 8:,} of its {length:,} bytes are there)",
                         self.records,
@@ -260,9 +260,11 @@ class CaptureFile:
                     continue
             found = self._find_block(pos + 4)
             if found is None:
-                yield Damage(f"{problem}: no further block found, reading stopped", self.records)
+                yield PcapDamage(
+                    f"{problem}: no further block found, reading stopped", self.records
+                )
                 return
-            yield Damage(
+            yield PcapDamage(
                 f"{problem}: {found - pos:,} byte(s) skipped to the next block at byte {found:,}",
                 self.records,
             )
@@ -307,7 +309,7 @@ class CaptureFile:
             pos += CHUNK
         return None
 
-    def _block(self, kind: int, body: bytes) -> Iterator[Packet | Damage]:
+    def _block(self, kind: int, body: bytes) -> Iterator[Packet | PcapDamage]:
         order = self._order
         if kind == IDB:
             if len(body) < 8:
@@ -331,7 +333,7 @@ class CaptureFile:
             return
         if kind in (EPB, OPB):
             if len(body) < 20:
-                yield Damage("an enhanced packet block too short for its fields", self.records)
+                yield PcapDamage("an enhanced packet block too short for its fields", self.records)
                 return
             if kind == EPB:
                 iface, high, low, caplen, wire = struct.unpack_from(order + "IIIII", body)
@@ -340,7 +342,7 @@ class CaptureFile:
             data = body[20 : 20 + caplen]
             self.records += 1
             if iface >= len(self._interfaces):
-                yield Damage(
+                yield PcapDamage(
                     f"packet {self.records} names interface {iface}, which the file never "
                     "described: skipped",
                     self.records,

@@ -11,9 +11,9 @@ from typing import Any
 
 from analyzer.mcapio.channels import METADATA_NAME, ROLE_EVENT, ROLE_RAW, STATS_METADATA_NAME
 from analyzer.mcapio.read.file_end import read_header
-from analyzer.mcapio.read.reader import RawMessage, Recording, channel_role, raw_item, ros_item
+from analyzer.mcapio.read.reader import McapRecording, RawMessage, channel_role, raw_item, ros_item
 from analyzer.mcapio.read.ros_can import ROS_CAN_ROLES
-from analyzer.pipeline import Decoding, default_decoder
+from analyzer.pipeline import PipelineDecoder, default_decoder
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally
 
@@ -93,7 +93,7 @@ class _Fold:
     def __init__(self, tally: Tally) -> None:
         self.tally = tally
         self.decoded = 0  # ROS frames decoded
-        self._decoder: Decoding | None = None
+        self._decoder: PipelineDecoder | None = None
 
     def __call__(self, message: RawMessage) -> None:
         if message.role in ROS_CAN_ROLES:
@@ -149,14 +149,14 @@ def recording_info(path: str | os.PathLike[str], *, scan: bool = False) -> Recor
     record, or with ``scan``, the raw and event channels are read and counted again. A recovered
     (unfinished) file has no summary: its readable part is scanned once, sequentially.
     """
-    recording = Recording(path)
+    recording = McapRecording(path)
     info = _summarise(recording, scan)
     profile, library = read_header(recording.path)
     info.writer = ", ".join(part for part in (library, profile and f"profile {profile}") if part)
     return info
 
 
-def _summarise(recording: Recording, scan: bool) -> RecordingInfo:
+def _summarise(recording: McapRecording, scan: bool) -> RecordingInfo:
     metadata = recording.metadata()
     base = dict(metadata.get(METADATA_NAME, {}))
     if recording.recovered:
@@ -228,7 +228,7 @@ def _summarise(recording: Recording, scan: bool) -> RecordingInfo:
     return info
 
 
-def _scan_everything(recording: Recording, base: dict[str, str]) -> RecordingInfo:
+def _scan_everything(recording: McapRecording, base: dict[str, str]) -> RecordingInfo:
     counts: Counter[str] = Counter()
     roles: dict[str, str] = {}
     times: dict[str, list[int]] = {}  # topic -> [first, last] log time

@@ -41,8 +41,8 @@ from analyzer.protocol.types import (
 
 __all__ = [
     "SOURCE_KINDS",
+    "McapRecording",
     "RawMessage",
-    "Recording",
     "RecordingError",
     "RecordingIterator",
     "channel_role",
@@ -60,7 +60,7 @@ T = TypeVar("T")
 SOURCE_KINDS = frozenset({LINK, BAD_LINE})
 
 
-class Recording:
+class McapRecording:
     """An MCAP file opened for reading.
 
     A finished file is read through its summary, once the summary passes its CRC check;
@@ -362,7 +362,7 @@ _REPLAYED_TOPICS = frozenset({*RAW_TOPICS, TOPIC_DIAGNOSTICS})
 class RecordingIterator(Generic[T]):
     """An iterator that also says whether its recording was recovered."""
 
-    def __init__(self, recording: Recording, iterator: Iterator[T]) -> None:
+    def __init__(self, recording: McapRecording, iterator: Iterator[T]) -> None:
         self.recording = recording
         self._iterator = iterator
 
@@ -389,17 +389,17 @@ class RecordingIterator(Generic[T]):
 
 def read_items(path: str | os.PathLike[str]) -> RecordingIterator[RawItem]:
     """Raw CAN frames / stream chunks of a recording, in arrival order (for re-decoding)."""
-    recording = Recording(path)
+    recording = McapRecording(path)
     return RecordingIterator(recording, recording.items())
 
 
 def read_replay(path: str | os.PathLike[str]) -> RecordingIterator[RawItem | Event]:
     """Raw items and the source-level diagnostics (link, bad_line) in arrival order."""
-    recording = Recording(path)
+    recording = McapRecording(path)
     return RecordingIterator(recording, recording.replay())
 
 
 def read_events(path: str | os.PathLike[str]) -> RecordingIterator[Event]:
     """The decoded events stored in a recording, in arrival order."""
-    recording = Recording(path)
+    recording = McapRecording(path)
     return RecordingIterator(recording, recording.events())

@@ -69,9 +69,9 @@ def _camera_messages(
     recording cut short by a full disk or ``kill -9`` is recovered like for every command).
     Without ``decode`` their data is left out (empty). ``read`` is told how many bytes of
     the file the read has got through, with each message (for a progress line)."""
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
 
-    recording = Recording(path)
+    recording = McapRecording(path)
     for message in recording.messages(roles=roles):
         if read is not None:
             read(recording.position.bytes)
@@ -133,9 +133,9 @@ def requested_streams(path: str | os.PathLike[str]) -> dict[str, str]:
     """The streams the recorder was asked for, {name: URL}, from the recording's
     metadata (empty for recordings made before it was written down)."""
     from analyzer.mcapio.channels import METADATA_NAME
-    from analyzer.mcapio.read.reader import Recording
+    from analyzer.mcapio.read.reader import McapRecording
 
-    text = Recording(path).metadata().get(METADATA_NAME, {}).get(VIDEO_METADATA_KEY)
+    text = McapRecording(path).metadata().get(METADATA_NAME, {}).get(VIDEO_METADATA_KEY)
     try:
         found = json.loads(text) if text else {}
     except ValueError:

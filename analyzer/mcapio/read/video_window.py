@@ -65,10 +65,10 @@ class RecordedVideo:
     for each window. ``chunks_read`` counts the chunks read (for the benchmark)."""
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
-        from analyzer.mcapio.read.reader import Recording
+        from analyzer.mcapio.read.reader import McapRecording
 
         self.path = str(path)
-        self.recording = Recording(path)
+        self.recording = McapRecording(path)
         self.chunks_read = 0
         summary = self.recording.summary()
         self._channels: dict[str, int] = {}

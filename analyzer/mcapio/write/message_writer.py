@@ -30,7 +30,7 @@ from analyzer.mcapio.log_time import MAX_LOG_SECONDS, time_ns
 from analyzer.mcapio.write.channel_registry import ChannelRegistry
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
 from analyzer.pipeline import RawItem
-from analyzer.protocol.types import CanFrame, Event
+from analyzer.protocol.types import CanFrame, Event, StreamChunk
 from analyzer.tally import Tally
 
 _time_of = operator.attrgetter("time")
@@ -95,7 +95,9 @@ class MessageWriter:
             self.tally, self._shared = self.tally.copy(), False
         return self.tally
 
-    def _put(self, messages: Sequence[RawItem | Event]) -> None:
+    # One loop with every frame's and event's encoding inline: it runs for every message of
+    # a file (benchmarks/convert_speed.py); the rare parts (views, stream bytes) are apart.
+    def _put(self, messages: Sequence[RawItem | Event]) -> None:  # noqa: PLR0915
         """Each raw item to its lossless channel, each event to its topic's channel (and its
         views), in the order given: one loop, as this runs for every frame of a file. The
         messages go to the writer together at the end (or before a new channel's record)."""
@@ -170,25 +172,52 @@ class MessageWriter:
                     add((channel_id, log_time, data, log_time, number))
                     events += 1
                     if views is not None and topic in VIEW_INPUT_TOPICS:
-                        for view_topic, view in views.views(event):
-                            view_id = channels.get(view_topic)
-                            view_id = view_id or self._channel(view_topic, ROLE_VIEW, out)
-                            number = sequence[view_id] + 1
-                            sequence[view_id] = number
-                            add((view_id, log_time, json_bytes(view), log_time, number))
-                            extra += 1
+                        extra += self._put_views(views, event, log_time, out)
                 else:
-                    topic = TOPIC_STREAM_BYTES
-                    channel_id = channels.get(topic) or self._channel(topic, ROLE_RAW, out)
-                    encoded = stream_chunk_json(message)  # type: ignore[arg-type]
-                    t = message.time
-                    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
-                    number = sequence[channel_id] + 1
-                    sequence[channel_id] = number
-                    add((channel_id, log_time, encoded, log_time, number))
+                    self._put_chunk(message, out)  # type: ignore[arg-type]
         finally:
             if can_id:
                 sequence[can_id] = can_number
+        self._written(messages, out, events, extra)
+
+    def _put_views(
+        self,
+        views: FoxgloveViews,
+        event: Event,
+        log_time: int,
+        out: list[tuple[int, int, bytes, int, int]],
+    ) -> int:
+        """The Foxglove views of ``event`` to their channels; how many."""
+        channels, sequence = self._registry.ids, self._registry.sequence
+        added = 0
+        for view_topic, view in views.views(event):
+            view_id = channels.get(view_topic) or self._channel(view_topic, ROLE_VIEW, out)
+            number = sequence[view_id] + 1
+            sequence[view_id] = number
+            out.append((view_id, log_time, json_bytes(view), log_time, number))
+            added += 1
+        return added
+
+    def _put_chunk(self, chunk: StreamChunk, out: list[tuple[int, int, bytes, int, int]]) -> None:
+        """A stream's bytes (TCP, UART) to their lossless channel."""
+        channels, sequence = self._registry.ids, self._registry.sequence
+        topic = TOPIC_STREAM_BYTES
+        channel_id = channels.get(topic) or self._channel(topic, ROLE_RAW, out)
+        encoded = stream_chunk_json(chunk)
+        t = chunk.time
+        log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+        number = sequence[channel_id] + 1
+        sequence[channel_id] = number
+        out.append((channel_id, log_time, encoded, log_time, number))
+
+    def _written(
+        self,
+        messages: Sequence[RawItem | Event],
+        out: list[tuple[int, int, bytes, int, int]],
+        events: int,
+        extra: int,
+    ) -> None:
+        """The messages to the writer, and the counts of what was written."""
         items = len(messages) - events
         self._write(out)
         self.items_written += items
