@@ -100,7 +100,7 @@ def _plain(value: Any) -> Any:
 
 
 @pytest.mark.parametrize("kind", KINDS, ids=str)
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(data=st.data())
 def test_a_column_is_what_pa_array_makes_of_the_same_values(
     kind: pa.DataType, data: st.DataObject
@@ -132,7 +132,7 @@ operations = st.lists(
 
 
 @pytest.mark.parametrize("kind", KINDS, ids=str)
-@settings(max_examples=120, deadline=None)
+@settings(max_examples=80, deadline=None)
 @given(data=st.data(), steps=operations)
 def test_a_builder_gives_back_its_rows_in_order_whatever_the_appends_and_takes(
     kind: pa.DataType, data: st.DataObject, steps: list[tuple[str, int]]
