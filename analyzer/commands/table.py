@@ -145,7 +145,7 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 def run(args: argparse.Namespace) -> int:
     from analyzer.extras import FLEET, require
 
-    require(FLEET, "`table`")
+    require(FLEET, "`table`", uses=("pyarrow",))
     from analyzer.fleet.runner import connect, walk_inputs
 
     tags = parse_tags(args.tag)

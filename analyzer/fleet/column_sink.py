@@ -4,192 +4,37 @@
 a table's rows on (to ``TablesOut``: the dataset's files, or the caller) every
 ``GROUP_ROWS`` rows, so memory holds one row group per table, never an input's rows.
 Events decoded in vectors come to it as columns (``takes_columns``) and go into the
-tables a column at a time, in the order of the frames that gave them.
+tables a column at a time, in the order of the frames that gave them. A table keeps at
+most ``CHUNK_ROWS`` rows as Python values; then they go into numpy buffers that stay
+from row group to row group (``table_columns``), and Arrow arrays are made of those
+(``arrow_arrays``: ``pa.array`` would import pandas).
 """
 
 from __future__ import annotations
 
-import json
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass
 from operator import itemgetter
 from typing import Any, Protocol
 
 import pyarrow as pa
 
-from analyzer.fleet.columns import EXTRA, KEY_FIELDS, TIME, TOPIC_TABLES, event_schema
-from analyzer.protocol.event_columns import EventColumns, EventGroup
+from analyzer.fleet.arrow_arrays import repeated
+from analyzer.fleet.columns import TOPIC_TABLES
+from analyzer.fleet.table_columns import Part, TableColumns
+from analyzer.protocol.event_columns import EventColumns
 from analyzer.protocol.response_fields import FEEDBACK_COMMAND
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
 
 GROUP_ROWS = 16_384  # rows of one Parquet row group: what a table holds in memory at most
-_KEYS = frozenset(f.name for f in KEY_FIELDS) | {"topic", EXTRA}
-_PY_TYPES: dict[pa.DataType, tuple[type, ...]] = {
-    pa.string(): (str,),
-    pa.int64(): (int,),
-    pa.float64(): (float, int),
-    pa.bool_(): (bool,),
-    pa.list_(pa.string()): (list,),
-}
-
-
-@dataclass(slots=True)
-class Part:
-    """Rows of one table as columns: times, sources, values by column (a column not
-    named is null in every row) and each row's ``extra`` fields."""
-
-    times: list[float]
-    sources: list[str]
-    columns: dict[str, list[Any]]
-    extra: list[dict[str, Any] | None]
-
-    def column(self, name: str) -> list[Any]:
-        values = self.columns.get(name)
-        return [None] * len(self.times) if values is None else values
-
-
-class TableColumns:
-    """Events of one topic gathered column by column, typed by the topic's schema."""
-
-    def __init__(self, topic: str) -> None:
-        self.schema = event_schema(topic)
-        self.names = [f.name for f in self.schema if f.name not in _KEYS]
-        self.known = frozenset(self.names) | _KEYS
-        self.times: list[float] = []
-        self.sources: list[str] = []
-        self.columns: dict[str, list[Any]] = {name: [] for name in self.names}
-        self.extra: list[dict[str, Any] | None] = []
-
-    def add(self, time_s: float, source: str, fields: dict[str, Any], warnings: list[str]) -> None:
-        self.times.append(time_s)
-        self.sources.append(source)
-        columns = self.columns
-        for name in self.names:
-            columns[name].append(fields.get(name))
-        if "warnings" in columns:
-            columns["warnings"][-1] = list(warnings)
-        unknown = fields.keys() - self.known
-        self.extra.append({k: fields[k] for k in sorted(unknown)} if unknown else None)
-
-    def extend(self, part: Part) -> None:
-        """Rows as columns (what ``add`` makes of each of their events)."""
-        self.times += part.times
-        self.sources += part.sources
-        for name, values in self.columns.items():
-            values += part.column(name)
-        self.extra += part.extra
-
-    def group_part(self, group: EventGroup) -> Part:
-        """The rows of a group of events decoded in vectors (none has a warning)."""
-        n = len(group)
-        values = group.values()
-        constants = group.constants
-        columns: dict[str, list[Any]] = {}
-        for name in self.names:
-            if name in constants:
-                columns[name] = [constants[name]] * n
-            elif name in values:
-                columns[name] = values[name]
-        if "warnings" in self.columns:
-            columns["warnings"] = [[]] * n  # one empty list: never changed, only read
-        unknown = sorted(k for k in group.keys if k not in self.known)
-        extra: list[dict[str, Any] | None] = [None] * n
-        if unknown:
-            cells = [[constants[k]] * n if k in constants else values[k] for k in unknown]
-            extra = [dict(zip(unknown, row, strict=True)) for row in zip(*cells, strict=True)]
-        return Part(group.times.tolist(), list(group.sources), columns, extra)
-
-    def empty(self) -> TableColumns:
-        """A table of the same topic with no rows (its schema not made again)."""
-        other = TableColumns.__new__(TableColumns)
-        other.schema, other.names, other.known = self.schema, self.names, self.known
-        other.times, other.sources, other.extra = [], [], []
-        other.columns = {name: [] for name in self.names}
-        return other
-
-    def event_part(self, event: Event) -> Part:
-        """One event as a part: what ``add`` makes of it."""
-        one = self.empty()
-        one.add(event.time, event.source, event.fields, event.warnings)
-        return Part(one.times, one.sources, one.columns, one.extra)
-
-    def split(self, count: int) -> TableColumns:
-        """The first ``count`` rows, taken out as a table of their own."""
-        first = self.empty()
-        first.times, self.times = self.times[:count], self.times[count:]
-        first.sources, self.sources = self.sources[:count], self.sources[count:]
-        first.extra, self.extra = self.extra[:count], self.extra[count:]
-        for name, values in self.columns.items():
-            first.columns[name], self.columns[name] = values[:count], values[count:]
-        return first
-
-    def clear(self) -> None:
-        self.times.clear()
-        self.sources.clear()
-        for values in self.columns.values():
-            values.clear()
-        self.extra.clear()
-
-    def table(self, recording: str, content_hash: str) -> pa.Table:
-        n = len(self.times)
-        arrays: list[pa.Array] = [
-            pa.repeat(pa.scalar(recording, pa.string()), n),
-            pa.repeat(pa.scalar(content_hash, pa.string()), n),
-            timestamps(self.times),
-            pa.array(self.sources, pa.string()),
-        ]
-        for name in self.names:
-            arrays.append(self._column(name, self.schema.field(name).type))
-        extra = self.extra
-        if extra.count(None) == n:  # the usual table: every field has its column
-            arrays.append(pa.nulls(n, pa.string()))
-        else:
-            texts = [None if e is None else json.dumps(e, default=str) for e in extra]
-            arrays.append(pa.array(texts, pa.string()))
-        return pa.Table.from_arrays(arrays, schema=self.schema)
-
-    def _column(self, name: str, kind: pa.DataType) -> pa.Array:
-        values = self.columns[name]
-        if values.count(None) == len(values):  # a field of other commands: null throughout
-            return pa.nulls(len(values), kind)
-        try:
-            return pa.array(values, kind)
-        except (pa.ArrowInvalid, pa.ArrowTypeError, TypeError, OverflowError):
-            pass
-        # A value of another type than the schema says: kept in ``extra``, never lost.
-        wanted = _PY_TYPES.get(kind, (object,))
-        for i, value in enumerate(values):
-            if value is None or (isinstance(value, wanted) and not _bool_as_number(value, kind)):
-                continue
-            extra = self.extra[i]
-            if extra is None:
-                extra = {}
-            extra[name] = value
-            self.extra[i] = extra
-            values[i] = None
-        return pa.array(values, kind)
-
-
-def _bool_as_number(value: Any, kind: pa.DataType) -> bool:
-    return isinstance(value, bool) and kind != pa.bool_()
-
-
-def timestamps(seconds: Sequence[float | None]) -> pa.Array:
-    """Unix seconds -> UTC timestamps in microseconds (rounded half to even, as ``round``)."""
-    if None in seconds:
-        micros = [None if s is None else round(s * 1_000_000) for s in seconds]
-        return pa.array(micros, pa.int64()).cast(TIME)
-    import numpy as np  # pyarrow's own dependency
-
-    exact = np.rint(np.array(seconds, np.float64) * 1_000_000).astype(np.int64)
-    return pa.array(exact, pa.int64()).cast(TIME)
+CHUNK_ROWS = 1_024  # rows a table holds as Python values before they go into its buffers
 
 
 class TablesOut(Protocol):
     """Where an input's row groups go: files of the dataset, or back to the caller."""
 
-    def write(self, name: str, table: pa.Table) -> None: ...
+    def write(self, name: str, table: pa.Table) -> None:
+        """One row group of table ``name``. Its arrays are over the sink's buffers, good
+        until ``write`` returns: one that keeps the rows keeps a copy."""
 
     def discard(self, name: str) -> None: ...
 
@@ -201,7 +46,9 @@ class CollectedTables:
         self.parts: dict[str, list[pa.Table]] = {}
 
     def write(self, name: str, table: pa.Table) -> None:
-        self.parts.setdefault(name, []).append(table)
+        # concat_arrays copies the rows out of the sink's buffers
+        copy = [pa.concat_arrays(column.chunks) for column in table.columns]
+        self.parts.setdefault(name, []).append(pa.Table.from_arrays(copy, schema=table.schema))
 
     def discard(self, name: str) -> None:
         self.parts.pop(name, None)
@@ -225,6 +72,7 @@ class ColumnSink:
         self.content_hash = content_hash
         self.group_rows = group_rows or GROUP_ROWS
         self.tables: dict[str, TableColumns] = {}
+        self._group_keys: list[pa.Array] | None = None
         self.rows = 0
         self.findings = 0
         self.verdicts: Counter[str] = Counter()  # of the commands' findings
@@ -243,8 +91,7 @@ class ColumnSink:
                     self._count_finding(event)
                 columns = self._table(name, event.topic)
                 columns.add(event.time, event.source, event.fields, event.warnings)
-                if len(columns.times) >= self.group_rows:
-                    self._flush(name, columns)
+                self._written(name, columns)
 
     def handle_columns(self, block: EventColumns) -> None:
         """The events of a block decoded in vectors, a table's rows at a time, each
@@ -263,8 +110,7 @@ class ColumnSink:
         for name, pieces in parts.items():
             columns = self.tables[name]
             columns.extend(_in_frame_order(columns.names, pieces))
-            while len(columns.times) >= self.group_rows:
-                self._write(name, columns.split(self.group_rows))
+            self._written(name, columns)
 
     def _table(self, name: str, topic: str) -> TableColumns:
         columns = self.tables.get(name)
@@ -280,8 +126,8 @@ class ColumnSink:
 
     def close(self) -> None:
         for name, columns in self.tables.items():
-            if columns.times:
-                self._flush(name, columns)
+            if columns.rows:
+                self._write(name, columns, columns.rows)
 
     def drop_findings(self) -> None:
         """Forget every finding written (an input without a clock cannot time them)."""
@@ -293,14 +139,28 @@ class ColumnSink:
         self.health.clear()
         self.tables.pop(name, None)
 
-    def _flush(self, name: str, columns: TableColumns) -> None:
-        self._write(name, columns)
-        columns.clear()
+    def _written(self, name: str, columns: TableColumns) -> None:
+        """Every whole row group of the table written; the rows held as Python values
+        made Arrow arrays when they are many."""
+        while columns.rows >= self.group_rows:
+            self._write(name, columns, self.group_rows)
+        if len(columns.times) >= CHUNK_ROWS:
+            columns.settle()
 
-    def _write(self, name: str, columns: TableColumns) -> None:
-        table = columns.table(self.recording, self.content_hash)
+    def _write(self, name: str, columns: TableColumns, count: int) -> None:
+        table = columns.take(count, self._keys(count))
         self.rows += table.num_rows
         self.out.write(name, table)
+
+    def _keys(self, count: int) -> list[pa.Array]:
+        """The recording's name and content hash in each of ``count`` rows (those of a
+        whole row group made once)."""
+        keys = self._group_keys if count == self.group_rows else None
+        if keys is None:
+            keys = [repeated(self.recording, count), repeated(self.content_hash, count)]
+            if count == self.group_rows:
+                self._group_keys = keys
+        return keys
 
 
 def _in_frame_order(names: list[str], pieces: list[tuple[list[int], Part]]) -> Part:

@@ -20,6 +20,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from analyzer.errors import UsageError
+from analyzer.fleet.arrow_arrays import repeated
 from analyzer.fleet.columns import RECORDINGS, TABLES, recordings_schema
 from analyzer.output_file import OutputWriteError, describe_os_error
 
@@ -85,32 +86,34 @@ class Dataset:
     def failure(self, digest: str) -> str | None:
         """The error of the input's row (None when it was read, or is not here)."""
         try:
-            column = pq.read_table(self.path(RECORDINGS, digest), columns=["error"]).column(0)
+            column = _read(self.path(RECORDINGS, digest), ["error"]).column(0)
         except (OSError, pa.ArrowException):
             return None
         return None if len(column) == 0 else column[0].as_py()
 
     def tags(self, digest: str) -> dict[str, str] | None:
         """The tags of the input's row (None when it is not here)."""
+        base = set(recordings_schema([]).names)
         try:
-            table = pq.read_table(self.path(RECORDINGS, digest))
+            with pq.ParquetFile(self.path(RECORDINGS, digest)) as handle:
+                if handle.metadata.num_rows == 0:
+                    return None
+                names = [n for n in handle.schema_arrow.names if n not in base]
+                table = handle.read(columns=names)  # strings only: a timestamp loads pandas
         except (OSError, pa.ArrowException):
             return None
-        if table.num_rows == 0:
-            return None
-        base = set(recordings_schema([]).names)
-        row = table.slice(0, 1).to_pylist()[0]
-        return {k: str(v) for k, v in row.items() if k not in base and v is not None}
+        row = table.slice(0, 1).to_pylist()[0] if names else {}
+        return {k: str(v) for k, v in row.items() if v is not None}
 
     def retag(self, digest: str, tags: dict[str, str]) -> None:
         """Give the input's row these tags instead of its own (rewritten atomically)."""
         target = self.path(RECORDINGS, digest)
-        old = pq.read_table(target)
+        old = _read(target)
         schema = recordings_schema(list(tags))
         columns = [
-            pa.array([tags[f.name]] * old.num_rows, f.type)
+            repeated(tags[f.name], old.num_rows)
             if f.name in tags
-            else old.column(f.name).cast(f.type)
+            else _as(old.column(f.name), f.type)
             if f.name in old.column_names
             else pa.nulls(old.num_rows, f.type)
             for f in schema
@@ -234,6 +237,19 @@ class StreamedTables:
         for name in list(self.open):
             with contextlib.suppress(OSError, pa.ArrowException):
                 self.discard(name)
+
+
+def _read(path: Path, columns: list[str] | None = None) -> pa.Table:
+    """A file of the dataset (``pq.read_table`` would import pyarrow.dataset, and with it
+    pandas when it is installed)."""
+    with pq.ParquetFile(path) as handle:
+        return handle.read(columns=columns)
+
+
+def _as(values: pa.ChunkedArray, kind: pa.DataType) -> pa.ChunkedArray:
+    """``values`` as ``kind`` (cast only when it is another type: a cast loads
+    pyarrow's compute functions)."""
+    return values if values.type == kind else values.cast(kind)
 
 
 def _temp_name(target: Path) -> Path:

@@ -18,10 +18,10 @@ from typing import Any
 
 import pyarrow as pa
 
+from analyzer.fleet.arrow_arrays import column
 from analyzer.fleet.column_sink import CollectedTables, ColumnSink, TablesOut
 from analyzer.fleet.columns import (
     RECORDINGS,
-    TIME,
     diagnostic_column,
     health_column,
     recordings_schema,
@@ -237,11 +237,8 @@ def recording_row(work: FileWork, run: dict[str, Any] | None, error: str | None 
     for name in ("start", "end", "bus_worst_time"):
         value = row.get(name)
         row[name] = None if value is None else round(float(value) * 1_000_000)
-    columns = {
-        f.name: pa.array([row.get(f.name)], pa.int64() if f.type == TIME else f.type).cast(f.type)
-        for f in schema
-    }
-    return pa.Table.from_pydict(columns, schema=schema)
+    columns = [column([row.get(f.name)], f.type) for f in schema]
+    return pa.Table.from_arrays(columns, schema=schema)
 
 
 @contextmanager
