@@ -16,7 +16,7 @@ from typing import Any
 from analyzer.protocol.bus_state import ERROR_ACTIVE, LEVELS
 from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import BUS_ERROR, TOPIC_DIAGNOSTICS, Event
-from analyzer.timefmt import format_clock
+from analyzer.timefmt import UTC, TimeZone
 
 
 def _level(state: str) -> int:
@@ -195,16 +195,16 @@ class BusStatus:
         return [self.now, *([self.worst] if self.worst else []), self.errors]
 
 
-def status_words(bus: BusFigures) -> BusStatus | None:
+def status_words(bus: BusFigures, zone: TimeZone = UTC) -> BusStatus | None:
     """What the monitor's status bar and ``record``'s status line say of the bus (None
-    before the first error frame)."""
+    before the first error frame); the worst state's time in ``zone``."""
     if not bus.channels:
         return None
     now = max((b.state for b in bus.channels.values()), key=_level)
     worst = bus.worst()
     worst_state, worst_words = ERROR_ACTIVE, ""
     if worst is not None and _level(worst[0]) and worst[1] is not None:
-        worst_state, worst_words = worst[0], f"worst {worst[0]} {format_clock(worst[1])}"
+        worst_state, worst_words = worst[0], f"worst {worst[0]} {zone.format_clock(worst[1])}"
     classes = ", ".join(f"{name} {n:,}" for name, n in bus.classes().most_common(2))
     count = bus.error_frames
     errors = f"{count:,} error frame{'' if count == 1 else 's'}"

@@ -5,7 +5,7 @@ from __future__ import annotations
 from analyzer.bus_figures import BusFigures
 from analyzer.protocol.bus_state import BUS_OFF
 from analyzer.protocol.ids import CAN_BITRATE
-from analyzer.timefmt import format_datetime
+from analyzer.timefmt import UTC, TimeZone
 
 # Protocol violations that come from a bitrate or a termination that does not fit the bus.
 SIGNAL_ERRORS = (
@@ -23,8 +23,9 @@ def _frames(count: int) -> str:
     return f"{count:,} error frame" + ("" if count == 1 else "s")
 
 
-def bus_hints(bus: BusFigures, frames: int) -> list[str]:
-    """Hints from the error frames of a run that read ``frames`` CAN frames in all."""
+def bus_hints(bus: BusFigures, frames: int, zone: TimeZone = UTC) -> list[str]:
+    """Hints from the error frames of a run that read ``frames`` CAN frames in all (for
+    people: their times in ``zone``)."""
     if not bus:
         return []
     hints: list[str] = []
@@ -67,7 +68,7 @@ def bus_hints(bus: BusFigures, frames: int) -> list[str]:
         if channel.worst == BUS_OFF and channel.worst_time is not None:
             back = "and came back" if channel.state != BUS_OFF else "and stayed there"
             hints.append(
-                f"{name} went bus-off at {format_datetime(channel.worst_time)} {back}: a "
+                f"{name} went bus-off at {zone.format_datetime(channel.worst_time)} {back}: a "
                 "controller in bus-off neither sends nor receives until it is restarted "
                 f"(SocketCAN restarts it by itself after: ip link set {name} type can "
                 "restart-ms 100)"

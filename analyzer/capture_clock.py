@@ -27,7 +27,7 @@ from analyzer.protocol.types import (
     StreamChunk,
     diagnostic,
 )
-from analyzer.timefmt import format_clock
+from analyzer.timefmt import UTC
 
 # A frame this far before the capture's time is no clock going back but a damaged one (a
 # pcap record header this far from the last good time is garbage too).
@@ -157,9 +157,11 @@ class CaptureClock:
         assert when is not None
         t = _time(item)
         source, raw, what = _describe(item)
+        # A diagnostic is data (recordings, JSON): its times are UTC, whatever is displayed.
         detail = (
-            f"{what} timed {format_clock(t)}, more than {self.max_back_s / 86400:g} days before "
-            f"the capture ({format_clock(when)}): a damaged timestamp; its bytes are kept here"
+            f"{what} timed {UTC.format_clock(t)}, more than {self.max_back_s / 86400:g} days "
+            f"before the capture ({UTC.format_clock(when)}): a damaged timestamp; its bytes "
+            "are kept here"
         )
         return diagnostic(when, source, BAD_FRAME, detail, raw, stated_time=t)
 

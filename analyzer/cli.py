@@ -197,7 +197,8 @@ def _command_name(argv: Sequence[str]) -> str | None:
 
 def _run(parser: argparse.ArgumentParser, args: argparse.Namespace, name: str) -> int:
     module = getattr(args, "_module", None)
-    timefmt.use_local_time(bool(getattr(args, "local_time", False)))
+    # Built once here and passed down to what shows times to people (no global switch).
+    args.time_zone = timefmt.chosen_zone(bool(getattr(args, "local_time", False)))
     if module is None:
         parser.print_help()
         return EXIT_USAGE

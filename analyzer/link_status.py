@@ -13,7 +13,7 @@ from collections.abc import Iterable
 
 from analyzer.protocol.types import LINK, TOPIC_DIAGNOSTICS, Event
 from analyzer.sources.base import OVERFLOW
-from analyzer.timefmt import format_clock
+from analyzer.timefmt import UTC, TimeZone
 
 GOOD_STATES = frozenset({"open", "connected", "gs_connected"})
 WAIT_STATES = frozenset({"listening", "reconnecting", "connecting"})
@@ -72,14 +72,14 @@ class LinkStatus:
         """The link is down: the last change was a failure, or a retry after one."""
         return self.state in PROBLEM_STATES or bool(self.state == RETRY_STATE and self.problem)
 
-    def describe(self, now: float) -> str:
+    def describe(self, now: float, zone: TimeZone = UTC) -> str:
         """The link in words at time ``now`` (a pending retry counts down; a lost link
-        says since when, and once back, when it was lost and when it came back)."""
+        says since when, and once back, when it was lost and when it came back: in ``zone``)."""
         if self.good and self.back_at is not None and self.lost_at is not None:
-            lost, back = format_clock(self.lost_at), format_clock(self.back_at)
+            lost, back = zone.format_clock(self.lost_at), zone.format_clock(self.back_at)
             return f"{self.detail} (lost {lost}, back {back})"
         if self.state in PROBLEM_STATES:
-            return self.detail + self._gone(now)
+            return self.detail + self._gone(now, zone)
         if self.state != RETRY_STATE:
             return self.detail or self.state
         if self.retry_at is None:
@@ -88,9 +88,10 @@ class LinkStatus:
             retry = "connecting again"
         else:
             retry = f"retrying in {self.retry_at - now:.1f} s"
-        return f"{self.problem}{self._gone(now)}; {retry}" if self.problem else retry
+        return f"{self.problem}{self._gone(now, zone)}; {retry}" if self.problem else retry
 
-    def _gone(self, now: float) -> str:
+    def _gone(self, now: float, zone: TimeZone) -> str:
         if self.lost_at is None:
             return ""
-        return f" (gone {max(0.0, now - self.lost_at):.1f} s, since {format_clock(self.lost_at)})"
+        since = zone.format_clock(self.lost_at)
+        return f" (gone {max(0.0, now - self.lost_at):.1f} s, since {since})"

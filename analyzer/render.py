@@ -23,7 +23,7 @@ from analyzer.protocol.types import (
     Event,
 )
 from analyzer.terminal_text import printable
-from analyzer.timefmt import clock_width, format_clock
+from analyzer.timefmt import UTC, TimeZone
 
 WHERE_WIDTH = 17
 TOPIC_WIDTH = 17
@@ -90,10 +90,10 @@ _STYLES = {
 }
 
 
-def format_time(t: float) -> str:
-    """``HH:MM:SS.mmm`` in UTC with ``Z`` (or local time with its offset, see
-    ``analyzer.timefmt``) for Unix times, else seconds with milliseconds."""
-    return format_clock(t)
+def format_time(t: float, zone: TimeZone = UTC) -> str:
+    """``HH:MM:SS.mmm`` in UTC with ``Z`` (or, in ``zone`` local, local time with its
+    offset) for Unix times, else seconds with milliseconds."""
+    return zone.format_clock(t)
 
 
 def short_source(source: str) -> str:
@@ -125,7 +125,7 @@ def label(event: Event) -> str:
     return TOPIC_LABELS.get(event.topic, event.topic.rsplit("/", 1)[-1])
 
 
-def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
+def value_words(key: str, value: Any, fields: dict[str, Any], zone: TimeZone = UTC) -> str:
     """One field as ``name value unit``, e.g. ``pan -5.00 deg/s``."""
     shown, unit = key, ""
     for suffix, words in UNIT_SUFFIXES:
@@ -136,7 +136,7 @@ def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
     if isinstance(value, bool):
         text = "yes" if value else "no"
     elif key.endswith("_at") and isinstance(value, (int, float)):
-        text = format_time(value)  # a moment (``observed_at``): a clock time, not seconds
+        text = format_time(value, zone)  # a moment (``observed_at``): a clock time, not seconds
     elif isinstance(value, float):
         text = f"{value:.7f}" if key in PRECISE else f"{value:.2f}"
     else:
@@ -144,8 +144,9 @@ def value_words(key: str, value: Any, fields: dict[str, Any]) -> str:
     return f"{shown} {text} {unit}".rstrip()
 
 
-def describe(event: Event) -> str:
-    """The values of an event in plain words (no time, source, topic or name columns)."""
+def describe(event: Event, zone: TimeZone = UTC) -> str:
+    """The values of an event in plain words (no time, source, topic or name columns);
+    the moments among them in ``zone``."""
     fields = event.fields
     topic = event.topic
     if topic == TOPIC_DIAGNOSTICS:
@@ -153,10 +154,10 @@ def describe(event: Event) -> str:
     if topic == TOPIC_UAV_TEXT:
         return repr(str(fields.get("text", "")))
     if topic == TOPIC_CAN_BUS_STATE:
-        return bus_state_words(fields)
+        return bus_state_words(fields, zone)
     if topic == TOPIC_CAN_OTHER:
         return _other_frame_words(fields)
-    return _field_words(topic, fields)
+    return _field_words(topic, fields, zone)
 
 
 def _diagnostic_words(fields: dict[str, Any]) -> str:
@@ -179,7 +180,7 @@ def _other_frame_words(fields: dict[str, Any]) -> str:
     return f"id {ident} [{fields.get('dlc', 0)}] {fields.get('data', '')}".rstrip()
 
 
-def _field_words(topic: str, fields: dict[str, Any]) -> str:
+def _field_words(topic: str, fields: dict[str, Any], zone: TimeZone) -> str:
     """A command's, a message's or a finding's fields in words: those that say it alone
     first, then each value with its name and unit, then the trailing ones."""
     head: list[str] = []
@@ -202,47 +203,48 @@ def _field_words(topic: str, fields: dict[str, Any]) -> str:
         elif said_alone and key in TRAILING_WORDS:
             tail.append(value)
         elif key in trailing:
-            tail.append(value_words(key, value, fields))
+            tail.append(value_words(key, value, fields, zone))
         elif said_alone and key == "axis":
             continue  # the value's own name says it: "pitch -45.00 deg"
         elif topic == TOPIC_ANALYSIS_RESPONSE and key == "verdict":
             words.append(f"verdict {verdict_word(fields)}")  # a gap is LOST, not NOT OBEYED
         else:
-            words.append(value_words(key, value, fields))
+            words.append(value_words(key, value, fields, zone))
     return "  ".join(head + words + tail)
 
 
-def bus_state_words(fields: dict[str, Any]) -> str:
+def bus_state_words(fields: dict[str, Any], zone: TimeZone = UTC) -> str:
     """``error-passive since 22:13:20.000Z  tx errors 128  rx errors 136  6 error frames``."""
     words = [str(fields.get("state", "?"))]
     since = fields.get("since")
     if isinstance(since, (int, float)):
-        words[0] += f" since {format_time(since)}"
+        words[0] += f" since {format_time(since, zone)}"
     if "tx_errors" in fields:
         words.append(f"tx errors {fields['tx_errors']}  rx errors {fields.get('rx_errors')}")
     words.append(f"{fields.get('error_frames', 0)} error frames")
     return "  ".join(words)
 
 
-def describe_event(event: Event) -> str:
+def describe_event(event: Event, zone: TimeZone = UTC) -> str:
     """Name and values in plain words, e.g. ``gimbal_control pan -5.00 deg/s tilt 0.00 deg/s``."""
-    text = describe(event)
+    text = describe(event, zone)
     return printable(f"{label(event)} {text}".rstrip())
 
 
-def render_event(event: Event, color: bool = False) -> str:
-    """One aligned line: time, source (and direction), topic, name, values, warnings."""
+def render_event(event: Event, color: bool = False, zone: TimeZone = UTC) -> str:
+    """One aligned line: time (in ``zone``), source (and direction), topic, name, values,
+    warnings."""
     diagnostic = event.topic == TOPIC_DIAGNOSTICS
     # Every part may hold text from the input (channel names, recorded topics, text
     # messages): control characters are escaped before anything reaches the terminal.
     columns = [
-        (format_time(event.time).rjust(clock_width()), "time"),
+        (format_time(event.time, zone).rjust(zone.clock_width), "time"),
         (printable(where(event)).ljust(WHERE_WIDTH), "where"),
         (printable(event.topic).ljust(TOPIC_WIDTH), "topic"),
         (printable(label(event)).ljust(LABEL_WIDTH), "diagnostic" if diagnostic else "label"),
     ]
     try:
-        body = describe(event)
+        body = describe(event, zone)
     except (TypeError, ValueError):  # fields of an unexpected type: show them as they are
         body = "  ".join(f"{k} {v}" for k, v in event.fields.items())
     body = printable(body)

@@ -17,7 +17,7 @@ from analyzer.protocol.lru import MAX_SOURCES
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally
 from analyzer.terminal_text import printable
-from analyzer.timefmt import format_datetime
+from analyzer.timefmt import UTC, TimeZone
 
 Style = Callable[[str], str]
 
@@ -34,8 +34,9 @@ def _alarm(text: str) -> str:
     return f"\033[1;31m{text}\033[0m"
 
 
-def feedback_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
-    """Feedback rate and longest gap per stream, as ``decode --summary`` and ``info`` say it."""
+def feedback_lines(tally: Tally, alarm: Style = _plain, zone: TimeZone = UTC) -> list[str]:
+    """Feedback rate and longest gap per stream, as ``decode --summary`` and ``info`` say it
+    (the gap's ends in ``zone``)."""
     lines: list[str] = []
     if not tally.feedback:
         return ["  feedback       " + alarm("none (the gimbal should answer at about 2 Hz)")]
@@ -46,8 +47,8 @@ def feedback_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
         if track.count > 1:
             gap = (
                 f"longest gap {track.longest_gap:.3f} s, "
-                f"{format_datetime(track.gap_start or 0.0)} .. "
-                f"{format_datetime(track.gap_end or 0.0)}; "
+                f"{zone.format_datetime(track.gap_start or 0.0)} .. "
+                f"{zone.format_datetime(track.gap_end or 0.0)}; "
                 + gap_words(track.gaps_over_threshold, track.lost_messages)
             )
             if track.gaps_over_threshold:
@@ -85,15 +86,17 @@ def _count(n: int, word: str) -> str:
     return f"{n:,} {word}" + ("" if n == 1 else "s")
 
 
-def bus_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
-    """The CAN buses' error frames: worst state and when, counts by class, and hints."""
+def bus_lines(tally: Tally, alarm: Style = _plain, zone: TimeZone = UTC) -> list[str]:
+    """The CAN buses' error frames: worst state and when (in ``zone``), counts by class,
+    and hints."""
     bus = tally.bus
     if not bus:
         return []
     lines = [f"  {'CAN bus':<15}{_count(bus.error_frames, 'error frame')}"]
     for name, channel in sorted(bus.channels.items()):
         worst = channel.worst
-        when = format_datetime(channel.worst_time) if channel.worst_time is not None else "?"
+        worst_time = channel.worst_time
+        when = zone.format_datetime(worst_time) if worst_time is not None else "?"
         words = f"worst {worst} at {when}"
         if worst != "error-active":
             words = alarm(words)
@@ -110,7 +113,7 @@ def bus_lines(tally: Tally, alarm: Style = _plain) -> list[str]:
         lines.append(f"    {'':<11}{by_class}")
     if bus.untracked:
         lines.append(f"    {bus.untracked:,} more error frames of channels not followed one by one")
-    for hint in bus_hints(bus, tally.frames):
+    for hint in bus_hints(bus, tally.frames, zone):
         lines.append(f"  {'hint':<15}{alarm(printable(hint))}")
     return lines
 
@@ -243,8 +246,8 @@ class Summary:
             "decoder": self.decoder_stats,
         }
 
-    def render(self, color: bool = False) -> str:
-        """A short readable report."""
+    def render(self, color: bool = False, zone: TimeZone = UTC) -> str:
+        """A short readable report, its times in ``zone``."""
         bold, alarm = (_bold, _alarm) if color else (_plain, _plain)
         tally = self.tally
         # Names below come from the input (paths, recorded topics, channel names): escaped.
@@ -253,7 +256,10 @@ class Summary:
         lines = [bold(title)]
         first, last = tally.first_time, tally.last_time
         if first is not None and last is not None and last > 0:
-            span = f"{format_datetime(first)} .. {format_datetime(last)}  ({tally.span:.3f} s)"
+            span = (
+                f"{zone.format_datetime(first)} .. {zone.format_datetime(last)}  "
+                f"({tally.span:.3f} s)"
+            )
         else:
             span = "no timestamps"
         lines.append(f"  {'time span':<15}{span}")
@@ -261,8 +267,8 @@ class Summary:
             lines.append(f"  {'time base':<15}{self.time_base}")
         lines.append(f"  {'input':<15}{self._input_words()}")
         lines.extend(event_lines(tally, alarm))
-        lines.extend(feedback_lines(tally, alarm))
-        lines.extend(bus_lines(tally, alarm))
+        lines.extend(feedback_lines(tally, alarm, zone))
+        lines.extend(bus_lines(tally, alarm, zone))
         if self.not_a_stream is None:
             lines.append(crc_line(tally, alarm))
         else:

@@ -105,6 +105,19 @@ def rtsp_camera(rtsp_camera_factory: Callable[..., RtspCamera]) -> RtspCamera:
 
 
 @pytest.hookimpl(tryfirst=True)
+@pytest.fixture
+def india_time(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """This process in UTC+05:30 (no summer time, so the offset is known): local times
+    in tests of --local-time."""
+    import time
+
+    monkeypatch.setenv("TZ", "IST-05:30")
+    time.tzset()
+    yield
+    monkeypatch.undo()
+    time.tzset()
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Keep every collected test before -m / -k deselect some (tests/test_quick_tier.py
     checks the marks of all of them, in a quick run too)."""

@@ -6,7 +6,6 @@ import csv
 import io
 import json
 import re
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -288,18 +287,6 @@ def test_fleet_report_loads_in_chromium_with_every_plot_drawn(
     assert "b-cut.pcap" in dom and "Obedience per command and gimbal" in dom
     code, _, err = cli("fleet", str(fleet["dataset"]), "--html", str(page))
     assert code == 2 and "--force" in err
-
-
-@pytest.fixture
-def india_time(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """This process in UTC+05:30 (no summer time, so the offset is known)."""
-    import time
-
-    monkeypatch.setenv("TZ", "IST-05:30")
-    time.tzset()
-    yield
-    monkeypatch.undo()
-    time.tzset()
 
 
 def test_times_follow_local_time_in_text_and_report_but_not_json(

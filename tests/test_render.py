@@ -17,7 +17,7 @@ from analyzer.protocol.ids import ALTITUDE_ID, FEEDBACK_ID, GPS_ID, UAV_ATTITUDE
 from analyzer.protocol.types import CRC_MISMATCH, CanFrame, Event, StreamChunk, diagnostic
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
 from analyzer.render import describe_event, format_time, render_event
-from analyzer.timefmt import clock_width, format_datetime, use_local_time
+from analyzer.timefmt import LOCAL, UTC
 
 T = 1_700_000_000.25
 
@@ -34,7 +34,7 @@ def command(name: str, **params: Any) -> Event:
 
 def body(line: str) -> str:
     """The line after the fixed columns."""
-    return line[clock_width() + 1 + 17 + 1 + 17 + 1 + 16 + 1 :]
+    return line[UTC.clock_width + 1 + 17 + 1 + 17 + 1 + 16 + 1 :]
 
 
 def test_command_line_has_aligned_columns_and_units_in_words() -> None:
@@ -141,17 +141,16 @@ def test_local_time_shows_its_offset(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("TZ", "Europe/Berlin")
     time.tzset()
     try:
-        use_local_time(True)
-        assert format_time(1_715_680_801.253) == "12:00:01.253+02:00"
-        assert len(format_time(1_715_680_801.253)) == clock_width()
-        assert format_datetime(1_715_680_801.253) == "2024-05-14 12:00:01.253+02:00"
-        assert format_time(12.3456) == "12.346"
+        assert format_time(1_715_680_801.253, LOCAL) == "12:00:01.253+02:00"
+        assert len(format_time(1_715_680_801.253, LOCAL)) == LOCAL.clock_width
+        assert LOCAL.format_datetime(1_715_680_801.253) == "2024-05-14 12:00:01.253+02:00"
+        assert format_time(12.3456, LOCAL) == "12.346"
+        assert UTC.format_datetime(1_715_680_801.253) == "2024-05-14 10:00:01.253Z"
     finally:
-        use_local_time(False)
         monkeypatch.delenv("TZ")
         time.tzset()
-    assert format_datetime(1_715_680_801.253) == "2024-05-14 10:00:01.253Z"
-    assert format_datetime(1_715_680_801.9996) == "2024-05-14 10:00:02.000Z"
+    assert UTC.format_datetime(1_715_680_801.9996) == "2024-05-14 10:00:02.000Z"
+    assert len(format_time(1_715_680_801.253)) == UTC.clock_width
 
 
 @given(

@@ -222,14 +222,10 @@ def test_only_the_chosen_pictures_are_kept_while_reading() -> None:
 def test_with_local_time_the_page_says_which_times_are_local(
     flight: tuple[Path, dict[str, Any], str], tmp_path: Path
 ) -> None:
-    from analyzer import timefmt
     from analyzer.cli import main
 
     page = tmp_path / "local.html"
     log = flight[0].with_name("demo31.log")
-    try:
-        assert main(["--local-time", "report", str(log), "-o", str(page)]) == 0
-    finally:
-        timefmt.use_local_time(False)
+    assert main(["--local-time", "report", str(log), "-o", str(page)]) == 0
     assert "Times in the tables are local time" in page.read_text(encoding="utf-8")
     assert "Times are UTC." in flight[0].read_text(encoding="utf-8")

@@ -30,7 +30,7 @@ from analyzer.check.steps import Hold, Listen, Plan, Send
 from analyzer.feedback_track import EXPECTED_FEEDBACK_HZ, FEEDBACK_TOLERANCE, GAP_THRESHOLD_S
 from analyzer.protocol.check_fields import FAIL, PASS, SKIPPED
 from analyzer.protocol.response_fields import CHECK_PICTURE, REFERENCE_AIRFRAME
-from analyzer.timefmt import format_clock
+from analyzer.timefmt import UTC
 
 JUDGED_CHECKS = frozenset(
     {CHECK_TARGET, CHECK_RATE, CHECK_STOP, CHECK_REPEAT, CHECK_TRACKING, CHECK_PICTURE}
@@ -237,7 +237,8 @@ def undecided(evidence: Evidence, measured: Measured, pairs: list[tuple[str, str
     )
     if silence > GAP_THRESHOLD_S:
         return (
-            f"no feedback for {silence:.1f} s during the step (from {format_clock(since)}): "
+            # a verdict's sentence is data (the JSON, the recording): in UTC, always
+            f"no feedback for {silence:.1f} s during the step (from {UTC.format_clock(since)}): "
             "it cannot be judged"
         )
     text = "; ".join(unknown + measured.unmeasured)

@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     judging = analysis.judging()
     out = sys.stdout
     output = FindingsOutput(
-        judging, pipeline.tally, json_lines=args.json, problems=args.problems
+        judging, pipeline.tally, json_lines=args.json, problems=args.problems, zone=args.time_zone
     ).to(out)
     pipeline.stages.append(output.stage)  # the analysis, whose findings it writes
     pipeline.sinks.append(output)

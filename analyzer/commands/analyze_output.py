@@ -8,7 +8,6 @@ import tempfile
 from collections.abc import Callable
 from typing import IO, Any
 
-from analyzer import timefmt
 from analyzer.analysis.verdict_counts import VerdictCounts
 from analyzer.api.analysis import FindingsInOrder, Judging
 from analyzer.pipeline import Batch
@@ -16,6 +15,7 @@ from analyzer.protocol.response_fields import verdict_word
 from analyzer.protocol.types import Event
 from analyzer.tally import Tally
 from analyzer.terminal_text import printable_lines
+from analyzer.timefmt import UTC, TimeZone, is_absolute
 
 _NUMBER_FIELDS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
     ("target_deg", "target", lambda v: f"{v:g} deg"),
@@ -39,13 +39,23 @@ class FindingsOutput:
     ``stage`` is the analysis as the pipeline's stage: the findings it makes, and no
     finding the input may already hold, are written. An input without a clock (see
     ``untimed``) gets no findings. The text report's lines go to a temporary file first
-    (``finish`` writes the header, which needs the whole input's figures, then them).
+    (``finish`` writes the header, which needs the whole input's figures, then them);
+    its times are in ``zone`` (the JSON lines keep Unix seconds).
     """
 
     keeps_items = False
 
-    def __init__(self, analysis: Judging, tally: Tally, *, json_lines: bool, problems: bool):
+    def __init__(
+        self,
+        analysis: Judging,
+        tally: Tally,
+        *,
+        json_lines: bool,
+        problems: bool,
+        zone: TimeZone = UTC,
+    ):
         self.json_lines = json_lines
+        self.zone = zone
         self.problems = problems
         self.spool: IO[str] | None = (
             # closed by finish (the text report), or with the process
@@ -91,9 +101,9 @@ class FindingsOutput:
         out, spool = self.out, self.spool
         assert out is not None and spool is not None
         out.write(printable_lines(header) + "\n")
-        if self.first_time is not None and timefmt.is_absolute(self.first_time):
-            zone = "local" if timefmt.local_time() else "UTC"
-            out.write(f"times are {zone}, " + timefmt.format_datetime(self.first_time)[:10] + "\n")
+        if self.first_time is not None and is_absolute(self.first_time):
+            day = self.zone.format_datetime(self.first_time)[:10]
+            out.write(f"times are {'local' if self.zone.local else 'UTC'}, {day}\n")
         out.write("\n")
         spool.seek(0)
         shutil.copyfileobj(spool, out)
@@ -106,7 +116,7 @@ class FindingsOutput:
     def _line(self, event: Event) -> str:
         if self.json_lines:
             return json.dumps(event.to_dict())
-        return printable_lines(finding_line(event))  # names may come from the input
+        return printable_lines(finding_line(event, self.zone))  # names may come from the input
 
     def _write(self, lines: list[str]) -> None:
         target = self.spool if self.spool is not None else self.out
@@ -115,20 +125,20 @@ class FindingsOutput:
             target.write("\n".join(lines) + "\n")
 
 
-def clock(t: float) -> str:
+def clock(t: float, zone: TimeZone = UTC) -> str:
     """Time of day with milliseconds, UTC with a Z (or local time with its offset after
-    --local-time, see analyzer.timefmt); seconds from the start for relative times."""
-    if not timefmt.is_absolute(t):
+    --local-time: ``zone``); seconds from the start for relative times."""
+    if not is_absolute(t):
         return f"{t:10.3f} s"
-    return timefmt.format_clock(t)
+    return zone.format_clock(t)
 
 
-def finding_line(event: Event) -> str:
+def finding_line(event: Event, zone: TimeZone = UTC) -> str:
     """One finding of the text report: time, command, check, verdict, detail, numbers."""
     f = event.fields
     numbers = _numbers(f)
     return (
-        f"{clock(event.time)}  {f['command']:<16} {f['check']:<12} "
+        f"{clock(event.time, zone)}  {f['command']:<16} {f['check']:<12} "
         f"{verdict_word(f):<10}  {f['detail']}" + (f"  [{numbers}]" if numbers else "")
     )
 

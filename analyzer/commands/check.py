@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from analyzer.mcapio.write.sink import McapSink
     from analyzer.mcapio.write.video import VideoRecorder
     from analyzer.sim.transports import LinkSpec
+    from analyzer.timefmt import TimeZone
 
 HELP = "bench acceptance check: drive the gimbal through built-in steps and judge each one"
 DESCRIPTION = """\
@@ -243,7 +244,7 @@ def _run_check(
     results = runner.results
     _say_how_it_ended(runner, path, say)
     if args.report is not None:
-        _write_report(args.report, args.force, observer, results, spec, limits)
+        _write_report(args.report, args.force, observer, results, spec, limits, args.time_zone)
         print(f"report written to {args.report}", file=say)
     if capture.error is not None:
         raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
@@ -282,6 +283,7 @@ def _recording_sink(
             ),
             force=args.force,
             hold_back=VIDEO_HOLD_BACK_S if options.video else 0.0,
+            zone=args.time_zone,
         )
     except BaseException:
         link.close()
@@ -382,6 +384,7 @@ def _write_report(
     results: list[StepResult],
     spec: LinkSpec,
     limits: Limits,
+    zone: TimeZone,
 ) -> None:
     from typing import IO
 
@@ -398,6 +401,7 @@ def _write_report(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
         lead=steps_table_html(results, "Bench check"),
+        zone=zone,
     )
     with OutputFile(target, force=force) as out:
         cast("IO[bytes]", out.file).write(text.encode("utf-8"))

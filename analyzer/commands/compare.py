@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         from analyzer.compare.page import render
         from analyzer.output_file import OutputFile
 
-        page = render(a, b, pairs, figure_rules).encode("utf-8")
+        page = render(a, b, pairs, figure_rules, args.time_zone).encode("utf-8")
         with OutputFile(args.html, force=args.force, inputs=[args.a, args.b]) as out:
             cast("IO[bytes]", out.file).write(page)
         print(f"comparison written to {args.html}", file=sys.stderr if args.json else sys.stdout)

@@ -13,6 +13,7 @@ from analyzer.errors import UsageError
 from analyzer.progress import Progress
 from analyzer.protocol.ids import PROTOCOL_IDS
 from analyzer.terminal_text import printable
+from analyzer.timefmt import UTC, TimeZone
 
 HELP = "decode a capture file (candump, python-can logs, pcap, raw dumps, MCAP) into events"
 
@@ -142,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     live = args.file == "-"
     # With --summary only the summary is printed (as one JSON object with --json).
     if not args.summary:
-        printer = make_printer(args.json, color)
+        printer = make_printer(args.json, color, args.time_zone)
         pipeline.sinks.append(LinePrinter(out, printer, wanted, flush_each=live, as_json=args.json))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
     interrupted = False
@@ -176,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             out.write(json.dumps(summary.to_dict(), default=str) + "\n")
         else:
-            out.write(summary.render(color) + "\n")
+            out.write(summary.render(color, args.time_zone) + "\n")
         out.flush()
     elif sys.stderr.isatty() and not live:
         sys.stderr.write(
@@ -185,7 +186,7 @@ def run(args: argparse.Namespace) -> int:
     from analyzer.bus_hints import bus_hints
 
     errors = tally.bus.error_frames
-    hints = [] if args.summary else bus_hints(tally.bus, tally.frames)
+    hints = [] if args.summary else bus_hints(tally.bus, tally.frames, args.time_zone)
     nothing = _nothing_for_us(reader.stats, decoder_stats, args.raw, errors)
     for note in [*reader.notes, *nothing, *hints, *mismatch]:
         sys.stderr.write(f"note: {printable(note)}\n")
@@ -234,7 +235,8 @@ def use_color(choice: str, out: IO[str]) -> bool:
     return not os.environ.get("NO_COLOR") and ansi_ok(out)
 
 
-def make_printer(as_json: bool, color: bool) -> Callable[[Any], str]:
+def make_printer(as_json: bool, color: bool, zone: TimeZone = UTC) -> Callable[[Any], str]:
+    """Each event as a ``--json`` line, or as a text line with its times in ``zone``."""
     if as_json:
 
         def to_json(event: Any) -> str:
@@ -243,7 +245,7 @@ def make_printer(as_json: bool, color: bool) -> Callable[[Any], str]:
         return to_json
     from analyzer.render import render_event
 
-    return lambda event: render_event(event, color=color)
+    return lambda event: render_event(event, color=color, zone=zone)
 
 
 def event_filter(topics: list[str], names: list[str]) -> Callable[[Any], bool] | None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import IO, Any
@@ -27,6 +28,7 @@ from analyzer.protocol.types import (
     TOPIC_UAV_GPS,
     Event,
 )
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.video.spec import add_video_options
 
 HELP = "see the whole tool work with no hardware: simulated gimbal, live decode, demo.mcap"
@@ -198,13 +200,13 @@ class SimulatorOption:
 class DemoPrinter:
     """Sink printing each event as one plain line; UAV status thinned out unless ``everything``."""
 
-    def __init__(self, stream: IO[str], *, everything: bool = False) -> None:
+    def __init__(self, stream: IO[str], *, everything: bool = False, zone: TimeZone = UTC) -> None:
         self.stream = stream
         self.everything = everything
         self.hidden = 0
         self._last: dict[str, float] = {}
         self._last_command = ""
-        self._render: Any = _renderer()
+        self._render: Callable[[Event], str] = _renderer(zone)
 
     def handle(self, batch: Batch) -> None:
         lines = [self._render(e) for e in batch.events if self._shown(e)]
@@ -234,19 +236,19 @@ class DemoPrinter:
         self.stream.flush()
 
 
-def _renderer() -> Any:
+def _renderer(zone: TimeZone) -> Callable[[Event], str]:
+    """Each event as a line, its time in ``zone``."""
     try:
         from analyzer.render import render_event
     except ImportError:
-        return _plain
-    return lambda event: render_event(event, color=False)
+        return lambda event: _plain(event, zone)
+    return lambda event: render_event(event, color=False, zone=zone)
 
 
-def _plain(event: Event) -> str:
+def _plain(event: Event, zone: TimeZone) -> str:
     from analyzer.sim.engine import describe_command, format_fields
-    from analyzer.timefmt import format_clock
 
-    stamp = format_clock(event.time)
+    stamp = zone.format_clock(event.time)
     if event.topic == TOPIC_COMMAND:
         text = describe_command(event.fields)
     else:
@@ -352,7 +354,7 @@ def run(args: argparse.Namespace) -> int:
         from analyzer.ardupilot.live import NotedSource
 
         source = NotedSource(source)
-    printer = None if tui else DemoPrinter(sys.stdout, everything=args.all)
+    printer = None if tui else DemoPrinter(sys.stdout, everything=args.all, zone=args.time_zone)
     eye, camera = simulated_camera()
     recording = open_live_recording(
         args,

@@ -108,13 +108,15 @@ def run(args: argparse.Namespace) -> int:
     elif args.csv:
         write_csv(out, answers[0])
     elif not args.html or args.sql:
-        write_text(out, answers)
+        write_text(out, answers, args.time_zone)
     if args.html:
         from analyzer.fleet.page import render_fleet
 
         assert overview is not None
         # With --sql, the standard page with the query's answer at the end.
-        page = render_fleet(args.dataset, standard, overview, extra=query).encode()
+        page = render_fleet(
+            args.dataset, standard, overview, extra=query, zone=args.time_zone
+        ).encode()
         with OutputFile(args.html, force=args.force) as handle:
             cast("IO[bytes]", handle.file).write(page)
         sys.stderr.write(f"wrote {args.html} ({len(page) / 1024:,.0f} KiB)\n")

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from analyzer.summary import bus_lines, crc_line, event_lines, feedback_lines
 from analyzer.terminal_text import printable
-from analyzer.timefmt import format_datetime
+from analyzer.timefmt import UTC, TimeZone
 
 if TYPE_CHECKING:
     from analyzer.mcapio.read.info import RecordingInfo
@@ -77,12 +77,12 @@ def _simulator_lines(meta: dict[str, str]) -> list[str]:
     return [f"{label:<12}{meta[key]}" for key, label in SIMULATOR_KEYS if meta.get(key)]
 
 
-def render(info: RecordingInfo) -> str:
-    """Human-readable report."""
+def render(info: RecordingInfo, zone: TimeZone = UTC) -> str:
+    """Human-readable report, its times in ``zone``."""
     lines = [f"file        {info.path} ({_size(info.size_bytes)}, {_state(info)})"]
     lines += _damage_lines(info)
     lines += _origin_lines(info)
-    lines += _time_lines(info)
+    lines += _time_lines(info, zone)
     if info.topics:
         width = max(len(t.topic) for t in info.topics)
         lines.append("")
@@ -93,8 +93,8 @@ def render(info: RecordingInfo) -> str:
     lines.append("")
     lines.append(f"figures of the run, from {info.stats_from}:")
     lines.extend(event_lines(info.tally))
-    lines.extend(feedback_lines(info.tally))
-    lines.extend(bus_lines(info.tally))
+    lines.extend(feedback_lines(info.tally, zone=zone))
+    lines.extend(bus_lines(info.tally, zone=zone))
     lines.append(crc_line(info.tally))
     # Paths, metadata, topics and kinds come from the file: no raw control characters.
     return "\n".join(printable(line) for line in lines)
@@ -153,14 +153,14 @@ def _origin_lines(info: RecordingInfo) -> list[str]:
     return lines
 
 
-def _time_lines(info: RecordingInfo) -> list[str]:
+def _time_lines(info: RecordingInfo, zone: TimeZone) -> list[str]:
     """Its time range, duration and message count."""
     if info.start_ns is None or info.end_ns is None:
         lines = ["time range  (no messages)"]
     else:
         lines = [
-            f"time range  {format_datetime(info.start_ns / 1e9)} .. "
-            f"{format_datetime(info.end_ns / 1e9)}",
+            f"time range  {zone.format_datetime(info.start_ns / 1e9)} .. "
+            f"{zone.format_datetime(info.end_ns / 1e9)}",
             f"duration    {info.duration_s:.3f} s",
         ]
     lines.append(f"messages    {info.message_count}, counts from {info.counts_from}")
@@ -182,7 +182,8 @@ def run(args: argparse.Namespace) -> int:
             out["video_streams"] = video_dicts(args.recording)
         print(json.dumps(out, indent=2))
     else:
-        print(render(info))
+        print(render(info, args.time_zone))
         if has_video:
-            print("\n".join(printable(line) for line in video_lines(args.recording)))
+            lines = video_lines(args.recording, args.time_zone)
+            print("\n".join(printable(line) for line in lines))
     return 0

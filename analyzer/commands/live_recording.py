@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from analyzer.errors import SourceError
+from analyzer.timefmt import UTC, TimeZone
 
 if TYPE_CHECKING:
     from analyzer.capture import Capture
@@ -41,6 +42,7 @@ class LiveRecording:
     video: VideoRecorder | None = None
     live: FoxgloveLive | None = None
     companions: list[Companion] = field(default_factory=list)
+    zone: TimeZone = UTC  # the monitor's times (--local-time: local time)
 
     def run(
         self,
@@ -81,6 +83,7 @@ class LiveRecording:
                         source_label=with_foxglove(label, self.live),
                         exit_when_done=exit_when_done,
                         live_status=foxglove_status(self.live),
+                        zone=self.zone,
                     )
                 )
             # Inside the try: a failed write here must still finish the recording.
@@ -142,6 +145,7 @@ def open_live_recording(
             force=args.force,
             tee=live,
             hold_back=hold_back,
+            zone=args.time_zone,
             **sink_options,
         )
     except BaseException:
@@ -154,4 +158,4 @@ def open_live_recording(
     sinks: list[Any] = [s for s in (video, sink, *own, live) if s is not None]
     stages = Analysis().stages(before_camera=None if video is None else video.stage)
     capture = Capture(source, sinks, stages=stages)
-    return LiveRecording(capture, sink, path, source, video, live)
+    return LiveRecording(capture, sink, path, source, video, live, zone=args.time_zone)

@@ -82,7 +82,10 @@ def run(args: argparse.Namespace) -> int:
     capture = Capture(source, [] if live is None else [live], stages=Analysis().stages())
     label = str(getattr(source, "description", args.source))
     result = run_app(
-        capture, source_label=with_foxglove(label, live), live_status=foxglove_status(live)
+        capture,
+        source_label=with_foxglove(label, live),
+        live_status=foxglove_status(live),
+        zone=args.time_zone,
     )
     if capture.error is not None:
         raise capture.error  # a SourceError: one line, exit 1

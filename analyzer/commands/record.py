@@ -17,6 +17,7 @@ from analyzer.link_status import LinkStatus
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.write.options import add_compression_argument
 from analyzer.pipeline import Batch
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.video.spec import VIDEO_HOLD_BACK_S, add_video_options, is_camera_event
 
 HELP = "capture a live source (CAN, TCP, proxy, serial, file replay) into an MCAP recording"
@@ -142,8 +143,10 @@ class StatusLine:
         path: str,
         link: LinkWatch | None = None,
         waiting: str = "waiting for data",
+        zone: TimeZone = UTC,
     ) -> None:
         self.stream = stream
+        self.zone = zone  # the times it shows (when the link was lost, the worst bus state)
         self.path = path
         self.link = link or LinkWatch()
         self.waiting = waiting
@@ -165,7 +168,7 @@ class StatusLine:
             parts.append(f"{stats.frames} frames ({stats.frames_per_s:.0f}/s)")
         if stats.chunks:
             parts.append(f"{stats.bytes} bytes ({stats.bytes_per_s:.0f}/s)")
-        words = status_words(stats.tally.bus)
+        words = status_words(stats.tally.bus, self.zone)
         if words is not None:  # error frames seen: the words of the monitor's status bar
             parts.append("  ".join(words.words()))
         parts.append(f"{stats.events} events")
@@ -181,7 +184,7 @@ class StatusLine:
     def link_words(self, stats: Any) -> str:
         link = self.link.status
         if link.seen:
-            return f"[{link.describe(time.time())}]"
+            return f"[{link.describe(time.time(), self.zone)}]"
         return "[receiving]" if stats.frames or stats.chunks else f"[{self.waiting}]"
 
     def handle(self, batch: Batch) -> None:
@@ -251,7 +254,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet and not args.tui:
             address = getattr(source, "address", None)
             waiting = f"connecting to {address}" if address else "waiting for data"
-            status = StatusLine(sys.stderr, path, link, waiting)
+            status = StatusLine(sys.stderr, path, link, waiting, args.time_zone)
             status.video = video
             own.append(status)
         if args.print and not args.tui:
@@ -358,7 +361,7 @@ def _said_at_the_end(
         # an adapter unplugged and not back: the recording ends at the loss, say so
         print(
             f"gimbal-analyzer record: warning: {description} had not come back when the "
-            f"capture ended ({link.status.describe(time.time())})",
+            f"capture ended ({link.status.describe(time.time(), args.time_zone)})",
             file=sys.stderr,
         )
     return _said_of_the_video_and_drops(video, stats, result)

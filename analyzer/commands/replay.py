@@ -158,6 +158,7 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
                 aligned="no" if args.no_align else "yes",
             ),
             force=args.force,
+            zone=args.time_zone,
         )
     except BaseException:
         link.close()

@@ -103,13 +103,14 @@ def run(args: argparse.Namespace) -> int:
     if camera_stage is not None and not data.untimed:
         from analyzer.report.camera_judged import judged_section
 
-        judged = judged_section(camera_stage.judged, camera_stage.pictures)
+        judged = judged_section(camera_stage.judged, camera_stage.pictures, args.time_zone)
     text = render(
         data,
         f"tolerance {settings.tolerance_deg:g} deg, time allowed {settings.time_allowed_s:g} s",
         pictures,
         lead,
         judged,
+        args.time_zone,
     )
     page = text.encode("utf-8")
     with OutputFile(args.output, force=args.force, inputs=inputs) as out:

@@ -6,13 +6,13 @@ import json
 import time
 from importlib import resources
 
-from analyzer import timefmt
 from analyzer.check.output import STEPS_CSS
 from analyzer.compare.figures import Rule
 from analyzer.compare.judged import Judged
 from analyzer.compare.output import axis_words, figures_text, sides, verdict_line
 from analyzer.compare.pairs import Pair
 from analyzer.report.page import CHART_JS, CHECK_JS, CSS, _e, _plot, _rows
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.version import __version__
 
 PAGE_CSS = ".differs { color: #d62728; font-weight: 600; } .same { color: #2ca02c; }"
@@ -38,8 +38,11 @@ def _plot_data(a: Judged, b: Judged, pairs: list[Pair]) -> dict[str, object]:
     }
 
 
-def render(a: Judged, b: Judged, pairs: list[Pair], rules: tuple[Rule, ...]) -> str:
-    """The whole page, self-contained (Chart.js inlined as in the flight report)."""
+def render(
+    a: Judged, b: Judged, pairs: list[Pair], rules: tuple[Rule, ...], zone: TimeZone = UTC
+) -> str:
+    """The whole page, self-contained (Chart.js inlined as in the flight report); the time
+    it was made in ``zone``."""
     plots = _plot_data(a, b, pairs)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     check_js = (resources.files("analyzer.report") / CHECK_JS).read_text("utf-8")
@@ -47,7 +50,7 @@ def render(a: Judged, b: Judged, pairs: list[Pair], rules: tuple[Rule, ...]) -> 
     payload = json.dumps(plots, separators=(",", ":")).replace("</", "<\\/")
     has = bool(plots["a"] or plots["b"])
     title = f"Comparison: {a.name} and {b.name}"
-    generated = timefmt.format_datetime(time.time())
+    generated = zone.format_datetime(time.time())
     table = []
     for pair in pairs:
         first = pair.first

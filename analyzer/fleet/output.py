@@ -9,9 +9,9 @@ from datetime import date, datetime, timezone
 from decimal import Decimal
 from typing import IO
 
-from analyzer import timefmt
 from analyzer.fleet.queries import Answer, Value
 from analyzer.terminal_text import printable
+from analyzer.timefmt import UTC, TimeZone
 
 MAX_TEXT_ROWS = 50  # per question in the text output (--json and --csv give all)
 
@@ -31,15 +31,15 @@ def cell(value: Value | object) -> str | int | float | bool | None:
     return str(value)
 
 
-def human(value: Value | object) -> str | int | float | bool | None:
-    """A value as people read it: times by the one time rule (analyzer.timefmt)."""
+def human(value: Value | object, zone: TimeZone = UTC) -> str | int | float | bool | None:
+    """A value as people read it: times by the one time rule (analyzer.timefmt), in ``zone``."""
     if isinstance(value, datetime):
-        return timefmt.format_datetime(value.timestamp())
+        return zone.format_datetime(value.timestamp())
     return cell(value)
 
 
-def _text(value: Value | object) -> str:
-    shown = human(value)
+def _text(value: Value | object, zone: TimeZone) -> str:
+    shown = human(value, zone)
     if shown is None:
         return "-"
     if isinstance(shown, float):
@@ -47,7 +47,8 @@ def _text(value: Value | object) -> str:
     return printable(str(shown))
 
 
-def write_text(out: IO[str], answers: Sequence[Answer]) -> None:
+def write_text(out: IO[str], answers: Sequence[Answer], zone: TimeZone = UTC) -> None:
+    """The answers as aligned columns, their times in ``zone``."""
     for n, answer in enumerate(answers):
         if n:
             out.write("\n")
@@ -55,7 +56,7 @@ def write_text(out: IO[str], answers: Sequence[Answer]) -> None:
         if not answer.rows:
             out.write("  (no rows)\n")
             continue
-        shown = [[_text(v) for v in row] for row in answer.rows[:MAX_TEXT_ROWS]]
+        shown = [[_text(v, zone) for v in row] for row in answer.rows[:MAX_TEXT_ROWS]]
         widths = [
             max(len(col), *(len(r[i]) for r in shown)) for i, col in enumerate(answer.columns)
         ]

@@ -9,11 +9,11 @@ from datetime import datetime
 from importlib import resources
 from typing import Any
 
-from analyzer import timefmt
 from analyzer.analysis.findings import VERDICTS
 from analyzer.fleet.output import human
 from analyzer.fleet.queries import Answer, Value
 from analyzer.report.page import CHART_JS, CHECK_JS, CSS, _e, _plot, _rows
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.version import __version__
 
 
@@ -63,7 +63,7 @@ def _caption(text: str) -> str:
     return f'<p class="small">{_e(text)}</p>'
 
 
-def _table(answer: Answer) -> str:
+def _table(answer: Answer, zone: TimeZone) -> str:
     if not answer.rows:
         return '<p class="empty">no rows</p>'
     numeric = frozenset(
@@ -71,7 +71,7 @@ def _table(answer: Answer) -> str:
         for i in range(len(answer.columns))
         if all(isinstance(row[i], (int, float)) or row[i] is None for row in answer.rows)
     )
-    rows = [["" if (v := human(x)) is None else _e(v) for x in row] for row in answer.rows]
+    rows = [["" if (v := human(x, zone)) is None else _e(v) for x in row] for row in answer.rows]
     return _rows(rows, answer.columns, numeric)
 
 
@@ -85,10 +85,10 @@ def _tags(answers: Sequence[Answer]) -> list[str]:
     ]
 
 
-def _when(value: Value | object) -> str:
+def _when(value: Value | object, zone: TimeZone) -> str:
     """A time as every human output shows it (analyzer.timefmt: UTC, or --local-time)."""
     if isinstance(value, datetime):
-        return timefmt.format_datetime(value.timestamp())
+        return zone.format_datetime(value.timestamp())
     return "-"
 
 
@@ -97,8 +97,10 @@ def render_fleet(
     answers: Sequence[Answer],
     overview: Answer,
     extra: Sequence[Answer] = (),
+    zone: TimeZone = UTC,
 ) -> str:
-    """The whole page: the standard ``answers`` and the ``overview``, then ``extra`` ones."""
+    """The whole page: the standard ``answers`` and the ``overview``, then ``extra`` ones;
+    its times in ``zone``."""
     tags = [t for t in _tags(answers) if t != "fleet"]
     tag = tags[0] if tags else "fleet"
     plots = plot_data(answers, tag)
@@ -109,12 +111,11 @@ def render_fleet(
     flights, failed, frames, findings, first, last = (
         overview.rows[0] if overview.rows else (0, 0, None, None, None, None)
     )
-    generated = timefmt.format_datetime(time.time())
-    zone = "local time" if timefmt.local_time() else "UTC"
+    generated = zone.format_datetime(time.time())
     kv = [
         ("dataset", _e(dataset)),
         ("recordings", f"{flights:,} ({failed:,} unreadable or damaged)"),
-        ("time range", f"{_e(_when(first))} to {_e(_when(last))}"),
+        ("time range", f"{_e(_when(first, zone))} to {_e(_when(last, zone))}"),
         ("CAN frames", f"{frames or 0:,}"),
         ("findings", f"{findings or 0:,}"),
         ("tags", _e(", ".join(tags) or "none")),
@@ -122,7 +123,7 @@ def render_fleet(
     sections = [
         f"<h1>Fleet report: {_e(dataset)}</h1>",
         f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {_e(generated)}. '
-        f"Times are {zone}; weeks are ISO weeks in UTC. "
+        f"Times are {'local time' if zone.local else 'UTC'}; weeks are ISO weeks in UTC. "
         f"Plots are grouped by the first tag ({_e(tag)}).</p>",
         "<h2>Overview</h2>",
         '<table class="kv">' + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in kv),
@@ -139,7 +140,7 @@ def render_fleet(
         _plot("plot-response", bool(plots["response"]), "no timed responses"),
     ]
     for answer in [*answers, *extra]:
-        sections += [f"<h2>{_e(answer.title)}</h2>", _table(answer)]
+        sections += [f"<h2>{_e(answer.title)}</h2>", _table(answer, zone)]
     return "\n".join(
         [
             "<!DOCTYPE html>",

@@ -9,10 +9,11 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from analyzer import timefmt
 from analyzer.report.decimate import Decimator
 from analyzer.report.finding_groups import whole_run
+from analyzer.report.tables import clock
 from analyzer.scene.timeline import TimedPicture  # a camera picture: stream, time, jpeg
+from analyzer.timefmt import UTC, TimeZone
 
 STRIP_SIZE = 8  # pictures in the strip along the flight
 MAX_FINDING_PICTURES = 40  # findings shown with their pictures
@@ -42,10 +43,6 @@ def picture_jpeg(picture: TimedPicture) -> bytes:
 
 def _e(value: Any) -> str:
     return html.escape(str(value), quote=True)
-
-
-def _clock(t: float) -> str:
-    return timefmt.format_clock(t) if timefmt.is_absolute(t) else f"{t:.3f} s"
 
 
 def _img(picture: TimedPicture, alt: str) -> str:
@@ -171,18 +168,21 @@ def choose(
     return choice
 
 
-def _figure(picture: TimedPicture | None, what: str, t: float) -> str:
+def _figure(picture: TimedPicture | None, what: str, t: float, zone: TimeZone) -> str:
     if picture is None:
         return f'<figure><p class="empty">no picture {_e(what)}</p></figure>'
     offset = picture.time - t
     return (
         f"<figure>{_img(picture, f'camera {what}')}<figcaption>{_e(what)}: "
-        f"{_e(_clock(picture.time))} ({offset:+.1f} s)</figcaption></figure>"
+        f"{_e(clock(picture.time, zone))} ({offset:+.1f} s)</figcaption></figure>"
     )
 
 
-def camera_section(choice: PictureChoice, findings: Sequence[dict[str, Any]]) -> str:
-    """The HTML of "What the camera saw" (empty when the input has no camera pictures)."""
+def camera_section(
+    choice: PictureChoice, findings: Sequence[dict[str, Any]], zone: TimeZone = UTC
+) -> str:
+    """The HTML of "What the camera saw" (empty when the input has no camera pictures),
+    its times in ``zone``."""
     if not choice.count or choice.first is None or choice.last is None:
         return ""
     first, last = choice.first, choice.last
@@ -195,14 +195,15 @@ def camera_section(choice: PictureChoice, findings: Sequence[dict[str, Any]]) ->
     out = [
         "<h2>What the camera saw</h2>",
         f'<p class="small">{choice.count:,} pictures of {_e(", ".join(sorted(choice.streams)))}'
-        f" from {_e(_clock(first))} to {_e(_clock(last))}. Blue ticks: pictures; red and "
+        f" from {_e(clock(first, zone))} to {_e(clock(last, zone))}. Blue ticks: pictures; red and "
         "orange: the commands shown below, not obeyed / partly obeyed.</p>",
         '<div class="strip">',
     ]
     for picture in strip:
         out.append(
-            f"<figure>{_img(picture, f'camera at {_clock(picture.time)}')}"
-            f"<figcaption>{_e(_clock(picture.time))} {_e(picture.stream)}</figcaption></figure>"
+            f"<figure>{_img(picture, f'camera at {clock(picture.time, zone)}')}"
+            f"<figcaption>{_e(clock(picture.time, zone))} {_e(picture.stream)}</figcaption>"
+            "</figure>"
         )
     out.append("</div>")
     out.append('<div class="timeline">')
@@ -232,14 +233,14 @@ def camera_section(choice: PictureChoice, findings: Sequence[dict[str, Any]]) ->
         verdict = str(finding["verdict"])
         decided = ""
         if moment is not None:
-            decided = f'<br><span class="small">decided at {_e(_clock(moment))}</span>'
-        out.append(_figure(before, "before the command", t))
+            decided = f'<br><span class="small">decided at {_e(clock(moment, zone))}</span>'
+        out.append(_figure(before, "before the command", t, zone))
         if moment is None:
             out.append('<figure><p class="empty">no moment of decision</p></figure>')
         else:
-            out.append(_figure(after, "at the verdict", moment))
+            out.append(_figure(after, "at the verdict", moment, zone))
         out.append(
-            f"<div><b>{_e(_clock(t))} {_e(finding.get('command', ''))}</b>: "
+            f"<div><b>{_e(clock(t, zone))} {_e(finding.get('command', ''))}</b>: "
             f'<span class="v v-{_e(verdict)}">{_e(verdict.replace("_", " "))}</span> '
             f"{_e(finding.get('detail', ''))}" + decided + "</div>"
         )

@@ -7,13 +7,13 @@ import time
 from importlib import resources
 from typing import Any
 
-from analyzer import timefmt
 from analyzer.protocol.types import Event
 from analyzer.render import describe_event
 from analyzer.report import camera, camera_judged, tables
 from analyzer.report.collect import ReportData
 from analyzer.report.decimate import Row
 from analyzer.report.tables import _e, _rows
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.version import __version__
 
 MARK_LABEL = 34  # characters of a command mark's label
@@ -55,19 +55,19 @@ def _plot(plot_id: str, has_data: bool, empty: str, square: bool = False) -> str
     return f'<div class="{cls}"><canvas id="{plot_id}"></canvas></div>'
 
 
-def _mark_label(event: Event) -> str:
+def _mark_label(event: Event, zone: TimeZone) -> str:
     """A command in words, short enough to stand along a plot's height."""
-    words = " ".join(describe_event(event).split())
+    words = " ".join(describe_event(event, zone).split())
     return words if len(words) <= MARK_LABEL else words[: MARK_LABEL - 1] + "\u2026"
 
 
-def _zone_words() -> str:
-    if timefmt.local_time():
+def _zone_words(zone: TimeZone) -> str:
+    if zone.local:
         return "Times in the tables are local time (with their UTC offset); the plots' are UTC."
     return "Times are UTC."
 
 
-def _plot_data(data: ReportData) -> dict[str, Any]:
+def _plot_data(data: ReportData, zone: TimeZone) -> dict[str, Any]:
     start = data.first or 0.0
 
     def rel(rows: list[Row]) -> list[list[Any]]:
@@ -83,7 +83,7 @@ def _plot_data(data: ReportData) -> dict[str, Any]:
         "start": start,
         "span": round((data.last or start) - start, 3),
         "attitude": rel(data.attitude.rows()),
-        "marks": [[round(r[0] - start, 3), _mark_label(r[1])] for r in data.marks.rows()],
+        "marks": [[round(r[0] - start, 3), _mark_label(r[1], zone)] for r in data.marks.rows()],
         "targets": targets,
         "commanded": rel(data.commanded_rows()),
         "measured": rel(data.measured.rows()),
@@ -115,11 +115,12 @@ def render(
     pictures: camera.PictureChoice | None = None,
     lead: str = "",
     judged: str = "",
+    zone: TimeZone = UTC,
 ) -> str:
     """The whole page: ``pictures`` are the camera pictures chosen for it, if any; ``lead``
     is HTML of a command's own shown first (the check's steps); ``judged`` the section of
-    the camera commands judged from the video."""
-    plots = _plot_data(data)
+    the camera commands judged from the video; the tables' times in ``zone``."""
+    plots = _plot_data(data, zone)
     chart_js = (resources.files("analyzer.report") / "vendor" / CHART_JS).read_text("utf-8")
     script = (resources.files("analyzer.report") / "script.js").read_text("utf-8")
     check_js = (resources.files("analyzer.report") / CHECK_JS).read_text("utf-8")
@@ -135,13 +136,13 @@ def render(
     notes = "".join(f'<p class="small">note: {_e(n)}</p>' for n in data.notes)
     sections = [
         f"<h1>{_e(title)}</h1>",
-        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. {_zone_words()} '
+        f'<p class="sub">gimbal-analyzer {_e(__version__)}, made {generated}. {_zone_words(zone)} '
         "The protocol has no acknowledgements: each command is judged from the attitude "
         "feedback that followed it.</p>",
         notes,
         lead,
         "<h2>Overview</h2>",
-        tables.overview(data, settings),
+        tables.overview(data, settings, zone),
         "<h2>Gimbal attitude</h2>",
         '<p class="small">Dashed lines: commands. Crosses: target angles, coloured by verdict. '
         "Drag across a time plot to zoom in (every time plot follows), double-click to zoom "
@@ -161,15 +162,15 @@ def render(
         _plot("plot-altitude", has["altitude"], why("no UAV altitude (0x0000FF16) in this input")),
         _plot("plot-track", has["track"], "no UAV GPS position (0x0000FF15) in this input", True),
         "<h2>UAV status texts</h2>",
-        tables.texts(data),
+        tables.texts(data, zone),
         "<h2>Responses</h2>",
-        tables.responses(data),
-        camera.camera_section(pictures, camera.shown_findings(data.findings.worst_first()))
+        tables.responses(data, zone),
+        camera.camera_section(pictures, camera.shown_findings(data.findings.worst_first()), zone)
         if pictures is not None
         else "",
         judged,
         "<h2>Diagnostics</h2>",
-        tables.diagnostics(data),
+        tables.diagnostics(data, zone),
     ]
     return "\n".join(
         [

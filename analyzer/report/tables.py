@@ -5,7 +5,6 @@ from __future__ import annotations
 import html
 from typing import Any
 
-from analyzer import timefmt
 from analyzer.analysis.findings import (
     ALL_VERDICTS,
     DEGRADED,
@@ -19,6 +18,7 @@ from analyzer.analysis.findings import (
 )
 from analyzer.report.collect import MAX_ROWS, ReportData
 from analyzer.report.finding_groups import Group
+from analyzer.timefmt import TimeZone, is_absolute
 
 UNTIMED = (
     "the input carries no timestamps (a raw TCP/UART byte dump?), so responses cannot be "
@@ -35,11 +35,12 @@ def _e(value: Any) -> str:
     return html.escape(str(value), quote=True)
 
 
-def _clock(t: float, with_date: bool = False) -> str:
-    """The one time rule (analyzer.timefmt): UTC with Z, or local time with --local-time."""
-    if not timefmt.is_absolute(t):
+def clock(t: float, zone: TimeZone, with_date: bool = False) -> str:
+    """A time of the page, by the one time rule (analyzer.timefmt) in ``zone``: UTC with
+    Z, or local time with --local-time; seconds for a relative time."""
+    if not is_absolute(t):
         return f"{t:.3f} s"
-    return timefmt.format_datetime(t) if with_date else timefmt.format_clock(t)
+    return zone.format_datetime(t) if with_date else zone.format_clock(t)
 
 
 def _verdict(verdict: str) -> str:
@@ -67,14 +68,15 @@ def _counts(counts: dict[str, int]) -> str:
     return ", ".join(f"{counts[v]:,} {v.replace('_', ' ')}" for v in ALL_VERDICTS if counts.get(v))
 
 
-def overview(data: ReportData, settings: str) -> str:
+def overview(data: ReportData, settings: str, zone: TimeZone) -> str:
     rows: list[tuple[str, str]] = [("source", f"{_e(data.source)} ({_e(data.format_name)})")]
     if data.first is not None and data.last is not None:
         span = data.last - data.first
         rows.append(
             (
                 "time range",
-                f"{_e(_clock(data.first, True))} to {_e(_clock(data.last, True))} ({span:.1f} s)",
+                f"{_e(clock(data.first, zone, True))} to {_e(clock(data.last, zone, True))} "
+                f"({span:.1f} s)",
             )
         )
     rows.append(
@@ -87,7 +89,7 @@ def overview(data: ReportData, settings: str) -> str:
     rows.append(
         ("diagnostics", ", ".join(f"{_e(k)} {n:,}" for k, n in kinds.most_common()) or "none")
     )
-    rows.extend(_bus_rows(data))
+    rows.extend(_bus_rows(data, zone))
     verdicts = data.counts.verdicts  # the commands' findings, as analyze counts them
     rows.append(("verdicts", " ".join(f"{_verdict(v)} {verdicts.get(v, 0):,}" for v in VERDICTS)))
     rows.append(("feedback", _e(data.counts.health_line())))
@@ -96,7 +98,7 @@ def overview(data: ReportData, settings: str) -> str:
     return f'<table class="kv">{body}</table>'
 
 
-def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
+def _bus_rows(data: ReportData, zone: TimeZone) -> list[tuple[str, str]]:
     """The CAN bus's worst state and when, its error frames by class, and what to do."""
     from analyzer.bus_hints import bus_hints
 
@@ -104,13 +106,13 @@ def _bus_rows(data: ReportData) -> list[tuple[str, str]]:
     if worst is None:
         return []
     state, when, channel = worst
-    at = f" at {_e(_clock(when, True))}" if when is not None else ""
+    at = f" at {_e(clock(when, zone, True))}" if when is not None else ""
     classes = ", ".join(f"{_e(k)} {n:,}" for k, n in data.bus.classes().most_common())
     rows = [
         ("CAN bus", f"worst {_e(state)}{at} on {_e(channel)}"),
         ("error frames", f"{data.bus.error_frames:,}: {classes}"),
     ]
-    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames)]
+    rows += [("hint", _e(hint)) for hint in bus_hints(data.bus, data.frames, zone)]
     return rows
 
 
@@ -164,20 +166,22 @@ def _figure_columns(check: str) -> tuple[tuple[str, bool, Any], ...]:
     return _FIGURES.get(check, _TARGET_COLUMNS)
 
 
-def _example(finding: dict[str, Any], columns: tuple[tuple[str, bool, Any], ...]) -> list[str]:
+def _example(
+    finding: dict[str, Any], columns: tuple[tuple[str, bool, Any], ...], zone: TimeZone
+) -> list[str]:
     return [
-        _e(_clock(float(finding["time"]))),
+        _e(clock(float(finding["time"]), zone)),
         _verdict(str(finding["verdict"])),
         _e(finding.get("detail", "")),
         *(cell(finding) for _, _, cell in columns),
     ]
 
 
-def _group(group: Group) -> str:
+def _group(group: Group, zone: TimeZone) -> str:
     examples = group.examples()
     span = ""
     if group.first is not None and group.last is not None and group.total > 1:
-        span = f", {_e(_clock(group.first))} to {_e(_clock(group.last))}"
+        span = f", {_e(clock(group.first, zone))} to {_e(clock(group.last, zone))}"
     shown = (
         f"{len(examples)} examples of {group.total:,}"
         if len(examples) < group.total
@@ -192,10 +196,10 @@ def _group(group: Group) -> str:
     figures = _figure_columns(group.check)
     heads = ["time", "verdict", "detail", *(h for h, _, _ in figures)]
     numeric = frozenset(3 + i for i, (_, num, _) in enumerate(figures) if num)
-    return head + _rows([_example(f, figures) for f in examples], heads, numeric)
+    return head + _rows([_example(f, figures, zone) for f in examples], heads, numeric)
 
 
-def responses(data: ReportData) -> str:
+def responses(data: ReportData, zone: TimeZone) -> str:
     """Findings per command and check: exact counts by verdict, the worst examples."""
     if data.untimed:
         return f'<p class="empty">{_e(UNTIMED)}</p>'
@@ -218,7 +222,7 @@ def responses(data: ReportData) -> str:
         f'<p class="small">{data.findings.total:,} findings, counted per command and check; '
         f"below each, up to {data.findings.keep} examples, the worst first. {EVERY_FINDING}</p>"
     )
-    return "\n".join([intro, table, *(_group(g) for g in groups)])
+    return "\n".join([intro, table, *(_group(g, zone) for g in groups)])
 
 
 def _yaw_reference(finding: dict[str, Any]) -> str:
@@ -230,20 +234,20 @@ def _yaw_reference(finding: dict[str, Any]) -> str:
     return _e(finding["yaw_reference"]) + small
 
 
-def texts(data: ReportData) -> str:
+def texts(data: ReportData, zone: TimeZone) -> str:
     """The flight controller's status texts (0x02008201 / 0x02008202)."""
     if not data.texts:
         return '<p class="empty">no status text from the flight controller in this input</p>'
-    table = _rows([[_e(_clock(t)), _e(text)] for t, text in data.texts], ["time", "text"])
+    table = _rows([[_e(clock(t, zone)), _e(text)] for t, text in data.texts], ["time", "text"])
     if data.text_count > len(data.texts):
         table += f'<p class="small">the first {len(data.texts):,} of {data.text_count:,}</p>'
     return table
 
 
-def diagnostics(data: ReportData) -> str:
+def diagnostics(data: ReportData, zone: TimeZone) -> str:
     if not data.diagnostics:
         return '<p class="empty">none: every frame decoded cleanly</p>'
-    rows = [[_e(_clock(t)), _e(kind), _e(detail)] for t, kind, detail in data.diagnostics]
+    rows = [[_e(clock(t, zone)), _e(kind), _e(detail)] for t, kind, detail in data.diagnostics]
     table = _rows(rows, ["time", "kind", "detail"])
     total = sum(data.diagnostic_kinds.values())
     if total > len(data.diagnostics):

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from analyzer.pipeline import Sink
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.bridge import TuiBridge
 from analyzer.tui.monitor_app import REFRESH_HZ, CaptureControl, MonitorApp, RefreshStats
 from analyzer.tui.monitor_layout import PAGES, is_paged
@@ -48,11 +49,13 @@ def run_app(
     source_label: str = "",
     exit_when_done: bool = False,
     live_status: Callable[[], tuple[str, bool]] | None = None,
+    zone: TimeZone = UTC,
 ) -> int:
     """Show the monitor for ``capture``: attach the bridge, start, run the UI, stop on quit.
 
-    With ``exit_when_done`` the UI also quits by itself when the capture ends (a
-    ``--duration`` ran out, a replayed file ended); otherwise it stays to be read.
+    Times are shown in ``zone`` (``--local-time``: local time). With ``exit_when_done``
+    the UI also quits by itself when the capture ends (a ``--duration`` ran out, a
+    replayed file ended); otherwise it stays to be read.
 
     The capture is stopped and joined (so every sink, the recording included, is
     finalised) whether the user quits (q, Ctrl+C, SIGTERM) or the UI fails. Returns 0,
@@ -69,6 +72,7 @@ def run_app(
         handle_sigterm=True,
         exit_when_done=exit_when_done,
         live_status=live_status,
+        zone=zone,
     )
     capture.start()
     try:

@@ -18,6 +18,7 @@ from textual.scroll_view import ScrollView
 from textual.strip import Strip
 
 from analyzer.protocol.types import LINK, TOPIC_COMMAND, TOPIC_DIAGNOSTICS
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.event_log import LogEntry
 from analyzer.tui.formatting import event_raw, event_text, folded_text, format_time
 
@@ -58,8 +59,9 @@ class CommandLog(ScrollView, can_focus=True):
             super().__init__()
             self.entry = entry
 
-    def __init__(self, *, id: str | None = None) -> None:
+    def __init__(self, *, id: str | None = None, zone: TimeZone = UTC) -> None:
         super().__init__(id=id)
+        self.zone = zone  # the times and the moments among the values
         self.entries: list[LogEntry] = []
         self._index: dict[int, int] = {}  # seq -> position in entries
         self.cursor_seq: int | None = None
@@ -86,7 +88,7 @@ class CommandLog(ScrollView, can_focus=True):
         key = (entry.seq, entry.count)
         text = self._texts.get(key)
         if text is None:
-            text = event_text(entry.event)
+            text = event_text(entry.event, self.zone)
             if entry.count > 1:
                 name = str(entry.event.fields.get("name", ""))
                 text = folded_text(text, name, entry.count, entry.event.time - entry.start)
@@ -97,7 +99,7 @@ class CommandLog(ScrollView, can_focus=True):
         """One log line: time, raw bytes when the raw view is on, words; styled by kind."""
         event = entry.event
         line = Text(no_wrap=True, end="")
-        line.append(format_time(entry.start), _TIME)
+        line.append(format_time(entry.start, self.zone), _TIME)
         line.append("  ")
         if self.raw:
             raw = event_raw(event)

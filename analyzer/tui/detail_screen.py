@@ -15,22 +15,24 @@ from textual.screen import ModalScreen
 from textual.widgets import Static
 
 from analyzer.protocol.types import Event
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.event_log import LogEntry
 from analyzer.tui.formatting import event_raw, event_text, format_time
 
 
-def render_detail(event: Event, entry: LogEntry | None = None) -> Table:
-    """Every field of ``event``; with the log ``entry`` of a folded line, how many
-    commands it stands for (the last one's fields are shown)."""
+def render_detail(event: Event, entry: LogEntry | None = None, zone: TimeZone = UTC) -> Table:
+    """Every field of ``event``, its times in ``zone``; with the log ``entry`` of a folded
+    line, how many commands it stands for (the last one's fields are shown)."""
     table = Table.grid(padding=(0, 2))
     table.add_column(style="dim", no_wrap=True)
     table.add_column()
-    table.add_row("event", Text(event_text(event), style="bold"))
+    table.add_row("event", Text(event_text(event, zone), style="bold"))
     if entry is not None and entry.count > 1:
-        span = f"{format_time(entry.start).strip()} to {format_time(event.time).strip()}"
+        start, end = format_time(entry.start, zone), format_time(event.time, zone)
+        span = f"{start.strip()} to {end.strip()}"
         table.add_row("repeated", f"{entry.count} times from {span}; the last one below")
     table.add_row("topic", event.topic)
-    table.add_row("time", f"{format_time(event.time)}  ({event.time:.6f})")
+    table.add_row("time", f"{format_time(event.time, zone)}  ({event.time:.6f})")
     table.add_row("source", event.source or "—")
     for key, value in event.fields.items():
         shown = value if isinstance(value, str) else json.dumps(value, default=str)
@@ -62,15 +64,16 @@ class DetailScreen(ModalScreen[None]):
         Binding("q", "close", "Close", show=False),
     ]
 
-    def __init__(self, event: Event, entry: LogEntry | None = None) -> None:
+    def __init__(self, event: Event, entry: LogEntry | None = None, zone: TimeZone = UTC) -> None:
         super().__init__()
         self.event = event
         self.entry = entry
+        self.zone = zone
 
     def compose(self) -> ComposeResult:
         with VerticalScroll() as scroll:
             scroll.border_title = "Event details"
-            yield Static(render_detail(self.event, self.entry), id="detail")
+            yield Static(render_detail(self.event, self.entry, self.zone), id="detail")
 
     def action_close(self) -> None:
         self.dismiss(None)

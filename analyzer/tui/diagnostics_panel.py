@@ -8,14 +8,16 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Sparkline, Static
 
 from analyzer.protocol.types import DIAGNOSTIC_KINDS
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.fit import grid, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import format_time
 from analyzer.tui.state import MonitorState
 
 
-def counter_lines(state: MonitorState, width: int) -> list[Text]:
-    """Counters by kind since the last clear (as many columns as fit), totals since start."""
+def counter_lines(state: MonitorState, width: int, zone: TimeZone = UTC) -> list[Text]:
+    """Counters by kind since the last clear (as many columns as fit), totals since start
+    (when last cleared: in ``zone``)."""
     c = state.counters
     cells: list[Text] = []
     kinds = (*DIAGNOSTIC_KINDS, "warnings", *sorted(set(c.kinds) - set(DIAGNOSTIC_KINDS)))
@@ -44,7 +46,7 @@ def counter_lines(state: MonitorState, width: int) -> list[Text]:
         Text(f"{t.errors:,} errors", "bold red" if t.errors else ""),
     ]
     if state.cleared_at is not None:
-        when = format_time(state.cleared_at).strip()
+        when = format_time(state.cleared_at, zone).strip()
         totals.append(Text(f"(cleared {state.clear_count}x, last {when})", "dim"))
     lines += pack(totals, width, indent=2)
     if state.dropped_batches:
@@ -64,8 +66,12 @@ class CountersView(FittedPanel):
     CountersView { border: none; padding: 0 1 0 0; }
     """
 
+    def __init__(self, *, id: str | None = None, zone: TimeZone = UTC) -> None:
+        super().__init__(id=id)
+        self.zone = zone
+
     def lines(self, state: MonitorState, width: int) -> list[Text]:
-        return counter_lines(state, width)
+        return counter_lines(state, width, self.zone)
 
 
 class DiagnosticsPanel(Horizontal):
@@ -80,9 +86,9 @@ class DiagnosticsPanel(Horizontal):
     DiagnosticsPanel #errors-spark > .sparkline--min-color { color: $error 30%; }
     """
 
-    def __init__(self, *, id: str | None = None) -> None:
+    def __init__(self, *, id: str | None = None, zone: TimeZone = UTC) -> None:
         super().__init__(id=id)
-        self._counters = CountersView(id="diag-counters")
+        self._counters = CountersView(id="diag-counters", zone=zone)
         self._frames_label = Static(id="frames-label")
         self._frames = Sparkline([0.0], id="frames-spark")
         self._errors_label = Static(id="errors-label")

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from analyzer import render, timefmt
+from analyzer import render
 from analyzer.protocol.types import (
     TO_IDU,
     Event,
 )
+from analyzer.timefmt import UTC, TimeZone
 
 
-def format_time(t: float) -> str:
-    """Wall-clock HH:MM:SS.mmm (UTC with Z, or local time with its offset; the one time
-    rule of ``analyzer.timefmt``) for Unix times, seconds for relative times."""
-    return render.format_time(t).rjust(timefmt.clock_width())
+def format_time(t: float, zone: TimeZone = UTC) -> str:
+    """Wall-clock HH:MM:SS.mmm (UTC with Z, or local time with its offset: ``zone``, the
+    one time rule of ``analyzer.timefmt``) for Unix times, seconds for relative times."""
+    return render.format_time(t, zone).rjust(zone.clock_width)
 
 
 def _age(age: float, units: tuple[str, str, str]) -> str:
@@ -57,10 +58,11 @@ def describe_params(event: Event) -> str:
     return " ".join(render.describe(event).split())
 
 
-def event_text(event: Event) -> str:
-    """One line of plain words for an event (without the time column)."""
+def event_text(event: Event, zone: TimeZone = UTC) -> str:
+    """One line of plain words for an event (without the time column; the moments among
+    its values in ``zone``)."""
     try:
-        text = " ".join(render.describe_event(event).split())
+        text = " ".join(render.describe_event(event, zone).split())
     except Exception:  # a wording bug must not take the monitor down
         text = f"{event.topic} {event.fields}"
     direction = event.fields.get("direction")

@@ -20,6 +20,7 @@ from textual.screen import Screen
 from textual.widgets import DataTable
 
 from analyzer.portable import STOP_SIGNALS
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.bridge import TuiBridge
 from analyzer.tui.command_log import CommandLog
 from analyzer.tui.detail_screen import DetailScreen
@@ -106,8 +107,10 @@ class MonitorApp(App[int]):
         handle_sigterm: bool = False,
         exit_when_done: bool = False,
         live_status: Callable[[], tuple[str, bool]] | None = None,
+        zone: TimeZone = UTC,
     ) -> None:
         super().__init__()
+        self.zone = zone  # every time on the screen (UTC, or local with --local-time)
         self.live_status = live_status  # the live Foxglove server's words, and whether to alert
         self.bridge = bridge
         self.capture = capture
@@ -115,7 +118,7 @@ class MonitorApp(App[int]):
         self.refresh_hz = refresh_hz
         self.state = state or MonitorState()
         self.file_size = file_size
-        self.info = StatusInfo(source=source_label, recording=recording)
+        self.info = StatusInfo(source=source_label, recording=recording, zone=zone)
         self.filter = EventFilter()
         self.search_text = ""
         self.paused = False
@@ -132,7 +135,7 @@ class MonitorApp(App[int]):
     # -- layout --------------------------------------------------------------------------------
 
     def compose(self) -> ComposeResult:
-        yield from compose_monitor()
+        yield from compose_monitor(self.zone)
 
     def on_mount(self) -> None:
         if self._handle_sigterm:
@@ -368,7 +371,7 @@ class MonitorApp(App[int]):
         self.show_detail(message.entry)
 
     def show_detail(self, entry: LogEntry) -> None:
-        self.push_screen(DetailScreen(entry.event, entry))
+        self.push_screen(DetailScreen(entry.event, entry, self.zone))
 
     def on_data_table_row_selected(self, message: DataTable.RowSelected) -> None:
         """Enter on an ID row: filter the log by that ID (a second Enter clears it)."""

@@ -9,6 +9,7 @@ from textual.containers import Horizontal
 from textual.widgets import Footer
 from textual.widgets._footer import FooterKey
 
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.command_log import CommandLog
 from analyzer.tui.diagnostics_panel import DiagnosticsPanel
 from analyzer.tui.gimbal_panel import GimbalPanel
@@ -104,16 +105,17 @@ class MonitorFooter(Footer):
             yield widget
 
 
-def compose_monitor() -> ComposeResult:
-    """Every panel of the monitor; the CSS shows all of them or those of the current page."""
+def compose_monitor(zone: TimeZone = UTC) -> ComposeResult:
+    """Every panel of the monitor, their times in ``zone``; the CSS shows all of them or
+    those of the current page."""
     yield StatusBar(id="status")
     with Horizontal(id="top"):
         yield GimbalPanel(id="gimbal")
         yield UavPanel(id="uav")
-    yield ResponsePanel(id="response")
+    yield ResponsePanel(id="response", zone=zone)
     with Horizontal(id="middle"):
-        yield CommandLog(id="log")
+        yield CommandLog(id="log", zone=zone)
         yield IdTable(id="ids")
-    yield DiagnosticsPanel(id="diagnostics")
+    yield DiagnosticsPanel(id="diagnostics", zone=zone)
     yield PromptBar(id="prompt")
     yield MonitorFooter()

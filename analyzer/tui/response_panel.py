@@ -7,6 +7,7 @@ from rich.text import Text
 from analyzer.analysis.findings import VERDICTS
 from analyzer.protocol.response_fields import verdict_word
 from analyzer.protocol.types import Event
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.fit import fold, join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import format_time, short_age
@@ -46,9 +47,11 @@ def figure_cells(fields: dict[str, object]) -> list[Text]:
     return cells
 
 
-def response_lines(state: MonitorState, width: int, earlier: bool = False) -> list[Text]:
+def response_lines(
+    state: MonitorState, width: int, earlier: bool = False, zone: TimeZone = UTC
+) -> list[Text]:
     """The panel's lines at ``width`` cells: the latest finding, its sentence, the counts;
-    with ``earlier`` the findings before it, newest first, each in full."""
+    with ``earlier`` the findings before it, newest first, each in full (timed in ``zone``)."""
     finding = state.finding
     head = Text(f"{'last':<{LABEL_WIDTH}}", style="dim")
     if finding is None:
@@ -81,16 +84,16 @@ def response_lines(state: MonitorState, width: int, earlier: bool = False) -> li
         if before:
             lines.append(Text("earlier", style="dim"))
         for event in before:
-            lines += earlier_lines(event, width)
+            lines += earlier_lines(event, width, zone)
     return lines
 
 
-def earlier_lines(event: Event, width: int) -> list[Text]:
+def earlier_lines(event: Event, width: int, zone: TimeZone = UTC) -> list[Text]:
     """One earlier finding: its time, verdict and command, then its sentence, in full."""
     f = event.fields
     verdict = str(f.get("verdict", "unknown"))
     head = Text.assemble(
-        (format_time(event.time).strip() + "  ", "dim"),
+        (format_time(event.time, zone).strip() + "  ", "dim"),
         (verdict_word(f).upper(), VERDICT_STYLES.get(verdict, "bold")),
         (f"  {f.get('command', '?')} {f.get('check', '')}", "bold"),
     )
@@ -105,11 +108,15 @@ class ResponsePanel(FittedPanel):
 
     earlier = False
 
+    def __init__(self, *, id: str | None = None, zone: TimeZone = UTC) -> None:
+        super().__init__(id=id)
+        self.zone = zone
+
     def on_mount(self) -> None:
         self.border_title = "Did it obey?"
 
     def lines(self, state: MonitorState, width: int) -> list[Text]:
-        return response_lines(state, width, self.earlier)
+        return response_lines(state, width, self.earlier, self.zone)
 
 
 def render_response(state: MonitorState, width: int = 76) -> Text:

@@ -8,6 +8,7 @@ from rich.text import Text
 
 from analyzer.bus_figures import BusFigures, status_words
 from analyzer.protocol.bus_state import LEVELS
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.tui.fit import join_lines, pack
 from analyzer.tui.fitted_panel import FittedPanel
 from analyzer.tui.formatting import format_size
@@ -29,12 +30,13 @@ class StatusInfo:
     dropped: int = 0  # frames / chunks the source dropped because the capture fell behind
     live: str = ""  # the live Foxglove server: clients, slow-client drops ('' without one)
     live_alert: bool = False  # a client too slow for the stream lost messages
+    zone: TimeZone = UTC  # the times shown (when the link was lost, the worst bus state)
 
 
-def link_text(state: MonitorState) -> tuple[str, str]:
+def link_text(state: MonitorState, zone: TimeZone = UTC) -> tuple[str, str]:
     """(words, style) for the connection state, from the last link diagnostic."""
     link = state.link
-    words = link.describe(state.now)
+    words = link.describe(state.now, zone)
     if state.source_ended:
         return ("ended: " + words if link.failing and words else "source ended"), "bold yellow"
     if link.seen:
@@ -52,9 +54,9 @@ def link_text(state: MonitorState) -> tuple[str, str]:
 BUS_STYLES = ("bold green", "bold yellow", "bold red", "bold white on red")
 
 
-def bus_cell(bus: BusFigures) -> Text | None:
-    """``CAN bus-off │ worst bus-off 10:00:08.000 │ 46 errors: bus-error 40, ...``."""
-    words = status_words(bus)
+def bus_cell(bus: BusFigures, zone: TimeZone = UTC) -> Text | None:
+    """``CAN bus-off │ worst bus-off 10:00:08.000Z │ 46 errors: bus-error 40, ...``."""
+    words = status_words(bus, zone)
     if words is None:
         return None
     cell = Text(f" {words.now} ", BUS_STYLES[LEVELS.get(words.state, 0)])
@@ -69,7 +71,7 @@ def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
     source = Text.assemble(
         (" ● ", "bold green" if not state.source_ended else "yellow"), (info.source or "?", "bold")
     )
-    words, style = link_text(state)
+    words, style = link_text(state, info.zone)
     cells = [source, Text(f" {words} ", style)]
     if info.recording:
         rec = Text("REC ", "bold red")
@@ -85,7 +87,7 @@ def status_cells(state: MonitorState, info: StatusInfo) -> list[Text]:
         load = state.bus_load * 100
         rates.append(f"{load:.1f}%", "bold red" if load >= 80 else "bold")
     cells.append(rates)
-    bus = bus_cell(state.bus)
+    bus = bus_cell(state.bus, info.zone)
     if bus is not None:
         cells.append(bus)
     if info.dropped:

@@ -173,8 +173,9 @@ def thumbnail_times(
     return [message.time for message in messages]
 
 
-def video_lines(path: str | os.PathLike[str]) -> list[str]:
-    """The ``info`` lines of the camera streams (none when the recording has no video)."""
+def video_lines(path: str | os.PathLike[str], zone: timefmt.TimeZone = timefmt.UTC) -> list[str]:
+    """The ``info`` lines of the camera streams (none when the recording has no video),
+    the gaps' times in ``zone``."""
     summaries = [s for s in video_summaries(path) if s.frames or s.failed]
     if not summaries:
         return []
@@ -194,7 +195,7 @@ def video_lines(path: str | os.PathLike[str]) -> list[str]:
         )
         for start, end in s.gaps[:5]:
             lines.append(
-                f"  {'':<{width}}  gap {end - start:.2f} s from {timefmt.format_clock(start)}"
+                f"  {'':<{width}}  gap {end - start:.2f} s from {zone.format_clock(start)}"
             )
     missing = not_installed_note(VIDEO, "picture sizes not read")
     if missing is not None:

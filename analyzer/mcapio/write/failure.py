@@ -6,9 +6,9 @@ import contextlib
 import os
 from collections.abc import Callable
 
-from analyzer import timefmt
 from analyzer.mcapio.channels import STATS_METADATA_NAME
 from analyzer.mcapio.write.chunked_writer import ChunkedWriter
+from analyzer.timefmt import UTC, TimeZone, is_absolute
 
 
 def keep_complete_chunks(
@@ -45,10 +45,11 @@ def keep_complete_chunks(
             os.fsync(fd)
 
 
-def format_clock(seconds: float | None) -> str:
-    """HH:MM:SS.mmmZ (UTC) of a Unix time; seconds for small (relative) times."""
+def format_clock(seconds: float | None, zone: TimeZone = UTC) -> str:
+    """HH:MM:SS.mmmZ (UTC, or local time in ``zone`` local) of a Unix time; seconds for
+    small (relative) times."""
     if seconds is None:
         return "-"
-    if not timefmt.is_absolute(seconds):  # a relative time, not a date
+    if not is_absolute(seconds):  # a relative time, not a date
         return f"{seconds:.3f} s"
-    return timefmt.format_clock(seconds)
+    return zone.format_clock(seconds)

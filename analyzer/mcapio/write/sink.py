@@ -22,6 +22,7 @@ from analyzer.output_file import OutputFile, describe_os_error, is_disk_full
 from analyzer.pipeline import Batch, RawItem
 from analyzer.protocol.types import TOPIC_ANALYSIS_RESPONSE, Event
 from analyzer.tally import Tally
+from analyzer.timefmt import UTC, TimeZone
 from analyzer.version import PROTOCOL_DOCUMENT, __version__
 
 __all__ = [
@@ -66,7 +67,8 @@ class McapSink:
     that much of the newest log time in the open chunk, so a late one still takes its own
     log time instead of the end of a chunk already written. A killed recorder then loses
     that much more. ``close`` writes them all; after a write error they are kept if they
-    fit in the space the failed chunk freed (``kept_messages`` counts what the file holds).
+    fit in the space the failed chunk freed (``kept_messages`` counts what the file holds);
+    ``error`` says until when in ``zone`` (the time zone the user reads).
     """
 
     def __init__(
@@ -86,9 +88,11 @@ class McapSink:
         atomic: bool = False,
         tee: MessageTee | None = None,
         hold_back: float = 0.0,
+        zone: TimeZone = UTC,
     ) -> None:
 
         self.path = str(path)
+        self.zone = zone  # the time in the message of a write error (a message for people)
         self.error: str | None = None  # the full message after a write error
         self.error_reason: str | None = None  # just the reason ("No space left on device")
         self.kept_messages = 0  # after a write error: messages the file still holds
@@ -372,7 +376,7 @@ class McapSink:
                 self._output.discard()
                 kept = "the unfinished output was removed"
             else:
-                until = format_clock(self.kept_until)
+                until = format_clock(self.kept_until, self.zone)
                 kept = f"{self.kept_messages} messages up to {until} kept in {self.path}"
         else:
             self._output.discard()
