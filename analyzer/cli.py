@@ -123,6 +123,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("--local-time", action="store_true", help=timefmt.FLAG_HELP)
+    # UTC unless main() reads --local-time: a namespace parsed here alone has a zone too
+    parser.set_defaults(time_zone=timefmt.UTC)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     parser.commands = {}
     for name in [only] if only in COMMANDS else COMMANDS:

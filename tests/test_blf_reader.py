@@ -251,7 +251,9 @@ def test_an_object_of_size_0_is_said_and_reading_goes_on(tmp_path: Path) -> None
     [
         ({"version": 7}, "header version 7, which Vector does not document"),
         ({"size": 20}, "a size of 20 bytes, less than its own header (32)"),
-        ({"size": 2_000_000_000}, "more than any object of a CAN log"),
+        ({"size": 2_000_000_000}, "a size of 2,000,000,000 bytes, more than a CAN message"),
+        # read as it says, it would swallow the next five objects
+        ({"size": 304}, "a size of 304 bytes, more than a CAN message can hold"),
     ],
 )
 def test_a_damaged_object_header_is_said(tmp_path: Path, change: dict[str, int], said: str) -> None:
@@ -262,6 +264,37 @@ def test_a_damaged_object_header_is_said(tmp_path: Path, change: dict[str, int],
     items = our_items(path)
     assert len([i for i in items if isinstance(i, CanFrame)]) == 5
     assert any(said in detail for detail in diagnostics(items)), diagnostics(items)
+
+
+@pytest.mark.parametrize("containers", ["none", "stored"])
+def test_a_file_cut_at_an_objects_end_is_said_from_its_header(
+    tmp_path: Path, containers: str
+) -> None:
+    """A copy that stopped between two objects reads without damage, but the header,
+    written when the file was closed, still gives the whole file's size."""
+    objects = frames_of(1)
+    whole = blf.blf_file(objects, containers=containers, container_size=3 * len(objects[0]))
+    kept = whole[: len(whole) - len(blf.blf_file(objects[3:], containers=containers)) + 144]
+    path = tmp_path / "cut.blf"
+    path.write_bytes(kept)
+    items = our_items(path)
+    frames = [i for i in items if isinstance(i, CanFrame)]
+    assert len(frames) == 3
+    assert diagnostics(items) == [
+        f"the BLF file is cut off at byte {len(kept):,} of the {len(whole):,} its header "
+        "gives (as a copy that did not finish leaves it): the 3 frames before the cut were read"
+    ]
+
+
+def test_an_object_longer_than_any_in_a_can_log_is_said(tmp_path: Path) -> None:
+    """Of any kind: the reader keeps no more than that while it waits for an object."""
+    objects = frames_of(1)
+    objects[2] = blf.blf_object(65, blf.app_text("CAN1;bus"), size=2_000_000_000)
+    path = tmp_path / "huge.blf"
+    path.write_bytes(blf.blf_file(objects, containers="stored"))
+    items = our_items(path)
+    assert len([i for i in items if isinstance(i, CanFrame)]) == 5
+    assert any("more than any object of a CAN log" in d for d in diagnostics(items))
 
 
 def test_bytes_that_are_no_object_are_said(tmp_path: Path) -> None:

@@ -42,6 +42,7 @@ _CONTAINER = BASE_HEADER.size + CONTAINER_HEADER.size  # a container's headers
 class FileHeader:
     size: int  # the header's own size: the first object starts there
     start_time: float  # the measurement's start, seconds since 1970 (0.0: none)
+    file_size: int = 0  # the whole file's size as its writer left it (0: not written)
 
 
 def read_header(handle: IO[bytes], path: str, file_size: int | None) -> FileHeader:
@@ -58,7 +59,7 @@ def read_header(handle: IO[bytes], path: str, file_size: int | None) -> FileHead
             "(a damaged or not a BLF file)"
         )
     _skip(handle, size - FILE_HEADER.size)
-    return FileHeader(size, start_time(fields[14:22]))
+    return FileHeader(size, start_time(fields[14:22]), fields[10])
 
 
 class Containers:

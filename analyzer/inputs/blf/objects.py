@@ -65,6 +65,29 @@ def header_problem(header_size: int, version: int, size: int) -> str | None:
     return None
 
 
+# The most an object of each CAN kind holds after its header: its documented fields, with
+# 8 bytes to spare for the fields a later version appends (CAN_MESSAGE2 is CAN_MESSAGE
+# and 8 more bytes). A CAN FD message of 64 bytes may carry extended data besides.
+_SPARE = 8
+_MOST_ROOM = {
+    **dict.fromkeys(CAN_MESSAGES, CAN_MESSAGE_DATA.size + _SPARE),
+    CAN_FD_MESSAGE: CAN_FD_DATA.size + _SPARE,
+    CAN_FD_MESSAGE_64: CAN_FD_64_DATA.size + 64 + 64 + _SPARE,
+    CAN_ERROR_EXT: CAN_ERROR_EXT_DATA.size + _SPARE,
+    CAN_ERROR: CAN_ERROR_DATA.size + _SPARE,
+    CAN_FD_ERROR_64: CAN_FD_64_DATA.size + 64 + 64 + _SPARE,
+}
+
+
+def size_problem(kind: int, header_size: int, size: int) -> str | None:
+    """An object of a CAN kind longer than that kind can be: its size field is damaged
+    (read as it says, it would swallow the objects after it). None: nothing wrong."""
+    most = _MOST_ROOM.get(kind)
+    if most is None or size - header_size <= most:
+        return None
+    return f"a size of {size:,} bytes, more than a {kind_of(kind)[:-1]} can hold"
+
+
 def read_object(data: bytes, at: int, start_time: float) -> CanFrame | Skipped:
     """The object at ``data[at:]`` (its size says where it ends; all of it is there)."""
     _, header_size, version, size, kind = BASE_HEADER.unpack_from(data, at)

@@ -54,6 +54,9 @@ class BlfReader(InputReader):
         except UsageError:
             self.close()
             raise
+        # A file shorter than its header says was cut off, even at an object's end (the
+        # header is written when the writer closes the file; 0 when it never did).
+        self._claimed_size = header.file_size if known_size is not None else 0
         self._containers = Containers(handle, header.size)
         self._stream = ObjectStream(header.start_time)
         self.frames = 0
@@ -130,6 +133,14 @@ class BlfReader(InputReader):
             out.append(self._cut(f" at byte {cut:,}"))
         elif self._stream.cut:
             out.append(self._cut("" if cut is None else f" at byte {cut:,}"))
+        elif self.size_bytes is not None and self._claimed_size > self.size_bytes:
+            out.append(
+                self._damage(
+                    f"the BLF file is cut off at byte {self.size_bytes:,} of the "
+                    f"{self._claimed_size:,} its header gives (as a copy that did not finish "
+                    f"leaves it): the {self.frames:,} frames before the cut were read"
+                )
+            )
         if not self.frames and self.size_bytes:
             out.append(
                 self._damage(

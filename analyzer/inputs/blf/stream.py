@@ -10,7 +10,8 @@ object one at a time (``objects``). It never stands still and never grows withou
   would read the same object for ever, a header version Vector does not document) is
   said and skipped up to the next ``LOBJ``;
 - an object claiming more than ``MAX_OBJECT`` bytes is damage too: the stream keeps at
-  most that much while it waits for the rest of an object;
+  most that much while it waits for the rest of an object; so is a CAN object longer
+  than its kind can be (read as it says, it would swallow the objects after it);
 - at the end, an object the data ends inside is said (the file was cut off).
 """
 
@@ -18,7 +19,7 @@ from __future__ import annotations
 
 from analyzer.inputs.blf.columns import Chain, chain, message_columns
 from analyzer.inputs.blf.layout import BASE_HEADER, OBJECT_SIGNATURE
-from analyzer.inputs.blf.objects import Skipped, header_problem, read_object
+from analyzer.inputs.blf.objects import Skipped, header_problem, read_object, size_problem
 from analyzer.protocol.frame_columns import FrameColumns
 from analyzer.protocol.types import CanFrame
 
@@ -85,7 +86,9 @@ class ObjectStream:
             self._columns(data, found, out)
             return found.end
         _, header_size, version, length, kind = BASE_HEADER.unpack_from(data, at)
-        problem = header_problem(header_size, version, length)
+        problem = header_problem(header_size, version, length) or size_problem(
+            kind, header_size, length
+        )
         if problem is None and length > MAX_OBJECT:
             problem = f"a size of {length:,} bytes, more than any object of a CAN log"
         if problem is not None:  # skipped with what follows it up to the next object
