@@ -10,6 +10,12 @@ from analyzer.errors import UsageError
 from analyzer.pipeline import Sink, Stage
 
 
+def check_port(port: int) -> None:
+    """The IDU's TCP port of a pcap input (``--port``): UsageError unless 1..65535."""
+    if not 0 < port < 65536:
+        raise UsageError(f"--port must be 1..65535, not {port}")
+
+
 def read_through(
     path: str,
     sinks: Sequence[Sink],
@@ -24,20 +30,14 @@ def read_through(
     a progress line on a terminal (not with ``quiet``); returns the reader (its
     ``format_name``, ``notes``). A sink that failed raises its error."""
     from analyzer.api.reading import open_decoding
-    from analyzer.pipeline import run_items
+    from analyzer.pipeline import run_reader
     from analyzer.progress import Progress
 
-    if not 0 < port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {port}")
+    check_port(port)
     decoding = open_decoding(path, file_format, port=port)
     reader, pipeline = decoding.reader, decoding.pipeline
     pipeline.stages.extend(stages)
     pipeline.sinks.extend(sinks)
     progress = Progress.maybe(reader, sys.stderr, quiet=quiet, label=label)
-    try:
-        run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
-    finally:
-        reader.close()
-    for failure in pipeline.failures:
-        raise failure.error
+    run_reader(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
     return reader

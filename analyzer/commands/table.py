@@ -143,6 +143,7 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analyzer.commands.input_pass import check_port
     from analyzer.extras import FLEET, require
 
     require(FLEET, "`table`")
@@ -151,8 +152,7 @@ def run(args: argparse.Namespace) -> int:
     tags = parse_tags(args.tag)
     if args.workers < 1:
         raise UsageError(f"--workers must be 1 or more, not {args.workers}")
-    if not 0 < args.port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    check_port(args.port)
     if args.client_writes and not args.dask:
         raise UsageError("--client-writes goes with --dask")
     started = time.monotonic()
