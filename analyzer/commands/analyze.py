@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING, Any
 
-from analyzer.input_options import add_input_arguments
+from analyzer.input_options import add_input_arguments, check_port
 from analyzer.terminal_text import printable
 
 if TYPE_CHECKING:
@@ -126,7 +126,6 @@ def open_decoding_of(args: argparse.Namespace) -> Decoding:
     """The input of ``analyze`` and ``report``: read and decoded as ``decode`` and the
     Python API's ``read`` and ``analyze`` read and decode it."""
     from analyzer.api.reading import open_decoding
-    from analyzer.commands.input_pass import check_port
 
     check_port(args.port)
     return open_decoding(args.file, args.format, port=args.port)

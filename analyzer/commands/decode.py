@@ -126,7 +126,7 @@ class LinePrinter:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.api.reading import open_decoding
-    from analyzer.commands.input_pass import check_port
+    from analyzer.input_options import check_port
     from analyzer.pipeline import run_reader
     from analyzer.summary import Summary
 

@@ -6,14 +6,8 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from analyzer.errors import UsageError
+from analyzer.input_options import check_port
 from analyzer.pipeline import Sink, Stage
-
-
-def check_port(port: int) -> None:
-    """The IDU's TCP port of a pcap input (``--port``): UsageError unless 1..65535."""
-    if not 0 < port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {port}")
 
 
 def read_through(

@@ -143,8 +143,8 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analyzer.commands.input_pass import check_port
     from analyzer.extras import FLEET, require
+    from analyzer.input_options import check_port
 
     require(FLEET, "`table`")
     from analyzer.fleet.runner import connect, walk_inputs
