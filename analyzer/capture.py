@@ -18,6 +18,7 @@ from analyzer.pipeline import Pipeline, PipelineDecoder, Sink, Stage
 from analyzer.portable import STOP_SIGNALS
 from analyzer.protocol.types import Event
 from analyzer.sources.base import link_event
+from analyzer.stdio import signals_to
 from analyzer.tally import Tally
 
 DEFAULT_BITRATE = 1_000_000
@@ -331,17 +332,10 @@ def run_until_interrupted(capture: Capture) -> int:
         if signum == signal.SIGINT and len(interrupted) > 1:
             raise KeyboardInterrupt
 
-    previous: dict[int, Any] = {}
-    if threading.current_thread() is threading.main_thread():
-        for signum in (int(signal.SIGINT), *STOP_SIGNALS):
-            previous[signum] = signal.signal(signum, on_signal)
-    try:
+    with signals_to((int(signal.SIGINT), *STOP_SIGNALS), on_signal):
         if capture._thread is None:
             capture.start()
         capture.wait()
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
     if interrupted and capture.error is None:
         capture.stop_reason = signal.Signals(interrupted[0]).name
     return 1 if capture.error is not None else 0

@@ -1,7 +1,7 @@
 """The one path of every command: raw items -> decoder -> stages -> counters -> sinks.
 
 ``decode``, ``convert``, ``record``, ``monitor`` and ``demo`` all run a :class:`Pipeline`:
-file commands drive it with :func:`run_items`, live ones through the capture engine
+file commands drive it with :func:`run_reader`, live ones through the capture engine
 (``analyzer.capture``), which feeds it from a reader thread. The pipeline itself never
 reads a file, a socket or a clock.
 
@@ -386,6 +386,43 @@ def run_items(
             progress.clear()
 
 
+class ItemReader(Protocol):
+    """An input that ``run_reader`` reads (``analyzer.inputs.base.InputReader``): items,
+    and a ``close`` that frees the file."""
+
+    def __iter__(self) -> Iterator[Any]: ...
+
+    def close(self) -> None: ...
+
+
+def run_reader(
+    reader: ItemReader,
+    pipeline: Pipeline,
+    *,
+    batch_items: int = BATCH_ITEMS,
+    progress: Progress | None = None,
+    interruptible: bool = False,
+) -> bool:
+    """The run of every file command: ``reader`` through ``pipeline`` (``run_items``),
+    the reader closed at the end whatever happens, then the error of a sink that failed
+    raised. ``interruptible`` (live input, such as standard input): Ctrl-C ends the input
+    as its end would (the pipeline finishes) and True is returned; else it propagates."""
+    interrupted = False
+    try:
+        try:
+            run_items(reader, pipeline, batch_items=batch_items, progress=progress)
+        except KeyboardInterrupt:
+            if not interruptible:
+                raise
+            interrupted = True
+            pipeline.finish()
+    finally:
+        reader.close()
+    for failure in pipeline.failures:
+        raise failure.error
+    return interrupted
+
+
 def delivered_batches(
     items: Iterable[Any], pipeline: Pipeline, *, batch_items: int = BATCH_ITEMS
 ) -> Iterator[Batch]:
@@ -398,8 +435,8 @@ def delivered_batches(
     (``analyzer.capture_clock``) on the way. Stops early (then finishes) when a sink fails. An
     exception of the reader (Ctrl-C, unreadable input) propagates without ``finish``:
     the caller decides whether what was read counts (``decode`` of live input finishes,
-    ``convert`` throws its output away). ``run_items`` (the commands) and the Python
-    API's ``read`` and ``analyze`` are this one loop.
+    ``convert`` throws its output away). ``run_items`` (the commands, through
+    ``run_reader``) and the Python API's ``read`` and ``analyze`` are this one loop.
     """
     if isinstance(items, BatchedItems):
         chunks: Iterator[list[Any]] = items.batches(batch_items)

@@ -11,7 +11,7 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from types import FrameType
 from typing import Any, TextIO, cast
 
@@ -99,24 +99,35 @@ def terminated(signum: int) -> Terminated:
     return exc
 
 
+SignalHandler = Callable[[int, FrameType | None], None]
+
+
+@contextlib.contextmanager
+def signals_to(signals: Iterable[int], handler: SignalHandler) -> Iterator[None]:
+    """Inside the block ``handler`` takes ``signals``; the handlers before it are back
+    after. Only the main thread can set them: in any other the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signum: signal.signal(signum, handler) for signum in signals}
+    try:
+        yield
+    finally:
+        for signum, before in previous.items():
+            signal.signal(signum, before)
+
+
 @contextlib.contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
     """Inside the block SIGTERM (and Windows' SIGBREAK: Ctrl-Break, the console closed)
     raises ``Terminated`` (a KeyboardInterrupt) in the main thread, so every command
     cleans up after it as after Ctrl-C."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
 
     def on_stop(signum: int, frame: FrameType | None) -> None:
         raise terminated(signum)
 
-    previous = {signum: signal.signal(signum, on_stop) for signum in STOP_SIGNALS}
-    try:
+    with signals_to(STOP_SIGNALS, on_stop):
         yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
 
 
 @contextlib.contextmanager
@@ -124,21 +135,13 @@ def interrupts_deferred() -> Iterator[None]:
     """Ctrl-C and the stop signals inside the block take effect when it ends, so a short
     step such as creating an output file and keeping a handle on it is never cut in the
     middle."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
     pending: list[int] = []
 
     def hold(signum: int, frame: FrameType | None) -> None:
         pending.append(signum)
 
-    signals = (int(signal.SIGINT), *STOP_SIGNALS)
-    previous = {signum: signal.signal(signum, hold) for signum in signals}
-    try:
+    with signals_to((int(signal.SIGINT), *STOP_SIGNALS), hold):
         yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
     if pending:
         raise terminated(pending[0]) if pending[0] in STOP_SIGNALS else KeyboardInterrupt
 

@@ -13,20 +13,20 @@ simulator's terminal during the check.
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 import subprocess
-import sys
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
 
 from tests.readme_blocks import Block, read_blocks
 from tests.readme_examples import compare
+from tests.tool_runs import ToolRun, tool_process
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs/tutorials/bench-check.md"
@@ -110,10 +110,10 @@ def shown_runs() -> list[Shown]:
 
 
 def argv(command: str, port: int) -> list[str]:
-    """A command line of the page as this Python runs it, on ``port`` instead."""
+    """The arguments of a command line of the page, on ``port`` instead."""
     words = shlex.split(LOOPBACK.sub(f"tcp:127.0.0.1:{port}", command))
     assert words[0] == "gimbal-analyzer"
-    return [sys.executable, "-m", "analyzer", *words[1:]]
+    return words[1:]
 
 
 @dataclass
@@ -128,15 +128,7 @@ class Simulator:
 
     @classmethod
     def start(cls, command: str) -> Simulator:
-        env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1"}
-        process = subprocess.Popen(
-            argv(command, 0),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            env=env,
-            encoding="utf-8",
-        )
+        process = tool_process(argv(command, 0), stderr=subprocess.STDOUT, PYTHONUNBUFFERED="1")
         simulator = cls(command, process)
         assert process.stdout is not None
         first = process.stdout.readline()
@@ -164,23 +156,16 @@ class Simulator:
 
 
 @dataclass
-class Run:
+class Run(ToolRun):
     """A check of the page against its simulator, in ``folder``."""
 
-    shown: Shown
-    simulator: Simulator
-    folder: Path
-    process: subprocess.Popen[str]
-    code: int | None = None
-    out: str = ""
-    err: str = ""
+    shown: Shown = field(kw_only=True)
+    simulator: Simulator = field(kw_only=True)
+    folder: Path = field(kw_only=True)
+    timeout_s: ClassVar[float] = 240.0
 
-    def finish(self) -> Run:
-        if self.code is None:
-            self.out, self.err = self.process.communicate(timeout=240)
-            self.code = self.process.returncode
-            self.simulator.stop()
-        return self
+    def stop_gimbal(self) -> None:
+        self.simulator.stop()
 
 
 @pytest.fixture(scope="module")
@@ -191,23 +176,12 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[list[Run]]:
         for number, shown in enumerate(checks):
             folder = tmp_path_factory.mktemp(f"bench-check-{number}")
             simulator = Simulator.start(shown.simulator)
-            process = subprocess.Popen(
-                argv(shown.command, simulator.port),
-                cwd=folder,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.PIPE,
-                text=True,
-                env={**os.environ, "PYTHONPATH": str(ROOT)},
-                encoding="utf-8",
-            )
-            started.append(Run(shown, simulator, folder, process))
+            process = tool_process(argv(shown.command, simulator.port), folder)
+            started.append(Run(process, shown=shown, simulator=simulator, folder=folder))
         yield started
     finally:
         for run in started:
-            if run.code is None:
-                run.process.kill()
-                run.process.communicate()
-            run.simulator.stop()
+            run.abandon()
 
 
 @pytest.mark.slow

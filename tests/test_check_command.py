@@ -16,8 +16,6 @@ import json
 import os
 import select
 import signal
-import subprocess
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -40,8 +38,8 @@ from analyzer.sim.runner import SimulatorRunner
 from analyzer.sim.transports import SimulatedLink, TcpServerLink, open_gimbal_link, parse_link
 from tests.platforms import posix_signals
 from tests.test_report_command import load
+from tests.tool_runs import ToolRun, tool_process
 
-ROOT = Path(__file__).resolve().parents[1]
 # Short waits: the slowest healthy move (150 deg at 60 deg/s) takes 2.5 s.
 FAST = ("--time-allowed", "4", "--listen", "2", "--speed-for", "1.5")
 SLEW_DPS = 60.0
@@ -126,41 +124,26 @@ class SerialPair:
 
 
 @dataclass
-class Run:
-    """A check run as a separate process."""
+class Run(ToolRun):
+    """A check run as a separate process (its steps: what it printed with --json)."""
 
-    gimbal: Gimbal
-    output: Path
-    process: subprocess.Popen[str]
-    steps: list[dict[str, Any]] = field(default_factory=list)
-    code: int | None = None
-    stderr: str = ""
+    gimbal: Gimbal = field(kw_only=True)
+    output: Path = field(kw_only=True)
 
-    def finish(self) -> Run:
-        if self.code is None:
-            out, self.stderr = self.process.communicate(timeout=180)
-            self.code = self.process.returncode
-            self.steps = [json.loads(line) for line in out.splitlines() if line.strip()]
-            self.gimbal.close()
-        return self
+    def stop_gimbal(self) -> None:
+        self.gimbal.close()
+
+    @property
+    def steps(self) -> list[dict[str, Any]]:
+        return [json.loads(line) for line in self.out.splitlines() if line.strip()]
 
     def by_name(self) -> dict[str, dict[str, Any]]:
         return {step["step"]: step for step in self.steps}
 
 
 def start_check(gimbal: Gimbal, output: Path, *options: str) -> Run:
-    command = [sys.executable, "-m", "analyzer", "check", "--to", gimbal.to, "--json"]
-    command += ["-o", str(output), *FAST, *options]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    process = subprocess.Popen(
-        command,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-        encoding="utf-8",
-    )
-    return Run(gimbal, output, process)
+    args = ["check", "--to", gimbal.to, "--json", "-o", str(output), *FAST, *options]
+    return Run(tool_process(args), gimbal=gimbal, output=output)
 
 
 # name -> (simulate flags, check options): started together, judged by the tests below.
@@ -197,10 +180,7 @@ def tcp_runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Run
         yield runs
     finally:
         for run in runs.values():
-            if run.code is None:
-                run.process.kill()
-                run.process.communicate()
-                run.gimbal.close()
+            run.abandon()
 
 
 def check_in_process(gimbal: Gimbal, *options: str) -> tuple[int, list[dict[str, Any]], str]:
@@ -350,7 +330,7 @@ def test_healthy_gimbal_on_the_virtual_can_bus_passes_every_step(
 @pytest.mark.slow
 def test_healthy_gimbal_over_tcp_passes_every_step(tcp_runs: dict[str, Run]) -> None:
     run = tcp_runs["healthy"].finish()
-    assert run.code == 0, run.stderr
+    assert run.code == 0, run.err
     assert_healthy(run.steps)
     # What the gimbal received: the steps' commands, ending with speeds 0 and forward.
     commands = [e.fields for e in run.gimbal.received if e.topic == "/gimbal/command"]
@@ -462,10 +442,8 @@ def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
         run.process.send_signal(signal.SIGINT)
         run.finish()
     finally:
-        if run.code is None:
-            run.process.kill()
-            gimbal.close()
-    assert run.code == 130, run.stderr
+        run.abandon()
+    assert run.code == 130, run.err
     commands = [e.fields for e in gimbal.received if e.topic == "/gimbal/command"]
     centred_last(commands)
     centred_last(messages(run.output, "/gimbal/command"))  # and the recording is finished
@@ -498,8 +476,8 @@ def test_a_link_lost_midway_ends_the_check_with_one_line(tcp_runs: dict[str, Run
     run = tcp_runs["link_lost"].finish()
     assert run.code == 1
     assert run.steps[0]["step"] == "pitch_angle" and run.steps[0]["verdict"] == "pass"
-    (error,) = [line for line in run.stderr.splitlines() if "error:" in line]
+    (error,) = [line for line in run.err.splitlines() if "error:" in line]
     assert "closed the connection" in error and "keeps everything up to then" in error
-    assert "Traceback" not in run.stderr
+    assert "Traceback" not in run.err
     # The recording is finished and readable, with what was sent up to then.
     assert messages(run.output, "/gimbal/command")

@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analyzer.inputs.base import by_frames
-from analyzer.inputs.candump.reader import CandumpParser, CandumpReader
+from analyzer.inputs.candump.reader import CandumpReader
 from analyzer.pipeline import Batch, Pipeline, run_items
 from analyzer.protocol.codec import encode_command
 from analyzer.protocol.decoder import ProtocolDecoder
@@ -38,8 +38,8 @@ from analyzer.protocol.ids import (
 from analyzer.protocol.types import CanFrame, Event
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_text, encode_uav_attitude
 from analyzer.tally import Tally
+from tests.candump_texts import CUTS, TEXTS, WANTED_SETS, parse, summary
 from tests.fault_logs import CANDUMP_NAME, write_fault_logs
-from tests.test_inputs_candump_scan import lines
 
 SAMPLES = Path(__file__).resolve().parents[1] / "samples"
 
@@ -53,37 +53,18 @@ def expanded(items: list[Any]) -> list[Any]:
 
 
 def parsed(text: bytes, cuts: list[int], wanted: frozenset[int] | None, columns: bool) -> Any:
-    parser = CandumpParser("test.log", wanted_ids=wanted, columnar=columns)
-    parser.dense = columns  # every block as arrays, whatever the last one held
-    ends = sorted({i + 1 for i, c in enumerate(text) if c == 0x0A})
-    chosen = sorted({ends[c % len(ends)] for c in cuts}) if ends else []
-    items: list[Any] = []
-    start = 0
-    for end in [*chosen, len(text)]:
-        if end > start:
-            items += parser.parse_block(text[start:end])
-        start = end
-        parser.dense = columns
-    items += parser.finish()
+    items, parser = parse(text, cuts, dense=columns, wanted_ids=wanted, columnar=columns)
     if columns:
         assert all(len(i) for i in items if isinstance(i, FrameColumns))
-    shown = [
-        (i.topic, i.time, dict(i.fields)) if isinstance(i, Event) else i for i in expanded(items)
-    ]
-    return shown, parser.stats, parser.first_time, parser.last_time, parser.notes
+    return summary(expanded(items), parser)
 
 
 @pytest.mark.slow
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    st.lists(lines(), max_size=60),
-    st.lists(st.integers(0, 10_000), max_size=4),
-    st.sampled_from([PROTOCOL_IDS, None, frozenset({0x123, 0x18F00000})]),
-)
+@given(TEXTS, CUTS, WANTED_SETS)
 def test_the_reader_gives_the_same_frames_as_columns(
-    text_lines: list[bytes], cuts: list[int], wanted: frozenset[int] | None
+    text: bytes, cuts: list[int], wanted: frozenset[int] | None
 ) -> None:
-    text = b"".join(line + b"\n" for line in text_lines)
     assert parsed(text, cuts, wanted, columns=True) == parsed(text, cuts, wanted, columns=False)
 
 

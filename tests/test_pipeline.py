@@ -10,7 +10,7 @@ import pytest
 
 from analyzer.mcapio.read.reader import read_events, read_items
 from analyzer.mcapio.write.sink import McapSink
-from analyzer.pipeline import Batch, Pipeline, run_items
+from analyzer.pipeline import Batch, Pipeline, run_items, run_reader
 from analyzer.protocol.types import BAD_LINE, TOPIC_COMMAND, Event, diagnostic
 from tests.test_mcap_support import decode_all, event_dicts, traffic
 
@@ -125,6 +125,41 @@ def test_an_interrupt_leaves_finishing_to_the_caller_and_finish_runs_once() -> N
     assert pipeline.tally.frames + pipeline.tally.chunks == 5
     pipeline.finish()
     assert pipeline.tally.frames + pipeline.tally.chunks == 5
+
+
+class Reader:
+    """A file reader: its items, then ``KeyboardInterrupt`` if ``interrupt``; notes its close."""
+
+    def __init__(self, items: list[Any], *, interrupt: bool = False) -> None:
+        self.items, self.interrupt, self.closed = items, interrupt, False
+
+    def __iter__(self) -> Iterator[Any]:
+        yield from self.items
+        if self.interrupt:
+            raise KeyboardInterrupt
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def test_a_file_run_closes_its_reader_and_raises_what_a_sink_raised() -> None:
+    reader, good = Reader(traffic(5.0)), Collect()
+    with pytest.raises(OSError, match="No space left"):
+        run_reader(reader, Pipeline([Broken(), good]), batch_items=10)
+    assert reader.closed and good.closed
+
+
+def test_ctrl_c_ends_a_live_input_as_its_end_would_and_a_file_run_propagates_it() -> None:
+    items = traffic(2.0)[:5]
+    live, sink = Reader(items, interrupt=True), Collect()
+    pipeline = Pipeline([sink])
+    assert run_reader(live, pipeline, batch_items=1, interruptible=True) is True
+    assert live.closed and sink.closed and pipeline.tally.frames + pipeline.tally.chunks == 5
+    file = Reader(items, interrupt=True)
+    with pytest.raises(KeyboardInterrupt):
+        run_reader(file, Pipeline([Collect()]))
+    assert file.closed
+    assert run_reader(Reader(items), Pipeline()) is False
 
 
 def test_the_response_analyzer_is_a_stage_and_analyze_runs_it_in_the_pipeline(

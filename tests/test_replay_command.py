@@ -17,12 +17,11 @@ import re
 import shutil
 import signal
 import statistics
-import subprocess
-import sys
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
 
@@ -36,6 +35,7 @@ from tests.readme_examples import compare as compare_shown
 from tests.replay_bench import read_span
 from tests.test_check_command import Gimbal
 from tests.test_replay_offline import cli
+from tests.tool_runs import ToolRun, tool_process
 
 ROOT = Path(__file__).resolve().parents[1]
 HOWTO = ROOT / "docs" / "howto" / "replay.md"
@@ -43,22 +43,15 @@ FLIGHT = "samples/pilot-candump.log"
 
 
 @dataclass
-class Replay:
+class Replay(ToolRun):
     """A replay as a process of its own, in ``folder`` (which holds a copy of samples/)."""
 
-    gimbal: Gimbal
-    folder: Path
-    process: subprocess.Popen[str]
-    code: int | None = None
-    out: str = ""
-    err: str = ""
+    gimbal: Gimbal = field(kw_only=True)
+    folder: Path = field(kw_only=True)
+    timeout_s: ClassVar[float] = 120.0
 
-    def finish(self) -> Replay:
-        if self.code is None:
-            self.out, self.err = self.process.communicate(timeout=120)
-            self.code = self.process.returncode
-            self.gimbal.close()
-        return self
+    def stop_gimbal(self) -> None:
+        self.gimbal.close()
 
     def commands(self) -> list[str]:
         """What the gimbal received: the raw bytes of each command, in order."""
@@ -66,18 +59,8 @@ class Replay:
 
 
 def start_replay(gimbal: Gimbal, folder: Path, *options: str) -> Replay:
-    command = [sys.executable, "-m", "analyzer", "replay", FLIGHT, "--to", gimbal.to, *options]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    process = subprocess.Popen(
-        command,
-        cwd=folder,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-        encoding="utf-8",
-    )
-    return Replay(gimbal, folder, process)
+    process = tool_process(["replay", FLIGHT, "--to", gimbal.to, *options], folder)
+    return Replay(process, gimbal=gimbal, folder=folder)
 
 
 @pytest.fixture(scope="module")
@@ -102,10 +85,7 @@ def runs(folder: Path) -> Iterator[dict[str, Replay]]:
         yield started
     finally:
         for run in started.values():
-            if run.code is None:
-                run.process.kill()
-                run.process.communicate()
-                run.gimbal.close()
+            run.abandon()
 
 
 def flight_commands(end_s: float | None = 12.0) -> list[str]:

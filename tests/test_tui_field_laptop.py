@@ -5,7 +5,11 @@ count what a TCP or UART source delivers."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import re
+from collections.abc import AsyncIterator
+
+from textual.pilot import Pilot
 
 from analyzer.analysis.findings import ResponseFinding
 from analyzer.pipeline import Batch, RawItem
@@ -37,6 +41,24 @@ def app_at(now: float) -> tuple[MonitorApp, TuiBridge]:
     return MonitorApp(bridge, source_label="can:socketcan:can0", clock=lambda: now), bridge
 
 
+@contextlib.asynccontextmanager
+async def monitor(batch: Batch, now: float) -> AsyncIterator[tuple[MonitorApp, Pilot[int]]]:
+    """The monitor on the laptop's terminal at the clock's ``now``, once it has drawn
+    ``batch``."""
+    app, bridge = app_at(now)
+    async with app.run_test(size=SIZE) as pilot:
+        bridge.handle(batch)
+        await redraw(app, pilot)
+        yield app, pilot
+
+
+async def after_key(app: MonitorApp, pilot: Pilot[int], key: str) -> str:
+    """The screen once ``key`` is pressed and the view redrawn."""
+    await pilot.press(key)
+    await redraw(app, pilot)
+    return screen_text(app)
+
+
 def finding(t: float, command: str, verdict: str, detail: str) -> Event:
     return ResponseFinding(command, t, "target", verdict, detail).to_event()
 
@@ -50,15 +72,10 @@ def test_a_number_key_shows_did_it_obey_with_the_findings_before_the_latest() ->
     frames: list[RawItem] = [CanFrame(T0 + 3.5, CONTROL_ID, encode_command("forward"))]
 
     async def body() -> None:
-        app, bridge = app_at(T0 + 4)
-        async with app.run_test(size=SIZE) as pilot:
-            bridge.handle(decoded(frames, findings))
-            await redraw(app, pilot)
+        async with monitor(decoded(frames, findings), T0 + 4) as (app, pilot):
             assert "5 Obey?" in screen_text(app).splitlines()[-1]
             assert "Did it obey?" not in screen_text(app)
-            await pilot.press("5")
-            await redraw(app, pilot)
-            text = screen_text(app)
+            text = await after_key(app, pilot, "5")
             assert "─ Did it obey? ─" in text and "─ Gimbal ─" not in text
             assert "OBEYED  forward target" in text
             assert "1 not obeyed" in text and "2 obeyed" in text
@@ -78,9 +95,8 @@ def test_a_cut_log_line_ends_in_an_ellipsis_and_enter_shows_it_whole() -> None:
         async with app.run_test(size=SIZE) as pilot:
             bridge.handle(batch)
             await redraw(app, pilot)
-            await pilot.press("2")
-            await redraw(app, pilot)
-            rows = [line for line in screen_text(app).splitlines() if re.match(r"│\d\d:", line)]
+            text = await after_key(app, pilot, "2")
+            rows = [line for line in text.splitlines() if re.match(r"│\d\d:", line)]
             cut = [row for row in rows if "…" in row]
             assert cut and all(row.rstrip(" │").endswith("…") for row in cut)
             assert any("INCOMPLETE feedback message with only 3 of 4 segments" in r for r in cut)
@@ -120,21 +136,13 @@ def test_a_stick_at_20_hz_is_one_log_line_and_the_crc_errors_stay_in_view() -> N
     items = stick_with_crc_errors(8.0)
 
     async def body() -> None:
-        app, bridge = app_at(items[-1].time + 0.1)
-        async with app.run_test(size=SIZE) as pilot:
-            bridge.handle(decoded(items))
-            await redraw(app, pilot)
-            await pilot.press("2")
-            await redraw(app, pilot)
-            text = screen_text(app)
+        async with monitor(decoded(items), items[-1].time + 0.1) as (app, pilot):
+            text = await after_key(app, pilot, "2")
             assert text.count("CRC_MISMATCH") == 3  # every one of them, on one screen
             assert "gimbal_control x160 in 8.0 s, last pan" in text
             # all topics (v) show every command, as text mode's --all does
-            await pilot.press("v")
-            await redraw(app, pilot)
-            assert screen_text(app).count("gimbal_control pan") > 5
-            await pilot.press("v")
-            await redraw(app, pilot)
+            assert (await after_key(app, pilot, "v")).count("gimbal_control pan") > 5
+            await after_key(app, pilot, "v")
             log = app.query_one(CommandLog)
             run = next(e for e in log.entries if e.count > 1)
             app.show_detail(run)
@@ -161,19 +169,12 @@ def test_a_tcp_source_s_panels_count_chunks_not_can_frames() -> None:
     items = tcp_session(10.0)
 
     async def body() -> None:
-        app, bridge = app_at(items[-1].time + 0.1)
-        async with app.run_test(size=SIZE) as pilot:
-            bridge.handle(decoded(items))
-            await redraw(app, pilot)
+        async with monitor(decoded(items), items[-1].time + 0.1) as (app, pilot):
             assert "4 chunks/s" in screen_text(app)
-            await pilot.press("3")
-            await redraw(app, pilot)
-            text = screen_text(app)
+            text = await after_key(app, pilot, "3")
             assert "Streams: chunks by direction" in text and "CAN IDs" not in text
             assert re.search(r"tcp ←idu\s+stream\s+20\s+2\.0", text), text
-            await pilot.press("4")
-            await redraw(app, pilot)
-            text = screen_text(app)
+            text = await after_key(app, pilot, "4")
             assert "chunks/s 4" in text and "frames/s" not in text
             assert "40 chunks" in text and "0 frames" not in text
 

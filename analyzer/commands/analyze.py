@@ -6,8 +6,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING, Any
 
-from analyzer.errors import UsageError
-from analyzer.input_options import add_input_arguments
+from analyzer.input_options import add_input_arguments, check_port
 from analyzer.terminal_text import printable
 
 if TYPE_CHECKING:
@@ -128,13 +127,8 @@ def open_decoding_of(args: argparse.Namespace) -> Decoding:
     Python API's ``read`` and ``analyze`` read and decode it."""
     from analyzer.api.reading import open_decoding
 
-    if not 0 < args.port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    check_port(args.port)
     return open_decoding(args.file, args.format, port=args.port)
-
-
-def open_reader(args: argparse.Namespace) -> Any:
-    return open_decoding_of(args).reader
 
 
 def settings_from(args: argparse.Namespace) -> Any:
@@ -150,7 +144,7 @@ def settings_from(args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from analyzer.analysis.stage import Analysis
     from analyzer.commands.analyze_output import FindingsOutput
-    from analyzer.pipeline import run_items
+    from analyzer.pipeline import run_reader
     from analyzer.progress import Progress
 
     settings = settings_from(args)
@@ -166,12 +160,7 @@ def run(args: argparse.Namespace) -> int:
     pipeline.sinks.append(output)
     # The text report is written at the end: the terminal is free for a progress line.
     progress = Progress.maybe(reader, sys.stderr, out, not args.json, quiet=args.quiet)
-    try:
-        run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
-    finally:
-        reader.close()
-    for failure in pipeline.failures:
-        raise failure.error
+    run_reader(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
     # The camera not judged: the video extra is missing.
     notes = [*reader.notes, *([analysis.camera_note] if analysis.camera_note else [])]
     if output.untimed:

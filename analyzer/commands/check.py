@@ -10,10 +10,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO, cast
 
-from analyzer.errors import SourceError, UsageError
+from analyzer.errors import UsageError
 
 if TYPE_CHECKING:
     from analyzer.capture import Capture
+    from analyzer.check.bench_run import BenchRecording
     from analyzer.check.judge import Limits, StepResult
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
@@ -216,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
 def _run_check(
     args: argparse.Namespace, steps: tuple[CheckStep, ...], options: Options, limits: Limits
 ) -> int:
+    from analyzer.check.bench_run import BenchRecording, kept_up_to_then
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
     from analyzer.check.output import JsonPrinter, TablePrinter
@@ -240,14 +242,14 @@ def _run_check(
     capture.start()
     if video is not None:  # the zoom step needs pictures from before its first command
         _wait_for_video(video, lambda text: print(f"warning: {text}", file=say))
-    _run_steps(runner, steps, link, observer, capture, sink, path)
+    _run_steps(runner, steps, BenchRecording(link, observer, capture, sink, path))
     results = runner.results
     _say_how_it_ended(runner, path, say)
     if args.report is not None:
         _write_report(args.report, args.force, observer, results, spec, limits, args.time_zone)
         print(f"report written to {args.report}", file=say)
     if capture.error is not None:
-        raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
+        raise kept_up_to_then(capture.error, path)
     from analyzer.protocol.check_fields import FAIL
 
     return 1 if any(r.verdict == FAIL for r in results) else 0
@@ -271,23 +273,18 @@ def _recording_sink(
     args: argparse.Namespace, link: CheckLink, path: str, spec: LinkSpec, options: Options
 ) -> McapSink:
     """The check's recording (the link is closed if it cannot be opened)."""
+    from analyzer.check.bench_run import bench_sink
     from analyzer.commands.video_options import video_metadata
-    from analyzer.mcapio.write.sink import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.video.spec import VIDEO_HOLD_BACK_S
 
-    try:
-        return McapSink(
-            path,
-            metadata=recording_metadata(
-                f"check: bench check over {spec}", command="check", **video_metadata(args)
-            ),
-            force=args.force,
-            hold_back=VIDEO_HOLD_BACK_S if options.video else 0.0,
-            zone=args.time_zone,
-        )
-    except BaseException:
-        link.close()
-        raise
+    metadata = recording_metadata(
+        f"check: bench check over {spec}", command="check", **video_metadata(args)
+    )
+    hold_back = VIDEO_HOLD_BACK_S if options.video else 0.0
+    return bench_sink(
+        link, path, metadata, force=args.force, hold_back=hold_back, zone=args.time_zone
+    )
 
 
 def _check_capture(
@@ -313,42 +310,20 @@ def _check_capture(
     return Capture(link, sinks, stages=stages), video
 
 
-def _run_steps(
-    runner: CheckRunner,
-    steps: tuple[CheckStep, ...],
-    link: CheckLink,
-    observer: Observer,
-    capture: Capture,
-    sink: McapSink,
-    path: str,
-) -> None:
+def _run_steps(runner: CheckRunner, steps: tuple[CheckStep, ...], bench: BenchRecording) -> None:
     """The steps run; whatever happens, the gimbal is stopped and centred, every verdict
     goes through the pipeline and the recording is finished."""
-    completed = False
-    try:
-        runner.run(steps)
-        completed = True
-    except SourceError as exc:
-        raise SourceError(
-            f"{exc}; the check stopped (the gimbal may not be centred); the recording "
-            f"{path} keeps everything up to then"
-        ) from None
-    finally:
+
+    def stop_gimbal(completed: bool) -> None:
         if not completed:  # Ctrl-C, a link that failed: stop the gimbal, centre it
             with contextlib.suppress(Exception):
                 runner.centre(wait=False)
-        # Everything sent and every verdict through the pipeline before it stops.
-        noted, sent = len(runner.results), link.last_sent
-        observer.wait(
-            lambda: observer.steps_seen >= noted and observer.commands_until >= sent,
-            time.monotonic() + 2.0,
-        )
-        capture.stop()
-        capture.join(10.0)
-        with contextlib.suppress(SourceError):
-            sink.close()
-    if sink.error is not None:
-        raise SourceError(sink.error)
+
+    def verdicts_seen() -> bool:
+        return bench.observer.steps_seen >= len(runner.results)
+
+    with bench.running("the check", stop_gimbal, verdicts_seen):
+        runner.run(steps)
 
 
 def _say_how_it_ended(runner: CheckRunner, path: str, say: TextIO) -> None:

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import sys
 import time
-from typing import Any
 
 from analyzer.errors import EXIT_INTERRUPTED, UsageError
 from analyzer.mcapio.write.options import add_compression_argument
-from analyzer.pipeline import Pipeline, run_items
+from analyzer.pipeline import Pipeline, run_reader
 from analyzer.progress import Progress
 from analyzer.stdio import interrupt_name, interrupts_deferred
 
@@ -90,14 +88,12 @@ def run(args: argparse.Namespace) -> int:
                 compression=args.compression,
             )
         pipeline.sinks.append(sink)
-        run_items(source, pipeline, progress=progress)  # closes (commits) the sink
-        for failure in pipeline.failures:
-            raise failure.error
+        run_reader(source, pipeline, progress=progress)  # closes (commits) the sink
         finished = True
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the finally removes the partial file
         interrupted = interrupt_name(exc)
     finally:
-        _close(source)
+        source.close()  # closed by the run too; here also when no output could be made
         if not finished and sink is not None:
             sink.abandon()
     if interrupted:
@@ -128,10 +124,3 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     return 0
-
-
-def _close(source: Any) -> None:
-    closer = getattr(source, "close", None)
-    if callable(closer):
-        with contextlib.suppress(Exception):
-            closer()

@@ -127,11 +127,11 @@ class LinePrinter:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.api.reading import open_decoding
-    from analyzer.pipeline import run_items
+    from analyzer.input_options import check_port
+    from analyzer.pipeline import run_reader
     from analyzer.summary import Summary
 
-    if not 0 < args.port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    check_port(args.port)
     wanted = event_filter(args.topic, args.name)
     out = sys.stdout
     color = use_color(args.color, out)
@@ -146,19 +146,10 @@ def run(args: argparse.Namespace) -> int:
         printer = make_printer(args.json, color, args.time_zone)
         pipeline.sinks.append(LinePrinter(out, printer, wanted, flush_each=live, as_json=args.json))
     progress = Progress.maybe(reader, sys.stderr, out, args.summary)
-    interrupted = False
-    try:
-        try:
-            run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
-        except KeyboardInterrupt:
-            if not live:
-                raise
-            interrupted = True  # Ctrl-C ends live input: finish as at its end
-            pipeline.finish()
-    finally:
-        reader.close()
-    for failure in pipeline.failures:
-        raise failure.error
+    # Ctrl-C ends live input: finished as at its end.
+    interrupted = run_reader(
+        reader, pipeline, batch_items=decoding.batch_items, progress=progress, interruptible=live
+    )
     decoder_stats: dict[str, int] = getattr(pipeline.decoder, "stats", {})
     tally = pipeline.tally
     from analyzer.inputs.raw_stream import raw_stream_mismatch

@@ -6,7 +6,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from analyzer.errors import UsageError
+from analyzer.input_options import check_port
 from analyzer.pipeline import Sink, Stage
 
 
@@ -24,20 +24,14 @@ def read_through(
     a progress line on a terminal (not with ``quiet``); returns the reader (its
     ``format_name``, ``notes``). A sink that failed raises its error."""
     from analyzer.api.reading import open_decoding
-    from analyzer.pipeline import run_items
+    from analyzer.pipeline import run_reader
     from analyzer.progress import Progress
 
-    if not 0 < port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {port}")
+    check_port(port)
     decoding = open_decoding(path, file_format, port=port)
     reader, pipeline = decoding.reader, decoding.pipeline
     pipeline.stages.extend(stages)
     pipeline.sinks.extend(sinks)
     progress = Progress.maybe(reader, sys.stderr, quiet=quiet, label=label)
-    try:
-        run_items(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
-    finally:
-        reader.close()
-    for failure in pipeline.failures:
-        raise failure.error
+    run_reader(reader, pipeline, batch_items=decoding.batch_items, progress=progress)
     return reader

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-import time
 from typing import TYPE_CHECKING, Any
 
 from analyzer.errors import SourceError, UsageError
@@ -140,29 +139,22 @@ def run(args: argparse.Namespace) -> int:
 def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> int:
     from analyzer.analysis.stage import Analysis
     from analyzer.capture import Capture
+    from analyzer.check.bench_run import BenchRecording, bench_sink, kept_up_to_then
     from analyzer.check.link import CheckLink
     from analyzer.check.observer import Observer
-    from analyzer.mcapio.write.sink import McapSink, recording_metadata
+    from analyzer.mcapio.write.sink import recording_metadata
     from analyzer.replay.player import Player
 
     link = CheckLink(spec, purpose="the replay")
-    try:
-        sink = McapSink(
-            path,
-            metadata=recording_metadata(
-                f"replay: {args.file} over {spec}",
-                command="replay",
-                flight=args.file,
-                flight_span=f"{span.start_s:.3f}-{span.end_s:.3f} s",
-                speed=f"{args.speed:g}",
-                aligned="no" if args.no_align else "yes",
-            ),
-            force=args.force,
-            zone=args.time_zone,
-        )
-    except BaseException:
-        link.close()
-        raise
+    metadata = recording_metadata(
+        f"replay: {args.file} over {spec}",
+        command="replay",
+        flight=args.file,
+        flight_span=f"{span.start_s:.3f}-{span.end_s:.3f} s",
+        speed=f"{args.speed:g}",
+        aligned="no" if args.no_align else "yes",
+    )
+    sink = bench_sink(link, path, metadata, force=args.force, zone=args.time_zone)
     observer = Observer()
     capture = Capture(link, [sink, observer], stages=Analysis().stages())
     progress = None if args.quiet else _progress(span, args.speed)
@@ -170,17 +162,8 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
     print(f"replay over {link.description}; recording {path}", flush=True)
     if not args.no_align and span.attitude is None:
         print("the flight has no attitude feedback: the gimbal is not aligned first")
-    capture.start()
-    completed = False
-    try:
-        outcome = player.play(span, speed=args.speed, align=not args.no_align)
-        completed = True
-    except SourceError as exc:
-        raise SourceError(
-            f"{exc}; the replay stopped (the gimbal may not be centred); the recording "
-            f"{path} keeps everything up to then"
-        ) from None
-    finally:
+
+    def stop_gimbal(completed: bool) -> None:
         _clear_progress(progress)
         if not completed:  # Ctrl-C, a link that failed: stop the gimbal, centre it
             player.close_span("interrupted")
@@ -189,18 +172,14 @@ def _replay(args: argparse.Namespace, span: Span, spec: LinkSpec, path: str) -> 
         else:
             with contextlib.suppress(SourceError):
                 player.centre(wait=True)
-        sent = link.last_sent  # everything sent through the pipeline before it stops
-        observer.wait(lambda: observer.commands_until >= sent, time.monotonic() + 2.0)
-        capture.stop()
-        capture.join(10.0)
-        with contextlib.suppress(SourceError):
-            sink.close()
-    if sink.error is not None:
-        raise SourceError(sink.error)
+
+    capture.start()
+    with BenchRecording(link, observer, capture, sink, path).running("the replay", stop_gimbal):
+        outcome = player.play(span, speed=args.speed, align=not args.no_align)
     for line in _summary(outcome, span, path):
         print(line)
     if capture.error is not None:
-        raise SourceError(f"{capture.error}; the recording {path} keeps everything up to then")
+        raise kept_up_to_then(capture.error, path)
     if outcome.stopped:
         print(f"gimbal-analyzer replay: {outcome.stopped}", file=sys.stderr)
         return 1

@@ -64,10 +64,10 @@ def run(args: argparse.Namespace) -> int:
     import sys
 
     from analyzer.analysis.stage import NOT_JUDGED, Analysis, WithCamera
-    from analyzer.commands.analyze import open_reader, settings_from
+    from analyzer.commands.analyze import open_decoding_of, settings_from
     from analyzer.extras import VIDEO
     from analyzer.output_file import OutputFile, check_output
-    from analyzer.pipeline import Pipeline, run_items
+    from analyzer.pipeline import run_reader
     from analyzer.progress import Progress
     from analyzer.report.collect import ReportData
     from analyzer.report.page import render
@@ -76,7 +76,8 @@ def run(args: argparse.Namespace) -> int:
     inputs = [] if args.file == "-" else [args.file]
     check_output(args.output, force=args.force, inputs=inputs)  # refuse before the work
     settings = settings_from(args)
-    reader = open_reader(args)
+    decoding = open_decoding_of(args)
+    reader, pipeline = decoding.reader, decoding.pipeline
     data = ReportData(source=reader.source, format_name=reader.format_name)
     left_out: list[str] = []  # what the missing video extra leaves out, in words
     # A recording with video: camera commands judged by it.
@@ -89,12 +90,10 @@ def run(args: argparse.Namespace) -> int:
     overlays = _overlays(args, sinks, left_out) if recording is not None else None
     camera_notes = [f"{' and '.join(left_out)}: {VIDEO.missing}"] if left_out else []
     # The same decoding and counting as every command; the analysis is a stage of it.
-    pipeline = Pipeline(sinks, stages=[FindingsInto(judging, data)])
+    pipeline.sinks.extend(sinks)
+    pipeline.stages.append(FindingsInto(judging, data))
     progress = Progress.maybe(reader, sys.stderr, quiet=args.quiet)
-    try:
-        run_items(reader, pipeline, progress=progress)
-    finally:
-        reader.close()
+    run_reader(reader, pipeline, progress=progress)
     data.notes.extend([*reader.notes, *camera_notes])
     data.frames = pipeline.tally.frames
     _mark_untimed(data)

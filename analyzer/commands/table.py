@@ -144,6 +144,7 @@ def parse_tags(values: list[str]) -> dict[str, str]:
 
 def run(args: argparse.Namespace) -> int:
     from analyzer.extras import FLEET, require
+    from analyzer.input_options import check_port
 
     require(FLEET, "`table`", uses=("pyarrow",))
     from analyzer.fleet.runner import connect, walk_inputs
@@ -151,8 +152,7 @@ def run(args: argparse.Namespace) -> int:
     tags = parse_tags(args.tag)
     if args.workers < 1:
         raise UsageError(f"--workers must be 1 or more, not {args.workers}")
-    if not 0 < args.port < 65536:
-        raise UsageError(f"--port must be 1..65535, not {args.port}")
+    check_port(args.port)
     if args.client_writes and not args.dask:
         raise UsageError("--client-writes goes with --dask")
     started = time.monotonic()

@@ -67,7 +67,7 @@ class Rule:
 def rules(tolerance_deg: float) -> tuple[Rule, ...]:
     """Every figure compared, in the order a pair shows them; angles within
     ``tolerance_deg`` (the analysis' --tolerance) are the same."""
-    obeyed = f"{RATE_OK[0] * 100:.0f}-{RATE_OK[1] * 100:.0f} % (the band of an obeyed rate)"
+    obeyed = _percent_band(*RATE_OK, "the band of an obeyed rate")
     speed = Limits().speed_tolerance
     period = f"one feedback period ({FEEDBACK_PERIOD_S:.2f} s, the resolution of a time read "
     period += "from the feedback)"
@@ -85,7 +85,7 @@ def rules(tolerance_deg: float) -> tuple[Rule, ...]:
             ".1f",
             "deg/s",
             relative=(1 - speed, 1 + speed),
-            band=f"{(1 - speed) * 100:.0f}-{(1 + speed) * 100:.0f} % (the check's speed band)",
+            band=_percent_band(1 - speed, 1 + speed, "the check's speed band"),
         ),
         Rule("response_s", "response", ".2f", "s", absolute=FEEDBACK_PERIOD_S, band=period),
         Rule("latency_s", "latency", ".2f", "s", absolute=FEEDBACK_PERIOD_S, band=period),
@@ -93,24 +93,31 @@ def rules(tolerance_deg: float) -> tuple[Rule, ...]:
         Rule("overshoot_deg", "overshoot", ".1f", "deg", absolute=tolerance_deg, band=angle),
         Rule("error_deg", "error", ".2f", "deg", absolute=tolerance_deg, band=angle),
         Rule("moved_deg", "moved", ".1f", "deg", absolute=tolerance_deg, band=angle),
-        *(
-            Rule(
-                name,
-                label,
-                ".3g",
-                relative=(1 - SCALE_TOLERANCE, 1 + SCALE_TOLERANCE),
-                band=f"{SCALE_TOLERANCE * 100:.0f} % (a zoom ratio reached)",
-            )
-            for name, label in (("scale", "scale"), ("scale_back", "scale back"))
+        _within_share("scale", "scale", ".3g", "", SCALE_TOLERANCE, "a zoom ratio reached"),
+        _within_share(
+            "scale_back", "scale back", ".3g", "", SCALE_TOLERANCE, "a zoom ratio reached"
         ),
-        Rule(
-            "period_s",
-            "period",
-            ".2f",
-            "s",
-            relative=(1 - FEEDBACK_TOLERANCE, 1 + FEEDBACK_TOLERANCE),
-            band=f"{FEEDBACK_TOLERANCE * 100:.0f} % (the feedback's rhythm)",
+        _within_share(
+            "period_s", "period", ".2f", "s", FEEDBACK_TOLERANCE, "the feedback's rhythm"
         ),
         Rule("lost", "lost", "g", band="not the same count"),
         Rule("crc_errors", "CRC errors", "g", band="not the same count"),
     )
+
+
+def _within_share(name: str, label: str, form: str, unit: str, share: float, why: str) -> Rule:
+    """A figure the same while B is within ``share`` of A either way (``why``: the rule
+    of the analysis or the check that the share is)."""
+    return Rule(
+        name,
+        label,
+        form,
+        unit,
+        relative=(1 - share, 1 + share),
+        band=f"{share * 100:.0f} % ({why})",
+    )
+
+
+def _percent_band(low: float, high: float, why: str) -> str:
+    """A band of shares of A in words: "75-133 % (why)"."""
+    return f"{low * 100:.0f}-{high * 100:.0f} % ({why})"

@@ -10,9 +10,9 @@ from analyzer.export.ardupilot_params import (
     PARAMETERS,
     autopilot_usage,
     lua_block,
-    lua_string,
     page_section,
 )
+from analyzer.export.literals import lua_string
 from analyzer.protocol.codec import find_command
 from analyzer.protocol.crc import crc16
 from analyzer.protocol.feedback import LAYOUTS

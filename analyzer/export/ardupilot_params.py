@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from analyzer.export.literals import lua_string
 from analyzer.protocol.ids import CAN_BITRATE
 
 PARAM_TABLE_KEY = 148  # no script shipped with ArduPilot uses it (tests/ardupilot_scripts.py)
@@ -91,11 +92,6 @@ AUTOPILOT_PARAMETERS: tuple[AutopilotParameter, ...] = (
         "(optional)",
     ),
 )
-
-
-def lua_string(text: str) -> str:
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
-    return f'"{escaped}"'
 
 
 def lua_block() -> list[str]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
+from analyzer.export.literals import short_number
 from analyzer.protocol.command_table import COMMANDS, CommandRow
 from analyzer.protocol.fields import Field
 from analyzer.protocol.ids import (
@@ -81,13 +82,6 @@ class _DbcMessage:
     signals: tuple[_Signal, ...]
 
 
-def _num(value: float) -> str:
-    """A DBC number: integers without a decimal point, others as short as exact."""
-    if float(value).is_integer():
-        return str(int(value))
-    return repr(float(value))
-
-
 def _text(value: str) -> str:
     return value.replace("\\", "/").replace('"', "'")
 
@@ -109,9 +103,10 @@ def _field_signal(f: Field, name: str, parent: tuple[str, int] | None = None) ->
         lo_raw = f.minimum if f.minimum is not None else lo_raw
         hi_raw = f.maximum if f.maximum is not None else hi_raw
     if f.expected is not None:
-        notes.append(f"the document prescribes raw {f.expected} ({_num(f.scale(f.expected))})")
+        scaled = short_number(f.scale(f.expected))
+        notes.append(f"the document prescribes raw {f.expected} ({scaled})")
     if f.soft_maximum is not None:
-        notes.append(f"above {_num(f.scale(f.soft_maximum))}: {f.soft_note}")
+        notes.append(f"above {short_number(f.scale(f.soft_maximum))}: {f.soft_note}")
     comment = f.description + "".join(f"; {n}" for n in notes)
     marker = ""
     if parent is not None:
@@ -239,8 +234,8 @@ def _signal_line(s: _Signal, receiver: str) -> str:
     mux = f" {s.mux_marker}" if s.mux_marker else ""
     sign = "-" if s.signed else "+"
     return (
-        f" SG_ {s.name}{mux} : {s.start}|{s.length}@1{sign} ({_num(s.factor)},0) "
-        f'[{_num(s.minimum)}|{_num(s.maximum)}] "{s.unit}" {receiver}'
+        f" SG_ {s.name}{mux} : {s.start}|{s.length}@1{sign} ({short_number(s.factor)},0) "
+        f'[{short_number(s.minimum)}|{short_number(s.maximum)}] "{s.unit}" {receiver}'
     )
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from functools import cache
 from importlib import resources
 
+from analyzer.export.literals import lua_string
 from analyzer.protocol.command_table import COMMANDS, CommandRow
 from analyzer.protocol.feedback import (
     FEEDBACK_ID_BYTES,
@@ -39,17 +40,6 @@ FRAME_TYPE_NAMES = {
     FRAME_ATTITUDE: "attitude feedback",
     FRAME_RANGING: "laser ranging feedback",
 }
-
-
-def _lua_str(text: str) -> str:
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
-    return f'"{escaped}"'
-
-
-def _lua_num(value: float) -> str:
-    if float(value).is_integer():
-        return str(int(value))
-    return repr(float(value))
 
 
 def _shape(f: Field) -> tuple[object, ...]:
@@ -89,40 +79,40 @@ def _spec(abbr: str, f: Field) -> str:
     """A Lua table describing one field; the dissector body turns it into a ProtoField."""
     text = f.description + (f" [{f.unit}]" if f.unit else "")
     items = [
-        f"abbr={_lua_str(abbr)}",
-        f"name={_lua_str(f.name)}",
-        f"desc={_lua_str(text)}",
+        f"abbr={lua_string(abbr)}",
+        f"name={lua_string(f.name)}",
+        f"desc={lua_string(text)}",
         f"off={f.offset}",
         f"size={f.size}",
         f"signed={'true' if f.kind.startswith('s') else 'false'}",
         f"div={f.div}",
         f"mul={f.mul}",
         f"decimals={f.decimals}",
-        f"unit_suffix={_lua_str(' ' + f.unit if f.unit else '')}",
+        f"unit_suffix={lua_string(' ' + f.unit if f.unit else '')}",
     ]
     if f.labels is not None:
-        pairs = ", ".join(f"[{k}]={_lua_str(v)}" for k, v in sorted(f.labels.items()))
+        pairs = ", ".join(f"[{k}]={lua_string(v)}" for k, v in sorted(f.labels.items()))
         items.append(f"labels={{{pairs}}}")
         if f.other_label is not None:
-            items.append(f"other_label={_lua_str(f.other_label)}")
+            items.append(f"other_label={lua_string(f.other_label)}")
     if f.boolean:
         items.append("boolean=true")
     if f.minimum is not None or f.maximum is not None:
         lo, hi = f.value_limits()
         items.append(f"min={f.minimum if f.minimum is not None else 'nil'}")
         items.append(f"max={f.maximum if f.maximum is not None else 'nil'}")
-        items.append(f"min_text={_lua_str(f.format_value(lo))}")
-        items.append(f"max_text={_lua_str(f.format_value(hi))}")
+        items.append(f"min_text={lua_string(f.format_value(lo))}")
+        items.append(f"max_text={lua_string(f.format_value(hi))}")
     if f.expected is not None:
         items.append(f"expected={f.expected}")
     if f.soft_maximum is not None:
         items.append(f"soft_max={f.soft_maximum}")
-        items.append(f"soft_note={_lua_str(f.soft_note)}")
+        items.append(f"soft_note={lua_string(f.soft_note)}")
     return "F{" + ", ".join(items) + "}"
 
 
 def _table(pairs: dict[int, str], width: int) -> str:
-    return "{" + ", ".join(f"[0x{k:0{width}X}]={_lua_str(v)}" for k, v in pairs.items()) + "}"
+    return "{" + ", ".join(f"[0x{k:0{width}X}]={lua_string(v)}" for k, v in pairs.items()) + "}"
 
 
 def _generated() -> list[str]:
@@ -146,7 +136,7 @@ def _generated() -> list[str]:
         f"local TEXT_END_ID = 0x{TEXT_END_ID:08X}",
         f"local FEEDBACK_SIZE = {FEEDBACK_MESSAGE_SIZE}",
         f"local MIN_FEEDBACK_FRAME = {min(layout.frame_size for layout in LAYOUTS.values())}",
-        f"local FEEDBACK_ID_BYTES = {_lua_str(FEEDBACK_ID_BYTES.hex(' ').upper())}",
+        f"local FEEDBACK_ID_BYTES = {lua_string(FEEDBACK_ID_BYTES.hex(' ').upper())}",
         f"local MOTOR_YAW_LIMIT = {MOTOR_YAW_LIMIT}",
         "local WIDE_MOTOR_YAW_TYPES = {"
         + ", ".join(f"[{t}]=true" for t in sorted(WIDE_MOTOR_YAW_TYPES))
@@ -165,7 +155,7 @@ def _generated() -> list[str]:
         "local COMMANDS = {}",
     ]
     for row in COMMANDS:
-        parts = [f"name={_lua_str(row.name)}", f"title={_lua_str(row.title)}"]
+        parts = [f"name={lua_string(row.name)}", f"title={lua_string(row.title)}"]
         params = ", ".join(_spec(command_abbr(row, f), f) for f in row.params)
         parts.append(f"params={{{params}}}")
         if row.selector is not None:
@@ -180,14 +170,14 @@ def _generated() -> list[str]:
     for key, layout in LAYOUTS.items():
         specs = ", ".join(_spec(feedback_abbr(layout, f), f) for f in layout.layout.fields)
         lines.append(
-            f"FEEDBACK[0x{key:02X}] = {{name={_lua_str(layout.name)}, "
+            f"FEEDBACK[0x{key:02X}] = {{name={lua_string(layout.name)}, "
             f"size={layout.frame_size}, fields={{{specs}}}}}"
         )
     lines.append("local STATUS = {}")
     for can_id, status in STATUS_FRAMES.items():
         specs = ", ".join(_spec(status_abbr(status, f), f) for f in status.layout.fields)
         lines.append(
-            f"STATUS[0x{can_id:08X}] = {{name={_lua_str('uav_' + status.name)}, "
+            f"STATUS[0x{can_id:08X}] = {{name={lua_string('uav_' + status.name)}, "
             f"used={USED_BYTES[can_id]}, fields={{{specs}}}}}"
         )
     lines.append("")

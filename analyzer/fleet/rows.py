@@ -128,7 +128,7 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
     from analyzer.analysis.response import Settings
     from analyzer.analysis.stage import Analysis
     from analyzer.inputs import open_input
-    from analyzer.pipeline import Pipeline, run_items
+    from analyzer.pipeline import Pipeline, run_reader
     from analyzer.progress import Progress
     from analyzer.protocol.ids import PROTOCOL_IDS
     from analyzer.summary import Summary
@@ -147,12 +147,7 @@ def _decode(work: FileWork, path: str, result: FileRows, out: TablesOut) -> None
     # camera commands are not judged here: a fleet's video is not decoded file by file.
     pipeline = Pipeline([sink], stages=Analysis(settings).stages())
     progress = Progress.maybe(reader, sys.stderr, quiet=not work.progress)
-    try:
-        run_items(reader, pipeline, progress=progress)
-    finally:
-        reader.close()
-    for failure in pipeline.failures:
-        raise failure.error
+    run_reader(reader, pipeline, progress=progress)
     summary = Summary(work.path, reader.format_name, pipeline.tally)
     summary.finish(
         input_stats=reader.stats,

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 
 from analyzer.inputs.base import ABSOLUTE, RELATIVE_TO_START, InputItem, InputReader, time_problem
 from analyzer.inputs.python_can.text_logs import RAW_LIMIT, text_lines
+from analyzer.inputs.textlines import damage_after_line
 from analyzer.protocol.types import BAD_LINE, CanFrame, Event, diagnostic
 
 ABSOLUTE_FROM_US = 10**15  # a microsecond count this large is a date (after 2001)
@@ -105,13 +106,7 @@ class SavvyCanReader(InputReader):
 
     def _reported_damage(self) -> Iterator[Event]:
         for problem in self._damage:
-            yield diagnostic(
-                self.last_time or 0.0,
-                self.source,
-                BAD_LINE,
-                f"after line {self.lines}: {problem}",
-                line=self.lines,
-            )
+            yield damage_after_line(self.source, self.last_time or 0.0, self.lines, problem)
         self._damage.clear()
 
     @property

@@ -7,6 +7,8 @@ import zlib
 from collections.abc import Iterator
 from typing import IO, Any
 
+from analyzer.protocol.types import BAD_LINE, Event, diagnostic
+
 BLOCK_SIZE = 1 << 20  # bytes read at a time
 MAX_LINE = 1 << 16  # a longer line is cut to this length (plus one byte: see ``is_overlong``)
 GZIP_MAGIC = b"\x1f\x8b"
@@ -264,3 +266,10 @@ def open_lines(raw: IO[bytes], block_size: int = BLOCK_SIZE) -> tuple[Iterator[b
         gunzip = TolerantGunzip(raw)
         return gunzip.read_blocks(), gunzip.problems
     return iter(lambda: raw.read(block_size), b""), []
+
+
+def damage_after_line(source: str, time: float, line: int, problem: str) -> Event:
+    """A problem of ``open_lines`` (a damaged stretch of a compressed file) as the
+    diagnostic of a text reader: said after ``line``, the last line read (the lines
+    around the damage are read)."""
+    return diagnostic(time, source, BAD_LINE, f"after line {line}: {problem}", line=line)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from analyzer.protocol.ardupilot_fields import MOUNT_FIELDS, TARGET_ENUMS, TARGET_FIELDS
@@ -84,6 +85,20 @@ def _envelope(topic: str, title: str, description: str) -> dict[str, Any]:
     }
 
 
+def _add_described(
+    schema: dict[str, Any],
+    fields: Mapping[str, tuple[str, str]],
+    enums: Mapping[str, Sequence[str]] | None = None,
+) -> None:
+    """Add the properties of a table of name -> (JSON type, description), with the values
+    ``enums`` allows for each it names."""
+    props = schema["properties"]
+    for name, (kind, description) in fields.items():
+        props[name] = {"type": kind, "description": description}
+        if enums is not None and name in enums:
+            props[name]["enum"] = list(enums[name])
+
+
 def _add_fields(schema: dict[str, Any], fields: tuple[Field, ...], *, required: bool) -> None:
     """Add the properties of ``fields``; a labelled ``X`` is followed by its number ``X_code``."""
     props = schema["properties"]
@@ -164,10 +179,7 @@ def response_schema() -> dict[str, Any]:
             "detail": {"type": "string", "description": "the finding in one sentence"},
         }
     )
-    for name, (kind, description) in OPTIONAL_FIELDS.items():
-        props[name] = {"type": kind, "description": description}
-        if name in FIELD_ENUMS:
-            props[name]["enum"] = list(FIELD_ENUMS[name])
+    _add_described(schema, OPTIONAL_FIELDS, FIELD_ENUMS)
     schema["required"] += ["command", "check", "verdict", "detail"]
     return schema
 
@@ -180,12 +192,10 @@ def check_steps_schema() -> dict[str, Any]:
         "One step of `gimbal-analyzer check`, judged by the response analysis and the "
         "figures measured from the feedback; 'time' is when the step was decided.",
     )
-    props = schema["properties"]
-    for name, (kind, description) in {**STEP_FIELDS, **FIGURES}.items():
-        props[name] = {"type": kind, "description": description}
-    props["step"]["enum"] = list(STEP_NAMES)
-    props["verdict"]["enum"] = list(STEP_VERDICTS)
-    props["findings"]["items"] = {"type": "string"}
+    _add_described(
+        schema, {**STEP_FIELDS, **FIGURES}, {"step": STEP_NAMES, "verdict": STEP_VERDICTS}
+    )
+    schema["properties"]["findings"]["items"] = {"type": "string"}
     schema["required"] += list(REQUIRED_FIELDS)
     return schema
 
@@ -276,11 +286,8 @@ def ardupilot_schemas() -> dict[str, dict[str, Any]]:
         "What ArduPilot's mount library (mount:get_rate_target, get_angle_target, "
         "get_location_target) or camera library (camera:get_state) asks, at each change.",
     )
-    for schema, fields in ((mount, MOUNT_FIELDS), (targets, TARGET_FIELDS)):
-        for name, (kind, description) in fields.items():
-            schema["properties"][name] = {"type": kind, "description": description}
-            if name in TARGET_ENUMS and schema is targets:
-                schema["properties"][name]["enum"] = list(TARGET_ENUMS[name])
+    _add_described(mount, MOUNT_FIELDS)
+    _add_described(targets, TARGET_FIELDS, TARGET_ENUMS)
     mount["required"] += list(MOUNT_FIELDS)
     targets["required"].append("target")
     return {TOPIC_ARDUPILOT_MOUNT: mount, TOPIC_ARDUPILOT_TARGETS: targets}

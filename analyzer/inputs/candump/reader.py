@@ -23,8 +23,14 @@ from analyzer.inputs.candump.scan import (
     stamp_at,
 )
 from analyzer.inputs.candump.times import DECIDE_AFTER
-from analyzer.inputs.textlines import BLOCK_SIZE, MAX_LINE, line_blocks, open_lines
-from analyzer.protocol.types import BAD_LINE, Event, diagnostic
+from analyzer.inputs.textlines import (
+    BLOCK_SIZE,
+    MAX_LINE,
+    damage_after_line,
+    line_blocks,
+    open_lines,
+)
+from analyzer.protocol.types import Event
 
 _OTHER = itemgetter(OTHER)
 
@@ -243,13 +249,7 @@ class CandumpReader(InputReader):
     def _damage(self, problem: str) -> Event:
         """A damaged stretch of a compressed file (the lines around it are read)."""
         parser = self.parser
-        return diagnostic(
-            parser.last_time or 0.0,
-            self.source,
-            BAD_LINE,
-            f"after line {parser.lines}: {problem}",
-            line=parser.lines,
-        )
+        return damage_after_line(self.source, parser.last_time or 0.0, parser.lines, problem)
 
     @property
     def stats(self) -> dict[str, int]:

@@ -11,7 +11,15 @@ from analyzer.errors import UsageError
 from analyzer.inputs.base import InputItem, InputReader
 from analyzer.inputs.pcap.notes import PcapStats, capture_notes, capture_problems
 from analyzer.inputs.pcap.records import CaptureFile, Packet, PcapDamage
-from analyzer.inputs.pcap.socketcan import CanCounts, can_notes, sll2_can, sll_can, socketcan_frame
+from analyzer.inputs.pcap.socketcan import (
+    SLL2_HEADER,
+    SLL_HEADER,
+    CanCounts,
+    can_notes,
+    sll2_can,
+    sll_can,
+    socketcan_frame,
+)
 from analyzer.inputs.pcap.tcp_flows import MAX_FLOWS, MAX_PENDING_TOTAL, Flow, FlowTable, Output
 from analyzer.inputs.pcap.tcp_reassembly import Delivered, Result
 from analyzer.protocol.ids import TCP_PORT
@@ -43,6 +51,7 @@ SUPPORTED_LINKS = frozenset(
 
 ETH_IPV4 = 0x0800
 ETH_IPV6 = 0x86DD
+_COOKED_HEADER = {LINK_LINUX_SLL: SLL_HEADER, LINK_LINUX_SLL2: SLL2_HEADER}
 ETH_VLAN = frozenset({0x8100, 0x88A8, 0x9100})
 IP_TCP = 6
 IPV6_SKIPPED_HEADERS = frozenset({0, 43, 60})  # hop-by-hop, routing, destination options
@@ -183,34 +192,15 @@ class PcapReader(InputReader):
             ip = _ethernet_payload(packet)
         elif link == LINK_LINUX_SLL:
             sll = sll_can(packet)
-            if sll is not None:  # tcpdump -i any: the ID in host byte order
-                protocol, can, direction = sll
-                frame = socketcan_frame(
-                    time,
-                    can,
-                    "any",
-                    self.can,
-                    order="little",
-                    protocol=protocol,
-                    direction=direction,
-                )
-                return self._can(frame)
-            ip = packet[16:] if packet[14:16] in (b"\x08\x00", b"\x86\xdd") else None
+            if sll is not None:  # tcpdump -i any
+                return self._cooked_can(time, *sll, "any")
+            ip = _cooked_ip(link, packet)
         elif link == LINK_LINUX_SLL2:
             sll2 = sll2_can(packet)
             if sll2 is not None:
                 protocol, can, direction, ifindex = sll2
-                frame = socketcan_frame(
-                    time,
-                    can,
-                    f"if{ifindex}",
-                    self.can,
-                    order="little",
-                    protocol=protocol,
-                    direction=direction,
-                )
-                return self._can(frame)
-            ip = packet[20:] if packet[0:2] in (b"\x08\x00", b"\x86\xdd") else None
+                return self._cooked_can(time, protocol, can, direction, f"if{ifindex}")
+            ip = _cooked_ip(link, packet)
         elif link in (LINK_NULL, LINK_LOOP):
             ip = packet[4:]
         elif link in RAW_IP_LINKS:
@@ -343,6 +333,15 @@ class PcapReader(InputReader):
                 )
         return out
 
+    def _cooked_can(
+        self, time: float, protocol: int, can: bytes, direction: str, channel: str
+    ) -> list[InputItem]:
+        """A CAN frame of a Linux cooked capture (SLL, SLL2): the ID in host byte order."""
+        frame = socketcan_frame(
+            time, can, channel, self.can, order="little", protocol=protocol, direction=direction
+        )
+        return self._can(frame)
+
     def _can(self, frame: CanFrame | None) -> list[InputItem]:
         if frame is None:
             self.counts.bad_packets += 1
@@ -358,6 +357,13 @@ def _ethernet_payload(packet: bytes) -> bytes | None:
         ethertype = int.from_bytes(packet[offset : offset + 2], "big")
     if ethertype in (ETH_IPV4, ETH_IPV6):
         return packet[offset + 2 :]
+    return None
+
+
+def _cooked_ip(link: int, packet: bytes) -> bytes | None:
+    """The IP packet of a Linux cooked capture (SLL, SLL2) whose protocol says IP."""
+    if _link_protocol(link, packet) in (ETH_IPV4, ETH_IPV6):
+        return packet[_COOKED_HEADER[link] :]
     return None
 
 

@@ -19,7 +19,7 @@ from typing import Any
 
 from analyzer.inputs.base import ABSOLUTE, DELTA
 from analyzer.inputs.python_can.skipped_lines import SkippedLine, asc_problem, trc_checker
-from analyzer.inputs.textlines import MAX_LINE, open_lines, split_blocks
+from analyzer.inputs.textlines import MAX_LINE, damage_after_line, open_lines, split_blocks
 from analyzer.protocol.types import BAD_LINE, Event, diagnostic
 
 RAW_LIMIT = 200  # characters of a bad line kept in its diagnostic
@@ -192,13 +192,7 @@ class TextLogReading:
 
     def _damage_since(self, reported: int) -> Iterator[Event]:
         for problem in self.damage[reported:]:
-            yield diagnostic(
-                self.last_time,
-                self.source,
-                BAD_LINE,
-                f"after line {self.feed.lineno}: {problem}",
-                line=self.feed.lineno,
-            )
+            yield damage_after_line(self.source, self.last_time, self.feed.lineno, problem)
 
     def unreadable(self, exc: BaseException) -> Event:
         why = str(exc).strip().splitlines()
