@@ -34,6 +34,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "progress",
             "capture_clock",
             "library_log",
+            "pipeline_contracts",
             "pipeline",
         ),
     ),
