@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
+from analyzer.commands.demo_printer import DemoPrinter
 from analyzer.commands.simulate import (
     add_behaviour_arguments,
     add_fault_arguments,
@@ -20,15 +20,6 @@ from analyzer.commands.simulate import (
 from analyzer.errors import EXIT_FAILED, SourceError, UsageError
 from analyzer.live.options import add_foxglove_options
 from analyzer.mcapio.write.options import add_compression_argument
-from analyzer.pipeline import Batch
-from analyzer.protocol.types import (
-    TOPIC_COMMAND,
-    TOPIC_UAV_ALTITUDE,
-    TOPIC_UAV_ATTITUDE,
-    TOPIC_UAV_GPS,
-    Event,
-)
-from analyzer.timefmt import UTC, TimeZone
 from analyzer.video.spec import add_video_options
 
 HELP = "see the whole tool work with no hardware: simulated gimbal, live decode, demo.mcap"
@@ -75,8 +66,6 @@ DEFAULT_OUTPUT = "demo.mcap"
 PLAIN_DURATION = 10.0
 # Faults the demo injects unless --clean: rare enough to read, frequent enough to be seen.
 DEMO_FAULTS = {"drop": 0.02, "corrupt": 0.02, "duplicate": 0.02, "delay": 0.02, "seed": 7}
-QUIET_TOPICS = frozenset({TOPIC_UAV_GPS, TOPIC_UAV_ALTITUDE, TOPIC_UAV_ATTITUDE})
-QUIET_EVERY = 1.0  # plain output: UAV status lines at most once a second per topic
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -195,66 +184,6 @@ class SimulatorOption:
     flag: str
     default: Any
     fault: bool
-
-
-class DemoPrinter:
-    """Sink printing each event as one plain line; UAV status thinned out unless ``everything``."""
-
-    def __init__(self, stream: IO[str], *, everything: bool = False, zone: TimeZone = UTC) -> None:
-        self.stream = stream
-        self.everything = everything
-        self.hidden = 0
-        self._last: dict[str, float] = {}
-        self._last_command = ""
-        self._render: Callable[[Event], str] = _renderer(zone)
-
-    def handle(self, batch: Batch) -> None:
-        lines = [self._render(e) for e in batch.events if self._shown(e)]
-        if lines:
-            self.stream.write("\n".join(lines) + "\n")
-            self.stream.flush()
-
-    def _shown(self, event: Event) -> bool:
-        if self.everything:
-            return True
-        if event.topic in QUIET_TOPICS:
-            if event.time - self._last.get(event.topic, -1e9) < QUIET_EVERY:
-                self.hidden += 1
-                return False
-            self._last[event.topic] = event.time
-        elif event.topic == TOPIC_COMMAND:
-            raw = str(event.fields.get("raw", ""))
-            last = self._last.get(TOPIC_COMMAND, -1e9)
-            if raw == self._last_command and event.time - last < QUIET_EVERY:
-                self.hidden += 1
-                return False
-            self._last_command = raw
-            self._last[TOPIC_COMMAND] = event.time
-        return True
-
-    def close(self) -> None:
-        self.stream.flush()
-
-
-def _renderer(zone: TimeZone) -> Callable[[Event], str]:
-    """Each event as a line, its time in ``zone``."""
-    try:
-        from analyzer.render import render_event
-    except ImportError:
-        return lambda event: _plain(event, zone)
-    return lambda event: render_event(event, color=False, zone=zone)
-
-
-def _plain(event: Event, zone: TimeZone) -> str:
-    from analyzer.sim.engine import describe_command, format_fields
-
-    stamp = zone.format_clock(event.time)
-    if event.topic == TOPIC_COMMAND:
-        text = describe_command(event.fields)
-    else:
-        text = format_fields(event.fields)
-    warnings = f"  !! {'; '.join(event.warnings)}" if event.warnings else ""
-    return f"{stamp} {event.topic:<17} {text}{warnings}"
 
 
 def _driver(args: argparse.Namespace) -> Any:
