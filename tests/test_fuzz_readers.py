@@ -369,6 +369,34 @@ def test_an_mf4_channel_outside_its_record_is_refused_before_asammdf_reads_it() 
     assert "ends at byte 1,143,153,499 of a record of 84 bytes" in err
 
 
+def test_an_mf4_record_size_of_a_gigabyte_is_refused_before_asammdf_allocates_it() -> None:
+    """Found by the fuzzer: 8,488 bytes made asammdf allocate one record of 944 MB."""
+    code, _, err = decode(REGRESSIONS / "mf4" / "record-of-944-mb.mf4", None)
+    assert code == 2 and err.count("\n") == 1
+    assert "has records of 944,329,507 bytes, more than a CAN bus-logging record" in err
+
+
+@pytest.mark.parametrize(("field", "value"), [(0, 3 << 28), (4, 1 << 30), (0, (1 << 20) + 1)])
+def test_an_mf4_record_size_field_beyond_any_can_record_is_refused(
+    tmp_path: Path, field: int, value: int
+) -> None:
+    """cg_data_bytes (field 0) or cg_inval_bytes (field 4) of the CAN frames' group."""
+    import struct
+
+    data = bytearray(python_can_bytes(tmp_path, "x.mf4", seed_frames()))
+    group = data.find(b"##CG")
+    links = struct.unpack_from("<Q", data, group + 16)[0]
+    data_bytes_at = group + 24 + 8 * links + 8 + 8 + 2 + 2 + 4  # after the cycle count
+    record = struct.unpack_from("<I", data, data_bytes_at)[0]
+    assert 0 < record < 200  # a bus-logging record as python-can writes it
+    struct.pack_into("<I", data, data_bytes_at + field, value)
+    path = tmp_path / "huge-record.mf4"
+    path.write_bytes(bytes(data))
+    code, _, err = decode(path, None)
+    assert code == 2 and err.count("\n") == 1
+    assert "more than a CAN bus-logging record holds" in err
+
+
 def test_a_db3_message_whose_time_sqlite_holds_as_text_is_a_bad_frame() -> None:
     """sqlite3 keeps any type in any column: the message is skipped in words and the
     reading goes on (here up to a page the same damage broke: it says so)."""

@@ -1,6 +1,7 @@
 """MF4 files checked before asammdf reads them: a data group whose records are not
 counted makes asammdf loop for ever, a channel placed outside its record makes it read
-outside its buffer and crash the process (ASAM MDF 4.x block layout)."""
+outside its buffer and crash the process, a record size of gigabytes makes it allocate
+them (ASAM MDF 4.x block layout)."""
 
 from __future__ import annotations
 
@@ -12,9 +13,14 @@ _HD_AT = 64  # the header block follows the 64-byte identification block
 _MAX_CHAIN = 100_000  # a longer chain of blocks is a loop in a damaged file
 _DATA_BLOCKS = (b"##DT", b"##DZ", b"##DL", b"##HL")
 # A channel group's data: cg_record_id, cg_cycle_count, cg_flags, cg_path_separator,
-# reserved, cg_data_bytes (the record's size); a VLSD group (flag bit 0) has no records.
-_GROUP_DATA = struct.Struct("<QQHH4xI")
+# reserved, cg_data_bytes (the record's size), cg_inval_bytes; a VLSD group (flag bit 0)
+# has no records.
+_GROUP_DATA = struct.Struct("<QQHH4xII")
 _VLSD_GROUP = 1
+# asammdf allocates a whole record at once whatever the data holds. A CAN bus-logging
+# record (a frame's time, ID, flags, length, and its data bytes or where they are) takes
+# well under 200 bytes; a record size beyond this is a damaged field.
+_MOST_RECORD = 1 << 20
 # A channel's data: cn_type, cn_sync_type, cn_data_type, cn_bit_offset, cn_byte_offset,
 # cn_bit_count; virtual channels (types 3, 6) take no bytes of the record.
 _CHANNEL_DATA = struct.Struct("<BBBBII")
@@ -70,9 +76,10 @@ class _Blocks:
         self.handle.seek(block.data_at)
         return layout.unpack(self.handle.read(layout.size))
 
-    def channel_outside(self, first_group: int) -> str | None:
-        """Where a channel of the chain of channel groups from ``first_group`` lies
-        outside its group's record (its sub-channels included); None when none does."""
+    def group_problem(self, first_group: int) -> str | None:
+        """A record of the chain of channel groups from ``first_group`` too large to be
+        one, or a channel outside its group's record (its sub-channels included); None
+        when there is neither."""
         offset, groups = first_group, 0
         while offset and groups < _MAX_CHAIN:
             groups += 1
@@ -81,6 +88,13 @@ class _Blocks:
             if group is None or sizes is None or len(group.links) < 2:
                 return None
             if not sizes[2] & _VLSD_GROUP:
+                record = sizes[4] + sizes[5]
+                if record > _MOST_RECORD:
+                    return (
+                        f"its channel group at byte {offset:,} has records of {record:,} "
+                        "bytes, more than a CAN bus-logging record holds (a damaged MF4 "
+                        "file, for which asammdf would allocate them)"
+                    )
                 found = self._outside(group.links[1], sizes[4])
                 if found:
                     return found
@@ -137,7 +151,7 @@ def mf4_problem(handle: IO[bytes], size: int) -> str | None:
                     f"its data group at byte {offset:,} holds data but counts no record "
                     "(a damaged or unfinished MF4 file, which asammdf cannot read)"
                 )
-            outside = blocks.channel_outside(group.links[1])
+            outside = blocks.group_problem(group.links[1])
             if outside:
                 return outside
             offset = group.links[0]
