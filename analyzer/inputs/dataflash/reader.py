@@ -72,6 +72,7 @@ class DataFlashReader(InputReader):
         self.counts = DataFlashStats()
         self._unread_layouts: dict[int, tuple[str, str]] = {}  # CAN layouts not understood
         self._unread_records: dict[int, int] = {}  # their records, by type
+        self._channels: dict[int, str] = {}  # the name of each bus number
         self.time_offset = self._find_time_base()
         self.time_base = GPS_UTC if self.time_offset is not None else SINCE_BOOT
         if self.time_offset is None:
@@ -80,27 +81,23 @@ class DataFlashReader(InputReader):
                 "seconds since the autopilot booted, not dates"
             )
 
-    # The usual record is read inline, one unpack and one frame each: this loop runs for every
-    # record of a log (benchmarks/dataflash_speed.py); damage and the end are apart.
-    def __iter__(self) -> Iterator[InputItem]:  # noqa: C901, PLR0915
+    def __iter__(self) -> Iterator[InputItem]:
+        """Every record in turn: CAN records as frames, FMT records taken in, damage said
+        and skipped to the next record. This loop runs for every record of a log
+        (benchmarks/dataflash_speed.py): the usual record costs one look-up and one call."""
         data = self._data
         size = len(data)
-        counts = self.counts
         base = self.time_offset or 0.0
         lengths: dict[int, int] = {FMT_TYPE: FMT_LENGTH}
         cans: dict[int, CanColumns] = {}
-        unread = self._unread_records
-        channels: dict[int, str] = {}
-        pos = records = 0
-        frames = 0
-        first_time = last_time = None
+        frame = self._frame
+        pos = records = frames = 0
         while pos < size:
             kind = data[pos + 2] if pos + 2 < size else -1
             length = lengths.get(kind, 0) if data[pos : pos + 2] == HEAD else 0
             end = pos + length
             if not length or end > size:
                 found = self._resync(pos, lengths)
-                self.last_time = last_time
                 yield from self._damage(pos, found, size, kind, length, base, records)
                 if found is None:
                     break
@@ -111,57 +108,68 @@ class DataFlashReader(InputReader):
                 self.position_bytes = pos
             columns = cans.get(kind)
             if columns is None:
-                if kind == FMT_TYPE:
-                    self._define(parse_fmt(data, pos), lengths, cans)
-                elif kind in unread:
-                    unread[kind] += 1
-                pos = end
+                self._other_record(kind, pos, lengths, cans)
+            elif (
+                end < size
+                and data[end : end + 2] != HEAD
+                and ((found := self._inside(pos, end, lengths)) is not None)
+            ):  # damage inside this record
+                yield from self._damage(pos, found, size, kind, length, base, records)
+                pos = found
                 continue
-            if end < size and data[end : end + 2] != HEAD:
-                found = self._resync(pos + 3, lengths)
-                if found is not None and found < end:  # damage inside this record
-                    self.last_time = last_time
-                    yield from self._damage(pos, found, size, kind, length, base, records)
-                    pos = found
-                    continue
-            # The usual record, inline: one unpack, one slice, one frame.
-            values = columns.fields.unpack_from(data, pos + 3)
-            if columns.order is not None:
-                values = tuple(values[i] for i in columns.order)
-            if columns.has_bus:
-                time_us, bus, ident, dlc = values
-                channel = channels.get(bus) or channels.setdefault(bus, f"bus{bus}")
             else:
-                time_us, ident, dlc = values
-                channel = "scripting"
-            time = base + time_us * 1e-6
-            last_time = time
-            if first_time is None:
-                first_time = self.first_time = time
-            frames += 1
-            if columns.fd:
-                counts.fd_records += 1
-                dlc = FD_LENGTHS[dlc & 0x0F]
-            elif dlc > 8:
-                yield self._bad_dlc(pos, time, ident, dlc)
-                pos = end
-                continue
-            at = pos + columns.data_at
-            if ident & FLAG_RTR:
-                yield CanFrame(
-                    time, ident & MASK_EXT, b"", bool(ident & FLAG_EFF), channel, True,
-                    bool(ident & FLAG_ERR), columns.fd, "", dlc,
-                )  # fmt: skip
-            else:
-                yield CanFrame(
-                    time, ident & MASK_EXT, data[at : at + dlc], bool(ident & FLAG_EFF), channel,
-                    False, bool(ident & FLAG_ERR), columns.fd,
-                )  # fmt: skip
+                frames += 1
+                yield frame(columns, pos, base)
             pos = end
-        counts.records = records
-        counts.can_records = frames
-        self.last_time = last_time
-        yield from self._finished(last_time or base)
+        self.counts.records = records
+        self.counts.can_records = frames
+        yield from self._finished(self.last_time or base)
+
+    def _other_record(
+        self, kind: int, pos: int, lengths: dict[int, int], cans: dict[int, CanColumns]
+    ) -> None:
+        """A record that is no CAN frame: a format taken in, one not understood counted."""
+        if kind == FMT_TYPE:
+            self._define(parse_fmt(self._data, pos), lengths, cans)
+        elif kind in self._unread_records:
+            self._unread_records[kind] += 1
+
+    def _inside(self, pos: int, end: int, lengths: dict[int, int]) -> int | None:
+        """Where a record starts inside the one at ``pos``, which no record follows (None:
+        nowhere, the record is whole)."""
+        found = self._resync(pos + 3, lengths)
+        return found if found is not None and found < end else None
+
+    def _frame(self, columns: CanColumns, pos: int, base: float) -> InputItem:
+        """The CAN record at ``pos`` as a frame (a diagnostic for a DLC over 8)."""
+        values = columns.fields.unpack_from(self._data, pos + 3)
+        if columns.order is not None:
+            values = tuple(values[i] for i in columns.order)
+        if columns.has_bus:
+            time_us, bus, ident, dlc = values
+            channels = self._channels
+            channel = channels.get(bus) or channels.setdefault(bus, f"bus{bus}")
+        else:
+            time_us, ident, dlc = values
+            channel = "scripting"
+        time = self.last_time = base + time_us * 1e-6
+        if self.first_time is None:
+            self.first_time = time
+        if columns.fd:
+            self.counts.fd_records += 1
+            dlc = FD_LENGTHS[dlc & 0x0F]
+        elif dlc > 8:
+            return self._bad_dlc(pos, time, ident, dlc)
+        if ident & FLAG_RTR:
+            return CanFrame(
+                time, ident & MASK_EXT, b"", bool(ident & FLAG_EFF), channel, True,
+                bool(ident & FLAG_ERR), columns.fd, "", dlc,
+            )  # fmt: skip
+        at = pos + columns.data_at
+        return CanFrame(
+            time, ident & MASK_EXT, self._data[at : at + dlc], bool(ident & FLAG_EFF), channel,
+            False, bool(ident & FLAG_ERR), columns.fd,
+        )  # fmt: skip
 
     def _finished(self, last_time: float) -> Iterator[InputItem]:
         """After the last record: what the decompression found wrong, as diagnostics, and

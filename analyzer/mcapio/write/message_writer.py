@@ -95,12 +95,11 @@ class MessageWriter:
             self.tally, self._shared = self.tally.copy(), False
         return self.tally
 
-    # One loop with every frame's and event's encoding inline: it runs for every message of
-    # a file (benchmarks/convert_speed.py); the rare parts (views, stream bytes) are apart.
-    def _put(self, messages: Sequence[RawItem | Event]) -> None:  # noqa: PLR0915
+    def _put(self, messages: Sequence[RawItem | Event]) -> None:
         """Each raw item to its lossless channel, each event to its topic's channel (and its
-        views), in the order given: one loop, as this runs for every frame of a file. The
-        messages go to the writer together at the end (or before a new channel's record)."""
+        views), in the order given: one loop, as this runs for every frame of a file
+        (benchmarks/convert_speed.py). The messages go to the writer together at the end (or
+        before a new channel's record)."""
         if not messages:
             return
         out: list[tuple[int, int, bytes, int, int]] = []
@@ -111,42 +110,15 @@ class MessageWriter:
         views = self._views
         can_id = channels.get(TOPIC_CAN_FRAMES, 0)
         can_number = sequence[can_id] if can_id else 0  # kept here, stored at the end
-        known_parts = FRAME_PARTS
-        join = b"".join
-        dumps = orjson.dumps
         events = extra = 0
         try:
             for message in messages:
                 kind = type(message)
                 if kind is CanFrame:
-                    frame: CanFrame = message  # type: ignore[assignment]
                     if not can_id:
                         can_id = self._channel(TOPIC_CAN_FRAMES, ROLE_RAW, out)
                         can_number = sequence[can_id]
-                    t = frame.time
-                    if (
-                        type(t) is float
-                        and FLOAT_AS_REPR_FROM <= t < MAX_LOG_SECONDS
-                        and not frame.is_remote
-                    ):  # can_frame_json and the log time, inlined: every frame
-                        data = frame.data
-                        key: FramePartsKey = (
-                            frame.can_id,
-                            frame.extended,
-                            len(data),
-                            frame.channel,
-                            frame.is_error,
-                            frame.is_fd,
-                            frame.direction,
-                        )
-                        middle, tail = known_parts.get(key) or frame_parts(frame, key)
-                        encoded = join(
-                            (FRAME_OPEN, dumps(t), middle, data.hex(" ").upper().encode(), tail)
-                        )
-                        log_time = round(t * 1e9)
-                    else:
-                        encoded = can_frame_json(frame)
-                        log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+                    encoded, log_time = frame_message(message)  # type: ignore[arg-type]
                     can_number += 1
                     add((can_id, log_time, encoded, log_time, can_number))
                 elif kind is Event:
@@ -157,19 +129,7 @@ class MessageWriter:
                     log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
                     number = sequence[channel_id] + 1
                     sequence[channel_id] = number
-                    # json_bytes(event.to_dict()), inlined: every event
-                    content = {
-                        "topic": topic,
-                        "time": t,
-                        "source": event.source,
-                        "warnings": event.warnings,
-                        **event.fields,
-                    }
-                    try:
-                        data = dumps(content, default=json_default, option=ORJSON_OPTIONS)
-                    except (orjson.JSONEncodeError, TypeError):
-                        data = json_bytes(content)
-                    add((channel_id, log_time, data, log_time, number))
+                    add((channel_id, log_time, event_message(event), log_time, number))
                     events += 1
                     if views is not None and topic in VIEW_INPUT_TOPICS:
                         extra += self._put_views(views, event, log_time, out)
@@ -242,3 +202,42 @@ class MessageWriter:
         for channel_id, log_time, data, publish_time, number in messages:
             self._writer.add_message(channel_id, log_time, data, publish_time, number)
             self._tee.add_message(channel_id, log_time, data)
+
+
+def frame_message(frame: CanFrame) -> tuple[bytes, int]:
+    """A frame's JSON message and its log time (ns): the usual frame's JSON is put
+    together from cached parts (``can_frame_json`` for the rest)."""
+    t = frame.time
+    if type(t) is float and FLOAT_AS_REPR_FROM <= t < MAX_LOG_SECONDS and not frame.is_remote:
+        data = frame.data
+        key: FramePartsKey = (
+            frame.can_id,
+            frame.extended,
+            len(data),
+            frame.channel,
+            frame.is_error,
+            frame.is_fd,
+            frame.direction,
+        )
+        middle, tail = FRAME_PARTS.get(key) or frame_parts(frame, key)
+        encoded = b"".join(
+            (FRAME_OPEN, orjson.dumps(t), middle, data.hex(" ").upper().encode(), tail)
+        )
+        return encoded, round(t * 1e9)
+    log_time = round(t * 1e9) if 0 < t < MAX_LOG_SECONDS else time_ns(t)
+    return can_frame_json(frame), log_time
+
+
+def event_message(event: Event) -> bytes:
+    """An event's JSON message (``json_bytes(event.to_dict())``, with orjson when it can)."""
+    content = {
+        "topic": event.topic,
+        "time": event.time,
+        "source": event.source,
+        "warnings": event.warnings,
+        **event.fields,
+    }
+    try:
+        return orjson.dumps(content, default=json_default, option=ORJSON_OPTIONS)
+    except (orjson.JSONEncodeError, TypeError):
+        return json_bytes(content)
