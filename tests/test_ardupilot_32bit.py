@@ -239,6 +239,8 @@ def test_the_angles_to_a_location_target_are_the_reference_angles(driver: Driver
             f = fields[name]
             lua_raw = driver.codec.raw_value(driver.fns.COMMANDS.specified_angle.fields[name], ours)
             python_raw = min(max(round(want * f.div / f.mul), f.raw_limits()[0]), f.raw_limits()[1])
+            # the driver's angle, as it computed it, is encoded as the Python encoder does
+            assert lua_raw == f.to_raw(ours), (name, ours)
             tie_distance = abs((want * f.div / f.mul) % 1 - 0.5)
             if tie_distance < 1e-3:
                 close += 1
