@@ -397,6 +397,30 @@ def test_an_mf4_record_size_field_beyond_any_can_record_is_refused(
     assert "more than a CAN bus-logging record holds" in err
 
 
+def test_an_mf4_whose_chain_of_groups_loops_is_refused_not_followed_for_ever() -> None:
+    """Found by the fuzzer: asammdf counts the channel groups by following raw links."""
+    code, _, err = decode(REGRESSIONS / "mf4" / "chain-of-groups-that-loops.mf4", None)
+    assert code == 2 and err.count("\n") == 1
+    assert "its chain of data groups comes back to byte 1,000" in err
+
+
+@pytest.mark.parametrize(("kind", "what"), [(b"##DG", "data groups"), (b"##CG", "channel groups")])
+def test_an_mf4_group_linked_back_to_itself_is_refused(
+    tmp_path: Path, kind: bytes, what: str
+) -> None:
+    """A data group's (or channel group's) next link pointing at the group itself."""
+    import struct
+
+    data = bytearray(python_can_bytes(tmp_path, "x.mf4", seed_frames()))
+    group = data.find(kind)
+    struct.pack_into("<Q", data, group + 24, group)  # its first link: the next group
+    path = tmp_path / "looping.mf4"
+    path.write_bytes(bytes(data))
+    code, _, err = decode(path, None)
+    assert code == 2 and err.count("\n") == 1
+    assert f"its chain of {what} comes back to byte {group:,}" in err
+
+
 def test_a_db3_message_whose_time_sqlite_holds_as_text_is_a_bad_frame() -> None:
     """sqlite3 keeps any type in any column: the message is skipped in words and the
     reading goes on (here up to a page the same damage broke: it says so)."""

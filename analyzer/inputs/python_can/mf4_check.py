@@ -1,7 +1,7 @@
 """MF4 files checked before asammdf reads them: a data group whose records are not
-counted makes asammdf loop for ever, a channel placed outside its record makes it read
-outside its buffer and crash the process, a record size of gigabytes makes it allocate
-them (ASAM MDF 4.x block layout)."""
+counted, or a chain of groups that comes back on itself, makes asammdf loop for ever; a
+channel placed outside its record makes it read outside its buffer and crash the
+process; a record size of gigabytes makes it allocate them (ASAM MDF 4.x block layout)."""
 
 from __future__ import annotations
 
@@ -124,11 +124,46 @@ class _Blocks:
                 )
         return None
 
+    def link(self, offset: int) -> int | None:
+        """The 8-byte link at ``offset`` (None past the end of the file)."""
+        if offset < 0 or offset + 8 > self.size:
+            return None
+        self.handle.seek(offset)
+        return int.from_bytes(self.handle.read(8), "little")
+
+    def chain_loop(self) -> str | None:
+        """Where a chain of data groups, or of a data group's channel groups, comes back on
+        itself, followed as asammdf counts the groups before it reads a file: by the raw
+        links (the next at +24, a data group's first channel group at +32), whatever
+        block is there. None when every chain ends (or leaves the file: asammdf says so)."""
+        groups: set[int] = set()
+        group = self.link(_HD_AT + 24)  # the header's first link: the first data group
+        while group and len(groups) < _MAX_CHAIN:
+            if group in groups:
+                return _looping("data groups", group)
+            groups.add(group)
+            channel_groups: set[int] = set()
+            channel_group = self.link(group + 32)
+            while channel_group and len(channel_groups) < _MAX_CHAIN:
+                if channel_group in channel_groups:
+                    return _looping("channel groups", channel_group)
+                channel_groups.add(channel_group)
+                channel_group = self.link(channel_group + 24)
+            group = self.link(group + 24)
+        return None
+
     def holds_data(self, offset: int) -> bool:
         block = self.at(offset, b"")
         if block is None or block.kind not in _DATA_BLOCKS:
             return False
         return block.kind != b"##DT" or block.length > _BLOCK.size
+
+
+def _looping(what: str, offset: int) -> str:
+    return (
+        f"its chain of {what} comes back to byte {offset:,} (a damaged MF4 file, which "
+        "asammdf would follow for ever)"
+    )
 
 
 def mf4_problem(handle: IO[bytes], size: int) -> str | None:
@@ -139,6 +174,9 @@ def mf4_problem(handle: IO[bytes], size: int) -> str | None:
         header = blocks.at(_HD_AT, b"##HD")
         if header is None or not header.links:
             return None  # not laid out as expected: asammdf says what is wrong
+        loop = blocks.chain_loop()
+        if loop:
+            return loop
         seen: set[int] = set()
         offset = header.links[0]
         while offset and offset not in seen and len(seen) < _MAX_CHAIN:
