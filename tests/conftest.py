@@ -13,6 +13,12 @@ import pytest
 
 from tests.collected import ALL_ITEMS
 
+# A suite started in the background by a script (`nohup`, `cmd &`) inherits Ctrl-C
+# ignored, and so would every tool it starts: the tests that interrupt a tool (Ctrl-C
+# stops a check, a recording) would see the tool carry on. The tools get the default.
+if hasattr(signal, "SIGINT") and signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 CAMERA_SCRIPT = Path(__file__).resolve().parent / "rtsp_camera.py"
 SYSTEM_PYTHON = "/usr/bin/python3"
 # With this set (.ci/run does), the video tests fail instead of skipping without the server.

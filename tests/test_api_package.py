@@ -131,6 +131,7 @@ def test_the_docstring_examples_run(module: str, in_samples_folder: Path) -> Non
     assert result.failed == 0 and result.attempted > 0
 
 
+@pytest.mark.slow
 def test_the_examples_of_the_python_api_page_run(
     in_samples_folder: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

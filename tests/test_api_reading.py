@@ -170,6 +170,7 @@ def test_recording_errors(tmp_path: Path, inputs: dict[str, Path]) -> None:
         Recording(inputs["flight-candump.mcap"]).table("/gimbal")
 
 
+@pytest.mark.slow
 def test_analyze_judges_a_recordings_camera_alike_from_its_path_and_from_read(
     tmp_path: Path,
 ) -> None:

@@ -29,6 +29,9 @@ from analyzer.protocol.fields import EncodeError, Field
 from analyzer.protocol.uav import encode_altitude, encode_gps, encode_uav_attitude
 from tests.ardupilot_lua import ardupilot_lua, driver_functions
 
+# Lua built as ArduPilot builds it: seconds, once per process.
+pytestmark = pytest.mark.slow
+
 __all__ = ["ardupilot_lua"]  # the fixture
 
 f32 = np.float32

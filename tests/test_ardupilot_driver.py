@@ -37,6 +37,9 @@ from analyzer.sim.faults import FaultConfig
 from analyzer.sim.uav import FlightPath
 from tests.ardupilot_lua import ardupilot_lua
 
+# Lua built as ArduPilot builds it (seconds, once per process) and demos of the driver.
+pytestmark = pytest.mark.slow
+
 __all__ = ["ardupilot_lua"]  # the fixture
 
 CLEAN = SimConfig(ranging=True)

@@ -17,6 +17,9 @@ from analyzer.export.ardupilot import DRIVER_NAME, lua_text
 from analyzer.export.ardupilot_params import AUTOPILOT_PARAMETERS
 from tests.ardupilot_lua import ardupilot_lua, with_locals
 
+# Lua built as ArduPilot builds it: seconds, once per process.
+pytestmark = pytest.mark.slow
+
 __all__ = ["ardupilot_lua"]  # the fixture
 
 MANUAL = (Path(__file__).resolve().parents[1] / "docs" / "howto" / "ardupilot.md").read_text(

@@ -152,6 +152,16 @@ def test_a_healthy_gimbal_passes_every_step_from_any_attitude(
                 assert result.figures["slew_dps"] == pytest.approx(60.0, rel=0.05)
 
 
+@pytest.mark.parametrize("step", ["pan_speed", "tilt_speed"])
+def test_a_speed_step_held_past_the_whole_range_passes_a_healthy_gimbal(step: str) -> None:
+    """20 deg/s for 20 s crosses the whole range: the step starts at the stop it turns
+    away from and ends at the other one. Starting at a stop is no turn the wrong way."""
+    bench = SimulatedBench(SimConfig(attitude=(-45.0, 120.0)))
+    (result,) = bench.check(select(step), Options(speed_dps=20.0, speed_for_s=20.0))
+    assert result.verdict == PASS, result.detail
+    assert "the wrong way" not in result.detail and "then at its limit" in result.detail
+
+
 def test_each_step_starts_from_the_same_attitude_wherever_the_gimbal_was() -> None:
     """The start is the step's own: its target and figures do not depend on where the
     gimbal was left (the move from pitch 45 to -90 is measured whatever came before)."""

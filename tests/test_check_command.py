@@ -40,6 +40,9 @@ from tests.platforms import posix_signals
 from tests.test_report_command import load
 from tests.tool_runs import ToolRun, tool_process
 
+# Real checks over TCP in real time: each takes seconds.
+pytestmark = pytest.mark.slow
+
 # Short waits: the slowest healthy move (150 deg at 60 deg/s) takes 2.5 s.
 FAST = ("--time-allowed", "4", "--listen", "2", "--speed-for", "1.5")
 SLEW_DPS = 60.0
@@ -433,17 +436,24 @@ def test_ctrl_c_stops_and_centres_the_gimbal(tmp_path: Path) -> None:
     run = start_check(
         gimbal, tmp_path / "stopped.mcap", "--steps", "pan_speed", "--speed-for", "20"
     )
+    turning = ended_first = False
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:  # wait until it is turning
             if any(e.fields.get("pan_speed_dps") for e in gimbal.received):
+                turning = True
+                break
+            if run.process.poll() is not None:
                 break
             time.sleep(0.1)
+        ended_first = run.process.poll() is not None
         run.process.send_signal(signal.SIGINT)
         run.finish()
     finally:
         run.abandon()
-    assert run.code == 130, run.err
+    print(run.out, run.err, sep="\n")  # shown when it fails
+    assert turning and not ended_first  # Ctrl-C came while it turned
+    assert run.code == 130
     commands = [e.fields for e in gimbal.received if e.topic == "/gimbal/command"]
     centred_last(commands)
     centred_last(messages(run.output, "/gimbal/command"))  # and the recording is finished

@@ -13,6 +13,9 @@ import pytest
 
 from tests.soundness import HEALTHY, MODELS, Outcome, Scenario, run
 
+# Hundreds of simulated scenarios.
+pytestmark = pytest.mark.slow
+
 # The fixed subset: seeds of each kind (the camera's record video, which is slow).
 SEEDS = {("analyze", HEALTHY): 60, ("check", HEALTHY): 20, ("analyze", "fault"): 20}
 SEEDS |= {("check", "fault"): 10, ("camera", HEALTHY): 1, ("camera", "fault"): 1}

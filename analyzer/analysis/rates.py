@@ -179,7 +179,7 @@ def _asked(
         commanded.append((word, axis, index, key))
         extra[f"commanded_{key}_dps"] = asked[index] / duration
         extra[f"peak_{key}_dps"] = movement.peak_pan if index == 0 else movement.peak_tilt
-        usable, limits[index] = _until_limit(points, axis)
+        usable, limits[index] = _until_limit(points, axis, asked[index])
         series[index] = [(s.time, s.value(axis)) for s in usable]
     if points:
         extra["observed_at"] = points[-1].time
@@ -263,11 +263,18 @@ def _cut_words(movement: Movement, cut: Cut, end: float) -> str:
     )
 
 
-def _until_limit(points: list[Sample], axis: str) -> tuple[list[Sample], float | None]:
-    """The samples before the first one at a limit of ``axis``, and that limit."""
+def _until_limit(
+    points: list[Sample], axis: str, asked: float
+) -> tuple[list[Sample], float | None]:
+    """The samples before the first one at a limit of ``axis``, and that limit. A
+    movement that starts at the stop opposite to where it was ``asked`` to turn (a check
+    starts a long speed step there) leaves that stop: its first samples there are no end."""
+    leaving = True
     for n, s in enumerate(points):
         limit = s.at_limit(axis)
-        if limit is not None:
+        if limit is None:
+            leaving = False
+        elif not (leaving and limit * asked < 0):
             return points[:n], limit
     return points, None
 
