@@ -404,6 +404,14 @@ def test_an_mf4_whose_chain_of_groups_loops_is_refused_not_followed_for_ever() -
     assert "its chain of data groups comes back to byte 1,000" in err
 
 
+def test_an_mf4_whose_channel_groups_loop_behind_a_damaged_header_is_refused() -> None:
+    """Found by the fuzzer next: the header block's link count damaged, a channel group
+    linked to itself."""
+    code, _, err = decode(REGRESSIONS / "mf4" / "chain-of-channel-groups-that-loops.mf4", None)
+    assert code == 2 and err.count("\n") == 1
+    assert "its chain of channel groups comes back to byte 3,936" in err
+
+
 @pytest.mark.parametrize(("kind", "what"), [(b"##DG", "data groups"), (b"##CG", "channel groups")])
 def test_an_mf4_group_linked_back_to_itself_is_refused(
     tmp_path: Path, kind: bytes, what: str

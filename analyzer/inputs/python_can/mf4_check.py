@@ -171,12 +171,12 @@ def mf4_problem(handle: IO[bytes], size: int) -> str | None:
     the headers of the data groups, their channel groups and data blocks."""
     blocks = _Blocks(handle, size)
     try:
+        loop = blocks.chain_loop()  # followed by asammdf whatever the header block holds
+        if loop:
+            return loop
         header = blocks.at(_HD_AT, b"##HD")
         if header is None or not header.links:
             return None  # not laid out as expected: asammdf says what is wrong
-        loop = blocks.chain_loop()
-        if loop:
-            return loop
         seen: set[int] = set()
         offset = header.links[0]
         while offset and offset not in seen and len(seen) < _MAX_CHAIN:
