@@ -404,6 +404,14 @@ def test_an_mf4_whose_chain_of_groups_loops_is_refused_not_followed_for_ever() -
     assert "its chain of data groups comes back to byte 1,000" in err
 
 
+def test_an_mf4_channel_behind_a_damaged_link_count_is_checked_as_asammdf_reads_it() -> None:
+    """Found by the fuzzer next: a channel block of the standard length whose link count
+    is damaged; asammdf reads it at its fixed layout and crashed on its sub-channel."""
+    code, _, err = decode(REGRESSIONS / "mf4" / "channel-with-damaged-link-count.mf4", None)
+    assert code == 2 and err.count("\n") == 1
+    assert "its channel at byte 1,960 ends at byte 32,781 of a record of 84 bytes" in err
+
+
 def test_an_mf4_whose_channel_groups_loop_behind_a_damaged_header_is_refused() -> None:
     """Found by the fuzzer next: the header block's link count damaged, a channel group
     linked to itself."""

@@ -25,6 +25,9 @@ _MOST_RECORD = 1 << 20
 # cn_bit_count; virtual channels (types 3, 6) take no bytes of the record.
 _CHANNEL_DATA = struct.Struct("<BBBBII")
 _VIRTUAL = (3, 6)
+# asammdf reads a channel block of these lengths at a fixed layout of this many links,
+# whatever its link count says: so does this check.
+_CHANNEL_LINKS = {160: 8, 168: 9}
 
 
 class _Block(NamedTuple):
@@ -50,6 +53,8 @@ class _Blocks:
         if len(head) < _BLOCK.size:
             return None
         found, length, count = _BLOCK.unpack(head)
+        if found == b"##CN":
+            count = _CHANNEL_LINKS.get(length, count)
         end = offset + _BLOCK.size + 8 * count
         if (kind and found != kind) or count > 1024 or end > self.size:
             return None
