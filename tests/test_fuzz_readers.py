@@ -325,9 +325,7 @@ def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_o
     import struct
 
     data = bytearray(python_can_bytes(tmp_path, "x.mf4", seed_frames()))
-    group = data.find(b"##CG")  # the CAN frames' channel group: 40 records
-    links = struct.unpack_from("<Q", data, group + 16)[0]
-    cycles_at = group + 24 + 8 * links + 8  # after cg_record_id
+    cycles_at = _channel_group_data(data) + 8  # the CAN frames' group, after cg_record_id
     assert struct.unpack_from("<Q", data, cycles_at)[0] == FRAMES
     struct.pack_into("<Q", data, cycles_at, 0)  # asammdf loops for ever on this
     path = tmp_path / "uncounted.mf4"
@@ -338,6 +336,16 @@ def test_an_mf4_data_group_whose_records_are_not_counted_is_refused_not_looped_o
 
 
 REGRESSIONS = Path(__file__).resolve().parent.parent / "fuzz" / "regressions"
+
+
+def _channel_group_data(data: bytes | bytearray) -> int:
+    """Where the data part of an MF4 file's first channel group (python-can's CAN frames:
+    40 records) starts: after its header and its links."""
+    import struct
+
+    group = data.find(b"##CG")
+    links = struct.unpack_from("<Q", data, group + 16)[0]
+    return group + 24 + 8 * links
 
 
 @pytest.mark.parametrize(
@@ -384,9 +392,7 @@ def test_an_mf4_record_size_field_beyond_any_can_record_is_refused(
     import struct
 
     data = bytearray(python_can_bytes(tmp_path, "x.mf4", seed_frames()))
-    group = data.find(b"##CG")
-    links = struct.unpack_from("<Q", data, group + 16)[0]
-    data_bytes_at = group + 24 + 8 * links + 8 + 8 + 2 + 2 + 4  # after the cycle count
+    data_bytes_at = _channel_group_data(data) + 8 + 8 + 2 + 2 + 4  # after the cycle count
     record = struct.unpack_from("<I", data, data_bytes_at)[0]
     assert 0 < record < 200  # a bus-logging record as python-can writes it
     struct.pack_into("<I", data, data_bytes_at + field, value)
