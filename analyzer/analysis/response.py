@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable
-from dataclasses import dataclass
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -20,6 +19,13 @@ from analyzer.analysis.findings import (
 from analyzer.analysis.health import FeedbackHealth
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, YAW, Sample, sample_from
+from analyzer.analysis.settings import (
+    DEFAULT_FLAG_ALLOWED_S,
+    DEFAULT_TIME_ALLOWED_S,
+    DEFAULT_TOLERANCE_DEG,
+    FLAG_PERIODS,
+    Settings,
+)
 from analyzer.analysis.stick_judge import LOOKBACK_S, StickJudge
 from analyzer.analysis.streams import STREAM_GAP_S
 from analyzer.analysis.target_check import TargetCheck, judge_target, target_check
@@ -30,7 +36,6 @@ from analyzer.analysis.tracking import (
     nothing_to_stop,
 )
 from analyzer.feedback_track import (
-    EXPECTED_FEEDBACK_HZ,
     GAP_THRESHOLD_S,
     damaged_feedback,
     feedback_stream,
@@ -53,11 +58,6 @@ from analyzer.protocol.types import (
 EVENT_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS})
 FIELD_TOPICS = frozenset({TOPIC_COMMAND})
 
-DEFAULT_TOLERANCE_DEG = 1.0
-DEFAULT_TIME_ALLOWED_S = 5.0
-# A state flag (tracking) shows a change in the next feedback messages: three periods.
-FLAG_PERIODS = 3
-DEFAULT_FLAG_ALLOWED_S = FLAG_PERIODS / EXPECTED_FEEDBACK_HZ  # 1.5 s at the document's 2 Hz
 # A target re-sent within this of its last sending is still the same judgement; a judged
 # one is held for its re-sends at most this long after its time allowed.
 RESEND_GAP_S = STREAM_GAP_S
@@ -79,23 +79,6 @@ AXES = {
     "tap_zoom": BOTH,
     "tracking": BOTH,
 }
-
-
-@dataclass(frozen=True)
-class Settings:
-    """The judgement's knobs (the ``analyze`` options)."""
-
-    tolerance_deg: float = DEFAULT_TOLERANCE_DEG
-    time_allowed_s: float = DEFAULT_TIME_ALLOWED_S  # for a target (an angle) to be reached
-    flag_allowed_s: float = DEFAULT_FLAG_ALLOWED_S  # for a state flag (tracking) to change
-
-    def __post_init__(self) -> None:
-        if not self.tolerance_deg > 0:
-            raise ValueError("the tolerance must be more than 0 deg")
-        if not self.time_allowed_s > 0:
-            raise ValueError("the time allowed must be more than 0 s")
-        if not self.flag_allowed_s > 0:
-            raise ValueError("the time allowed for a state flag must be more than 0 s")
 
 
 class ResponseAnalyzer:
@@ -441,4 +424,15 @@ def _speeds(fields: dict[str, Any]) -> tuple[float, float]:
     )
 
 
-__all__ = ["NOT_OBEYED", "OBEYED", "PARTIAL", "UNKNOWN", "ResponseAnalyzer", "Settings"]
+__all__ = [
+    "DEFAULT_FLAG_ALLOWED_S",
+    "DEFAULT_TIME_ALLOWED_S",
+    "DEFAULT_TOLERANCE_DEG",
+    "FLAG_PERIODS",
+    "NOT_OBEYED",
+    "OBEYED",
+    "PARTIAL",
+    "UNKNOWN",
+    "ResponseAnalyzer",
+    "Settings",
+]

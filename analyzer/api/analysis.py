@@ -8,7 +8,7 @@ from collections.abc import Generator, Iterable
 from dataclasses import dataclass
 
 from analyzer.analysis.findings import Timed, untimed
-from analyzer.analysis.response import (
+from analyzer.analysis.settings import (
     DEFAULT_FLAG_ALLOWED_S,
     DEFAULT_TIME_ALLOWED_S,
     DEFAULT_TOLERANCE_DEG,

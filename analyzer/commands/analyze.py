@@ -75,7 +75,7 @@ def positive_number(text: str) -> float:
 
 
 def add_settings_arguments(parser: argparse.ArgumentParser) -> None:
-    from analyzer.analysis.response import (
+    from analyzer.analysis.settings import (
         DEFAULT_FLAG_ALLOWED_S,
         DEFAULT_TIME_ALLOWED_S,
         DEFAULT_TOLERANCE_DEG,
