@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from analyzer.analysis.findings import (
@@ -19,6 +20,8 @@ from analyzer.feedback_track import FEEDBACK_PERIOD_S, FeedbackClock, Silence
 from analyzer.feedback_track import FEEDBACK_TOLERANCE as RATE_TOLERANCE
 
 WINDOW_S = 60.0
+# Times are compared with this much room, as (t - first) // WINDOW_S rounds.
+WINDOW_MARGIN_S = 1e-3
 MIN_LAST_WINDOW_S = 5.0  # a shorter last window is folded into the judgement only if it has data
 
 
@@ -34,6 +37,7 @@ class FeedbackHealth:
         self.last_feedback: float | None = None
         self.clock = FeedbackClock()  # when each stream's feedback last came
         self._window = 0
+        self._next_window = -math.inf  # no time before this closes a window
         self._window_messages = 0
         self._window_gaps = 0
         self._window_lost = 0
@@ -44,6 +48,10 @@ class FeedbackHealth:
 
     def tick(self, t: float) -> list[ResponseFinding]:
         """Any event's time: closes the minute windows that ended before ``t``."""
+        if t < self._next_window:  # the most frequent: nothing closes (``first`` is set)
+            if t > self.last:  # type: ignore[operator]
+                self.last = t
+            return []
         first = self.first
         if first is None:
             first = self.first = t
@@ -55,7 +63,9 @@ class FeedbackHealth:
             # silence, or a clock that jumps by years) are not listed one by one.
             found = [self._judge_window(WINDOW_S)]
             self._window = window
+            self._next_window = first + (window + 1) * WINDOW_S - WINDOW_MARGIN_S
             return found
+        self._next_window = first + (self._window + 1) * WINDOW_S - WINDOW_MARGIN_S
         return []
 
     def feedback(self, t: float, stream: str = "") -> list[ResponseFinding]:

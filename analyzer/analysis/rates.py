@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -163,7 +162,7 @@ def _asked(
     extra: dict[str, Any],
 ) -> _Asked:
     """What the movement asked of each axis, and the feedback of each commanded one."""
-    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    motion = movement.motion()
     at_start = motion.at(movement.start)
     asked = [a - b for a, b in zip(motion.at(end), at_start, strict=True)]
     duration = max(end - movement.start, 1e-9)
@@ -313,11 +312,11 @@ def judge_stop(
     end: float,
     after: list[Sample],
     tolerance: float,
-    follows: Callable[[str, float], float] | None = None,
+    follows: Callable[[str, list[float]], list[float]] | None = None,
 ) -> ResponseFinding | None:
     """Still moving after the stick came back (``end``)? None when too few samples show it.
 
-    ``follows(axis, t)``: the angle of ``axis`` at ``t`` that the movement's commands,
+    ``follows(axis, times)``: the angles of ``axis`` at ``times`` that the movement's commands,
     followed late as its fit measured, still explain (a late gimbal finishes the
     movement after the stick came back); only motion on beyond that counts (stopping
     sooner than the fit says is no fault), by more than the tolerance and a quarter of
@@ -325,23 +324,21 @@ def judge_stop(
     if len(after) < 2:
         return None
 
-    def explained(axis: str, s: Sample) -> float:
-        return follows(axis, s.time) if follows is not None else 0.0
-
-    first, last = after[0], after[-1]
+    times = [s.time for s in after]
+    first = after[0]
     moved_at = None
     moved = 0.0
     for axis in (PITCH, MOTOR_YAW):
-        expected = explained(axis, last) - explained(axis, first)
+        explained = follows(axis, times) if follows is not None else [0.0] * len(after)
+        expected = explained[-1] - explained[0]
         way = math.copysign(1.0, expected) if abs(expected) > STILL_DEG else 0.0
         beyond = 0.0
-        for prev, s in itertools.pairwise(after):
-            step = (s.value(axis) - explained(axis, s)) - (prev.value(axis) - explained(axis, prev))
+        for k in range(1, len(after)):
+            prev, s = after[k - 1], after[k]
+            step = (s.value(axis) - explained[k]) - (prev.value(axis) - explained[k - 1])
             if abs(step) > 0.05:
                 moved_at = s.time if moved_at is None else max(moved_at, s.time)
-            more = (s.value(axis) - first.value(axis)) - (
-                explained(axis, s) - explained(axis, first)
-            )
+            more = (s.value(axis) - first.value(axis)) - (explained[k] - explained[0])
             beyond = max(beyond, way * more if way else abs(more))
         if beyond > tolerance + 0.25 * abs(expected):
             moved = max(moved, beyond)

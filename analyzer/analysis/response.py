@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Iterable
 from typing import Any
@@ -57,12 +58,16 @@ from analyzer.protocol.types import (
 # commands); of every other event only the time counts.
 EVENT_TOPICS = frozenset({TOPIC_GIMBAL_ATTITUDE, TOPIC_GIMBAL_RANGING, TOPIC_DIAGNOSTICS})
 FIELD_TOPICS = frozenset({TOPIC_COMMAND})
+# The fields read of a stick command (the most frequent; of others, all are made).
+FIELDS_READ = {"gimbal_control": ("name", "component", "pan_speed_dps", "tilt_speed_dps")}
 
 # A target re-sent within this of its last sending is still the same judgement; a judged
 # one is held for its re-sends at most this long after its time allowed.
 RESEND_GAP_S = STREAM_GAP_S
 RESEND_HOLD_S = 30.0
 FEEDBACK_WAIT_S = 2.0  # without feedback, a judgement waits this long past its deadline
+# Times are compared with this much room, as t - a > b and t > a + b can round apart.
+DUE_MARGIN_S = 1e-3
 FC_ATTITUDE_FRESH_S = 3.0  # flight-controller attitude older than this counts as absent
 DAMAGED_KINDS = frozenset({CRC_MISMATCH, INCOMPLETE})  # damaged feedback, in the health
 # Commands that move the gimbal: each one ends what the previous motion command asked for.
@@ -98,6 +103,8 @@ class ResponseAnalyzer:
         self._last_target: TargetCheck | None = None  # the last motion command's, if a target
         self._tracking_seen = False  # a feedback message has shown the tracking flag on
         self._session: TrackingSession | None = None  # tracking commands since the first
+        # Before this time, time passing without feedback judges nothing (-inf: unknown).
+        self._quiet_until = -math.inf
 
     # -- input ---------------------------------------------------------------------------
 
@@ -123,15 +130,22 @@ class ResponseAnalyzer:
             out += self._settle(t, None)
         else:  # the most frequent: time passes, perhaps a command (no list made for nothing)
             out = self._moment(t, topic, event.fields)
+            return self._emit(out) if out else []
+        self._quiet_until = -math.inf  # feedback or damage judged: when is the next one due?
         return self._emit(out) if out else []
 
     def _moment(self, t: float, topic: str, fields: dict[str, Any] | None) -> list[ResponseFinding]:
         """Any event but feedback and damage: its time passes; a command is judged."""
         out = self.health.tick(t)
-        if self._targets or self._tracking or self._sticks.active:
+        streams = self._sticks.streams
+        if (t >= self._quiet_until or streams.reshaped) and (
+            self._targets or self._tracking or self._sticks.active
+        ):
             settled = self._settle(t, None)
             if settled:
                 out += settled
+            self._quiet_until = self._next_due() - DUE_MARGIN_S
+            streams.reshaped = False
         if topic == TOPIC_UAV_ATTITUDE:
             self._fc_attitude = t
         elif topic == TOPIC_COMMAND and fields is not None:
@@ -163,7 +177,7 @@ class ResponseAnalyzer:
             if isinstance(segment, list):
                 out += self.process(segment)
                 continue
-            for item in segment.moments(EVENT_TOPICS, FIELD_TOPICS):
+            for item in segment.moments(EVENT_TOPICS, FIELD_TOPICS, FIELDS_READ):
                 if isinstance(item, tuple):
                     found = self._moment(*item)
                     if found:
@@ -204,6 +218,7 @@ class ResponseAnalyzer:
             return self._gimbal_control(t, fields)
         if name not in MOTION and name != "tracking_stop":
             return out
+        self._quiet_until = -math.inf
         session = self._session
         if name == "tracking" and session is not None:
             session.update(t)  # the box moved: the same session
@@ -258,15 +273,21 @@ class ResponseAnalyzer:
 
     def _gimbal_control(self, t: float, fields: dict[str, Any]) -> list[ResponseFinding]:
         """One command of a stick stream: targets end at a speed, movements open and close."""
-        pan, tilt = _speeds(fields)
+        pan, tilt = fields.get("pan_speed_dps", 0.0), fields.get("tilt_speed_dps", 0.0)
+        if pan.__class__ is not float or tilt.__class__ is not float:
+            pan, tilt = _speed(pan), _speed(tilt)
         out: list[ResponseFinding] = []
         if (pan != 0 or tilt != 0) and self._targets:
             # A speed takes over both axes; zeros (a centred stick) leave targets alone.
             out += self._end_targets(t, "gimbal_control", BOTH)
-        component = str(fields.get("component") or "gimbal")
-        start = self._sticks.command(t, component, pan, tilt, self._target_met())
+        component = fields.get("component")
+        if component.__class__ is not str or not component:
+            component = str(component or "gimbal")
+        start = self._sticks.command(t, component, pan, tilt, self._target_met)
         if start is not None:
-            self._motion = ("gimbal_control", start)
+            motion = self._motion
+            if motion is None or motion[1] != start or motion[0] != "gimbal_control":
+                self._motion = ("gimbal_control", start)
         return out
 
     def _target_met(self) -> bool:
@@ -330,6 +351,19 @@ class ResponseAnalyzer:
         if self._sticks.active:
             out += self._sticks.settle(t, sample)
         return out
+
+    def _next_due(self) -> float:
+        """The earliest time at which time passing without feedback judges something."""
+        late = FEEDBACK_WAIT_S
+        due = self._sticks.due()
+        for check in self._targets:
+            if check.finding is None:
+                due = min(due, check.deadline + late)
+            else:
+                due = min(due, check.last_sent + RESEND_GAP_S, check.deadline + RESEND_HOLD_S)
+        for tracking in self._tracking:
+            due = min(due, tracking.deadline + late)
+        return due
 
     def _cut(self, since: float, until: float, *, ended: bool = False) -> str:
         """What ended the feedback before ``until`` (for a command at ``since``), in words;
@@ -415,13 +449,9 @@ class ResponseAnalyzer:
         return out
 
 
-def _speeds(fields: dict[str, Any]) -> tuple[float, float]:
-    """A gimbal_control's pan and tilt speeds (0 for a value that is no number)."""
-    pan, tilt = fields.get("pan_speed_dps", 0.0), fields.get("tilt_speed_dps", 0.0)
-    return (
-        float(pan) if isinstance(pan, (int, float)) else 0.0,
-        float(tilt) if isinstance(tilt, (int, float)) else 0.0,
-    )
+def _speed(value: Any) -> float:
+    """A gimbal_control's speed as a float (0 for a value that is no number)."""
+    return float(value) if isinstance(value, (int, float)) else 0.0
 
 
 __all__ = [

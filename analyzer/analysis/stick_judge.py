@@ -3,17 +3,18 @@
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from analyzer.analysis.findings import ResponseFinding
-from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion
+from analyzer.analysis.motion_fit import LAG_MAX_S
 from analyzer.analysis.rates import Cut, CutBy, judge_cadence, judge_movement, judge_stop
 from analyzer.analysis.sample_window import SampleWindow
 from analyzer.analysis.samples import MOTOR_YAW, PITCH, Sample
-from analyzer.analysis.streams import HOLD_S, Movement, Streams
+from analyzer.analysis.streams import HOLD_S, STREAM_GAP_S, Movement, Streams
 from analyzer.analysis.targets import STILL_DEG
 from analyzer.feedback_track import FEEDBACK_PERIOD_S
 
@@ -51,6 +52,17 @@ class StickJudge:
         self.streams = Streams()
         self._stops: list[_StopCheck] = []
 
+    def due(self) -> float:
+        """The earliest time at which ``settle`` without a sample judges or ends something."""
+        streams, late = self.streams, self.late
+        due = min((s.last + STREAM_GAP_S for s in streams.open.values()), default=math.inf)
+        for movement in streams.waiting:
+            assert movement.window_end is not None
+            due = min(due, movement.window_end + late)
+        for stop in self._stops:
+            due = min(due, stop.until + late)
+        return due
+
     @property
     def active(self) -> bool:
         """Something is open or waits for its judgement."""
@@ -58,20 +70,32 @@ class StickJudge:
         return bool(streams.open or streams.waiting or self._stops)
 
     def command(
-        self, t: float, component: str, pan: float, tilt: float, target_met: bool = False
+        self,
+        t: float,
+        component: str,
+        pan: float,
+        tilt: float,
+        target_met: Callable[[], bool] | None = None,
     ) -> float | None:
         """One gimbal_control; the first command of its movement when the stick is off
-        centre (the motion a limit finding would name), else None. ``target_met``: the
-        last other motion command was a target the gimbal is at (nothing left to do)."""
-        if pan != 0 or tilt != 0:
+        centre (the motion a limit finding would name), else None. ``target_met``, asked
+        when a movement starts: the last other motion command was a target the gimbal is
+        at (nothing left to do)."""
+        moving = pan != 0 or tilt != 0
+        if moving and self._stops:
             for stop in self._stops:
                 if stop.movement.component == component:
                     stop.until, stop.cut = min(stop.until, t), True  # the stick moved again
-        self._stopped(self.streams.command(t, component, pan, tilt))
-        stream = self.streams.open.get(component)
-        if (pan != 0 or tilt != 0) and stream is not None and stream.movement is not None:
+                    self.streams.reshaped = True
+        closed = self.streams.command(t, component, pan, tilt)
+        if closed:
+            self._stopped(closed)
+        stream = self.streams.open.get(component) if moving else None
+        if stream is not None and stream.movement is not None:
             movement = stream.movement
-            if movement.start == t and not self._free_before(movement, target_met):
+            if movement.start == t and not self._free_before(
+                movement, target_met is not None and target_met()
+            ):
                 movement.free_from = t
             return movement.start
         return None
@@ -180,6 +204,7 @@ class StickJudge:
             if movement.ended_by is not None and movement.ended_by.centred:
                 until = movement.stopped_at + STOP_GRACE_S + STOP_OBSERVE_S
                 self._stops.append(_StopCheck(movement, until))
+                self.streams.reshaped = True
 
     def _judge_movement(
         self, movement: Movement, upto: float | None, cut: Cut | None = None
@@ -237,19 +262,20 @@ class StickJudge:
         return [] if found is None else [found]
 
 
-def _follows(movement: Movement) -> Callable[[str, float], float] | None:
-    """The angle (per feedback axis, at a time) the movement's commands explain, followed
+def _follows(movement: Movement) -> Callable[[str, list[float]], list[float]] | None:
+    """The angles (per feedback axis, at times) the movement's commands explain, followed
     with the lag and ratios its fit found; None without a fit."""
     if movement.followed is None:
         return None
     lag, ratios = movement.followed
-    motion = CommandedMotion([*movement.prior, *movement.commands], HOLD_S)
+    motion = movement.motion()
     index = {MOTOR_YAW: 0, PITCH: 1}
 
-    def follows(axis: str, t: float) -> float:
+    def follows(axis: str, times: list[float]) -> list[float]:
         i = index[axis]
         if i not in ratios:
-            return 0.0
-        return ratios[i] * float(motion.axis_at(np.array([t - lag]), i)[0])
+            return [0.0] * len(times)
+        angles: list[float] = (ratios[i] * motion.axis_at(np.array(times) - lag, i)).tolist()
+        return angles
 
     return follows

@@ -19,8 +19,9 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, field
 from enum import Enum
+from itertools import islice
 
-from analyzer.analysis.motion_fit import LAG_MAX_S, StickCommand
+from analyzer.analysis.motion_fit import LAG_MAX_S, CommandedMotion, StickCommand
 
 STREAM_GAP_S = 1.0  # commands further apart than this are separate streams
 RECOMMENDED_REPEAT_S = 0.05  # chapter 2.1, 0x04: "50ms at a time is recommended"
@@ -80,6 +81,15 @@ class Movement:
     free_from: float | None = None  # only the stream turns the gimbal from here (None: before)
     free_until: float | None = None  # another motion command took over here
     followed: tuple[float, dict[int, float]] | None = None  # its fit: lag, ratio per axis
+
+    _motion: tuple[int, CommandedMotion] | None = field(default=None, repr=False)
+
+    def motion(self) -> CommandedMotion:
+        """The motion its commands ask for, those just before it (``prior``) first."""
+        count = len(self.prior) + len(self.commands)
+        if self._motion is None or self._motion[0] != count:
+            self._motion = count, CommandedMotion([*self.prior, *self.commands], HOLD_S)
+        return self._motion[1]
 
     def add(self, command: StickCommand) -> None:
         """A command of the stream while the movement is open or awaits its judgement."""
@@ -170,20 +180,25 @@ class Streams:
             str, deque[StickCommand]
         ] = {}  # a component's commands of the last PRIOR_S
         self.forgotten: dict[str, float] = {}  # the newest one off centre no longer kept
+        # A stream opened or ended, a movement started, closed or was cut, a stop check
+        # came or was cut (its judge sets that): when judgements are due is to be seen again.
+        self.reshaped = False
 
     def command(self, t: float, component: str, pan: float, tilt: float) -> list[Movement]:
         """One gimbal_control; returns the movements it closed (their stop checks start)."""
-        closed = self.end_quiet(t)
+        closed = self.end_quiet(t) if self.open else []
         stream = self.open.get(component)
         command = StickCommand(t, pan, tilt)
-        for waiting in self.waiting:  # its motion goes on until it is judged
-            if waiting.component == component:
-                waiting.add(command)
+        if self.waiting:
+            for waiting in self.waiting:  # its motion goes on until it is judged
+                if waiting.component == component:
+                    waiting.add(command)
         if stream is None:
             stream = self.open[component] = StickStream(component, t)
+            self.reshaped = True
         else:
             stream.last = t
-        prior = self._remember(component, command)
+        recent = self._remember(component, command)
         movement = stream.movement
         centred = pan == 0 and tilt == 0
         if movement is not None:
@@ -202,22 +217,25 @@ class Streams:
                 return closed
         if not centred:
             movement = stream.movement = Movement(component, t, stream)
-            movement.prior = prior
+            self.reshaped = True
+            movement.prior = list(islice(recent, len(recent) - 1))  # those before it
             movement.other_before, movement.other_name = self.other_at, self.other_name
             movement.own_before = self.forgotten.get(component)
             movement.add(command)
         return closed
 
-    def _remember(self, component: str, command: StickCommand) -> list[StickCommand]:
-        """Keep ``command`` among the component's recent ones; those before it."""
-        recent = self.recent.setdefault(component, deque())
-        while recent and recent[0].time < command.time - PRIOR_S:
+    def _remember(self, component: str, command: StickCommand) -> deque[StickCommand]:
+        """Keep ``command`` among the component's recent ones (returned, it the last)."""
+        recent = self.recent.get(component)
+        if recent is None:
+            recent = self.recent[component] = deque()
+        oldest = command.time - PRIOR_S
+        while recent and recent[0].time < oldest:
             old = recent.popleft()
             if old.pan or old.tilt:
                 self.forgotten[component] = old.time
-        before = list(recent)
         recent.append(command)
-        return before
+        return recent
 
     def end_quiet(self, t: float) -> list[Movement]:
         """End the streams whose last command is more than STREAM_GAP_S before ``t``."""
@@ -236,6 +254,7 @@ class Streams:
         """Another motion command ``name`` at ``t``: every stream ends, every window is
         cut there."""
         self.other_at, self.other_name = t, name
+        self.reshaped = True
         closed: list[Movement] = []
         for component in list(self.open):
             closed += self._end(component, t, EndedBy.OTHER_COMMAND, name)
@@ -257,6 +276,7 @@ class Streams:
 
     def _end(self, component: str, t: float | None, why: EndedBy, name: str = "") -> list[Movement]:
         stream = self.open.pop(component)
+        self.reshaped = True
         movement = stream.movement
         if movement is None:
             return []
@@ -273,6 +293,7 @@ class Streams:
         if movement is not None:
             stream.movement = None
             self.waiting.append(movement)
+            self.reshaped = True
 
     def starts(self) -> list[float]:
         """The first command of every movement under way or awaiting its judgement."""

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Collection, Iterable
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from itertools import pairwise, repeat
 from operator import itemgetter
@@ -65,9 +65,9 @@ class EventGroup:
             )
         ]
 
-    def fields(self) -> list[dict[str, Any]]:
-        """Each event's fields, as its Event holds them."""
-        keys = self.keys
+    def fields(self, only: Collection[str] | None = None) -> list[dict[str, Any]]:
+        """Each event's fields, as its Event holds them (``only``: just those keys)."""
+        keys = self.keys if only is None else tuple(k for k in self.keys if k in only)
         constants, values = self.constants, self.values()
         columns = [repeat(constants[k]) if k in constants else values[k] for k in keys]
         return list(map(dict, map(zip, repeat(keys), zip(*columns, strict=False))))
@@ -180,17 +180,26 @@ class EventColumns:
         return self._ordered(EventGroup.events, self.singles)
 
     def moments(
-        self, events: Collection[str], fields: Collection[str]
+        self,
+        events: Collection[str],
+        fields: Collection[str],
+        only: Mapping[str, Collection[str]] | None = None,
     ) -> list[Event | tuple[float, str, dict[str, Any] | None]]:
         """Every event in frame order: an Event when its topic is in ``events``, else its
         time, topic and fields when its topic is in ``fields``, else its time and topic
-        (None for fields: nothing made of them)."""
+        (None for fields: nothing made of them). ``only``: the keys wanted of the
+        commands it names (the others' fields are whole)."""
 
         def make(group: EventGroup) -> list[Any]:
             topic = group.topic
             if topic in events:
                 return group.events()
-            made = group.fields() if topic in fields else repeat(None)
+            if topic in fields:
+                made: Iterable[Any] = group.fields(
+                    only.get(group.name) if only and group.name else None
+                )
+            else:
+                made = repeat(None)
             return list(zip(group.times.tolist(), repeat(topic), made))
 
         return self._ordered(make, self.singles)
