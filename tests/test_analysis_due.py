@@ -131,7 +131,7 @@ def traffic(phases: list[dict[str, Any]]) -> list[Event]:
     return events
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.lists(phase(), min_size=1, max_size=12))
 def test_random_traffic_gets_the_same_findings(phases: list[dict[str, Any]]) -> None:
     assert_same(traffic(phases))
