@@ -5,8 +5,8 @@ earliest of them can be due (a deadline, a stream's pause, a movement's window, 
 check), and the feedback health skips its minute windows until the next can close. A
 stick streamed at 20 Hz makes that the most frequent case; here an analyzer that looks at
 everything at every event gives, event for event, the same findings on random traffic:
-sticks of two components, zeros and pauses, targets re-sent, tracking, feedback with
-silences and damage, clocks that step back.
+sticks of two components, zeros and pauses, targets, tracking, feedback with outages
+and damage, clocks that step back.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ class EveryEventHealth(FeedbackHealth):
 
 
 class EveryEventAnalyzer(ResponseAnalyzer):
-    """The response analysis as it was: every pending judgement looked at every event."""
+    """The response analysis looking at every pending judgement at every event."""
 
     def __init__(self) -> None:
         super().__init__()
@@ -142,9 +142,9 @@ def test_a_pilots_minute_with_link_faults_gets_the_same_findings() -> None:
     late = Behaviour(lag_s=0.4, speed=0.7, drift_s=0.5)
     for config in (SimConfig(uav=True, faults=faults), SimConfig(behaviour=late)):
         _, events = run_offline(pilot_script(), 60.0, config, start=1_715_680_800.0)
-        assert_same(events)
+        assert assert_same(events) >= 5  # the stick's movements, their stops, the health
 
 
 def test_the_demo_script_gets_the_same_findings() -> None:
     _, events = run_offline(DEMO_SCRIPT, 14.0, SimConfig(ranging=True, uav=True))
-    assert_same(events)
+    assert assert_same(events) >= 5  # the script's commands are judged
